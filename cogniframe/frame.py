@@ -1,0 +1,354 @@
+"""Stage 2: Spec -> Frame, the graph every later stage derives from (pure numpy, no CAD).
+
+Axes: x to the right, y to the front, z up; the ground plane is z = 0 (the underside of the
+bottom corner joints, which are the feet). Corners: fl = (-x, +y), fr = (+x, +y),
+rr = (+x, -y), rl = (-x, -y).
+
+Layout (the paper's CogniFly): a square rod ring on top and one at the bottom
+(`rod_cage_top_front` ...); at each corner an upper and a lower leg rod bow inwards to a
+mid-height knee (`knee_fl`), giving the hourglass side; from each knee a pair of parallel arm
+rods (`rod_arm_fl_1/2`) runs diagonally in and down to a TPU link on the core
+(`core_link_fl`) and carries a motor mount; a damping strut (`rod_strut_fl`) runs from each
+bottom corner to the same core link.
+
+A rod end sits at `seat` mm from its joint centre (the socket bottom) and goes `depth` mm into
+the socket, so cut length = centre distance - seat_a - seat_b.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import UserError
+from .spec import Spec
+
+CORNERS = ("fl", "fr", "rr", "rl")
+# Sign of x and y for each corner.
+CORNER_SIGN = {"fl": (-1, 1), "fr": (1, 1), "rr": (1, -1), "rl": (-1, -1)}
+# Ring sides: (name, from corner, to corner), going clockwise seen from above.
+SIDES = (("front", "fl", "fr"), ("right", "fr", "rr"), ("rear", "rr", "rl"), ("left", "rl", "fl"))
+
+Vec = tuple[float, float, float]
+
+
+def _t(v) -> Vec:
+    return (float(v[0]), float(v[1]), float(v[2]))
+
+
+@dataclass(frozen=True)
+class RodEnd:
+    """One end of a rod: the joint it enters and where the socket is (mm)."""
+
+    node: str
+    port: Vec  # point on the rod axis level with the joint centre (node position + lateral offset)
+    seat: float  # distance from port to the rod end (socket bottom), mm
+    depth: float  # how far the rod goes into the socket, mm
+
+
+@dataclass(frozen=True)
+class Rod:
+    name: str
+    role: str  # "cage" | "leg" | "arm" | "strut"
+    a: RodEnd
+    b: RodEnd
+    diameter: float
+    material: str
+
+    @property
+    def axis(self) -> np.ndarray:
+        """Unit vector from end a to end b."""
+        d = np.subtract(self.b.port, self.a.port)
+        return d / np.linalg.norm(d)
+
+    @property
+    def centre_distance(self) -> float:
+        return float(np.linalg.norm(np.subtract(self.b.port, self.a.port)))
+
+    @property
+    def length(self) -> float:
+        """Exact rod length between the two socket bottoms, mm."""
+        return self.centre_distance - self.a.seat - self.b.seat
+
+    @property
+    def cut_length(self) -> float:
+        """Length to cut, rounded to 0.5 mm, mm."""
+        return round(self.length * 2) / 2
+
+    @property
+    def start(self) -> np.ndarray:
+        return np.asarray(self.a.port) + self.axis * self.a.seat
+
+    @property
+    def end(self) -> np.ndarray:
+        return np.asarray(self.b.port) - self.axis * self.b.seat
+
+    def socket_direction(self, node: str) -> np.ndarray:
+        """Unit vector pointing from `node` along this rod (out of the socket)."""
+        return self.axis if node == self.a.node else -self.axis
+
+    def end_at(self, node: str) -> RodEnd:
+        return self.a if node == self.a.node else self.b
+
+
+@dataclass(frozen=True)
+class Node:
+    name: str
+    kind: str  # "corner_top" | "corner_bottom" | "knee" | "core_link"
+    pos: Vec
+    rods: tuple[str, ...]
+    seat: float  # socket-bottom distance used by every rod at this joint, mm
+
+
+@dataclass(frozen=True)
+class Motor:
+    name: str  # motor_fl
+    corner: str
+    arm: tuple[str, str]  # the two arm rods the mount clips onto
+    axis: Vec  # motor axis point on the arm centreline (between the two rods), mm
+    seat_z: float  # z of the mount's top face, where the motor sits, mm
+    prop_z: float  # z of the propeller plane, mm
+    arm_slope_deg: float  # how steeply the arm descends toward the core
+
+
+@dataclass(frozen=True)
+class Box:
+    """Axis-aligned box: centre and full size (mm)."""
+
+    name: str
+    centre: Vec
+    size: Vec
+
+    @property
+    def lo(self) -> np.ndarray:
+        return np.asarray(self.centre) - np.asarray(self.size) / 2
+
+    @property
+    def hi(self) -> np.ndarray:
+        return np.asarray(self.centre) + np.asarray(self.size) / 2
+
+
+@dataclass(frozen=True)
+class Core:
+    plate: Box
+    holder: Box  # battery holder outline (open at the front for sliding the pack)
+    battery: Box
+    stack: Box  # flight controller + ESC stack volume
+    computer: Box | None
+
+    @property
+    def boxes(self) -> tuple[Box, ...]:
+        return tuple(b for b in (self.plate, self.holder, self.stack, self.computer) if b is not None)
+
+
+@dataclass(frozen=True)
+class PropClearance:
+    motor: str
+    to_cage_mm: float  # nearest rod of the cage, legs or struts (surface to the propeller disc)
+    to_core_mm: float  # nearest core box
+    to_neighbour_mm: float  # gap between this disc and the nearest other disc, in plan
+
+
+@dataclass(frozen=True)
+class Frame:
+    nodes: dict[str, Node]
+    rods: dict[str, Rod]
+    motors: tuple[Motor, ...]
+    core: Core
+    ground_z: float
+    prop_clearances: tuple[PropClearance, ...] = field(default=())
+
+    @property
+    def clearance_mm(self) -> float:
+        """Battery-holder underside above the ground plane: the payload travel on impact, mm."""
+        return float(self.core.holder.lo[2] - self.ground_z)
+
+    @property
+    def min_prop_margin(self) -> float:
+        return min(min(p.to_cage_mm, p.to_core_mm, p.to_neighbour_mm) for p in self.prop_clearances)
+
+    def rods_of(self, role: str) -> list[Rod]:
+        return [r for r in self.rods.values() if r.role == role]
+
+    def bbox(self) -> tuple[np.ndarray, np.ndarray]:
+        pts = np.array([n.pos for n in self.nodes.values()])
+        return pts.min(axis=0), pts.max(axis=0)
+
+
+# -- construction ----------------------------------------------------------------------------
+
+def build(spec: Spec) -> Frame:
+    """Derive the frame graph from a validated spec. Raises UserError if the props do not clear."""
+    f, j, c = spec.frame, spec.joints, spec.core
+    d, bore = spec.rods.diameter, spec.bore
+    inset = bore / 2 + j.wall  # joint outer wall flush with the box outside
+    hx, hy = f.width / 2 - inset, f.depth / 2 - inset
+    z_top, z_bot = f.height - inset, inset
+    z_knee = f.height * f.knee_height
+
+    core = _core(spec)
+    z_link = core.plate.centre[2]
+    a_link = c.plate_size / 2 + inset  # link socket centre just outside the plate corner
+
+    pos: dict[str, tuple[str, np.ndarray]] = {}
+    for k, (sx, sy) in CORNER_SIGN.items():
+        pos[f"corner_top_{k}"] = ("corner_top", np.array([sx * hx, sy * hy, z_top]))
+        pos[f"corner_bottom_{k}"] = ("corner_bottom", np.array([sx * hx, sy * hy, z_bot]))
+        pos[f"knee_{k}"] = ("knee", np.array([sx * (hx - f.knee_inset), sy * (hy - f.knee_inset), z_knee]))
+        pos[f"core_link_{k}"] = ("core_link", np.array([sx * a_link, sy * a_link, z_link]))
+
+    # (name, role, node a, node b, lateral offset vector applied to both ports)
+    edges: list[tuple[str, str, str, str, np.ndarray]] = []
+    zero = np.zeros(3)
+    for level in ("top", "bottom"):
+        for side, ka, kb in SIDES:
+            edges.append((f"rod_cage_{level}_{side}", "cage", f"corner_{level}_{ka}", f"corner_{level}_{kb}", zero))
+    for k in CORNERS:
+        edges.append((f"rod_leg_upper_{k}", "leg", f"corner_top_{k}", f"knee_{k}", zero))
+        edges.append((f"rod_leg_lower_{k}", "leg", f"knee_{k}", f"corner_bottom_{k}", zero))
+        sx, sy = CORNER_SIGN[k]
+        lateral = np.array([-sy, sx, 0.0]) / math.sqrt(2)  # horizontal, perpendicular to the diagonal
+        for i, s in ((1, 0.5), (2, -0.5)):
+            edges.append((f"rod_arm_{k}_{i}", "arm", f"knee_{k}", f"core_link_{k}", lateral * s * f.arm_spacing))
+        if f.struts:
+            edges.append((f"rod_strut_{k}", "strut", f"corner_bottom_{k}", f"core_link_{k}", zero))
+
+    incident: dict[str, list[int]] = {n: [] for n in pos}
+    for i, e in enumerate(edges):
+        incident[e[2]].append(i)
+        incident[e[3]].append(i)
+
+    seats = {n: _node_seat(n, pos, edges, incident[n], spec) for n in pos}
+    nodes = {n: Node(n, kind, _t(p), tuple(edges[i][0] for i in incident[n]), seats[n]) for n, (kind, p) in pos.items()}
+    rods = {}
+    for name, role, na, nb, off in edges:
+        ea = RodEnd(na, _t(pos[na][1] + off), seats[na], j.socket_depth)
+        eb = RodEnd(nb, _t(pos[nb][1] + off), seats[nb], j.socket_depth)
+        rods[name] = Rod(name, role, ea, eb, d, spec.rods.material)
+
+    for r in rods.values():
+        if r.length < 2 * j.socket_depth + 5:
+            raise UserError(
+                f"{spec.name}: {r.name} would be only {r.length:.1f} mm long, too short to sit in two "
+                f"{j.socket_depth} mm sockets. Fix: enlarge frame.width/frame.height or reduce frame.knee_inset "
+                f"or joints.socket_depth.")
+
+    motors = tuple(_motor(k, rods, spec) for k in CORNERS)
+    frame = Frame(nodes, rods, motors, core, ground_z=0.0)
+    clear = prop_clearances(frame, spec)
+    frame = Frame(nodes, rods, motors, core, 0.0, clear)
+    worst = min(clear, key=lambda p: min(p.to_cage_mm, p.to_core_mm, p.to_neighbour_mm))
+    if frame.min_prop_margin < 0:
+        raise UserError(
+            f"{spec.name}: the {spec.motors.prop_diameter:g} mm propeller of {worst.motor} hits the frame "
+            f"(margin to cage {worst.to_cage_mm:.1f} mm, to core {worst.to_core_mm:.1f} mm, to the next propeller "
+            f"{worst.to_neighbour_mm:.1f} mm). Fix: change motors.radius, use a smaller motors.prop_diameter, "
+            f"or make frame.width/frame.depth larger.")
+    if core.stack.hi[2] >= z_top - inset or (core.computer and core.computer.hi[2] >= z_top - inset):
+        raise UserError(
+            f"{spec.name}: the electronics on the core reach z = {max(b.hi[2] for b in core.boxes):.0f} mm, above the "
+            f"top ring at {z_top:.0f} mm. Fix: increase frame.height or lower core.battery_clearance.")
+    return frame
+
+
+def _node_seat(n: str, pos, edges, inc: list[int], spec: Spec) -> float:
+    """Socket-bottom distance at a joint: the spec's seat, raised so no two bores meet."""
+    j = spec.joints
+    dirs, ports = [], []
+    p0 = pos[n][1]
+    for i in inc:
+        _, _, na, nb, off = edges[i]
+        other = pos[nb][1] if na == n else pos[na][1]
+        v = other - p0
+        dirs.append(v / np.linalg.norm(v))
+        ports.append(p0 + off)
+    need = j.seat
+    r = spec.bore / 2 + j.wall / 2
+    for i in range(len(dirs)):
+        for k in range(i + 1, len(dirs)):
+            if np.linalg.norm(ports[i] - ports[k]) >= spec.bore + 2 * j.wall:
+                continue  # parallel arm rods: separate sockets side by side
+            cosang = float(np.clip(np.dot(dirs[i], dirs[k]), -1, 1))
+            half = math.acos(cosang) / 2
+            if half > 1e-6:
+                need = max(need, r / math.tan(half))
+    return round(need, 2)
+
+
+def _core(spec: Spec) -> Core:
+    c, b = spec.core, spec.core.battery
+    floor = c.plate_thickness  # the holder floor is printed like the plate
+    wall = c.plate_thickness
+    holder_h = b.height + floor + 1.0  # 1 mm slack so the pack slides in
+    holder_bottom = c.battery_clearance
+    plate_z = holder_bottom + holder_h + c.plate_thickness / 2
+    holder = Box("battery_holder", (0.0, 0.0, holder_bottom + holder_h / 2), (b.width + 2 * wall, b.length + wall, holder_h))
+    battery = Box("battery", (0.0, wall / 2, holder_bottom + floor + b.height / 2), (b.width, b.length, b.height))
+    plate = Box("core_plate", (0.0, 0.0, plate_z), (c.plate_size, c.plate_size, c.plate_thickness))
+    from .materials import STACK_PATTERNS
+
+    board = STACK_PATTERNS[c.stack_pattern][1]
+    stack_h = 16.0  # FC + 4-in-1 ESC on 8 mm standoffs
+    top = plate_z + c.plate_thickness / 2
+    stack = Box("fc_stack", (0.0, 0.0, top + stack_h / 2), (board, board, stack_h))
+    computer = None
+    if c.computer:
+        w, h = c.computer.hole_spacing
+        computer = Box("computer", (0.0, 0.0, top + stack_h + 6.0), (w + 7.0, h + 7.0, 5.0))
+    return Core(plate, holder, battery, stack, computer)
+
+
+def _motor(k: str, rods: dict[str, Rod], spec: Spec) -> Motor:
+    r1, r2 = rods[f"rod_arm_{k}_1"], rods[f"rod_arm_{k}_2"]
+    pa = (np.asarray(r1.a.port) + np.asarray(r2.a.port)) / 2  # knee end
+    pb = (np.asarray(r1.b.port) + np.asarray(r2.b.port)) / 2  # core end
+    ra, rb = np.hypot(*pa[:2]), np.hypot(*pb[:2])
+    t = (ra - spec.motors.radius) / (ra - rb)
+    if not 0.0 < t < 1.0:
+        raise UserError(
+            f"{spec.name}: motors.radius = {spec.motors.radius:g} mm puts the motors off their arms, which run from "
+            f"{rb:.0f} to {ra:.0f} mm from the centre. Fix: set motors.radius between {rb + 10:.0f} and {ra - 10:.0f}.")
+    axis = pa + t * (pb - pa)
+    slope = math.degrees(math.atan2(pa[2] - pb[2], ra - rb))
+    seat_z = float(axis[2]) + spec.rods.diameter / 2 + spec.joints.wall + 0.5
+    prop_z = seat_z + spec.motor.height
+    return Motor(f"motor_{k}", k, (r1.name, r2.name), _t(axis), seat_z, prop_z, slope)
+
+
+def prop_clearances(frame: Frame, spec: Spec) -> tuple[PropClearance, ...]:
+    """Smallest gap (mm) between each propeller disc and the cage rods, the core and the other discs."""
+    radius = spec.motors.prop_diameter / 2
+    out = []
+    for m in frame.motors:
+        centre = np.array([m.axis[0], m.axis[1], m.prop_z])
+        cage = min(_rod_to_disc(r, centre, radius) for r in frame.rods.values() if r.role != "arm")
+        core = min(_box_to_disc(b, centre, radius) for b in frame.core.boxes)
+        others = [np.hypot(o.axis[0] - m.axis[0], o.axis[1] - m.axis[1]) - 2 * radius for o in frame.motors if o is not m]
+        out.append(PropClearance(m.name, round(cage, 2), round(core, 2), round(float(min(others)), 2)))
+    return tuple(out)
+
+
+def _rod_to_disc(rod: Rod, centre: np.ndarray, radius: float) -> float:
+    """Distance from a rod's surface to a horizontal disc, sampled every 0.5 mm along the rod."""
+    n = max(2, int(rod.length / 0.5))
+    pts = rod.start + np.outer(np.linspace(0, 1, n), rod.end - rod.start)
+    return float(_point_to_disc(pts, centre, radius).min() - rod.diameter / 2)
+
+
+def _point_to_disc(pts: np.ndarray, centre: np.ndarray, radius: float) -> np.ndarray:
+    dxy = np.hypot(pts[:, 0] - centre[0], pts[:, 1] - centre[1])
+    dz = np.abs(pts[:, 2] - centre[2])
+    return np.hypot(np.maximum(dxy - radius, 0.0), dz)
+
+
+def _box_to_disc(box: Box, centre: np.ndarray, radius: float) -> float:
+    """Distance from an axis-aligned box to a horizontal disc (disc sampled on a 1 mm polar grid)."""
+    rr = np.linspace(0, radius, max(2, int(radius) + 1))
+    th = np.linspace(0, 2 * math.pi, max(16, int(2 * math.pi * radius)), endpoint=False)
+    R, T = np.meshgrid(rr, th)
+    pts = np.column_stack([centre[0] + (R * np.cos(T)).ravel(), centre[1] + (R * np.sin(T)).ravel(),
+                           np.full(R.size, centre[2])])
+    gap = np.maximum(np.abs(pts - np.asarray(box.centre)) - np.asarray(box.size) / 2, 0.0)
+    return float(np.linalg.norm(gap, axis=1).min())

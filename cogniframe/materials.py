@@ -1,0 +1,109 @@
+"""Materials library and the small hardware tables the params refer to by name.
+
+Densities in g/cm^3, moduli in MPa (N/mm^2). Values are typical datasheet or literature
+figures, each with its source noted; a params file can add or override materials under
+`materials:`. Hardware tables follow cq_warehouse's pattern: a dict of sizes and a lookup that
+raises ValueError listing the valid choices.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Material:
+    """A material: density_g_cm3 (g/cm^3), e_mpa (Young's modulus), g_mpa (shear modulus)."""
+
+    name: str
+    density_g_cm3: float
+    e_mpa: float
+    g_mpa: float
+    printed: bool
+    source: str
+
+    @property
+    def density_g_mm3(self) -> float:
+        return self.density_g_cm3 / 1000.0
+
+
+# fmt: off
+MATERIALS: dict[str, Material] = {m.name: m for m in (
+    # Pultruded carbon rod, ~60 % fibre volume: rho 1.55-1.60, E 120-140 GPa along the rod,
+    # in-plane shear 4-6 GPa (typical pultruded CFRP rod datasheets).
+    Material("carbon_rod", 1.55, 125_000.0, 5_000.0, False,
+             "typical pultruded CFRP rod datasheet (rho 1.55, E 120-140 GPa, G 4-6 GPa)"),
+    # Bamboo along the grain (BBQ skewers are culm wall): rho 0.6-0.8, E 15-20 GPa, G ~1 GPa.
+    Material("bamboo", 0.70, 15_000.0, 1_000.0, False,
+             "bamboo culm, along grain: rho 0.6-0.8, E 15-20 GPa (Janssen, Mechanical properties of bamboo)"),
+    # TPU 95A: Ultimaker TPU 95A TDS: 1.22 g/cm^3, tensile modulus 26 MPa; nu ~0.48 -> G = E/2.96.
+    Material("tpu_95a", 1.22, 26.0, 8.8, True,
+             "Ultimaker TPU 95A technical data sheet (1.22 g/cm^3, E 26 MPa); G from nu = 0.48"),
+    # ABS: Ultimaker ABS TDS 1.10 g/cm^3, tensile modulus 1681 MPa (printed); nu 0.35.
+    Material("abs", 1.10, 1681.0, 623.0, True,
+             "Ultimaker ABS technical data sheet (1.10 g/cm^3, E 1681 MPa printed); G from nu = 0.35"),
+    # PLA: Ultimaker PLA TDS 1.24 g/cm^3, tensile modulus 2346 MPa (printed); nu 0.36.
+    Material("pla", 1.24, 2346.0, 862.0, True,
+             "Ultimaker PLA technical data sheet (1.24 g/cm^3, E 2346 MPa printed); G from nu = 0.36"),
+    # PETG: typical filament TDS 1.27 g/cm^3, E ~2100 MPa; nu 0.38.
+    Material("petg", 1.27, 2100.0, 761.0, True,
+             "typical PETG filament data sheet (1.27 g/cm^3, E 2.0-2.2 GPa); G from nu = 0.38"),
+)}
+# fmt: on
+
+
+@dataclass(frozen=True)
+class Screw:
+    """Metric machine screw: nominal diameter, clearance hole and head diameter (mm), mass per 6 mm screw (g)."""
+
+    name: str
+    d: float
+    clearance_d: float
+    head_d: float
+    nut_af: float
+    mass_g: float
+
+
+SCREWS: dict[str, Screw] = {
+    # ISO 273 medium clearance holes; ISO 4762 heads; ISO 4032 nut widths across flats.
+    "M2": Screw("M2", 2.0, 2.4, 3.8, 4.0, 0.25),
+    "M2.5": Screw("M2.5", 2.5, 2.9, 4.5, 5.0, 0.4),
+    "M3": Screw("M3", 3.0, 3.4, 5.5, 5.5, 0.6),
+}
+
+# Flight-controller stack hole spacing (square, mm) and the board outline it implies (mm).
+STACK_PATTERNS: dict[str, tuple[float, float]] = {
+    "20x20": (20.0, 27.0),
+    "30.5x30.5": (30.5, 36.0),
+}
+
+
+@dataclass(frozen=True)
+class MotorPreset:
+    """Brushless motor: square bolt spacing (mm), screw, bell diameter and height (mm), mass (g)."""
+
+    name: str
+    bolt_spacing: float
+    screw: str
+    bell_d: float
+    height: float
+    mass_g: float
+    shaft_boss_d: float
+
+
+MOTOR_PRESETS: dict[str, MotorPreset] = {
+    # 1104 class (paper's carbon build): 9 x 9 mm M2 pattern, ~14 mm bell, ~6 g.
+    "1104": MotorPreset("1104", 9.0, "M2", 14.0, 13.0, 6.0, 5.0),
+    # 1404 class (bamboo build): 9 x 9 mm M2 pattern, ~18 mm bell, ~9 g.
+    "1404": MotorPreset("1404", 9.0, "M2", 18.0, 15.0, 9.0, 5.5),
+}
+
+
+def lookup(table: dict, name: str, what: str):
+    """Return table[name] or raise ValueError listing the valid choices."""
+    try:
+        return table[name]
+    except KeyError:
+        raise ValueError(
+            f"unknown {what} {name!r}; valid choices: {', '.join(sorted(table))}"
+        ) from None

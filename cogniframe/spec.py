@@ -1,0 +1,343 @@
+"""Stage 1: a params YAML file -> a validated, frozen `Spec`.
+
+Millimetres, grams, newtons, seconds unless a key's name says otherwise (`k_n_per_m`,
+`design_drop_height_cm`). Unknown keys are errors that suggest the closest valid key; every
+error names the file, the key path (and line) and the fix, and is raised as `UserError`.
+"""
+
+from __future__ import annotations
+
+import difflib
+import hashlib
+import json
+from pathlib import Path
+from typing import Annotated, Any
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from .errors import UserError
+from .materials import MATERIALS, MOTOR_PRESETS, SCREWS, STACK_PATTERNS, Material, MotorPreset
+
+Pos = Annotated[float, Field(gt=0)]
+Frac = Annotated[float, Field(ge=0, le=1)]
+
+
+class _M(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class MaterialDef(_M):
+    """A user-defined material (same fields as the built-in library)."""
+
+    density_g_cm3: Annotated[float, Field(gt=0, le=25, description="density, g/cm^3")]
+    e_mpa: Annotated[float, Field(gt=0, description="Young's modulus, MPa")]
+    g_mpa: Annotated[float, Field(gt=0, description="shear modulus, MPa")]
+    printed: bool = Field(False, description="true for filaments (joints, core)")
+    source: str = Field("user-defined in the params file", description="where the numbers come from")
+
+
+class FrameSection(_M):
+    width: Annotated[float, Field(ge=80, le=600, description="outside size along x (left-right), mm")] = 210
+    depth: Annotated[float, Field(ge=80, le=600, description="outside size along y (front-rear), mm")] = 210
+    height: Annotated[float, Field(ge=50, le=400, description="outside height, mm")] = 120
+    knee_inset: Annotated[float, Field(ge=0, le=80, description="how far each mid-height knee sits inside the corner, along x and along y, mm (the hourglass bow)")] = 12
+    knee_height: Annotated[float, Field(gt=0.2, lt=0.8, description="knee height as a fraction of the frame height")] = 0.5
+    arm_spacing: Annotated[float, Field(ge=6, le=40, description="centre distance between the two parallel rods of an arm, mm")] = 12
+    struts: bool = Field(True, description="damping struts from the bottom corners to the core")
+
+
+class RodsSection(_M):
+    material: str = Field("carbon_rod", description="material name (library or `materials:`)")
+    diameter: Annotated[float, Field(ge=1.0, le=8.0, description="rod diameter, mm")] = 3.0
+    stock_length: Annotated[float, Field(ge=50, le=3000, description="length of the rods you buy, mm")] = 1000
+    kerf: Annotated[float, Field(ge=0, le=5, description="material lost per cut, mm")] = 1.0
+
+
+class JointsSection(_M):
+    material: str = Field("tpu_95a", description="joint filament (TPU 95A in the paper)")
+    wall: Annotated[float, Field(ge=0.8, le=6, description="wall around every rod socket, mm")] = 1.6
+    socket_depth: Annotated[float, Field(ge=4, le=40, description="how deep a rod goes into its socket, mm")] = 10
+    seat: Annotated[float, Field(ge=0, le=20, description="minimum distance from a joint's centre to a socket bottom, mm (raised automatically where sockets meet at sharp angles)")] = 3.0
+    fit_clearance: dict[str, Annotated[float, Field(ge=-0.3, le=1.0)]] = Field(
+        default_factory=lambda: {"tpu_95a": 0.1},
+        description="socket hole = rod diameter + this, per joint material, mm; tune with `cogniframe coupon`",
+    )
+    hinge_thickness: Annotated[float, Field(ge=0.6, le=4, description="thickness of the living-hinge web where the frame folds, mm")] = 1.2
+
+
+class BatterySection(_M):
+    length: Annotated[float, Field(gt=10, le=200, description="mm")] = 70
+    width: Annotated[float, Field(gt=10, le=100, description="mm")] = 35
+    height: Annotated[float, Field(gt=3, le=60, description="mm")] = 15
+    mass: Annotated[float, Field(gt=0, le=500, description="g")] = 58
+
+
+class ComputerSection(_M):
+    name: str = "Raspberry Pi Zero"
+    hole_spacing: tuple[Pos, Pos] = Field((58.0, 23.0), description="mounting hole rectangle, mm")
+    screw: str = "M2.5"
+
+
+class CoreSection(_M):
+    material: str = Field("abs", description="rigid core filament (ABS or PLA)")
+    infill: Frac = Field(0.10, description="infill fraction of the core parts (0.10 = 10 %)")
+    plate_size: Annotated[float, Field(ge=30, le=200, description="side of the square core plate, mm; the TPU core links sit just outside its corners")] = 40
+    plate_thickness: Annotated[float, Field(ge=1.5, le=8, description="mm")] = 3.0
+    stack_pattern: str = Field("20x20", description="flight-controller/ESC stack hole pattern: 20x20 or 30.5x30.5")
+    stack_screw: str = "M2"
+    battery: BatterySection = BatterySection()
+    battery_clearance: Annotated[float, Field(ge=3, le=80, description="height of the battery holder's underside above the ground when the frame stands, mm (the crash clearance)")] = 16
+    computer: ComputerSection | None = ComputerSection()
+
+
+class MotorsSection(_M):
+    model: str = Field("1104", description="motor preset (sets bolt pattern, size, mass): " + ", ".join(MOTOR_PRESETS))
+    bolt_spacing: Annotated[float, Field(gt=3, le=40, description="override the preset's square bolt spacing, mm")] | None = None
+    screw: str | None = Field(None, description="override the preset's screw size")
+    mass: Annotated[float, Field(gt=0, le=100, description="override the preset's mass, g each")] | None = None
+    radius: Annotated[float, Field(ge=20, le=300, description="motor axis distance from the frame centre, in plan, mm")] = 82
+    prop_diameter: Annotated[float, Field(ge=25, le=260, description="propeller diameter, mm (3 in = 76.2)")] = 76.2
+    prop_mass: Annotated[float, Field(ge=0, le=30, description="g each")] = 1.0
+
+
+class Component(_M):
+    name: str
+    mass: Annotated[float, Field(ge=0, le=1000, description="g")]
+    qty: Annotated[int, Field(ge=1, le=100)] = 1
+
+
+class PrinterSection(_M):
+    bed: tuple[Pos, Pos, Pos] = Field((120.0, 120.0, 120.0), description="build volume x, y, z, mm")
+    nozzle: Annotated[float, Field(ge=0.1, le=1.2)] = 0.4
+    layer_height: Annotated[float, Field(ge=0.05, le=0.6)] = 0.2
+    perimeters: Annotated[int, Field(ge=1, le=10)] = 2
+    top_bottom_layers: Annotated[int, Field(ge=1, le=20)] = 4
+    margin: Annotated[float, Field(ge=0, le=20, description="gap between parts on a plate, mm")] = 4
+
+
+class RequirementsSection(_M):
+    mass_limit: Annotated[float, Field(gt=0, le=25000, description="all-up weight limit, g")] = 250
+    design_drop_height_cm: Annotated[float, Field(ge=0, le=2000, description="the drop the frame must survive without a battery-holder strike, cm")] = 100
+    clearance: Annotated[float, Field(gt=0, le=200, description="payload travel before the battery holder hits the ground, mm; null = from the geometry")] | None = None
+    drop_heights_cm: tuple[Annotated[float, Field(gt=0, le=2000)], ...] = (50, 100, 150, 262)
+
+
+class ModelSection(_M):
+    k_n_per_m: Annotated[float, Field(gt=0, le=1e7, description="measured stiffness (from `cogniframe fit`); null = predict from the frame")] | None = None
+    c_n_s_per_m: Annotated[float, Field(gt=0, le=1e5, description="measured damping; null = from damping_ratio")] | None = None
+    damping_ratio: Annotated[float, Field(gt=0, le=5, description="used when c_n_s_per_m is null (paper: 0.558)")] = 0.558
+
+
+class Spec(_M):
+    """The whole design. Load with `load(path)`; derived lookups are methods."""
+
+    name: str = Field("frame", description="design name; the output folder is out/<name>")
+    materials: dict[str, MaterialDef] = Field(default_factory=dict, description="extra or overriding materials")
+    frame: FrameSection = FrameSection()
+    rods: RodsSection = RodsSection()
+    joints: JointsSection = JointsSection()
+    core: CoreSection = CoreSection()
+    motors: MotorsSection = MotorsSection()
+    components: tuple[Component, ...] = ()
+    printer: PrinterSection = PrinterSection()
+    requirements: RequirementsSection = RequirementsSection()
+    model: ModelSection = ModelSection()
+
+    @model_validator(mode="after")
+    def _names_resolve(self) -> "Spec":
+        lib = {**MATERIALS, **self.materials}
+        for path, value in (("rods.material", self.rods.material), ("joints.material", self.joints.material),
+                            ("core.material", self.core.material)):
+            if value not in lib:
+                raise _KeyProblem(path, f"unknown material {value!r}", f"use one of {', '.join(sorted(lib))}, or define it under `materials:`")
+        if self.joints.material not in self.joints.fit_clearance:
+            raise _KeyProblem("joints.fit_clearance", f"no fit clearance for the joint material {self.joints.material!r}",
+                              f"add `{self.joints.material}: 0.1` under joints.fit_clearance (print `cogniframe coupon` to find yours)")
+        for path, value, table in (("core.stack_pattern", self.core.stack_pattern, STACK_PATTERNS),
+                                   ("core.stack_screw", self.core.stack_screw, SCREWS),
+                                   ("motors.model", self.motors.model, MOTOR_PRESETS),
+                                   ("motors.screw", self.motors.screw or "M2", SCREWS),
+                                   ("core.computer.screw", self.core.computer.screw if self.core.computer else "M2", SCREWS)):
+            if value not in table:
+                raise _KeyProblem(path, f"unknown value {value!r}", f"use one of {', '.join(table)}")
+        # A socket wall thinner than two extrusion lines prints as a single fragile line.
+        min_wall = 2 * self.printer.nozzle
+        if self.joints.wall < min_wall:
+            raise _KeyProblem("joints.wall", f"{self.joints.wall} mm is thinner than two extrusion lines of the {self.printer.nozzle} mm nozzle",
+                              f"set joints.wall to at least {min_wall:g}")
+        if self.joints.socket_depth < 2 * self.rods.diameter:
+            raise _KeyProblem("joints.socket_depth", f"{self.joints.socket_depth} mm holds a {self.rods.diameter} mm rod by less than two diameters and will let go on impact",
+                              f"set joints.socket_depth to at least {2 * self.rods.diameter:g}")
+        if self.joints.wall < 0.4 * self.rods.diameter:
+            raise _KeyProblem("joints.wall", f"{self.joints.wall} mm of TPU around a {self.rods.diameter} mm rod splits on impact (needs 40 % of the rod diameter)",
+                              f"set joints.wall to at least {0.4 * self.rods.diameter:.2f}")
+        if self.material(self.rods.material).printed:
+            raise _KeyProblem("rods.material", f"{self.rods.material!r} is a printed filament; rods are never printed", "use carbon_rod or bamboo")
+        core_half = self.core.plate_size / 2
+        inner_half = min(self.frame.width, self.frame.depth) / 2 - self.frame.knee_inset - self.rods.diameter - 2 * self.joints.wall
+        if core_half >= inner_half:
+            raise _KeyProblem("core.plate_size", f"a {self.core.plate_size} mm core does not fit inside the {self.frame.width} x {self.frame.depth} mm frame with its knees",
+                              f"make core.plate_size smaller than {2 * inner_half:.0f} or the frame larger")
+        return self
+
+    # -- derived lookups (pure) -------------------------------------------------------------
+    def material(self, name: str) -> Material:
+        if name in self.materials:
+            d = self.materials[name]
+            return Material(name, d.density_g_cm3, d.e_mpa, d.g_mpa, d.printed, d.source)
+        return MATERIALS[name]
+
+    @property
+    def fit_clearance(self) -> float:
+        """Socket hole clearance for the joint material, mm."""
+        return self.joints.fit_clearance[self.joints.material]
+
+    @property
+    def bore(self) -> float:
+        """Socket hole diameter, mm."""
+        return self.rods.diameter + self.fit_clearance
+
+    @property
+    def motor(self) -> MotorPreset:
+        p = MOTOR_PRESETS[self.motors.model]
+        return MotorPreset(p.name, self.motors.bolt_spacing or p.bolt_spacing, self.motors.screw or p.screw,
+                           p.bell_d, p.height, self.motors.mass or p.mass_g, p.shaft_boss_d)
+
+    def digest(self, *sections: str) -> str:
+        """sha256 of the named sections (all when none): a cache key for what a part uses."""
+        data = self.model_dump(mode="json")
+        if sections:
+            data = {s: data[s] for s in sections}
+        return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()
+
+
+class _KeyProblem(ValueError):
+    """A cross-field problem tied to one key path (turned into a UserError by `load`)."""
+
+    def __init__(self, path: str, problem: str, fix: str):
+        super().__init__(f"{problem}; fix: {fix}")
+        self.path, self.problem, self.fix = path, problem, fix
+
+
+# -- loading and error messages ------------------------------------------------------------
+
+def load(path: str | Path) -> Spec:
+    """Read and validate a params file. Raises UserError with a plain message on any problem."""
+    path = Path(path)
+    if not path.is_file():
+        raise UserError(f"{path}: no such params file. Give the path of a YAML file such as params/bamboo.yaml.")
+    text = path.read_text(encoding="utf-8")
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as e:
+        mark = getattr(e, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        raise UserError(f"{path}: not valid YAML{where} ({getattr(e, 'problem', e)}). Fix the indentation or quoting there.") from None
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise UserError(f"{path}: the file must be a mapping of sections (frame:, rods:, joints: ...), not a {type(data).__name__}.")
+    data.setdefault("name", path.stem)
+    return from_dict(data, source=str(path), text=text)
+
+
+def from_dict(data: dict[str, Any], source: str = "<params>", text: str | None = None) -> Spec:
+    """Validate a params mapping; errors name `source` and the key path."""
+    try:
+        return Spec.model_validate(data)
+    except ValidationError as e:
+        raise UserError(_explain(e, source, text)) from None
+
+
+def _explain(err: ValidationError, source: str, text: str | None) -> str:
+    lines = []
+    for item in err.errors():
+        ctx_err = (item.get("ctx") or {}).get("error")
+        if isinstance(ctx_err, _KeyProblem):
+            loc = tuple(ctx_err.path.split("."))
+            lines.append(f"{source}: {ctx_err.path}{_line(text, loc)}: {ctx_err.problem}. Fix: {ctx_err.fix}.")
+            continue
+        loc = tuple(str(p) for p in item["loc"])
+        key = ".".join(loc) or "(top level)"
+        if item["type"] == "extra_forbidden":
+            valid = _valid_keys(loc[:-1])
+            guess = difflib.get_close_matches(loc[-1], valid, n=1, cutoff=0.5)
+            hint = f"did you mean '{guess[0]}'? " if guess else ""
+            lines.append(f"{source}: {key}{_line(text, loc)}: unknown key. Fix: {hint}valid keys here are {', '.join(valid)}.")
+        else:
+            got = item.get("input")
+            got_s = "" if isinstance(got, (dict, list)) else f" (got {got!r})"
+            lines.append(f"{source}: {key}{_line(text, loc)}: {item['msg'].lower()}{got_s}. Fix: {_fix_hint(loc)}")
+    return "\n".join(lines)
+
+
+def _model_at(loc: tuple[str, ...]) -> type[BaseModel] | None:
+    model: Any = Spec
+    for part in loc:
+        if part.isdigit():
+            continue
+        field = model.model_fields.get(part) if isinstance(model, type) and issubclass(model, BaseModel) else None
+        if field is None:
+            return None
+        ann = field.annotation
+        candidates = [ann, *getattr(ann, "__args__", ())]
+        for c in candidates:
+            for cc in (c, *getattr(c, "__args__", ())):
+                if isinstance(cc, type) and issubclass(cc, BaseModel):
+                    model = cc
+                    break
+            else:
+                continue
+            break
+        else:
+            return None
+    return model if isinstance(model, type) and issubclass(model, BaseModel) else None
+
+
+def _valid_keys(loc: tuple[str, ...]) -> list[str]:
+    model = _model_at(loc)
+    return list(model.model_fields) if model else []
+
+
+def _fix_hint(loc: tuple[str, ...]) -> str:
+    model = _model_at(loc[:-1])
+    field = model.model_fields.get(loc[-1]) if model else None
+    desc = field.description if field and field.description else None
+    for meta in getattr(field, "metadata", []) if field else []:
+        bounds = [f"{op} {getattr(meta, attr)}" for attr, op in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<="))
+                  if getattr(meta, attr, None) is not None]
+        if bounds:
+            desc = (desc + "; " if desc else "") + "must be " + " and ".join(bounds)
+    return f"set {'.'.join(loc)} to a valid value ({desc})." if desc else f"check the value of {'.'.join(loc)}."
+
+
+def _line(text: str | None, loc: tuple[str, ...]) -> str:
+    """' (line N)' for a key path in the YAML source, when it can be found."""
+    if not text:
+        return ""
+    try:
+        node = yaml.compose(text)
+    except yaml.YAMLError:
+        return ""
+    line = None
+    for part in loc:
+        if isinstance(node, yaml.MappingNode):
+            for k, v in node.value:
+                if k.value == part:
+                    line, node = k.start_mark.line + 1, v
+                    break
+            else:
+                break
+        elif isinstance(node, yaml.SequenceNode) and part.isdigit() and int(part) < len(node.value):
+            node = node.value[int(part)]
+            line = node.start_mark.line + 1
+        else:
+            break
+    return f" (line {line})" if line else ""
+
+
+def json_schema() -> dict:
+    """JSON Schema of a params file, for editor autocompletion."""
+    return Spec.model_json_schema()
+
