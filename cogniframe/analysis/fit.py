@@ -132,6 +132,8 @@ class HeightFit:
     ``rmse_g``: sqrt of the height's mean per-trial MSE over the fit window, in G.
     Curves (``t_s`` in s from the impact start; ``mean_g``, ``std_g`` of the measured |a| and
     ``model_g``, the fitted model as the loss sees it, in G) span the trimmed length.
+    ``median_window_samples``: median length of the trials' fit windows (impact to peak); a
+    few trials peak late on a second bounce, so the longest window is not representative.
     """
 
     height_cm: float
@@ -143,7 +145,7 @@ class HeightFit:
     mean_g: np.ndarray = field(repr=False)
     std_g: np.ndarray = field(repr=False)
     model_g: np.ndarray = field(repr=False)
-    fit_window_samples: int = 0
+    median_window_samples: int = 0
 
     def to_dict(self) -> dict:
         return {
@@ -530,7 +532,7 @@ def fit_drop_tests(
             std_g=hd.a_g.std(axis=0),
             model_g=model_accel_g(mass_kg, c, k, hd.height_cm, length, lowpass_rad_per_s,
                                   sample_rate_hz, g),
-            fit_window_samples=int(hd.peak_index.max()),
+            median_window_samples=int(np.median(hd.peak_index)),
         ))
     skipped = tuple(extra_skipped) + tuple(s for hd in heights for s in hd.skipped)
     return FitResult(

@@ -1,0 +1,131 @@
+"""Figures for the drop model and the drop-test fit (PNG, deterministic bytes).
+
+Figures are built on matplotlib's object API with the Agg canvas, so nothing touches pyplot's
+global state or the user's chosen backend, and matplotlib is only imported when a figure is
+drawn. PNGs are written without the "Software" metadata key, so the same input gives the same
+bytes (useful for caching and for diffs in CI).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:  # only for annotations; importing the analysis modules is cheap anyway
+    from cogniframe.analysis.fit import FitResult
+    from cogniframe.analysis.impact import DropResult
+
+DPI = 100
+"""Pixels per inch: a figure of (w, h) inches is (w * DPI, h * DPI) pixels."""
+
+
+def _figure(width_in: float, height_in: float, nrows: int = 1, ncols: int = 1):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width_in, height_in), dpi=DPI, layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(nrows, ncols, squeeze=False)
+    return fig, axes
+
+
+def _save(fig, path: Path | str) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    # No bbox_inches="tight": the pixel size must be what the figure size says.
+    fig.savefig(path, format="png", dpi=DPI, metadata={"Software": None})
+    return path
+
+
+def plot_drop_response(result: "DropResult", path: Path | str) -> Path:
+    """Displacement (mm) and |acceleration| (G) vs time (ms) per height, with the clearance.
+
+    Curves run to 1.2 x the latest time of x_max: past the clearance they are the
+    unconstrained model, which the dashed clearance line marks as no longer valid.
+    Image: 800 x 700 px.
+    """
+    from cogniframe.analysis.impact import trajectory
+
+    fig, axes = _figure(8.0, 7.0, 2, 1)
+    ax_x, ax_a = axes[0, 0], axes[1, 0]
+    finite = [h.t_max_s for h in result.heights if np.isfinite(h.t_max_s)]
+    t_end = 1.2 * max(finite) if finite else None
+    for h in result.heights:
+        t, x, _, a_g = trajectory(result.mass_kg, result.c_n_s_per_m, result.k_n_per_m,
+                                  h.height_cm, t_end_s=t_end, n=1000)
+        label = f"{h.height_cm:g} cm" + (" (strikes)" if h.strikes else "")
+        (line,) = ax_x.plot(t * 1e3, x * 1e3, label=label)
+        ax_a.plot(t * 1e3, a_g, color=line.get_color(), label=label)
+    ax_x.axhline(result.clearance_mm, color="k", linestyle="--", linewidth=1,
+                 label=f"clearance {result.clearance_mm:g} mm")
+    ax_x.set_ylabel("payload displacement x (mm)")
+    ax_x.set_title(
+        f"m = {result.mass_kg:g} kg, c = {result.c_n_s_per_m:.4g} N s/m, "
+        f"k = {result.k_n_per_m:.4g} N/m, zeta = {result.damping_ratio:.3f}; "
+        f"max safe height {result.max_safe_height_cm:.1f} cm"
+    )
+    ax_a.set_ylabel("|acceleration| (G)")
+    ax_a.set_xlabel("time since touch-down (ms)")
+    for ax in (ax_x, ax_a):
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="best", fontsize="small")
+    return _save(fig, path)
+
+
+def plot_energy_split(result: "DropResult", path: Path | str) -> Path:
+    """Stacked bars per height: share of the touch-down energy in spring, damper and rigid
+    collision (%), as in the paper. Image: 700 x 450 px."""
+    fig, axes = _figure(7.0, 4.5)
+    ax = axes[0, 0]
+    labels = [f"{h.height_cm:g} cm" for h in result.heights]
+    pos = np.arange(len(labels))
+    bottom = np.zeros(len(labels))
+    for name, key, color in (
+        ("spring", "energy_spring_pct", "tab:blue"),
+        ("damper", "energy_damper_pct", "tab:orange"),
+        ("rigid collision", "energy_rigid_pct", "tab:red"),
+    ):
+        vals = np.array([getattr(h, key) for h in result.heights])
+        ax.bar(pos, vals, 0.6, bottom=bottom, label=name, color=color)
+        bottom += vals
+    ax.set_xticks(pos, labels)
+    ax.set_ylabel("share of impact energy (%)")
+    ax.set_ylim(0, 118)  # headroom for the legend above the 100 % bars
+    ax.set_title(f"Energy split (c = {result.c_n_s_per_m:.4g} N s/m, "
+                 f"k = {result.k_n_per_m:.4g} N/m)")
+    ax.legend(loc="upper center", ncol=3, fontsize="small")
+    ax.grid(True, axis="y", alpha=0.3)
+    return _save(fig, path)
+
+
+def plot_fit(fit_result: "FitResult", path: Path | str) -> Path:
+    """The paper's "raw measurements vs our model" figure: per height, measured mean +- std of
+    |a| (G) from the impact start, and the fitted model as the loss sees it (low-passed).
+    The shaded span is the median trial's fit window (impact to measured peak); the plot
+    shows five times that, at least 40 samples. Image: 500 px wide per height, 450 px tall.
+    """
+    n = len(fit_result.heights)
+    fig, axes = _figure(5.0 * n, 4.5, 1, n)
+    for ax, h in zip(axes[0], fit_result.heights):
+        span = min(h.t_s.size, max(5 * h.median_window_samples, 40))
+        t_ms = h.t_s[:span] * 1e3
+        mean, std = h.mean_g[:span], h.std_g[:span]
+        ax.fill_between(t_ms, mean - std, mean + std, alpha=0.3, color="tab:blue",
+                        label="measured mean ± std")
+        ax.plot(t_ms, mean, color="tab:blue")
+        ax.plot(t_ms, h.model_g[:span], color="tab:red", label="model")
+        if h.median_window_samples:
+            ax.axvspan(0, h.t_s[h.median_window_samples - 1] * 1e3, color="0.9", zorder=0,
+                       label="median fit window")
+        ax.set_title(f"{h.height_cm:g} cm: {h.trials_used} trials, RMSE {h.rmse_g:.1f} G")
+        ax.set_xlabel("time since impact (ms)")
+        ax.set_ylabel("|a| (G)")
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="upper right", fontsize="small")
+    fig.suptitle(
+        f"c = {fit_result.c_n_s_per_m:.4g} N s/m, k = {fit_result.k_n_per_m:.4g} N/m, "
+        f"zeta = {fit_result.damping_ratio:.3f}, m = {fit_result.mass_kg:g} kg"
+    )
+    return _save(fig, path)
