@@ -1,0 +1,342 @@
+"""`cogniframe drop` (the impact model) and `cogniframe fit` (c, k from drop tests).
+
+Both raise :class:`cogniframe.errors.UserError` for anything the user can fix; the CLI entry
+point prints it and exits with code 2. ``register(app)`` adds both commands to a Typer app.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import sys
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+from cogniframe.errors import UserError
+
+MANIFEST = "drop.yaml"
+"""Per-folder manifest read by `cogniframe fit`: ``height_cm:`` and optional ``mass_kg:``."""
+
+_HEIGHT_IN_NAME = re.compile(r"(\d+(?:\.\d+)?)\s*cm", re.IGNORECASE)
+
+
+def _stdout():
+    from rich.console import Console
+
+    return Console()
+
+
+def _stderr():
+    from rich.console import Console
+
+    return Console(stderr=True)
+
+
+def _positive(value: float, option: str, unit: str, example: str, allow_zero: bool = False) -> float:
+    ok = (value >= 0 if allow_zero else value > 0) and math.isfinite(value)
+    if not ok:
+        need = "zero or more" if allow_zero else "greater than zero"
+        raise UserError(f"Option {option} is {value:g}; it must be a number {need} in {unit} "
+                        f"(e.g. {option} {example}).")
+    return value
+
+
+def _parse_heights(text: str) -> list[float]:
+    try:
+        heights = [float(p) for p in text.replace(" ", "").split(",") if p]
+    except ValueError:
+        raise UserError(f"Option --heights is '{text}'; give drop heights in cm separated by "
+                        "commas, e.g. --heights 50,100,150.") from None
+    if not heights:
+        raise UserError("Option --heights is empty; give drop heights in cm separated by "
+                        "commas, e.g. --heights 50,100,150.")
+    for h in heights:
+        _positive(h, "--heights", "cm", "50,100,150", allow_zero=True)
+    return heights
+
+
+# --------------------------------------------------------------------------------------------
+# drop
+
+
+def drop(
+    mass_kg: Annotated[float, typer.Option("--mass-kg", "--mass", help="Total mass in kg (paper's crash-test build: 0.241).")],
+    k: Annotated[float, typer.Option("--k", help="Stiffness k in N/m (paper: 7040).")],
+    c: Annotated[Optional[float], typer.Option("--c", help="Damping c in N s/m (paper: 46). Give --c or --zeta.")] = None,
+    zeta: Annotated[Optional[float], typer.Option("--zeta", help="Damping ratio instead of --c: c = 2 zeta sqrt(k m) (paper: 0.558).")] = None,
+    heights: Annotated[str, typer.Option("--heights", help="Drop heights in cm, comma-separated.")] = "50,100,150",
+    clearance_mm: Annotated[float, typer.Option("--clearance-mm", help="Payload travel before the battery holder hits the ground, mm.")] = 16.0,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the result as one JSON object and nothing else.")] = False,
+    plots: Annotated[Optional[Path], typer.Option("--plots", help="Folder to write drop_response.png and energy_split.png into.")] = None,
+) -> None:
+    """Drop the payload on the exoskeleton (mass-spring-damper model): compression, peak G,
+    energy split and the highest drop that keeps the battery holder off the ground."""
+    from cogniframe.analysis.impact import damping_from_ratio, evaluate
+
+    _positive(mass_kg, "--mass-kg", "kg", "0.241")
+    _positive(k, "--k", "N/m", "7040")
+    _positive(clearance_mm, "--clearance-mm", "mm", "16")
+    if (c is None) == (zeta is None):
+        raise UserError("Give exactly one of --c (damping in N s/m, e.g. --c 46) or --zeta "
+                        "(damping ratio, e.g. --zeta 0.558); "
+                        + ("both were given." if c is not None else "neither was given."))
+    if zeta is not None:
+        c = damping_from_ratio(_positive(zeta, "--zeta", "(dimensionless)", "0.558", True),
+                               k, mass_kg)
+    else:
+        _positive(c, "--c", "N s/m", "46", allow_zero=True)
+    result = evaluate(mass_kg, c, k, _parse_heights(heights), clearance_mm)
+
+    written: list[Path] = []
+    if plots is not None:
+        from cogniframe.report.drop_plots import plot_drop_response, plot_energy_split
+
+        written = [plot_drop_response(result, plots / "drop_response.png"),
+                   plot_energy_split(result, plots / "energy_split.png")]
+
+    if as_json:
+        sys.stdout.write(json.dumps(result.to_dict()) + "\n")
+        for p in written:
+            _stderr().print(f"wrote {p}")
+        return
+
+    from rich.table import Table
+
+    out = _stdout()
+    table = Table(title=f"Drop model: m = {mass_kg:g} kg, c = {c:.4g} N s/m, k = {k:.4g} N/m, "
+                        f"zeta = {result.damping_ratio:.3f}")
+    for col in ("h cm", "v m/s", "x_max mm", "t_max ms", "peak G", "spring %",
+                "damper %", "rigid %", "strike"):
+        table.add_column(col, justify="right")
+    for h in result.heights:
+        table.add_row(
+            f"{h.height_cm:g}", f"{h.v_impact_m_per_s:.2f}", f"{h.x_max_mm:.2f}",
+            f"{h.t_max_s * 1e3:.2f}" if math.isfinite(h.t_max_s) else "-",
+            f"{h.peak_g:.1f}", f"{h.energy_spring_pct:.1f}", f"{h.energy_damper_pct:.1f}",
+            f"{h.energy_rigid_pct:.1f}", "[red]yes[/red]" if h.strikes else "no",
+        )
+    out.print(table)
+    out.print(f"Max safe height: {result.max_safe_height_cm:.1f} cm "
+              f"(x_max stays within the {clearance_mm:g} mm clearance)")
+    for p in written:
+        out.print(f"wrote {p}")
+
+
+# --------------------------------------------------------------------------------------------
+# fit
+
+
+def _read_manifest(folder: Path) -> dict:
+    """``drop.yaml`` of a folder as {"height_cm": float|None, "mass_kg": float|None}."""
+    path = folder / MANIFEST
+    if not path.is_file():
+        return {}
+    from ruamel.yaml import YAML, YAMLError
+
+    try:
+        data = YAML(typ="safe").load(path.read_text())
+    except YAMLError as exc:
+        raise UserError(f"Manifest '{path}' is not valid YAML ({str(exc).splitlines()[0]}). "
+                        "Write it as two lines, e.g. 'height_cm: 50' and 'mass_kg: 0.241'.") from None
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise UserError(f"Manifest '{path}' must be a mapping such as 'height_cm: 50' "
+                        "(and optionally 'mass_kg: 0.241').")
+    unknown = set(data) - {"height_cm", "mass_kg"}
+    if unknown:
+        raise UserError(f"Manifest '{path}' has unknown key(s) {', '.join(sorted(map(str, unknown)))}; "
+                        "the keys are 'height_cm' (required) and 'mass_kg' (optional).")
+    out = {}
+    for key, unit, example in (("height_cm", "cm", "50"), ("mass_kg", "kg", "0.241")):
+        if key in data:
+            v = data[key]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0 or not math.isfinite(v):
+                raise UserError(f"Manifest '{path}': key '{key}' is {v!r}; it must be a positive "
+                                f"number in {unit} (e.g. '{key}: {example}').")
+            out[key] = float(v)
+    return out
+
+
+def _resolve_sources(data: list[Path], heights: list[float]) -> tuple[list[tuple[float, Path]], list[float]]:
+    """Pair every DATA path with its height (cm); also return the masses manifests declare."""
+    if heights and len(heights) != len(data):
+        raise UserError(f"Got {len(heights)} --height value(s) for {len(data)} DATA argument(s). "
+                        "Give --height once per DATA argument, in the same order, or leave it "
+                        f"out and put a '{MANIFEST}' with 'height_cm: <cm>' in each data folder.")
+    pairs, masses = [], []
+    for i, p in enumerate(data):
+        if not p.exists():
+            raise UserError(f"Drop-test data '{p}' does not exist. Give folders of trial files "
+                            "(.bin from the logger, or .csv) or the files themselves.")
+        folder = p if p.is_dir() else p.parent
+        manifest = _read_manifest(folder)
+        if "mass_kg" in manifest:
+            masses.append(manifest["mass_kg"])
+        if heights:
+            h = heights[i]
+            _positive(h, "--height", "cm", "50")
+        elif "height_cm" in manifest:
+            h = manifest["height_cm"]
+        else:
+            m = _HEIGHT_IN_NAME.findall(folder.name)
+            if not m:
+                raise UserError(
+                    f"No drop height for '{p}': give --height <cm> (once per DATA argument), or "
+                    f"add '{folder / MANIFEST}' containing 'height_cm: <cm>', or name the folder "
+                    "after the height (e.g. SoftBottom_50cm).")
+            h = float(m[-1])
+        pairs.append((h, p))
+    return pairs, masses
+
+
+def _load_params(path: Path):
+    """Round-trip load of the --write params file (checked before any work is done)."""
+    from ruamel.yaml import YAML, YAMLError
+    from ruamel.yaml.comments import CommentedMap
+
+    if not path.is_file():
+        raise UserError(f"Params file '{path}' (from --write) does not exist. Give the params "
+                        "file of your build; the fitted values go into its 'model:' section.")
+    yaml = YAML()  # round-trip: keeps comments, key order and quoting
+    yaml.preserve_quotes = True
+    try:
+        doc = yaml.load(path.read_text())
+    except YAMLError as exc:
+        raise UserError(f"Params file '{path}' (from --write) is not valid YAML "
+                        f"({str(exc).splitlines()[0]}); fix it before writing into it.") from None
+    if doc is None:
+        doc = CommentedMap()
+    if not isinstance(doc, dict):
+        raise UserError(f"Params file '{path}' (from --write) must be a YAML mapping at the top "
+                        "level (keys such as 'model:').")
+    model = doc.get("model")
+    if model is not None and not isinstance(model, dict):
+        raise UserError(f"Params file '{path}': key 'model' is {model!r}, not a mapping. Make it "
+                        "a section, e.g. 'model:' followed by indented 'k_n_per_m: 7040'.")
+    return yaml, doc
+
+
+def _store_params(path: Path, yaml, doc, c: float, k: float) -> None:
+    """Set model.k_n_per_m and model.c_n_s_per_m (creating 'model:' if absent) and save."""
+    from ruamel.yaml.comments import CommentedMap
+
+    if doc.get("model") is None:
+        doc["model"] = CommentedMap()
+    # Six significant digits: more than the data supports, and the file stays readable.
+    doc["model"]["k_n_per_m"] = float(f"{k:.6g}")
+    doc["model"]["c_n_s_per_m"] = float(f"{c:.6g}")
+    with path.open("w") as fh:
+        yaml.dump(doc, fh)
+
+
+def fit(
+    data: Annotated[list[Path], typer.Argument(help="Folders of trials (.bin logger files or .csv), or trial files. One height per argument.", show_default=False)],
+    height: Annotated[Optional[list[float]], typer.Option("--height", help="Drop height in cm, once per DATA argument in order. Without it: 'height_cm' from the folder's drop.yaml, else a height in the folder name (SoftBottom_50cm).")] = None,
+    mass_kg: Annotated[Optional[float], typer.Option("--mass", "--mass-kg", help="Mass in kg of the dropped build; defaults to 'mass_kg' in drop.yaml.")] = None,
+    static: Annotated[Optional[Path], typer.Option("--static", help="Static test CSV (force_n, displacement_mm): also report the static k.")] = None,
+    write: Annotated[Optional[Path], typer.Option("--write", help="Params YAML: store the fitted k_n_per_m and c_n_s_per_m under 'model:' (comments kept).")] = None,
+    plot: Annotated[Optional[Path], typer.Option("--plot", help="Write the measured-vs-model figure to this PNG (no figure without it).")] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the fit as one JSON object and nothing else on stdout.")] = False,
+    no_lowpass: Annotated[bool, typer.Option("--no-lowpass", help="Compare the raw model, without the paper's low-pass filter.")] = False,
+    lowpass_rad_per_s: Annotated[float, typer.Option("--lowpass-rad-per-s", help="Low-pass corner w of H(s) = w/(s+w), rad/s.")] = 500.0,
+    loss: Annotated[str, typer.Option("--loss", help="cauchy: log(1 + total MSE) as the paper; mse: the total.")] = "cauchy",
+) -> None:
+    """Fit damping c and stiffness k to accelerometer drop tests with the paper's procedure."""
+    from cogniframe.analysis import fit as F
+
+    if loss not in F.LOSSES:
+        raise UserError(f"Option --loss is '{loss}'; use 'cauchy' (the paper's) or 'mse'.")
+    if not no_lowpass:
+        _positive(lowpass_rad_per_s, "--lowpass-rad-per-s", "rad/s", "500")
+    params = _load_params(write) if write is not None else None
+    pairs, manifest_masses = _resolve_sources(list(data), list(height or []))
+    if mass_kg is None:
+        if not manifest_masses:
+            raise UserError("No mass: give --mass <kg> (the dropped build's total mass, e.g. "
+                            f"--mass 0.241) or add 'mass_kg: <kg>' to each folder's {MANIFEST}.")
+        if max(manifest_masses) - min(manifest_masses) > 1e-9:
+            raise UserError(f"The {MANIFEST} files declare different masses "
+                            f"({', '.join(f'{m:g}' for m in sorted(set(manifest_masses)))} kg); "
+                            "the model fits one mass. Give --mass <kg> to choose.")
+        mass_kg = manifest_masses[0]
+    _positive(mass_kg, "--mass", "kg", "0.241")
+    k_static = F.fit_static_stiffness(static, mass_kg) if static is not None else None
+
+    # Several DATA arguments at the same height are one height: trimmed and averaged together.
+    groups: dict[float, list[Path]] = {}
+    for h, p in pairs:
+        groups.setdefault(h, []).append(p)
+    collected = {h: F.collect_files(ps) for h, ps in groups.items()}
+    total = sum(len(files) for files, _ in collected.values())
+
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+
+    heights_data = []
+    with Progress(TextColumn("reading trials"), BarColumn(), MofNCompleteColumn(),
+                  console=_stderr(), transient=True) as progress:
+        task = progress.add_task("read", total=total)
+        for h, (files, skipped) in sorted(collected.items()):
+            trials, bad = F.load_trials(files, on_file=lambda _p: progress.advance(task))
+            heights_data.append(F.prepare_height(
+                trials, h, skipped=skipped + bad, source=", ".join(map(str, groups[h]))))
+
+    lowpass = None if no_lowpass else lowpass_rad_per_s
+    result = F.fit_drop_tests(heights_data, mass_kg, lowpass_rad_per_s=lowpass, loss=loss)
+
+    if plot is not None:
+        from cogniframe.report.drop_plots import plot_fit
+
+        plot_fit(result, plot)
+    if params is not None:
+        _store_params(write, *params, result.c_n_s_per_m, result.k_n_per_m)
+
+    if as_json:
+        d = result.to_dict()
+        if k_static is not None:
+            d["static_k_n_per_m"] = k_static
+        sys.stdout.write(json.dumps(d) + "\n")
+        err = _stderr()
+        for s in result.skipped:
+            err.print(f"skipped {s}", markup=False, highlight=False, soft_wrap=True)
+        return
+
+    from rich.table import Table
+
+    out = _stdout()
+    summary = Table(title="Drop-test fit", caption=(
+        f"m = {mass_kg:g} kg, loss {loss}, "
+        + ("no low-pass" if lowpass is None else f"low-pass {lowpass:g} rad/s")))
+    summary.add_column("quantity")
+    summary.add_column("value", justify="right")
+    summary.add_row("c (N s/m)", f"{result.c_n_s_per_m:.2f}")
+    summary.add_row("k (N/m)", f"{result.k_n_per_m:.1f}")
+    summary.add_row("damping ratio", f"{result.damping_ratio:.3f}")
+    summary.add_row("loss", f"{result.loss:.4f}")
+    if k_static is not None:
+        summary.add_row("static k (N/m)", f"{k_static:.1f}")
+    if not result.converged:
+        summary.add_row("[red]converged[/red]", "[red]no[/red]")
+    out.print(summary)
+    per = Table(title="Per height")
+    for col in ("height cm", "trials used", "skipped", "median peak G", "RMSE G"):
+        per.add_column(col, justify="right")
+    for h in result.heights:
+        per.add_row(f"{h.height_cm:g}", str(h.trials_used), str(h.trials_skipped),
+                    f"{h.peak_median_g:.1f}", f"{h.rmse_g:.1f}")
+    out.print(per)
+    for s in result.skipped:
+        out.print(f"skipped {s}", markup=False, highlight=False, soft_wrap=True)
+    if plot is not None:
+        out.print(f"wrote {plot}")
+    if write is not None:
+        out.print(f"wrote model.k_n_per_m and model.c_n_s_per_m to {write}")
+
+
+def register(app: typer.Typer) -> None:
+    """Add `drop` and `fit` to ``app``."""
+    app.command("drop")(drop)
+    app.command("fit")(fit)
