@@ -279,8 +279,7 @@ def _node_seat(n: str, pos, edges, inc: list[int], spec: Spec) -> float:
 
 def _core(spec: Spec) -> Core:
     c, b = spec.core, spec.core.battery
-    floor = c.plate_thickness  # the holder floor is printed like the plate
-    wall = c.plate_thickness
+    floor = wall = c.holder_wall
     holder_h = b.height + floor + 1.0  # 1 mm slack so the pack slides in
     holder_bottom = c.battery_clearance
     plate_z = holder_bottom + holder_h + c.plate_thickness / 2

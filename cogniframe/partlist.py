@@ -241,7 +241,7 @@ def _battery_holder(spec: Spec, frame: Frame) -> PartSpec:
     c, b = spec.core, spec.core.battery
     h = frame.core.holder
     w, length, height = h.size
-    t = c.plate_thickness
+    t = c.holder_wall
     pitch, _ = STACK_PATTERNS[c.stack_pattern]
     screw = SCREWS[c.stack_screw]
     # Open-ended sleeve: top, floor, two side walls, a back stop; printed standing on the back stop.

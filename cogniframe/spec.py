@@ -84,6 +84,7 @@ class CoreSection(_M):
     infill: Frac = Field(0.10, description="infill fraction of the core parts (0.10 = 10 %)")
     plate_size: Annotated[float, Field(ge=30, le=200, description="side of the square core plate, mm; the TPU core links sit just outside its corners")] = 40
     plate_thickness: Annotated[float, Field(ge=1.5, le=8, description="mm")] = 3.0
+    holder_wall: Annotated[float, Field(ge=1.0, le=6, description="battery holder wall and floor thickness, mm")] = 2.0
     stack_pattern: str = Field("20x20", description="flight-controller/ESC stack hole pattern: 20x20 or 30.5x30.5")
     stack_screw: str = "M2"
     battery: BatterySection = BatterySection()

@@ -1,0 +1,110 @@
+"""Command line: thin wrappers over pipeline.py. Exit codes: 0 ok/PASS, 1 FAIL, 2 bad input."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Annotated, Optional
+
+import click
+import typer
+from rich.console import Console
+
+from . import spec as spec_mod
+from .errors import UserError
+
+app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
+                  help="CogniFly exoskeleton generator: params file in; parts, cut list, mass and crash margin out.")
+
+ParamsArg = Annotated[Path, typer.Argument(help="params YAML file, e.g. params/bamboo.yaml", show_default=False)]
+
+
+@app.command()
+def check(params: ParamsArg,
+          json_out: Annotated[bool, typer.Option("--json", help="print one JSON object instead of tables")] = False,
+          plots: Annotated[Optional[Path], typer.Option(help="also write the drop-model plots into this folder")] = None) -> None:
+    """Mass budget, cut list, crash margin and PASS/FAIL in well under a second (no CAD)."""
+    from . import pipeline
+
+    spec = spec_mod.load(params)
+    result = pipeline.check(spec)
+    if plots is not None and result.drop is not None:
+        from .report import drop_plots
+
+        plots.mkdir(parents=True, exist_ok=True)
+        drop_plots.plot_drop_response(result.drop, plots / "drop_response.png")
+        drop_plots.plot_energy_split(result.drop, plots / "energy_split.png")
+    if json_out:
+        sys.stdout.write(json.dumps(pipeline.check_dict(result), indent=2) + "\n")
+    else:
+        from .report.console import print_check
+
+        print_check(result, Console())
+    raise typer.Exit(0 if result.verdict == "PASS" else 1)
+
+
+@app.command()
+def build(params: ParamsArg,
+          out: Annotated[Optional[Path], typer.Option("-o", "--out", help="output folder (default out/<name>)")] = None,
+          jobs: Annotated[Optional[int], typer.Option("--jobs", "-j", min=1, help="parallel part builds (default: all cores)")] = None,
+          no_cache: Annotated[bool, typer.Option("--no-cache", help="rebuild every part from scratch")] = False) -> None:
+    """Build every printable part (STL, STEP), the assembly, cut list, mass budget and manifest."""
+    from .build import run_build
+
+    spec = spec_mod.load(params)
+    result = run_build(spec, params, out, jobs=jobs, use_cache=not no_cache, console=Console(stderr=True))
+    Console().print(f"wrote {result.out_dir} ({result.files} files); verdict {result.verdict}")
+    raise typer.Exit(0 if result.verdict == "PASS" else 1)
+
+
+@app.command()
+def coupon(params: ParamsArg,
+           out: Annotated[Optional[Path], typer.Option("-o", "--out", help="STL path (default out/<name>/coupon.stl)")] = None) -> None:
+    """Write a socket-fit test print: a row of sockets stepping the fit clearance, each labelled."""
+    from .export.coupon import write_coupon
+
+    spec = spec_mod.load(params)
+    path = out or Path("out") / spec.name / "coupon.stl"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    written, clearances = write_coupon(spec, path)
+    Console().print(f"wrote {written}: sockets for clearances {', '.join(f'{c:+.2f}' for c in clearances)} mm. "
+                    f"Print it in {spec.joints.material}, push a rod into each, and set "
+                    f"joints.fit_clearance.{spec.joints.material} to the loosest hole that still grips.")
+
+
+@app.command()
+def schema() -> None:
+    """Print the JSON Schema of a params file (for editor autocompletion)."""
+    sys.stdout.write(json.dumps(spec_mod.json_schema(), indent=2) + "\n")
+
+
+def _register_physics() -> None:
+    from .commands import physics
+
+    physics.register(app)
+
+
+_register_physics()
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point: runs the app and turns UserError into a one-paragraph message and exit code 2."""
+    err = Console(stderr=True, highlight=False, soft_wrap=True)
+    try:
+        rv = app(args=argv, standalone_mode=False)
+    except UserError as e:
+        err.print(f"error: {e}", markup=False)
+        return e.exit_code
+    except click.exceptions.ClickException as e:
+        e.show()
+        return e.exit_code
+    except click.exceptions.Exit as e:
+        return e.exit_code
+    except click.exceptions.Abort:
+        return 1
+    return rv if isinstance(rv, int) else 0
+
+
+def entry() -> None:
+    sys.exit(main())

@@ -1,0 +1,98 @@
+"""The stages in order. Reads like a table of contents; each stage lives in its own module.
+
+    spec -> frame -> partlist -> cutlist -> mass -> (stiffness, drop) -> verdict     `check`
+    ... -> parts (CAD) -> export (STL/STEP/assembly) -> mass with CAD volumes -> files  `build`
+
+CadQuery is only imported by `build` (through export/), so `check` stays fast.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from . import cutlist as cutlist_mod
+from . import frame as frame_mod
+from . import partlist as partlist_mod
+from .analysis import mass as mass_mod
+from .spec import Spec
+
+
+@dataclass(frozen=True)
+class Design:
+    """Everything derived from the params without CAD."""
+
+    spec: Spec
+    frame: frame_mod.Frame
+    parts: tuple[partlist_mod.PartSpec, ...]
+    cut: cutlist_mod.CutList
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    design: Design
+    mass: mass_mod.MassBudget
+    drop: object | None  # analysis.impact.DropResult once the physics stage is available
+    problems: tuple[str, ...]
+
+    @property
+    def verdict(self) -> str:
+        return "FAIL" if self.problems else "PASS"
+
+
+def design(spec: Spec) -> Design:
+    frame = frame_mod.build(spec)
+    parts = partlist_mod.build(spec, frame)
+    cut = cutlist_mod.build(spec, frame)
+    return Design(spec, frame, parts, cut)
+
+
+def check(spec: Spec, geometry: dict | None = None) -> CheckResult:
+    """Mass budget, crash margin and requirements; `geometry` = CAD volumes when known."""
+    d = design(spec)
+    budget = mass_mod.budget(spec, d.frame, d.cut, d.parts, geometry)
+    drop = _drop(spec, d, budget)
+    return CheckResult(d, budget, drop, tuple(_problems(spec, budget, drop)))
+
+
+def _drop(spec: Spec, d: Design, budget: mass_mod.MassBudget):
+    from .analysis import drop as drop_mod
+
+    return drop_mod.evaluate_design(spec, d.frame, budget.total_g)
+
+
+def _problems(spec: Spec, budget: mass_mod.MassBudget, drop) -> list[str]:
+    out = []
+    if budget.total_g > spec.requirements.mass_limit:
+        out.append(f"all-up weight {budget.total_g:.1f} g is over the {spec.requirements.mass_limit:g} g limit "
+                   f"by {-budget.margin_g:.1f} g (requirements.mass_limit)")
+    if drop is not None and spec.requirements.design_drop_height_cm > drop.max_safe_height_cm:
+        out.append(f"design drop height {spec.requirements.design_drop_height_cm:g} cm exceeds the max safe drop height "
+                   f"{drop.max_safe_height_cm:.1f} cm: the battery holder would hit the ground (requirements.design_drop_height_cm)")
+    return out
+
+
+def check_dict(result: CheckResult) -> dict:
+    """The stable JSON of `cogniframe check --json`."""
+    d = result.design
+    out = {
+        "name": d.spec.name,
+        "verdict": result.verdict,
+        "problems": list(result.problems),
+        "mass": result.mass.as_dict(),
+        "cutlist": [r.as_dict() for r in d.cut.rows],
+        "stock": {"stock_length_mm": d.cut.stock.stock_length_mm, "kerf_mm": d.cut.stock.kerf_mm,
+                  "count": d.cut.stock.count, "lower_bound": d.cut.stock.lower_bound,
+                  "rods": [{"index": s.index, "cuts_mm": [c for _, c in s.cuts], "offcut_mm": s.offcut_mm} for s in d.cut.stock.rods]},
+        "frame": {"clearance_mm": round(d.frame.clearance_mm, 2), "rods": len(d.frame.rods), "joints": len(d.frame.nodes),
+                  "prop_margin_mm": [{"motor": p.motor, "to_cage_mm": p.to_cage_mm, "to_core_mm": p.to_core_mm,
+                                      "to_neighbour_mm": p.to_neighbour_mm} for p in d.frame.prop_clearances]},
+        "parts": [{"name": p.name, "material": p.material, "qty": p.qty} for p in d.parts],
+    }
+    if result.drop is not None:
+        out["drop"] = result.drop.to_dict()
+    return out
+
+
+def output_dir(spec: Spec, out: Path | None) -> Path:
+    return out if out is not None else Path("out") / spec.name

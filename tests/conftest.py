@@ -1,0 +1,43 @@
+"""Shared fixtures: the presets, and a runner for the CLI entry point (exit codes included)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from cogniframe import spec as spec_mod
+
+ROOT = Path(__file__).resolve().parents[1]
+PARAMS = ROOT / "params"
+PRESETS = ("carbon", "bamboo")
+
+
+@pytest.fixture(params=PRESETS)
+def preset(request) -> spec_mod.Spec:
+    return spec_mod.load(PARAMS / f"{request.param}.yaml")
+
+
+@pytest.fixture
+def carbon() -> spec_mod.Spec:
+    return spec_mod.load(PARAMS / "carbon.yaml")
+
+
+@pytest.fixture
+def bamboo() -> spec_mod.Spec:
+    return spec_mod.load(PARAMS / "bamboo.yaml")
+
+
+@pytest.fixture
+def run_cli(capsys, monkeypatch):
+    """Run `cogniframe ARGS` in-process; returns (exit code, stdout, stderr)."""
+    from cogniframe.cli import main
+
+    def run(*args: str, cwd: Path | None = None):
+        if cwd is not None:
+            monkeypatch.chdir(cwd)
+        code = main([str(a) for a in args])
+        out = capsys.readouterr()
+        return code, out.out, out.err
+
+    return run

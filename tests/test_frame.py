@@ -1,0 +1,147 @@
+"""Frame graph: layout, names, symmetry, seats, cut lengths vs geometry, propeller clearance."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from cogniframe import frame as frame_mod
+from cogniframe import spec as spec_mod
+from cogniframe.errors import UserError
+
+
+def test_counts_and_roles(preset):
+    f = frame_mod.build(preset)
+    roles = [r.role for r in f.rods.values()]
+    assert (roles.count("cage"), roles.count("leg"), roles.count("arm"), roles.count("strut")) == (8, 8, 8, 4)
+    kinds = [n.kind for n in f.nodes.values()]
+    assert {k: kinds.count(k) for k in set(kinds)} == {"corner_top": 4, "corner_bottom": 4, "knee": 4, "core_link": 4}
+    assert len(f.motors) == 4
+
+
+def test_readable_stable_names(carbon):
+    f = frame_mod.build(carbon)
+    assert {"knee_fl", "corner_top_rr", "core_link_rl"} <= set(f.nodes)
+    assert {"rod_cage_top_front", "rod_cage_bottom_left", "rod_leg_upper_fr", "rod_arm_fl_2", "rod_strut_rl"} <= set(f.rods)
+    assert list(f.rods) == list(frame_mod.build(carbon).rods)  # deterministic order
+
+
+def test_box_extent_is_the_outside_size(carbon):
+    f = frame_mod.build(carbon)
+    lo, hi = f.bbox()
+    outer = carbon.bore / 2 + carbon.joints.wall  # joint wall beyond the node
+    assert hi[0] - lo[0] + 2 * outer == pytest.approx(210)
+    assert hi[2] - lo[2] + 2 * outer == pytest.approx(120)
+    assert lo[2] - outer == pytest.approx(f.ground_z)
+
+
+def test_incidence_is_consistent(preset):
+    f = frame_mod.build(preset)
+    for r in f.rods.values():
+        assert r.name in f.nodes[r.a.node].rods and r.name in f.nodes[r.b.node].rods
+    assert sum(len(n.rods) for n in f.nodes.values()) == 2 * len(f.rods)
+
+
+def test_fourfold_symmetry(preset):
+    f = frame_mod.build(preset)
+    rot = np.array([[0, 1, 0], [-1, 0, 0], [0, 0, 1]])  # -90 deg about z: fl -> fr -> rr -> rl
+    for a, b in (("fl", "fr"), ("fr", "rr"), ("rr", "rl"), ("rl", "fl")):
+        for kind in ("corner_top", "corner_bottom", "knee", "core_link"):
+            np.testing.assert_allclose(rot @ np.array(f.nodes[f"{kind}_{a}"].pos), f.nodes[f"{kind}_{b}"].pos, atol=1e-9)
+        assert f.rods[f"rod_strut_{a}"].length == pytest.approx(f.rods[f"rod_strut_{b}"].length)
+        assert f.rods[f"rod_arm_{a}_1"].length == pytest.approx(f.rods[f"rod_arm_{b}_2"].length)
+
+
+def test_hourglass_knees_bow_inwards(carbon):
+    f = frame_mod.build(carbon)
+    top, knee, bottom = (np.array(f.nodes[f"{k}_fl"].pos) for k in ("corner_top", "knee", "corner_bottom"))
+    assert abs(knee[0]) == pytest.approx(abs(top[0]) - carbon.frame.knee_inset)
+    assert knee[2] == pytest.approx(carbon.frame.height / 2)
+    assert abs(bottom[0]) == pytest.approx(abs(top[0]))
+
+
+def test_cut_length_is_distance_minus_seats(carbon):
+    f = frame_mod.build(carbon)
+    r = f.rods["rod_cage_top_front"]
+    a, b = f.nodes["corner_top_fl"].pos, f.nodes["corner_top_fr"].pos
+    assert r.length == pytest.approx(math.dist(a, b) - 2 * f.nodes["corner_top_fl"].seat)
+    assert r.cut_length == round(r.length * 2) / 2
+    assert np.linalg.norm(r.end - r.start) == pytest.approx(r.length)
+
+
+def test_arm_rods_are_parallel_and_spaced(carbon):
+    f = frame_mod.build(carbon)
+    r1, r2 = f.rods["rod_arm_fl_1"], f.rods["rod_arm_fl_2"]
+    np.testing.assert_allclose(r1.axis, r2.axis, atol=1e-12)
+    assert np.linalg.norm(np.subtract(r1.a.port, r2.a.port)) == pytest.approx(carbon.frame.arm_spacing)
+
+
+def test_seat_raised_where_rods_meet_at_sharp_angles(carbon):
+    f = frame_mod.build(carbon)
+    # The strut and the arms arrive at the core link at a narrow angle: their bores must not meet.
+    link = f.nodes["core_link_fl"]
+    arm, strut = f.rods["rod_arm_fl_1"], f.rods["rod_strut_fl"]
+    ang = math.acos(np.dot(arm.socket_direction(link.name), strut.socket_direction(link.name)))
+    need = (carbon.bore / 2 + carbon.joints.wall / 2) / math.tan(ang / 2)
+    assert link.seat == pytest.approx(max(carbon.joints.seat, need), abs=0.01)
+    assert link.seat > carbon.joints.seat
+    assert f.nodes["corner_top_fl"].seat == carbon.joints.seat
+
+
+def test_carbon_rods_resemble_the_papers(carbon):
+    f = frame_mod.build(carbon)
+    cage = [r.cut_length for r in f.rods_of("cage")]
+    assert len(cage) == 8 and all(abs(c - 195) <= 5 for c in cage)  # paper: 8 x 195
+    arms = [r.cut_length for r in f.rods_of("arm")]
+    assert len(arms) == 8 and all(abs(a - 97) <= 0.15 * 97 for a in arms)  # paper: 8 x 97
+
+
+def test_bamboo_rods_resemble_the_build(bamboo):
+    f = frame_mod.build(bamboo)
+    for role, target in (("cage", 230), ("leg", 50), ("arm", 110), ("strut", 130)):
+        for r in f.rods_of(role):
+            assert abs(r.cut_length - target) <= 0.06 * target, (r.name, r.cut_length, target)
+
+
+def test_clearance_from_geometry_is_the_holder_underside(preset):
+    f = frame_mod.build(preset)
+    assert f.clearance_mm == pytest.approx(preset.core.battery_clearance)
+    assert f.core.battery.lo[2] > f.core.holder.lo[2]
+
+
+def test_rod_diameter_changes_bore_and_cut_lengths(carbon):
+    thick = carbon.model_copy(update={"rods": carbon.rods.model_copy(update={"diameter": 4.0})})
+    f3, f4 = frame_mod.build(carbon), frame_mod.build(spec_mod.from_dict(thick.model_dump()))
+    assert all(r.diameter == 4.0 for r in f4.rods.values())
+    # the joint grows with the bore, so the ring nodes move in and the ring rods get shorter
+    assert f4.rods["rod_cage_top_front"].length < f3.rods["rod_cage_top_front"].length
+
+
+def test_prop_clearance_positive_and_reported(preset):
+    f = frame_mod.build(preset)
+    assert len(f.prop_clearances) == 4
+    assert f.min_prop_margin > 0
+
+
+def test_prop_disc_distance_matches_hand_calculation():
+    centre, radius = np.array([0.0, 0.0, 10.0]), 5.0
+    pts = np.array([[3.0, 0.0, 12.0], [8.0, 0.0, 10.0], [9.0, 0.0, 13.0]])
+    np.testing.assert_allclose(frame_mod._point_to_disc(pts, centre, radius), [2.0, 3.0, 5.0])
+    box = frame_mod.Box("b", (20.0, 0.0, 10.0), (4.0, 4.0, 4.0))
+    assert frame_mod._box_to_disc(box, centre, radius) == pytest.approx(13.0, abs=0.05)
+
+
+def test_big_propellers_are_a_clear_error(carbon):
+    data = carbon.model_dump()
+    data["motors"]["prop_diameter"] = 180
+    with pytest.raises(UserError, match=r"propeller of motor_.. hits the frame.*motors.prop_diameter"):
+        frame_mod.build(spec_mod.from_dict(data))
+
+
+def test_motor_off_the_arm_is_a_clear_error(carbon):
+    data = carbon.model_dump()
+    data["motors"]["radius"] = 200
+    with pytest.raises(UserError, match="motors.radius"):
+        frame_mod.build(spec_mod.from_dict(data))
