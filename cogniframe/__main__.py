@@ -1,0 +1,5 @@
+"""`python -m cogniframe` = the `cogniframe` command."""
+
+from .cli import entry
+
+entry()

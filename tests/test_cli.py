@@ -1,0 +1,99 @@
+"""`cogniframe check`: tables, stable JSON keys, exit codes, plain errors without tracebacks."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_check_json_has_the_stable_keys(run_cli):
+    code, out, _ = run_cli("check", ROOT / "params/carbon.yaml", "--json")
+    data = json.loads(out)
+    assert code == 0 and data["verdict"] == "PASS" and data["problems"] == []
+    m = data["mass"]
+    assert m["limit_g"] == 250 and set(m["groups"]) == {"exoskeleton", "core", "electronics", "battery"}
+    assert m["total_g"] == pytest.approx(sum(i["mass_g"] for i in m["items"]), abs=0.05)
+    assert {"name", "group", "qty", "mass_g"} <= set(m["items"][0])
+    assert {"role", "length_mm", "qty", "diameter_mm", "material"} <= set(data["cutlist"][0])
+    assert sum(r["qty"] for r in data["cutlist"]) == 28
+    drop = data["drop"]
+    assert {"k_n_per_m", "c_n_s_per_m", "damping_ratio", "mass_kg", "clearance_mm", "max_safe_height_cm",
+            "k_source", "c_source", "heights"} <= set(drop)
+    assert drop["k_source"] == "predicted" and drop["clearance_mm"] == pytest.approx(16.0)
+    assert [h["height_cm"] for h in drop["heights"]] == [50, 100, 150, 262]
+    assert {"x_max_mm", "peak_g", "energy_spring_pct", "energy_damper_pct", "energy_rigid_pct", "strikes"} <= set(drop["heights"][0])
+
+
+def test_check_table_shows_margin_and_verdict(run_cli):
+    code, out, _ = run_cli("check", ROOT / "params/carbon.yaml")
+    assert code == 0
+    assert "Mass budget: carbon" in out and "margin" in out and "Cut list: 28 rods" in out
+    assert "Max safe drop height" in out and out.rstrip().endswith("PASS")
+
+
+def _variant(tmp_path: Path, base: str, **sections) -> Path:
+    data = yaml.safe_load((ROOT / "params" / f"{base}.yaml").read_text())
+    for sec, values in sections.items():
+        if isinstance(values, dict):
+            data.setdefault(sec, {}).update(values)
+        else:
+            data[sec] = values
+    p = tmp_path / f"{base}_variant.yaml"
+    p.write_text(yaml.safe_dump(data))
+    return p
+
+
+def test_over_the_mass_limit_fails_with_exit_1(run_cli, tmp_path):
+    p = _variant(tmp_path, "carbon", requirements={"mass_limit": 200})
+    code, out, _ = run_cli("check", p, "--json")
+    data = json.loads(out)
+    assert code == 1 and data["verdict"] == "FAIL"
+    assert any("over the 200 g limit" in s for s in data["problems"])
+
+
+def test_design_drop_above_max_safe_fails(run_cli, tmp_path):
+    p = _variant(tmp_path, "carbon", requirements={"design_drop_height_cm": 200})
+    code, out, _ = run_cli("check", p, "--json")
+    data = json.loads(out)
+    assert code == 1 and any("max safe drop height" in s for s in data["problems"])
+
+
+def test_measured_k_and_c_are_used_and_labelled(run_cli, tmp_path):
+    p = _variant(tmp_path, "carbon", model={"k_n_per_m": 7040, "c_n_s_per_m": 46})
+    _, out, _ = run_cli("check", p, "--json")
+    drop = json.loads(out)["drop"]
+    assert drop["k_source"] == drop["c_source"] == "measured"
+    assert drop["k_n_per_m"] == 7040 and drop["c_n_s_per_m"] == 46
+
+
+def test_check_plots(run_cli, tmp_path):
+    code, _, _ = run_cli("check", ROOT / "params/carbon.yaml", "--plots", tmp_path / "plots")
+    assert code == 0
+    for name in ("drop_response.png", "energy_split.png"):
+        assert (tmp_path / "plots" / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_bad_key_is_exit_2_one_paragraph(run_cli, tmp_path):
+    p = _variant(tmp_path, "bamboo", joints={"wal": 2})
+    code, out, err = run_cli("check", p)
+    assert code == 2 and out == ""
+    assert "joints.wal" in err and "did you mean 'wall'" in err and p.name in err
+    assert "Traceback" not in err
+
+
+def test_errors_from_the_installed_command_have_no_traceback(tmp_path):
+    p = _variant(tmp_path, "bamboo", rods={"diameter": -3})
+    r = subprocess.run([sys.executable, "-m", "cogniframe", "check", str(p)], capture_output=True, text=True, cwd=tmp_path)
+    assert r.returncode == 2 and "rods.diameter" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_missing_file_is_exit_2(run_cli, tmp_path):
+    code, _, err = run_cli("check", tmp_path / "missing.yaml")
+    assert code == 2 and "no such params file" in err
