@@ -1,0 +1,271 @@
+"""`cogniframe drop` and `cogniframe fit` through a Typer app built with register()."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pytest
+import typer
+from ruamel.yaml import YAML
+from typer.testing import CliRunner
+
+from cogniframe.analysis.fit import model_accel_g
+from cogniframe.commands.physics import register
+from cogniframe.errors import UserError
+
+SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+DROPS = SHARED / "data" / "droptests"
+
+
+@dataclass
+class Outcome:
+    exit_code: int
+    stdout: str
+    stderr: str
+    message: str = ""
+
+
+def run(*args: str) -> Outcome:
+    """Invoke like cli.py does: a UserError becomes its message and exit code 2."""
+    app = typer.Typer()
+    register(app)
+    res = CliRunner().invoke(app, [str(a) for a in args])
+    if isinstance(res.exception, UserError):
+        return Outcome(2, res.stdout, res.stderr, str(res.exception))
+    if res.exception is not None and not isinstance(res.exception, SystemExit):
+        raise res.exception
+    return Outcome(res.exit_code, res.stdout, res.stderr)
+
+
+@pytest.fixture(scope="module")
+def drops() -> Path:
+    if not DROPS.is_dir():
+        pytest.fail(f"Shared drop-test data not found at {DROPS}: the repo must be cloned next "
+                    "to the 'shared' folder (as in CI).")
+    return DROPS
+
+
+# ---- drop -------------------------------------------------------------------------------
+
+
+def test_drop_json_reproduces_paper_and_prints_only_json():
+    r = run("drop", "--mass-kg", 0.241, "--c", 46, "--k", 7040, "--heights", "50,100,150", "--json")
+    assert r.exit_code == 0, r
+    d = json.loads(r.stdout)  # the whole of stdout is one JSON object
+    assert [round(h["x_max_mm"], 2) for h in d["heights"]] == [9.63, 13.56, 16.57]
+    assert [h["strikes"] for h in d["heights"]] == [False, False, True]
+    assert round(d["max_safe_height_cm"], 1) == 139.7
+    assert d["c_source"] == d["k_source"] == "given"
+
+
+def test_drop_table_shows_heights_strike_and_max_safe_height():
+    r = run("drop", "--mass-kg", 0.241, "--c", 46, "--k", 7040, "--heights", "100,150")
+    assert r.exit_code == 0, r
+    assert "139.7 cm" in r.stdout
+    assert "13.56" in r.stdout and "16.57" in r.stdout
+    assert "yes" in r.stdout and "no" in r.stdout
+
+
+def test_drop_zeta_gives_the_same_damping_as_c():
+    by_zeta = json.loads(run("drop", "--mass", 0.241, "--zeta", 0.558, "--k", 7040, "--json").stdout)
+    by_c = json.loads(run("drop", "--mass", 0.241, "--c", 2 * 0.558 * (7040 * 0.241) ** 0.5,
+                          "--k", 7040, "--json").stdout)
+    assert by_zeta["c_n_s_per_m"] == pytest.approx(by_c["c_n_s_per_m"])
+    assert [h["x_max_mm"] for h in by_zeta["heights"]] == pytest.approx(
+        [h["x_max_mm"] for h in by_c["heights"]])
+
+
+@pytest.mark.parametrize("args, needle", [
+    (["--k", 7040], "exactly one of --c"),
+    (["--k", 7040, "--c", 46, "--zeta", 0.5], "both were given"),
+    (["--k", -5, "--c", 46], "--k"),
+    (["--k", 7040, "--c", 46, "--heights", "50,abc"], "--heights"),
+    (["--k", 7040, "--c", 46, "--clearance-mm", 0], "--clearance-mm"),
+])
+def test_drop_bad_options_exit_2_with_message(args, needle):
+    r = run("drop", "--mass-kg", 0.241, *args)
+    assert r.exit_code == 2
+    assert needle in r.message
+
+
+def test_drop_plots_writes_two_pngs(tmp_path):
+    r = run("drop", "--mass-kg", 0.241, "--c", 46, "--k", 7040, "--plots", tmp_path / "p", "--json")
+    assert r.exit_code == 0, r
+    json.loads(r.stdout)  # still only JSON on stdout
+    for name in ("drop_response.png", "energy_split.png"):
+        assert (tmp_path / "p" / name).read_bytes()[:4] == b"\x89PNG"
+
+
+# ---- fit on the shared data ------------------------------------------------------------------
+
+
+def test_fit_shared_folders_heights_from_folder_names(drops, tmp_path):
+    r = run("fit", drops / "SoftBottom_50cm", drops / "SoftBottom_100cm", "--mass", 0.241,
+            "--static", SHARED / "data" / "static_stiffness_carbon.csv", "--json",
+            "--plot", tmp_path / "fit.png")
+    assert r.exit_code == 0, r
+    d = json.loads(r.stdout)
+    assert d["c_n_s_per_m"] == pytest.approx(69.5, rel=0.03)
+    assert d["k_n_per_m"] == pytest.approx(4323, rel=0.03)
+    assert d["static_k_n_per_m"] == pytest.approx(7040, rel=0.01)
+    assert [(h["height_cm"], h["trials_used"]) for h in d["heights"]] == [(50, 101), (100, 96)]
+    assert "acc_a-91.bhn" in r.stderr  # the skip line, kept off stdout in --json mode
+    assert (tmp_path / "fit.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_fit_table_lists_results_and_skipped_files(drops):
+    r = run("fit", drops / "SoftBottom_100cm", "--height", 100, "--mass", 0.241)
+    assert r.exit_code == 0, r
+    assert "c (N s/m)" in r.stdout and "damping ratio" in r.stdout
+    assert "skipped" in r.stdout and "acc_a-91.bhn" in r.stdout
+
+
+# ---- fit on synthetic CSV folders with manifests ---------------------------------------------
+
+
+def write_csv_height(folder: Path, height_cm: float, c: float, k: float, manifest: str | None,
+                     n_trials: int = 12, seed: int = 0) -> Path:
+    """CSV trials in G. The model curve comes from the library (its agreement with lsim is
+    tested in test_fit.py); here it only feeds the command's plumbing."""
+    folder.mkdir(parents=True)
+    rng = np.random.default_rng(seed)
+    a = model_accel_g(0.241, c, k, height_cm, 200)
+    for i in range(n_trials):
+        sig = np.concatenate([np.abs(rng.normal(0, 0.2, 30)), a + np.abs(rng.normal(0, 0.3, a.size))])
+        sig[30] = 0.1
+        t = np.arange(sig.size) / 1000
+        rows = "".join(f"{ti:.3f},0,0,{si:.6f}\n" for ti, si in zip(t, sig))
+        (folder / f"trial{i}.csv").write_text("t_s,ax_g,ay_g,az_g\n" + rows)
+    if manifest is not None:
+        (folder / "drop.yaml").write_text(manifest)
+    return folder
+
+
+@pytest.fixture(scope="module")
+def csv_drops(tmp_path_factory) -> Path:
+    root = tmp_path_factory.mktemp("csv")
+    write_csv_height(root / "low", 60, 40.0, 8000.0, "height_cm: 60\nmass_kg: 0.241\n", seed=1)
+    write_csv_height(root / "high", 120, 40.0, 8000.0, "height_cm: 120\nmass_kg: 0.241\n", seed=2)
+    return root
+
+
+def test_fit_reads_height_and_mass_from_drop_yaml(csv_drops):
+    r = run("fit", csv_drops / "low", csv_drops / "high", "--json")
+    assert r.exit_code == 0, r
+    d = json.loads(r.stdout)
+    assert [h["height_cm"] for h in d["heights"]] == [60, 120]
+    assert d["mass_kg"] == 0.241
+    assert d["c_n_s_per_m"] == pytest.approx(40.0, rel=0.05)
+    assert d["k_n_per_m"] == pytest.approx(8000.0, rel=0.05)
+
+
+def test_fit_height_option_overrides_manifest(csv_drops):
+    d = json.loads(run("fit", csv_drops / "low", "--height", 75, "--json").stdout)
+    assert [h["height_cm"] for h in d["heights"]] == [75]
+
+
+def test_fit_no_lowpass_and_mse_reach_the_fit(csv_drops):
+    base = json.loads(run("fit", csv_drops / "low", "--json").stdout)
+    raw = json.loads(run("fit", csv_drops / "low", "--json", "--no-lowpass", "--loss", "mse").stdout)
+    assert base["lowpass_rad_per_s"] == 500 and base["loss_kind"] == "cauchy"
+    assert raw["lowpass_rad_per_s"] is None and raw["loss_kind"] == "mse"
+    assert raw["c_n_s_per_m"] != pytest.approx(base["c_n_s_per_m"], rel=0.01)
+
+
+PARAMS = """\
+# CogniFly carbon build
+name: carbon   # the paper's build
+rods:
+  diameter_mm: 3.0
+model:
+  # measured values go here
+  damping_ratio: 0.558  # used when c is null
+  k_n_per_m: null
+tail: last
+"""
+
+
+def test_fit_write_updates_model_and_keeps_comments(csv_drops, tmp_path):
+    params = tmp_path / "params.yaml"
+    params.write_text(PARAMS)
+    r = run("fit", csv_drops / "low", csv_drops / "high", "--write", params, "--json")
+    assert r.exit_code == 0, r
+    fitted = json.loads(r.stdout)
+    text = params.read_text()
+    for comment in ("# CogniFly carbon build", "# the paper's build", "# measured values go here",
+                    "# used when c is null"):
+        assert comment in text
+    doc = YAML(typ="safe").load(text)
+    assert list(doc) == ["name", "rods", "model", "tail"]
+    assert list(doc["model"]) == ["damping_ratio", "k_n_per_m", "c_n_s_per_m"]
+    assert doc["model"]["k_n_per_m"] == pytest.approx(fitted["k_n_per_m"], rel=1e-5)
+    assert doc["model"]["c_n_s_per_m"] == pytest.approx(fitted["c_n_s_per_m"], rel=1e-5)
+    assert doc["rods"] == {"diameter_mm": 3.0}
+
+
+def test_fit_write_creates_model_mapping(csv_drops, tmp_path):
+    params = tmp_path / "params.yaml"
+    params.write_text("# only a comment\nname: x\n")
+    assert run("fit", csv_drops / "low", "--write", params).exit_code == 0
+    doc = YAML(typ="safe").load(params.read_text())
+    assert set(doc["model"]) == {"k_n_per_m", "c_n_s_per_m"}
+    assert "# only a comment" in params.read_text()
+
+
+def test_fit_write_bad_params_fails_before_any_output(csv_drops, tmp_path):
+    params = tmp_path / "params.yaml"
+    params.write_text("model: 5\n")
+    r = run("fit", csv_drops / "low", "--write", params, "--plot", tmp_path / "f.png")
+    assert r.exit_code == 2 and "params.yaml" in r.message and "'model'" in r.message
+    assert not (tmp_path / "f.png").exists()
+    assert params.read_text() == "model: 5\n"
+    r = run("fit", csv_drops / "low", "--write", tmp_path / "missing.yaml")
+    assert r.exit_code == 2 and "missing.yaml" in r.message
+
+
+# ---- fit: bad input ---------------------------------------------------------------------
+
+
+def test_fit_folder_with_nothing_usable_exits_2(tmp_path):
+    d = tmp_path / "drops_50cm"
+    d.mkdir()
+    (d / "a.bin").write_bytes(b"\x00" * 5)
+    (d / "b.bin").write_bytes(b"")
+    r = run("fit", d, "--mass", 0.241)
+    assert r.exit_code == 2
+    assert str(d) in r.message and "truncated" in r.message
+
+
+def test_fit_height_count_must_match_data(csv_drops):
+    r = run("fit", csv_drops / "low", csv_drops / "high", "--height", 50)
+    assert r.exit_code == 2 and "--height" in r.message
+
+
+def test_fit_without_height_anywhere_exits_2(tmp_path):
+    d = write_csv_height(tmp_path / "drops", 50, 40.0, 8000.0, None, n_trials=2)
+    r = run("fit", d, "--mass", 0.241)
+    assert r.exit_code == 2 and "drop.yaml" in r.message and "--height" in r.message
+
+
+def test_fit_without_mass_exits_2(tmp_path):
+    d = write_csv_height(tmp_path / "drops", 50, 40.0, 8000.0, "height_cm: 50\n", n_trials=2)
+    r = run("fit", d)
+    assert r.exit_code == 2 and "--mass" in r.message
+
+
+@pytest.mark.parametrize("manifest, needle", [("height_cm: -3\n", "height_cm"),
+                                              ("heigth_cm: 50\n", "heigth_cm"),
+                                              ("height_cm: [50\n", "not valid YAML")])
+def test_fit_bad_manifest_exits_2(tmp_path, manifest, needle):
+    d = write_csv_height(tmp_path / "drops", 50, 40.0, 8000.0, manifest, n_trials=2)
+    r = run("fit", d, "--mass", 0.241)
+    assert r.exit_code == 2 and needle in r.message and "drop.yaml" in r.message
+
+
+def test_fit_bad_loss_and_missing_data_exit_2(csv_drops, tmp_path):
+    assert "--loss" in run("fit", csv_drops / "low", "--loss", "huber").message
+    r = run("fit", tmp_path / "nope", "--height", 50, "--mass", 0.241)
+    assert r.exit_code == 2 and "does not exist" in r.message
