@@ -307,9 +307,7 @@ def fit(
     from rich.table import Table
 
     out = _stdout()
-    summary = Table(title="Drop-test fit", caption=(
-        f"m = {mass_kg:g} kg, loss {loss}, "
-        + ("no low-pass" if lowpass is None else f"low-pass {lowpass:g} rad/s")))
+    summary = Table(title="Drop-test fit")
     summary.add_column("quantity")
     summary.add_column("value", justify="right")
     summary.add_row("c (N s/m)", f"{result.c_n_s_per_m:.2f}")
@@ -328,6 +326,9 @@ def fit(
         per.add_row(f"{h.height_cm:g}", str(h.trials_used), str(h.trials_skipped),
                     f"{h.peak_median_g:.1f}", f"{h.rmse_g:.1f}")
     out.print(per)
+    out.print(f"m = {mass_kg:g} kg, loss {loss}, "
+              + ("no low-pass" if lowpass is None else f"low-pass {lowpass:g} rad/s")
+              + f", {result.evaluations} evaluations")
     for s in result.skipped:
         out.print(f"skipped {s}", markup=False, highlight=False, soft_wrap=True)
     if plot is not None:
