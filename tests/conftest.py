@@ -41,3 +41,12 @@ def run_cli(capsys, monkeypatch):
         return code, out.out, out.err
 
     return run
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _private_cache(tmp_path_factory):
+    """Tests never read or write the user's ~/.cache/cogniframe."""
+    import os
+
+    os.environ["COGNIFRAME_CACHE"] = str(tmp_path_factory.mktemp("cache"))
+    yield

@@ -258,14 +258,6 @@ def test_bad_arguments_raise():
         st.predict_stiffness(s, f, load_n=-1.0)
 
 
-def test_full_evaluation_is_fast():
-    s = _carbon()
-    st.predict_stiffness(s, frame_mod.build(s))  # first call pays PyNite's import
-    t0 = time.perf_counter()
-    st.predict_stiffness(s, frame_mod.build(s))
-    assert time.perf_counter() - t0 < 0.5
-
-
 def test_module_does_not_import_cad():
     code = "import sys, cogniframe.analysis.stiffness as s; assert 'cadquery' not in sys.modules and 'OCP' not in sys.modules"
     subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)

@@ -22,8 +22,6 @@ from dataclasses import dataclass
 from typing import Iterable
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
-from scipy.signal import lfilter
 
 G = 9.81
 """Gravity (m/s^2); the paper's value, also used to convert m/s^2 to G."""
@@ -255,19 +253,53 @@ def _settle_time(sys: _System) -> float:
     return 21.0 / slowest  # exp(-21) ~ 1e-9
 
 
+# Scalar solvers. Every root here is bracketed and the function monotone on the bracket, and
+# every maximum is bracketed by a dense grid: bisection and golden section are exact enough, and
+# keep scipy.optimize (~0.4 s to import) out of `cogniframe check`, whose budget is under 1 s.
+def _bisect(f, lo: float, hi: float, xtol: float) -> float:
+    """Root of f on [lo, hi] with f(lo) < 0 <= f(hi)."""
+    for _ in range(200):
+        if hi - lo <= xtol:
+            break
+        mid = 0.5 * (lo + hi)
+        if f(mid) < 0.0:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+def _golden_max(f, lo: float, hi: float, xtol: float) -> float:
+    """max of a unimodal f on [lo, hi] (golden-section search); returns the value."""
+    inv = (math.sqrt(5.0) - 1.0) / 2.0
+    a, b = lo, hi
+    c, d = b - inv * (b - a), a + inv * (b - a)
+    fc, fd = f(c), f(d)
+    while b - a > xtol:
+        if fc > fd:
+            b, d, fd = d, c, fc
+            c = b - inv * (b - a)
+            fc = f(c)
+        else:
+            a, c, fc = c, d, fd
+            d = a + inv * (b - a)
+            fd = f(d)
+    return max(fc, fd)
+
+
 def _time_to_reach(sys: _System, v0: float, x_target: float, t_hi: float) -> float:
     """First t in (0, t_hi] where x(t) = x_target; x increases monotonically there."""
     f = lambda t: float(_state(sys, v0, np.array([t]))[0][0]) - x_target  # noqa: E731
     if f(t_hi) <= 0.0:
         return t_hi
-    return brentq(f, 0.0, t_hi, xtol=1e-14, rtol=1e-12)
+    return _bisect(f, 0.0, t_hi, xtol=1e-14)
 
 
 def _peak_abs_accel(sys: _System, v0: float, t_end: float) -> float:
     """max |x''| over [0, t_end] in m/s^2: dense grid, then a bounded refinement.
 
     The acceleration is a damped sinusoid (or sum of exponentials) with at most a couple of
-    extrema before x_max, so a 2001-point grid brackets the maximum and Brent's bounded search
+    extrema before x_max, so a 2001-point grid brackets the maximum and a golden-section search
     finishes it to ~1e-10 relative.
     """
     if t_end <= 0.0:
@@ -280,9 +312,8 @@ def _peak_abs_accel(sys: _System, v0: float, t_end: float) -> float:
     best = float(a[i])
     lo, hi = t[max(i - 1, 0)], t[min(i + 1, t.size - 1)]
     if hi > lo:
-        neg = lambda s: -float(np.abs(_accel(sys, *_state(sys, v0, np.array([s]))))[0])  # noqa: E731
-        r = minimize_scalar(neg, bounds=(lo, hi), method="bounded", options={"xatol": 1e-13})
-        best = max(best, -float(r.fun))
+        mag = lambda s: float(np.abs(_accel(sys, *_state(sys, v0, np.array([s]))))[0])  # noqa: E731
+        best = max(best, _golden_max(mag, lo, hi, xtol=1e-13))
     return best
 
 
@@ -369,6 +400,8 @@ def lowpass_first_order(u: np.ndarray, dt_s: float, w_rad_per_s: float) -> np.nd
     one_minus_e = -math.expm1(-a)
     b1 = 1.0 - one_minus_e / a
     b0 = one_minus_e / a - e
+    from scipy.signal import lfilter  # imported here: scipy.signal costs ~0.6 s, and `check` never filters
+
     # zi = -b1 u[0] makes y[0] = 0: the filter starts from rest (lfilter is DF-II transposed).
     y, _ = lfilter([b1, b0], [1.0, -e], u, zi=[-b1 * u[0]])
     return y
@@ -407,7 +440,7 @@ def trajectory(
 def max_safe_height_cm(
     mass_kg: float, c: float, k: float, clearance_mm: float = PAPER_CLEARANCE_MM, g: float = G
 ) -> float:
-    """Highest drop (cm) whose x_max stays within ``clearance_mm`` (brentq on x_max(h) = x_c).
+    """Highest drop (cm) whose x_max stays within ``clearance_mm`` (bisection on x_max(h) = x_c).
 
     x_max grows monotonically with the impact speed, so the root is unique. Returns 0 if the
     payload reaches the clearance even when set down from rest (x_max(0) >= clearance).
@@ -426,7 +459,7 @@ def max_safe_height_cm(
         hi *= 2.0
         if hi > 1e9:  # x_max grows ~ sqrt(h); this only trips on absurd inputs
             return math.inf
-    return brentq(excess, 0.0, hi, xtol=1e-9, rtol=1e-12)
+    return _bisect(excess, 0.0, hi, xtol=1e-9)
 
 
 def evaluate(

@@ -1,0 +1,141 @@
+"""`cogniframe build`: the whole fabrication folder, built in a temp dir and moved into place whole.
+
+Order: design (no CAD) -> part CAD + STL/STEP -> assembly -> mass with CAD volumes -> drop
+model -> text outputs and plots -> fabrication package (plates, slicer, BOM, renders, report)
+-> manifest. Nothing appears in the output folder unless every step succeeded.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass
+from importlib import metadata
+from pathlib import Path
+
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+from . import __version__, cutlist, pipeline
+from .analysis.mass import PartGeometry
+from .cache import cache_dir
+from .spec import Spec
+
+STACK = ("cadquery", "cadquery-ocp", "trimesh", "manifold3d", "numpy", "scipy", "pynitefea", "pyvista", "vtk", "matplotlib")
+
+
+@dataclass(frozen=True)
+class BuildResult:
+    out_dir: Path
+    files: int
+    verdict: str
+    check: pipeline.CheckResult
+    built: tuple
+
+
+def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None = None, use_cache: bool = True,
+              console: Console | None = None) -> BuildResult:
+    console = console or Console(stderr=True)
+    final = pipeline.output_dir(spec, out)
+    final.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.building-", dir=final.parent))
+    try:
+        result = _build_into(spec, params_path, tmp, jobs, use_cache, console)
+        _replace_dir(tmp, final)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return BuildResult(final, result[0], result[1].verdict, result[1], result[2])
+
+
+def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_cache: bool, console: Console):
+    from .export.assembly import write_assembly
+    from .export.build import build_parts
+
+    design = pipeline.design(spec)
+    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                  console=console, transient=True) as progress:
+        task = progress.add_task(f"building {spec.name} parts", total=len(design.parts))
+        built = build_parts(spec, design.frame, design.parts, out, jobs=jobs,
+                            cache_dir=cache_dir() if use_cache else None,
+                            progress=lambda name: progress.update(task, advance=1, description=f"built {name}"))
+    write_assembly(spec, design.frame, design.parts, built, out)
+
+    geometry = {b.name: PartGeometry(b.volume_mm3, b.area_h_mm2, b.area_v_mm2, "cad") for b in built}
+    check = pipeline.check(spec, geometry)
+    data = pipeline.check_dict(check)
+    _write(out / "check.json", json.dumps(data, indent=2) + "\n")
+    _write(out / "cutlist.csv", cutlist.to_csv(design.cut))
+    _write(out / "cutlist.md", cutlist.to_markdown(design.cut))
+    _write(out / "mass.md", _mass_markdown(check))
+    if check.drop is not None:
+        from .report import drop_plots
+
+        (out / "plots").mkdir(exist_ok=True)
+        drop_plots.plot_drop_response(check.drop, out / "plots" / "drop_response.png")
+        drop_plots.plot_energy_split(check.drop, out / "plots" / "energy_split.png")
+
+    from .fabrication import write_fabrication
+
+    write_fabrication(spec, check, built, out, console)
+    n = _write_manifest(spec, params_path, out)
+    return n, check, built
+
+
+def _mass_markdown(check: pipeline.CheckResult) -> str:
+    m = check.mass
+    lines = [f"# Mass budget: {check.design.spec.name}", "", "| item | group | qty | g each | g | source |",
+             "|---|---|---:|---:|---:|---|"]
+    for i in m.items:
+        lines.append(f"| {i.name} | {i.group} | {i.qty} | {i.mass_g_each:.2f} | {i.mass_g:.1f} | {i.source} |")
+    lines += ["", "| group | g |", "|---|---:|"] + [f"| {g} | {v:.1f} |" for g, v in m.groups.items()]
+    lines += [f"| **all-up weight** | **{m.total_g:.1f}** |", f"| limit | {m.limit_g:g} |", f"| margin | {m.margin_g:+.1f} |"]
+    return "\n".join(lines) + "\n"
+
+
+def _write(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text, encoding="utf-8")
+
+
+def _sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def _write_manifest(spec: Spec, params_path: Path, out: Path) -> int:
+    files = sorted(p for p in out.rglob("*") if p.is_file())
+    versions = {"cogniframe": __version__}
+    for dist in STACK:
+        try:
+            versions[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            versions[dist] = None
+    manifest = {
+        "name": spec.name,
+        "params_file": Path(params_path).name,
+        "params_sha256": _sha256(Path(params_path)),
+        "spec_sha256": spec.digest(),
+        "versions": versions,
+        "files": [{"path": p.relative_to(out).as_posix(), "size": p.stat().st_size, "sha256": _sha256(p)} for p in files],
+    }
+    _write(out / "manifest.json", json.dumps(manifest, indent=2) + "\n")
+    return len(files) + 1
+
+
+def _replace_dir(new: Path, final: Path) -> None:
+    """Swap `new` into `final`, so readers see the old folder or the new one, never a mix."""
+    old = None
+    if final.exists():
+        old = final.with_name(f".{final.name}.old-{os.getpid()}")
+        shutil.rmtree(old, ignore_errors=True)
+        final.rename(old)
+    new.rename(final)
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
