@@ -1,0 +1,348 @@
+"""Print plates: every copy of every printed part laid out on the printer's bed, per material.
+
+Input meshes are already in print orientation (lowest z = 0). Each part may be turned about z
+once (to its smallest-area footprint, when that saves at least 10 % of bed area), then the
+copies' footprints (bounding rectangles grown by `printer.margin`) are packed onto as many beds
+as needed with rectpack's MaxRects (best short-side fit; the Global bin strategy fills one
+plate at a time with the best-fitting rectangles, so the plate count stays low). Rectangles
+are integers in 0.01 mm; packing has no randomness, so the same input gives the same layout.
+
+Coordinates on a plate are PrusaSlicer's: the bed runs from (0, 0) to (bed x, bed y). Parts
+keep `margin` mm from each other and `margin / 2` mm from the bed edges, and the packed group
+is centred on the bed.
+
+Files (`write_plates`): `<material>_<n>.3mf` (one named object per copy, `knee_1` ...,
+PrusaSlicer opens it directly and keeps the layout with `--dont-arrange`) and
+`<material>_<n>.png` (top view, parts filled and labelled). Both are byte-stable: the 3MF's
+random UUIDs are replaced by name-based ones and its zip entries get a fixed date; the PNG has
+no Software/date metadata.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import re
+import uuid
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+import trimesh
+
+from ..errors import UserError
+
+SCALE = 100  # packing units per mm (rectpack works best with integers)
+TURN_GAIN = 0.10  # turn a part to its min-area footprint only if that saves this much bed area
+UUID_NS = uuid.UUID("6f1c3b52-55d1-4c59-9a57-6a0a0c0f1f3e")  # namespace for the 3MF's stable UUIDs
+ZIP_DATE = (1980, 1, 1, 0, 0, 0)
+
+# Top-view fill colours by material (the renders use the same scheme).
+MATERIAL_COLOURS = {"tpu_95a": "#d62728", "abs": "#404040", "pla": "#404040", "petg": "#5a5a7a"}
+DEFAULT_COLOUR = "#1f77b4"
+
+
+def material_colour(material: str) -> str:
+    """Hex colour for a material: TPU red, ABS/PLA dark grey, anything else blue."""
+    if material in MATERIAL_COLOURS:
+        return MATERIAL_COLOURS[material]
+    return MATERIAL_COLOURS["tpu_95a"] if material.startswith("tpu") else DEFAULT_COLOUR
+
+
+@dataclass(frozen=True, eq=False)
+class PlateItem:
+    """A printed part to lay out: `qty` copies of `mesh` (print orientation, mm) in `material`."""
+
+    name: str
+    material: str
+    qty: int
+    mesh: trimesh.Trimesh
+
+
+@dataclass(frozen=True, eq=False)
+class PlacedCopy:
+    """One copy on a plate. `mesh` is in bed coordinates; (x, y) is its footprint's lower-left corner."""
+
+    name: str  # copy name, e.g. knee_3
+    part: str  # part name, e.g. knee
+    x: float
+    y: float
+    size: tuple[float, float, float]  # footprint x, y and height, mm
+    rotation_deg: float  # turn about z applied to the print-orientation mesh before placing
+    mesh: trimesh.Trimesh
+
+    @property
+    def volume_mm3(self) -> float:
+        return float(self.mesh.volume)
+
+
+@dataclass(frozen=True, eq=False)
+class Plate:
+    material: str
+    index: int  # 1-based, per material
+    bed: tuple[float, float, float]
+    margin: float
+    copies: tuple[PlacedCopy, ...]
+
+    @property
+    def name(self) -> str:
+        """File stem, e.g. tpu_95a_1."""
+        return f"{self.material}_{self.index}"
+
+    @property
+    def fill(self) -> float:
+        """Fraction of the bed area covered by the copies' footprints."""
+        return sum(c.size[0] * c.size[1] for c in self.copies) / (self.bed[0] * self.bed[1])
+
+    @property
+    def volume_mm3(self) -> float:
+        return sum(c.volume_mm3 for c in self.copies)
+
+
+@dataclass(frozen=True)
+class PlateFile:
+    """What `write_plates` wrote for one plate."""
+
+    name: str  # tpu_95a_1
+    material: str
+    threemf: Path
+    preview: Path
+    copies: tuple[str, ...]  # object names in the 3MF
+    volume_mm3: float = field(default=0.0)
+
+
+# -- layout ----------------------------------------------------------------------------------
+
+def _rot_z(deg: float) -> np.ndarray:
+    return trimesh.transformations.rotation_matrix(math.radians(deg), [0, 0, 1])
+
+
+def _footprint_turn(mesh: trimesh.Trimesh) -> float:
+    """Degrees to turn about z so the footprint's bounding rectangle is smallest (0 if not worth it)."""
+    pts = np.asarray(mesh.vertices)[:, :2]
+    ext = np.ptp(pts, axis=0)
+    area = float(ext[0] * ext[1])
+    try:
+        tf, rect = trimesh.bounds.oriented_bounds_2D(pts)
+    except Exception:  # degenerate (collinear) footprints: nothing to gain
+        return 0.0
+    if area <= 0 or rect[0] * rect[1] > (1 - TURN_GAIN) * area:
+        return 0.0
+    deg = math.degrees(math.atan2(tf[1, 0], tf[0, 0]))
+    return round(deg, 3)
+
+
+def _normalised(mesh: trimesh.Trimesh, deg: float) -> trimesh.Trimesh:
+    """Copy of `mesh` turned `deg` about z and moved so its bounding box starts at the origin."""
+    m = mesh.copy()
+    if deg:
+        m.apply_transform(_rot_z(deg))
+    m.apply_translation(-m.bounds[0])
+    return m
+
+
+def _check_item(item: PlateItem, bed: tuple[float, float, float], margin: float) -> None:
+    if item.qty < 0:
+        raise ValueError(f"{item.name}: negative quantity {item.qty}")
+    if item.mesh is None or len(item.mesh.faces) == 0:
+        raise ValueError(f"{item.name}: empty mesh")
+    lo = item.mesh.bounds[0]
+    if abs(lo[2]) > 1e-3:
+        raise ValueError(f"{item.name}: mesh is not in print orientation (lowest z = {lo[2]:.3f}, expected 0)")
+
+
+def pack_plates(items: Sequence[PlateItem], bed: Sequence[float], margin: float) -> tuple[Plate, ...]:
+    """Lay out every copy of every item on as few beds as rectpack finds, per material.
+
+    `bed` is the build volume (x, y, z) in mm (`printer.bed`); `margin` the gap between parts
+    (`printer.margin`). Plates are ordered by material name, then index. Raises UserError if a
+    part is taller than the build volume or its footprint does not fit the bed.
+    """
+    import rectpack
+
+    bed3 = (float(bed[0]), float(bed[1]), float(bed[2]))
+    margin = float(margin)
+    edge = margin / 2
+    by_material: dict[str, list[PlateItem]] = {}
+    for item in items:
+        _check_item(item, bed3, margin)
+        if item.qty:
+            by_material.setdefault(item.material, []).append(item)
+
+    plates: list[Plate] = []
+    for material in sorted(by_material):
+        group = sorted(by_material[material], key=lambda i: i.name)
+        shapes: dict[str, tuple[trimesh.Trimesh, float]] = {}
+        for item in group:
+            deg = _footprint_turn(item.mesh)
+            m = _normalised(item.mesh, deg)
+            w, d, h = (float(v) for v in m.extents)
+            usable = (bed3[0] - 2 * edge, bed3[1] - 2 * edge)
+            fits = (w <= usable[0] and d <= usable[1]) or (d <= usable[0] and w <= usable[1])
+            if h > bed3[2] or not fits:
+                raise UserError(
+                    f"part {item.name} ({w:.1f} x {d:.1f} x {h:.1f} mm in print orientation) does not fit the "
+                    f"{bed3[0]:g} x {bed3[1]:g} x {bed3[2]:g} mm build volume (printer.bed) with {edge:g} mm kept "
+                    f"from the bed edges (half of printer.margin). Fix: set printer.bed to your printer's real build "
+                    f"volume, lower printer.margin, or make the part smaller (e.g. frame or core sizes).")
+            shapes[item.name] = (m, deg)
+
+        packer = rectpack.newPacker(mode=rectpack.PackingMode.Offline, bin_algo=rectpack.PackingBin.Global,
+                                    pack_algo=rectpack.MaxRectsBssf, sort_algo=rectpack.SORT_AREA, rotation=True)
+        bin_w = int(math.floor((bed3[0] - 2 * edge + margin) * SCALE))
+        bin_h = int(math.floor((bed3[1] - 2 * edge + margin) * SCALE))
+        packer.add_bin(bin_w, bin_h, count=float("inf"))
+        rid_of: dict[int, tuple[PlateItem, int]] = {}
+        rid = 0
+        for item in group:
+            m, _ = shapes[item.name]
+            w, d = (int(math.ceil((float(v) + margin) * SCALE)) for v in m.extents[:2])
+            for k in range(1, item.qty + 1):
+                packer.add_rect(w, d, rid=rid)
+                rid_of[rid] = (item, k)
+                rid += 1
+        packer.pack()
+        placed = packer.rect_list()
+        if len(placed) != rid:  # cannot happen after the size check above, but never drop a part silently
+            missing = sorted(set(rid_of) - {r[5] for r in placed})
+            raise RuntimeError(f"packing left out {[f'{rid_of[i][0].name}_{rid_of[i][1]}' for i in missing]}")
+
+        per_bin: dict[int, list[tuple[int, int, int, int, int]]] = {}
+        for b, x, y, w, h, r in placed:
+            per_bin.setdefault(b, []).append((x, y, w, h, r))
+        for index, b in enumerate(sorted(per_bin), start=1):
+            rects = sorted(per_bin[b], key=lambda t: t[4])
+            copies = []
+            for x, y, w, h, r in rects:
+                item, k = rid_of[r]
+                m, deg = shapes[item.name]
+                turned = w != int(math.ceil((float(m.extents[0]) + margin) * SCALE))  # rectpack swapped w, h
+                mesh = m.copy()
+                total = deg
+                if turned:
+                    mesh.apply_transform(_rot_z(90.0))
+                    mesh.apply_translation(-mesh.bounds[0])
+                    total = deg + 90.0
+                copies.append((item, k, x / SCALE, y / SCALE, mesh, total))
+            # centre the packed group on the bed
+            lo = np.min([[c[2], c[3]] for c in copies], axis=0)
+            hi = np.max([[c[2] + c[4].extents[0], c[3] + c[4].extents[1]] for c in copies], axis=0)
+            shift = (np.array(bed3[:2]) - (hi - lo)) / 2 - lo
+            shift = np.round(shift, 2)
+            out = []
+            for item, k, x, y, mesh, total in copies:
+                px, py = round(x + shift[0], 2), round(y + shift[1], 2)
+                mesh.apply_translation([px, py, 0.0])
+                ext = mesh.extents
+                out.append(PlacedCopy(f"{item.name}_{k}", item.name, float(px), float(py),
+                                      (float(ext[0]), float(ext[1]), float(ext[2])), total % 360.0, mesh))
+            out.sort(key=lambda c: (c.part, int(c.name.rsplit("_", 1)[1])))
+            plates.append(Plate(material, index, bed3, margin, tuple(out)))
+    return tuple(plates)
+
+
+# -- files -----------------------------------------------------------------------------------
+
+_UUID_RE = re.compile(rb'p:UUID="[0-9a-fA-F-]{36}"')
+
+
+def plate_3mf_bytes(plate: Plate) -> bytes:
+    """The plate as a 3MF (trimesh scene export, one named object per copy), byte-stable."""
+    scene = trimesh.Scene()
+    for c in plate.copies:
+        scene.add_geometry(c.mesh, geom_name=c.name, node_name=c.name)
+    raw = scene.export(file_type="3mf")
+    return _stable_zip(raw, plate.name)
+
+
+def _stable_zip(raw: bytes, seed: str) -> bytes:
+    """Rewrite a 3MF zip: UUIDs derived from `seed` and their position, fixed entry dates."""
+    src = zipfile.ZipFile(io.BytesIO(raw))
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, "w", compression=zipfile.ZIP_DEFLATED, compresslevel=6) as dst:
+        for info in src.infolist():
+            data = src.read(info.filename)
+            if info.filename.endswith(".model"):
+                counter = iter(range(1 << 30))
+                data = _UUID_RE.sub(lambda _m: f'p:UUID="{uuid.uuid5(UUID_NS, f"{seed}/{next(counter)}")}"'.encode(), data)
+            zi = zipfile.ZipInfo(info.filename, date_time=ZIP_DATE)
+            zi.compress_type = zipfile.ZIP_DEFLATED
+            zi.external_attr = 0o644 << 16
+            dst.writestr(zi, data)
+    return out.getvalue()
+
+
+def plot_plate(plate: Plate, path: Path | str, size_in: float = 6.0, dpi: int = 100) -> Path:
+    """Top view of a plate: the bed, each copy's faces filled in its material colour, its
+    footprint outlined (dashed) and its name written on it. PNG without metadata."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.collections import PolyCollection
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Rectangle
+
+    path = Path(path)
+    bx, by = plate.bed[0], plate.bed[1]
+    aspect = by / bx
+    fig = Figure(figsize=(size_in, size_in * aspect + 0.5), dpi=dpi, layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.subplots()
+    ax.add_patch(Rectangle((0, 0), bx, by, facecolor="#f4f4f0", edgecolor="black", linewidth=1.2))
+    colour = material_colour(plate.material)
+    pt_per_mm = size_in * 72 * 0.82 / (bx + 4)  # roughly: the axes take ~82 % of the figure width
+    for c in plate.copies:
+        tri = np.asarray(c.mesh.vertices)[np.asarray(c.mesh.faces)][:, :, :2]
+        up = np.abs(np.asarray(c.mesh.face_normals)[:, 2]) > 1e-3  # walls project to lines: skip
+        ax.add_collection(PolyCollection(tri[up], facecolors=colour, edgecolors=colour, linewidths=0.3, alpha=0.85))
+        ax.add_patch(Rectangle((c.x, c.y), c.size[0], c.size[1], fill=False, edgecolor="#555555",
+                               linewidth=0.6, linestyle="--"))
+        fs = max(4.5, min(9.0, 0.9 * c.size[0] * pt_per_mm / (0.62 * max(len(c.name), 1))))
+        ax.text(c.x + c.size[0] / 2, c.y + c.size[1] / 2, c.name, ha="center", va="center", fontsize=fs,
+                color="black", bbox=dict(boxstyle="round,pad=0.15", facecolor="white", edgecolor="none", alpha=0.75))
+    ax.set_xlim(-2, bx + 2)
+    ax.set_ylim(-2, by + 2)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.set_title(f"{plate.name}: {len(plate.copies)} parts in {plate.material}\n"
+                 f"{bx:g} x {by:g} mm bed, footprints cover {100 * plate.fill:.0f} %", fontsize=10)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, format="png", dpi=dpi, metadata={"Software": None})
+    return path
+
+
+def write_plates(plates: Sequence[Plate], out_dir: Path | str) -> tuple[PlateFile, ...]:
+    """Write `<name>.3mf` and `<name>.png` for each plate into `out_dir` (created).
+
+    Stale plate files from an earlier build with more plates are removed, so the folder holds
+    exactly these plates (the `slice` command slices every *.3mf in it)."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    keep = {p.name for p in plates}
+    for old in sorted(out_dir.glob("*.3mf")):
+        if old.stem not in keep:
+            old.unlink()
+            old.with_suffix(".png").unlink(missing_ok=True)
+            old.with_suffix(".gcode").unlink(missing_ok=True)
+    written = []
+    for p in plates:
+        f3 = out_dir / f"{p.name}.3mf"
+        f3.write_bytes(plate_3mf_bytes(p))
+        png = plot_plate(p, out_dir / f"{p.name}.png")
+        written.append(PlateFile(p.name, p.material, f3, png, tuple(c.name for c in p.copies), p.volume_mm3))
+    return tuple(written)
+
+
+def parse_plate_name(stem: str) -> tuple[str, int]:
+    """'tpu_95a_2' -> ('tpu_95a', 2). Raises ValueError for other names."""
+    material, _, idx = stem.rpartition("_")
+    if not material or not idx.isdigit():
+        raise ValueError(f"not a plate file name: {stem!r} (expected <material>_<n>)")
+    return material, int(idx)
+
+
+def part_of(copy_name: str) -> str:
+    """'knee_3' -> 'knee'."""
+    base, _, k = copy_name.rpartition("_")
+    return base if base and k.isdigit() else copy_name

@@ -1,0 +1,168 @@
+"""Assembly instructions: numbered steps derived from the frame graph, "fold as you assemble".
+
+The paper's order: top and bottom rings, corners, connect and fold the sides, then arms and
+struts; here followed by the core and the electronics. Each step names the part copies it uses
+(`corner_top_fl` ...), the rods it inserts with their cut lengths (from the cut list) and what
+to glue. Every rod and every part copy appears in exactly one step: a rod in the step that
+first pushes it into a socket, a part in the step that first uses it.
+
+Glue policy (docs/fabrication.md explains why):
+- cage ring, leg, the knee end of each arm and the corner end of each strut: one drop of thin
+  CA at the socket mouth once the rod is fully seated. These joints are never taken apart and
+  a rod that pulls out on impact defeats the frame.
+- core links: NO glue. The arm and strut ends only push in, and the links are bolted to the
+  core plate, so the core (and its electronics) comes out as one unit.
+- motor mounts: no glue; they clip onto the arm rods and are held by the motor screws.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Sequence
+
+if TYPE_CHECKING:
+    from ..partlist import PartSpec
+    from ..pipeline import Design
+
+CORNER_WORDS = {"fl": "front-left", "fr": "front-right", "rr": "rear-right", "rl": "rear-left"}
+GLUE_CA = "one drop of thin CA glue at each socket mouth once the rod is fully seated"
+
+
+@dataclass(frozen=True)
+class Step:
+    number: int
+    title: str
+    parts: tuple[str, ...]  # part copies used, e.g. corner_top_fl
+    rods: tuple[tuple[str, float], ...]  # (rod name, cut length mm) inserted in this step
+    glue: str  # what to glue, or "none"
+    text: str  # what to do
+    hardware: tuple[str, ...] = ()
+
+    def as_dict(self) -> dict:
+        return {"number": self.number, "title": self.title, "parts": list(self.parts),
+                "rods": [{"rod": r, "cut_length_mm": length} for r, length in self.rods], "glue": self.glue,
+                "text": self.text, "hardware": list(self.hardware)}
+
+
+def copy_labels(part: "PartSpec") -> tuple[str, ...]:
+    """Names of a part's copies: the placement instance when it names the part (knee_fl),
+    else part + corner (motor_mount_fl), or the part name for a single copy (core_plate)."""
+    out = []
+    for pl in part.placements:
+        if pl.instance.startswith(part.name):
+            out.append(pl.instance)
+        elif part.qty == 1:
+            out.append(part.name)
+        else:
+            out.append(f"{part.name}_{pl.instance.rsplit('_', 1)[-1]}")
+    return tuple(out)
+
+
+def assembly_steps(design: "Design") -> tuple[Step, ...]:
+    """The numbered steps for a design (frame graph + part list + cut list)."""
+    frame, spec = design.frame, design.spec
+    cut = {name: row.length_mm for row in design.cut.rows for name in row.rods}
+    rods_by_role: dict[str, list[str]] = {}
+    for r in frame.rods.values():
+        rods_by_role.setdefault(r.role, []).append(r.name)
+    parts = {p.name: p for p in design.parts}
+    labels = {p.name: copy_labels(p) for p in design.parts}
+    used_parts: set[str] = set()
+    used_rods: set[str] = set()
+    steps: list[Step] = []
+
+    def take_parts(*names: str) -> tuple[str, ...]:
+        out = []
+        for n in names:
+            if n in labels and n not in used_parts:
+                used_parts.add(n)
+                out.extend(labels[n])
+        return tuple(out)
+
+    def take_rods(names: Sequence[str]) -> tuple[tuple[str, float], ...]:
+        out = []
+        for n in names:
+            if n in frame.rods and n not in used_rods:
+                used_rods.add(n)
+                out.append((n, cut[n]))
+        return tuple(out)
+
+    def hw(*names: str) -> tuple[str, ...]:
+        out = []
+        for n in names:
+            p = parts.get(n)
+            if p:
+                out += [f"{h.qty * p.qty} x {h.item}" for h in p.hardware]
+        return tuple(out)
+
+    def add(title: str, part_names: Sequence[str], rod_names: Sequence[str], glue: str, text: str,
+            hardware: Sequence[str] = ()) -> None:
+        steps.append(Step(len(steps) + 1, title, take_parts(*part_names), take_rods(rod_names), glue, text, tuple(hardware)))
+
+    def ring(level: str) -> list[str]:
+        return [n for n in rods_by_role.get("cage", []) if n.startswith(f"rod_cage_{level}_")]
+
+    add("Top ring", ["corner_top"], ring("top"), f"ring sockets: {GLUE_CA}",
+        "Lay the four top corners flat, open side up. Push the four top cage rods into them to form a square ring "
+        "(rod_cage_top_front between corner_top_fl and corner_top_fr, and so on round the square). Check the ring is "
+        "square (equal diagonals) before the glue sets.")
+    add("Bottom ring", ["corner_bottom"], ring("bottom"), f"ring sockets: {GLUE_CA}",
+        "Build the bottom ring the same way with the four bottom corners (feet pads down) and the bottom cage rods.")
+    upper = [n for n in rods_by_role.get("leg", []) if "_upper_" in n]
+    lower = [n for n in rods_by_role.get("leg", []) if "_lower_" in n]
+    add("Knees and upper legs", ["knee"], upper, "none yet (glue after folding, step 4)",
+        "Push an upper leg rod into the downward socket of each top corner and put a knee on its lower end, arm "
+        "sockets pointing inwards to the centre.")
+    add("Fold the sides", [], lower, f"leg sockets (top corners, knees, bottom corners): {GLUE_CA}",
+        "Push a lower leg rod into each knee. Stand the top ring over the bottom ring, then fold each side inwards "
+        "at the knees (the hourglass) and push the lower legs into the bottom corners one corner at a time. "
+        f"Each knee sits {spec.frame.knee_inset:g} mm inside its corner.")
+    arms = rods_by_role.get("arm", [])
+    add("Arms and motor mounts", ["motor_mount"], arms, f"knee end of each arm rod only: {GLUE_CA}; motor mounts: none",
+        "Clip a motor mount onto each pair of arm rods (the two rods of one arm run parallel, "
+        f"{spec.frame.arm_spacing:g} mm apart), then push both arm rods into the knee's arm sockets. Slide the mount "
+        f"to {spec.motors.radius:g} mm from the frame centre. Leave the inner ends free.")
+    struts = rods_by_role.get("strut", [])
+    if struts:
+        add("Struts", [], struts, f"bottom-corner end of each strut: {GLUE_CA}",
+            "Push a damping strut into the inward socket of each bottom corner; leave the inner end free.")
+    core_parts = [n for n in ("core_plate", "battery_holder", "core_link") if n in parts]
+    add("Core", core_parts, [], "none: the core links are bolted, so the core stays removable",
+        "Bolt a TPU core link onto each corner of the core plate (screw from below, nut on top). Screw the battery "
+        "holder under the plate with the stack screws; its open end faces the front so the battery slides in.",
+        hw("core_link", "core_plate"))
+    add("Hang the core", [], [], "none: arm and strut ends are only pushed into the core links",
+        "Hold the core in the middle of the frame and push the free ends of both arm rods"
+        + (" and the strut" if struts else "") + " of each corner into its core link. To remove the core later, pull "
+        "the rods out of the links.")
+    rest = [n for n in parts if n not in used_parts]
+    comps = ", ".join(f"{c.qty} x {c.name}" if c.qty > 1 else c.name for c in spec.components)
+    add("Electronics", rest, [], "none",
+        f"Screw the {spec.motor.name} motors onto the motor mounts ({spec.motor.screw} screws, not longer than the mount "
+        "so they do not touch the windings). Mount the flight controller / ESC stack on the core plate standoffs"
+        + (f", the {spec.core.computer.name} on the computer mount" if spec.core.computer else "")
+        + (f"; fit {comps}" if comps else "") + ". Solder the motors to the ESC, route wires along the arm rods, fit "
+        "the propellers (2 CW, 2 CCW) last, and slide the battery into its holder.",
+        hw("motor_mount", *rest))
+    leftover = [n for n in frame.rods if n not in used_rods]
+    if leftover:  # a rod role this module does not know yet: still tell the builder to fit it
+        add("Remaining rods", [], leftover, "none", "Fit these rods where the assembly drawing shows them.")
+    return tuple(steps)
+
+
+def to_markdown(steps: Sequence[Step], title: str = "Assembly") -> str:
+    out = [f"# {title}", ""] if title else []
+    for s in steps:
+        out.append(f"## {s.number}. {s.title}")
+        out.append("")
+        out.append(s.text)
+        out.append("")
+        if s.parts:
+            out.append(f"- Parts: {', '.join(s.parts)}")
+        if s.rods:
+            out.append("- Rods: " + ", ".join(f"{n} ({length:g} mm)" for n, length in s.rods))
+        if s.hardware:
+            out.append(f"- Hardware: {'; '.join(s.hardware)}")
+        out.append(f"- Glue: {s.glue}")
+        out.append("")
+    return "\n".join(out)
