@@ -1,0 +1,389 @@
+"""TPU joints (corner_top, corner_bottom, knee, core_link), generated from their sockets.
+
+Every joint is built directly IN PRINT ORIENTATION: `print_from_local(part)` (pure numpy, no CAD)
+maps the part's local frame (sockets, bolt hole) to the printer, and the solid is assembled there
+from "print-safe" pieces, so TPU prints without supports:
+
+* a socket parallel to the bed gets a D-section sleeve (flat bottom on the bed, vertical sides,
+  round top, OD = bore + 2 wall): its hole is a bridge of one bore diameter (<= 6 mm);
+* a socket within 45 deg of vertical gets a plain tilted cylinder, run down through the bed and cut
+  flat there (its surface never faces down more than 45 deg);
+* a socket sloped less than 45 deg above horizontal (the strut at a bottom corner) gets a cylinder
+  plus a vertical web (90 % of the OD wide) from its axis down to the bed, so nothing hangs; its
+  hole is a sloped bridge one bore wide.
+
+Each socket is then cut as a blind hole of diameter `socket.bore` from `socket.bottom()` to past
+`socket.mouth()`, with a 45 deg chamfer of `CHAMFER` mm at the mouth. Walls are `part.wall`.
+
+Print orientations
+* corner_top: ring plane on the bed, upside down (the leg socket then points up; the flat bed face
+  is the top of the frame). corner_bottom: as in the frame, ring sleeves and a foot pad on the bed:
+  the bottom corners are the feet, and the foot pad is what touches the ground.
+* knee, core_link: every socket direction lies in the frame's diagonal side plane and the two arm
+  rods are offset across it, so the joint is printed lying on its side: the lateral axis is vertical,
+  every socket is parallel to the bed, the two arm sockets are stacked in one block.
+
+Living hinge (knee). The sides fold at the knees ("fold as you assemble"; on impact the hourglass
+closes): the legs rotate relative to the arms about the lateral axis. That axis is vertical in
+print, so the hinge is a vertical TPU web `hinge_thickness` thick (across the bend) running from the
+upper-leg sleeve to the arm block, with a `HINGE_GAP` slot on both sides that frees the upper leg
+everywhere else. Layer lines then run along the bend, the way printed living hinges survive. The
+lower leg leaves the knee almost at right angles to the arms and its socket shares a wall with the
+arm sockets (the seat is only `joints.seat` from the knee centre), so it stays solid with the arm
+block; the upper leg, which makes the larger angle with the arms and carries the fold, is the one
+hinged.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..partlist import PartSpec
+
+CHAMFER = 0.5  # mm, 45 deg, at every socket mouth
+HINGE_GAP = 0.8  # mm, slot each side of the knee's living hinge (two 0.4 mm lines wide)
+SKIRT = 0.9  # web under a sloped sleeve, as a fraction of the sleeve OD (never tangent to it)
+JOINT_KINDS = ("corner_top", "corner_bottom", "knee", "core_link")
+
+
+@dataclass(frozen=True)
+class Built:
+    """A part solid in print orientation and the 4x4 transform print <- part local frame."""
+
+    shape: object  # cq.Shape
+    print_from_local: np.ndarray
+    shells: int = 1
+
+
+@dataclass(frozen=True, eq=False)
+class PSocket:
+    """A socket mapped into print coordinates."""
+
+    port: np.ndarray
+    direction: np.ndarray
+    seat: float
+    depth: float
+    bore: float
+    rod: str
+
+    def at(self, s: float) -> np.ndarray:
+        return self.port + self.direction * s
+
+    @property
+    def bottom(self) -> np.ndarray:
+        return self.at(self.seat)
+
+    @property
+    def mouth(self) -> np.ndarray:
+        return self.at(self.seat + self.depth)
+
+
+# -- transforms (pure numpy) ------------------------------------------------------------------
+
+def transform(rot: np.ndarray, shift) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, :3] = rot
+    m[:3, 3] = shift
+    return m
+
+
+FLIP_X = np.diag([1.0, -1.0, -1.0])  # 180 deg about x: upside down, still right-handed
+
+
+def print_from_local(part: PartSpec) -> np.ndarray:
+    """4x4 print <- local transform of a joint (bed at z = 0)."""
+    od = part.sockets[0].bore + 2 * part.wall
+    r = od / 2
+    dirs = np.array([s.direction for s in part.sockets], float)
+    if part.name in ("corner_top", "corner_bottom"):
+        vertical = dirs[np.abs(dirs[:, 2]) > 1e-6, 2]
+        rot = FLIP_X if vertical.sum() < 0 else np.eye(3)
+        return transform(rot, (0.0, 0.0, r))
+    if part.name in ("knee", "core_link"):
+        w = _side_normal(dirs)
+        x = _arm_direction(part)
+        x = x - w * (x @ w)
+        x /= np.linalg.norm(x)
+        y = np.cross(w, x)
+        rot = np.vstack([x, y, w])
+        ports = np.array([s.port for s in part.sockets], float)
+        low = float((ports @ w).min())
+        return transform(rot, (0.0, 0.0, r - low))
+    raise ValueError(f"unknown joint {part.name!r}; valid: {', '.join(JOINT_KINDS)}")
+
+
+def _side_normal(dirs: np.ndarray) -> np.ndarray:
+    """Unit normal of the plane holding every socket direction (the lateral axis), sign fixed."""
+    _, _, vt = np.linalg.svd(dirs)
+    w = vt[-1]
+    if np.abs(dirs @ w).max() > 1e-3:
+        raise ValueError("a knee/core-link joint needs every socket direction in one plane")
+    # Deterministic sign: point along the first socket port offset, else toward +x+y.
+    ref = np.array([1.0, 1.0, 0.25])
+    return w if w @ ref >= 0 else -w
+
+
+def _arm_direction(part: PartSpec) -> np.ndarray:
+    """Direction shared by the two parallel arm sockets."""
+    dirs = [np.asarray(s.direction, float) for s in part.sockets]
+    for i in range(len(dirs)):
+        for k in range(i + 1, len(dirs)):
+            if dirs[i] @ dirs[k] > 1 - 1e-9:
+                return dirs[i]
+    raise ValueError(f"{part.name}: no pair of parallel (arm) sockets")
+
+
+def map_sockets(part: PartSpec, m: np.ndarray) -> list[PSocket]:
+    out = []
+    for s in part.sockets:
+        port = m[:3, :3] @ np.asarray(s.port, float) + m[:3, 3]
+        d = m[:3, :3] @ np.asarray(s.direction, float)
+        out.append(PSocket(port, d / np.linalg.norm(d), float(s.seat), float(s.depth), float(s.bore), s.rod))
+    return out
+
+
+# -- print-safe primitives (CadQuery) --------------------------------------------------------
+
+def _cq():
+    import cadquery as cq
+
+    return cq
+
+
+def vec(p):
+    return _cq().Vector(float(p[0]), float(p[1]), float(p[2]))
+
+
+def horizontal(d) -> np.ndarray:
+    h = np.array([d[0], d[1], 0.0])
+    return h / np.linalg.norm(h)
+
+
+def dsleeve(start, d, length: float, axis_z: float, r: float, bottom: float = 0.0):
+    """D-section sleeve along horizontal `d` from `start`: flat bottom at `bottom`, round top."""
+    cq = _cq()
+    d = horizontal(d)
+    lat = np.array([-d[1], d[0], 0.0])
+    plane = cq.Plane(origin=(float(start[0]), float(start[1]), float(axis_z)), xDir=tuple(lat), normal=tuple(d))
+    lo = bottom - axis_z
+    wp = cq.Workplane(plane).moveTo(-r, lo).lineTo(r, lo).lineTo(r, 0).threePointArc((0, r), (-r, 0)).close()
+    return wp.extrude(length).val()
+
+
+def prism(points_xy, z0: float, z1: float):
+    """Vertical prism over a polygon (xy points, any winding) from z0 to z1."""
+    cq = _cq()
+    pts = [(float(x), float(y)) for x, y in points_xy]
+    return cq.Workplane("XY", origin=(0, 0, z0)).polyline(pts).close().extrude(z1 - z0).val()
+
+
+def box_along(p0, p1, width: float, z0: float, z1: float):
+    """Vertical prism: a strip `width` wide from xy point p0 to p1."""
+    a, b = np.asarray(p0[:2], float), np.asarray(p1[:2], float)
+    e = (b - a) / np.linalg.norm(b - a)
+    n = np.array([-e[1], e[0]]) * width / 2
+    return prism([a - n, b - n, b + n, a + n], z0, z1)
+
+
+def cylinder(p0, d, length: float, r: float):
+    return _cq().Solid.makeCylinder(r, length, vec(p0), vec(d))
+
+
+def sloped_sleeve(start, d, length: float, r: float):
+    """Cylinder along a sloped `d` plus a vertical web from its axis down below the bed."""
+    cq = _cq()
+    d = np.asarray(d, float)
+    h = horizontal(d)
+    lat = np.array([-h[1], h[0], 0.0])
+    p0 = np.asarray(start, float)
+    p1 = p0 + d * length
+    run = float((p1 - p0)[:2] @ h[:2])
+    # The web reaches under the whole cylinder: its ends lie in the planes of the end caps.
+    sa, ca = abs(float(d[2])), math.sqrt(1 - float(d[2]) ** 2)
+    z0, z1 = float(p0[2]), float(p1[2])
+    outline = [(-r * sa, -1.0), (run + r * sa, -1.0), (run + r * sa, z1 - r * ca), (run, z1), (0, z0), (-r * sa, z0 - r * ca)]
+    plane = cq.Plane(origin=(float(p0[0]), float(p0[1]), 0.0), xDir=tuple(h), normal=tuple(-lat))
+    web = cq.Workplane(plane).polyline(outline).close().extrude(SKIRT * r, both=True).val()
+    return cylinder(p0, d, length, r).fuse(web)
+
+
+def socket_cutter(s: PSocket, chamfer: float = CHAMFER):
+    """Blind hole from the socket bottom out past the mouth, with a 45 deg mouth chamfer."""
+    cq = _cq()
+    rb = s.bore / 2
+    extra = 2.0
+    hole = cq.Solid.makeCylinder(rb, s.depth + extra, vec(s.bottom), vec(s.direction))
+    cone = cq.Solid.makeCone(rb, rb + chamfer + extra, chamfer + extra, vec(s.mouth - s.direction * chamfer), vec(s.direction))
+    return hole.fuse(cone)
+
+
+def fuse_all(shapes):
+    first, *rest = shapes
+    return first.fuse(*rest).clean() if rest else first
+
+
+def above_bed(shape, big: float = 2000.0):
+    """Keep z >= 0 (the flat cut on the bed)."""
+    cq = _cq()
+    return shape.intersect(cq.Solid.makeBox(2 * big, 2 * big, big, cq.Vector(-big, -big, 0.0)))
+
+
+def finish(body, cutters):
+    """Cut the socket holes; return a single solid (raises if the part fell apart)."""
+    cq = _cq()
+    shape = body.cut(fuse_all(cutters)).clean() if cutters else body.clean()
+    solids = shape.Solids()
+    if len(solids) != 1:
+        raise RuntimeError(f"joint geometry produced {len(solids)} solids instead of 1")
+    return cq.Solid(solids[0].wrapped) if not isinstance(solids[0], cq.Solid) else solids[0]
+
+
+# -- the joints ------------------------------------------------------------------------------
+
+def build(part: PartSpec) -> Built:
+    m = print_from_local(part)
+    socks = map_sockets(part, m)
+    r = (part.sockets[0].bore + 2 * part.wall) / 2
+    if part.name in ("corner_top", "corner_bottom"):
+        shape = _corner(part, socks, r)
+    elif part.name == "knee":
+        shape = _knee(part, socks, r)
+    elif part.name == "core_link":
+        shape = _core_link(part, socks, r, m)
+    else:
+        raise ValueError(f"unknown joint {part.name!r}; valid: {', '.join(JOINT_KINDS)}")
+    return Built(shape, m)
+
+
+def _corner(part: PartSpec, socks: list[PSocket], r: float):
+    """Ring sleeves flat on the bed meeting in a round hub, the leg (and strut) rising from it."""
+    params = dict(part.params)
+    port = socks[0].port
+    pieces = [cylinder((port[0], port[1], 0.0), (0, 0, 1), 2 * r, r)]  # hub
+    cos45 = math.cos(math.radians(45))
+    for s in socks:
+        dz = s.direction[2]
+        length = s.seat + s.depth
+        if abs(dz) < 1e-6:
+            pieces.append(dsleeve(s.port, s.direction, length, s.port[2], r))
+        elif dz >= cos45:
+            back = s.port[2] / dz + r + 1.0  # run it down through the bed; cut flat later
+            pieces.append(cylinder(s.at(-back), s.direction, length + back, r))
+        elif dz > 0:
+            pieces.append(sloped_sleeve(s.port, s.direction, length, r))
+        else:
+            raise ValueError(f"{part.name}: socket {s.rod} points into the bed in print orientation")
+    if params.get("foot"):
+        # The foot: a flat pad on the ground side, twice the sleeve OD across, one wall thick.
+        pieces.append(cylinder((port[0], port[1], 0.0), (0, 0, 1), part.wall, 2 * r))
+    body = above_bed(fuse_all(pieces))
+    return finish(body, [socket_cutter(s) for s in socks])
+
+
+def _groups(socks: list[PSocket]) -> tuple[list[PSocket], list[PSocket]]:
+    """(the parallel arm sockets, the others)."""
+    for i in range(len(socks)):
+        par = [s for s in socks if s.direction @ socks[i].direction > 1 - 1e-9]
+        if len(par) > 1:
+            return par, [s for s in socks if s not in par]
+    raise ValueError("no parallel arm sockets")
+
+
+def _block(arms: list[PSocket], r: float, start: float):
+    """The stacked arm sockets: one D-section block from `start` to the mouth, up to the top arm."""
+    top = max(arms, key=lambda s: s.port[2])
+    return dsleeve(top.at(start), top.direction, top.seat + top.depth - start, top.port[2], r)
+
+
+def _footprint_rect(s: PSocket, start: float, end: float, half: float, grow: float = 0.0):
+    """xy corners of a sleeve's footprint from `start` to `end` along it, grown by `grow`."""
+    d = horizontal(s.direction)
+    lat = np.array([-d[1], d[0]])
+    a = s.port[:2] + d[:2] * (start - grow)
+    b = s.port[:2] + d[:2] * (end + grow)
+    h = half + grow
+    return [a - lat * h, b - lat * h, b + lat * h, a + lat * h]
+
+
+def _knee(part: PartSpec, socks: list[PSocket], r: float):
+    h = float(part.param("hinge_thickness"))
+    arms, legs = _groups(socks)
+    a = arms[0]
+    s_back = a.seat - part.wall
+    block = _block(arms, r, s_back)
+    # The hinged leg makes the larger angle with the arms (see the module docstring).
+    hinged = min(legs, key=lambda s: float(s.direction @ a.direction))
+    rigid = [s for s in legs if s is not hinged]
+    t_back = {id(s): s.seat - part.wall for s in legs}
+    rigid_solids = [dsleeve(s.at(t_back[id(s)]), s.direction, s.depth + part.wall, s.port[2], r) for s in rigid]
+    top = max(s.port[2] for s in legs) + r
+
+    # Upper leg, freed from everything rigid by HINGE_GAP ...
+    upper = dsleeve(hinged.at(t_back[id(hinged)]), hinged.direction, hinged.depth + part.wall, hinged.port[2], r)
+    clear = [prism(_footprint_rect(a, s_back, a.seat + a.depth, r, HINGE_GAP), -1.0, 1000.0)]
+    clear += [prism(_footprint_rect(s, t_back[id(s)], s.seat + s.depth, r, HINGE_GAP), -1.0, 1000.0) for s in rigid]
+    upper = upper.cut(fuse_all(clear))
+    # ... and joined to the arm block by the hinge web: from the centre of the upper leg's back
+    # face straight to the arm block's back face.
+    c = hinged.at(t_back[id(hinged)])
+    d = horizontal(a.direction)
+    lat = np.array([-d[1], d[0], 0.0])
+    off = float((c - a.port)[:2] @ lat[:2])
+    off = float(np.clip(off, -(r - h / 2 - 0.3), r - h / 2 - 0.3))
+    q = a.port + d * (s_back + 0.6) + lat * off
+    e = (q - c)[:2] / np.linalg.norm((q - c)[:2])
+    web = box_along(c[:2] - e * 0.6, q[:2], h, 0.0, top)
+    body = fuse_all([block, *rigid_solids, upper, web])
+    return finish(body, [socket_cutter(s) for s in socks])
+
+
+def _core_link(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarray):
+    """Stacked arm sockets + strut sleeve + a hub + the tab that bolts onto the core plate top."""
+    arms, others = _groups(socks)
+    a = arms[0]
+    s_back = a.seat - part.wall
+    pieces = [_block(arms, r, s_back)]
+    backs = _footprint_rect(a, s_back, s_back, r)[:2] + _footprint_rect(a, s_back, s_back, r)[2:]
+    tops = []
+    for s in others:
+        t0 = s.seat - part.wall
+        pieces.append(dsleeve(s.at(t0), s.direction, s.depth + part.wall, s.port[2], r))
+        backs += _footprint_rect(s, t0, t0, r)
+        tops.append(s.port[2] + r)
+    # The tab: local z from plate_top_z to plate_top_z + tab_thickness, from just outside the
+    # node to past the bolt hole, standing on the bed (it is a wall in print orientation).
+    rot = m[:3, :3]
+    e_v = rot @ np.array([0.0, 0.0, 1.0])
+    node = m[:3, 3]
+    bolt = rot @ np.asarray(part.param("bolt_hole"), float) + m[:3, 3]
+    v0 = float(part.param("plate_top_z"))
+    t = float(part.param("tab_thickness"))
+    hole_d = float(part.param("screw_clearance"))
+    r_tab = hole_d / 2 + part.wall
+    u = bolt - node
+    u = u - e_v * (u @ e_v)
+    u_len = float(np.linalg.norm(u[:2]))
+    e_u = u / u_len
+
+    def tab_pt(uu, vv):
+        return (node + e_u * uu + e_v * vv)[:2]
+
+    z_top = float(bolt[2] + r_tab)
+    pieces.append(prism([tab_pt(-1.0, v0), tab_pt(u_len + r_tab, v0), tab_pt(u_len + r_tab, v0 + t), tab_pt(-1.0, v0 + t)],
+                        0.0, z_top))
+    # Hub: the convex hull of the sleeves' back faces and the root of the tab.
+    backs += [tab_pt(0.5, v0), tab_pt(0.5, v0 + t)]
+    pieces.append(prism(_hull(np.array(backs)), 0.0, max(tops + [z_top])))
+    cq = _cq()
+    bolt_hole = cq.Solid.makeCylinder(hole_d / 2, t + 2.0, vec(bolt + e_v * (v0 - 1.0)), vec(e_v))
+    return finish(fuse_all(pieces), [socket_cutter(s) for s in socks] + [bolt_hole])
+
+
+def _hull(pts: np.ndarray) -> list[np.ndarray]:
+    from scipy.spatial import ConvexHull
+
+    h = ConvexHull(pts)
+    return [pts[i] for i in h.vertices]
