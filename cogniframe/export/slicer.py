@@ -346,6 +346,8 @@ def check_plate(path: Path | str, bed: Sequence[float], tol: float = 1e-3) -> tu
 
 _KNOWN_ERRORS = (
     ("could not fit on the bed", "a part does not fit the bed (printer.bed); check printer.bed against your printer"),
+    ("no layers were detected", "a part is thinner than one layer (printer.layer_height) or empty; rebuild with "
+                                "`cogniframe build` and check the part sizes"),
     ("empty layer", "the slicer found empty layers (a part floating or broken); rebuild with `cogniframe build`"),
     ("no extrusions", "a part is too thin to print with this nozzle (printer.nozzle)"),
     ("nothing to print", "a part is too thin or too small to print with this nozzle (printer.nozzle)"),
@@ -357,7 +359,8 @@ def _explain_failure(plate: Path, rc: int, output: str) -> str:
     for needle, why in _KNOWN_ERRORS:
         if needle in low:
             return f"PrusaSlicer could not slice {plate} (exit code {rc}): {why}."
-    tail = " | ".join(line.strip() for line in output.strip().splitlines()[-4:] if line.strip())
+    lines = [ln.strip() for ln in output.strip().splitlines() if ln.strip() and not ln.startswith("[")]  # drop log lines
+    tail = " | ".join(lines[-4:])
     return (f"PrusaSlicer could not slice {plate} (exit code {rc}): {tail or 'no message'}. "
             f"Fix: open the plate in PrusaSlicer to see the problem; rebuild with `cogniframe build`.")
 

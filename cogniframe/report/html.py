@@ -1,0 +1,398 @@
+"""report.html (self-contained, images embedded as base64 PNG) and report.md (images beside it).
+
+Every number about the design comes from `pipeline.check_dict(result)`, the same dict that
+`cogniframe check --json` prints, formatted with fixed rounding (see `FORMATS`); key figures
+carry a `data-key` attribute (`mass.total_g`, `drop.k_n_per_m` ...) so tests and scripts can
+read them back. Sections: verdicts, mass budget (+ chart), stiffness and drop model (+ plots),
+cut list and stock plan, BOM, print plates and slicer check, assembly steps, renders.
+No timestamps: the same inputs give the same files.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Mapping, Sequence
+
+if TYPE_CHECKING:
+    from ..export.plates import PlateFile
+    from ..export.slicer import SliceReport
+    from ..pipeline import CheckResult
+    from .assembly_steps import Step
+    from .bom import BomLine
+
+# data-key -> format of the value taken from check_dict (dotted path)
+FORMATS: dict[str, str] = {
+    "mass.total_g": "{:.2f}",
+    "mass.limit_g": "{:g}",
+    "mass.margin_g": "{:+.2f}",
+    "drop.k_n_per_m": "{:.0f}",
+    "drop.c_n_s_per_m": "{:.1f}",
+    "drop.damping_ratio": "{:.3f}",
+    "drop.mass_kg": "{:.3f}",
+    "drop.clearance_mm": "{:.1f}",
+    "drop.max_safe_height_cm": "{:.1f}",
+    "frame.clearance_mm": "{:.1f}",
+}
+FILES_DIR = "report_files"
+
+
+def lookup(d: Mapping, dotted: str):
+    cur = d
+    for k in dotted.split("."):
+        cur = cur[k]
+    return cur
+
+
+def fmt_key(d: Mapping, dotted: str) -> str:
+    """A check_dict value formatted as the report shows it ('-' when missing or infinite)."""
+    try:
+        v = lookup(d, dotted)
+    except (KeyError, TypeError):
+        return "-"
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "-"
+    return FORMATS[dotted].format(v)
+
+
+@dataclass(frozen=True)
+class Table:
+    id: str
+    title: str
+    headers: tuple[str, ...]
+    rows: tuple[tuple[str, ...], ...]
+    numeric: tuple[int, ...] = ()  # right-aligned columns
+    footer: tuple[str, ...] | None = None
+
+
+@dataclass(frozen=True)
+class Verdict:
+    key: str  # mass | crash | printability | overall
+    label: str
+    status: str  # PASS | FAIL | WARN | N/A
+    detail_html: str
+    detail_md: str
+
+
+# -- figures ---------------------------------------------------------------------------------
+
+def plot_mass_groups(mass: Mapping, path: Path) -> Path:
+    """Bar chart of the mass budget by group, with the total against the limit. 700 x 400 px."""
+    from .drop_plots import _figure, _save
+
+    fig, axes = _figure(7.0, 4.0)
+    ax = axes[0, 0]
+    groups = list(mass["groups"].items())
+    names = [g for g, _ in groups] + ["total"]
+    vals = [v for _, v in groups] + [mass["total_g"]]
+    colours = ["#d62728", "#404040", "#1f77b4", "#ff7f0e", "#2ca02c" if mass["margin_g"] >= 0 else "#b00000"]
+    bars = ax.bar(names, vals, color=colours[: len(vals) - 1] + [colours[-1]])
+    for b, v in zip(bars, vals):
+        ax.text(b.get_x() + b.get_width() / 2, v, f"{v:.1f} g", ha="center", va="bottom", fontsize=9)
+    ax.axhline(mass["limit_g"], color="k", linestyle="--", linewidth=1, label=f"limit {mass['limit_g']:g} g")
+    ax.set_ylabel("mass (g)")
+    ax.set_ylim(0, max(max(vals), mass["limit_g"]) * 1.15)
+    ax.set_title(f"Mass budget: {mass['total_g']:.2f} g of {mass['limit_g']:g} g (margin {mass['margin_g']:+.2f} g)")
+    ax.legend(loc="upper left", fontsize="small")
+    ax.grid(True, axis="y", alpha=0.3)
+    return _save(fig, path)
+
+
+def plot_stiffness(drop: Mapping, path: Path) -> Path:
+    """The lumped spring of the drop model: force vs payload deflection up to past the
+    clearance, the payload's weight, and each drop height's peak compression. 700 x 450 px."""
+    from .drop_plots import _figure, _save
+
+    fig, axes = _figure(7.0, 4.5)
+    ax = axes[0, 0]
+    k = drop["k_n_per_m"]
+    clear = drop["clearance_mm"]
+    xs = [h["x_max_mm"] for h in drop["heights"]]
+    x_end = max([clear * 1.3] + [x * 1.05 for x in xs])
+    ax.plot([0, x_end], [0, k * x_end / 1000], color="tab:blue", label=f"k = {k:.0f} N/m ({drop['k_source']})")
+    w = drop["mass_kg"] * 9.80665
+    ax.axhline(w, color="0.5", linestyle=":", label=f"payload weight {w:.2f} N")
+    ax.axvline(clear, color="k", linestyle="--", linewidth=1, label=f"clearance {clear:.1f} mm")
+    for h in drop["heights"]:
+        ax.plot([h["x_max_mm"]], [k * h["x_max_mm"] / 1000], "o", color="tab:red" if h["strikes"] else "tab:green")
+        ax.annotate(f"{h['height_cm']:g} cm", (h["x_max_mm"], k * h["x_max_mm"] / 1000), textcoords="offset points",
+                    xytext=(4, -10), fontsize=8)
+    ax.set_xlabel("payload deflection x (mm)")
+    ax.set_ylabel("spring force k x (N)")
+    ax.set_title("Frame stiffness and peak compression per drop height")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="upper left", fontsize="small")
+    return _save(fig, path)
+
+
+# -- content ---------------------------------------------------------------------------------
+
+def _verdicts(result: "CheckResult", cd: Mapping, plates, slice_report) -> list[Verdict]:
+    out = []
+    m = cd["mass"]
+    total, limit, margin = (fmt_key(cd, k) for k in ("mass.total_g", "mass.limit_g", "mass.margin_g"))
+    ok = m["total_g"] <= m["limit_g"]
+    out.append(Verdict("mass", "Mass", "PASS" if ok else "FAIL",
+                       f'all-up weight <b data-key="mass.total_g">{total}</b> g vs limit <span data-key="mass.limit_g">{limit}</span> g '
+                       f'(margin <span data-key="mass.margin_g">{margin}</span> g)',
+                       f"all-up weight {total} g vs limit {limit} g (margin {margin} g)"))
+    spec = result.design.spec
+    if "drop" in cd:
+        d = cd["drop"]
+        design_h = spec.requirements.design_drop_height_cm
+        safe = d["max_safe_height_cm"]
+        ok = safe is None or design_h <= safe
+        at = [h for h in d["heights"] if h["height_cm"] == design_h]
+        xm = f"; at {design_h:g} cm the payload travels {at[0]['x_max_mm']:.2f} mm" if at else ""
+        h_safe, clr, k = (fmt_key(cd, key) for key in ("drop.max_safe_height_cm", "drop.clearance_mm", "drop.k_n_per_m"))
+        out.append(Verdict("crash", "Crash margin", "PASS" if ok else "FAIL",
+                           f'max safe drop <b data-key="drop.max_safe_height_cm">{h_safe}</b> cm vs design drop {design_h:g} cm '
+                           f'(clearance <span data-key="drop.clearance_mm">{clr}</span> mm{html.escape(xm)}; '
+                           f'k = <span data-key="drop.k_n_per_m">{k}</span> N/m)',
+                           f"max safe drop {h_safe} cm vs design drop {design_h:g} cm (clearance {clr} mm{xm}; k = {k} N/m)"))
+    else:
+        out.append(Verdict("crash", "Crash margin", "N/A", "drop model not evaluated", "drop model not evaluated"))
+    if plates:
+        n = len(plates)
+        copies = sum(len(p.copies) for p in plates)
+        text = f"{copies} printed parts fit on {n} plate{'s' if n != 1 else ''} of the {spec.printer.bed[0]:g} x {spec.printer.bed[1]:g} x {spec.printer.bed[2]:g} mm bed"
+        status = "PASS"
+        if slice_report is None:
+            text += "; not sliced (no prusa-slicer)"
+        else:
+            text += f"; PrusaSlicer sliced every plate: {slice_report.total_g:.1f} g, {_dur(slice_report.total_time_s)}"
+            if slice_report.warnings:
+                status = "WARN"
+                text += f"; {len(slice_report.warnings)} warning(s) below"
+        out.append(Verdict("printability", "Printability", status, html.escape(text), text))
+    else:
+        out.append(Verdict("printability", "Printability", "N/A", "no print plates (run `cogniframe build`)",
+                           "no print plates (run `cogniframe build`)"))
+    out.append(Verdict("overall", "Design verdict", cd["verdict"],
+                       html.escape("; ".join(cd["problems"]) or "all requirements met"),
+                       "; ".join(cd["problems"]) or "all requirements met"))
+    return out
+
+
+def _dur(s: float) -> str:
+    from ..export.slicer import format_duration
+
+    return format_duration(s)
+
+
+def _tables(result: "CheckResult", cd: Mapping, bom, steps, plates, slice_report) -> dict[str, Table]:
+    t: dict[str, Table] = {}
+    m = cd["mass"]
+    t["mass-budget"] = Table("mass-budget", "Mass budget", ("item", "group", "qty", "g each", "g", "material", "source"),
+                             tuple((i["name"], i["group"], str(i["qty"]), f"{i['mass_g_each']:.3f}", f"{i['mass_g']:.2f}",
+                                    i["material"] or "", i["source"]) for i in m["items"]),
+                             (2, 3, 4), ("all-up weight", "", "", "", f"{m['total_g']:.2f}", "", ""))
+    t["mass-groups"] = Table("mass-groups", "By group and material", ("group", "g"),
+                             tuple((g, f"{v:.2f}") for g, v in m["groups"].items())
+                             + tuple((f"material: {k}", f"{v:.2f}") for k, v in m["by_material"].items()), (1,))
+    if "drop" in cd:
+        d = cd["drop"]
+        t["drop-model"] = Table("drop-model", "Drop model parameters", ("quantity", "value"), (
+            ("stiffness k (N/m)", f"{fmt_key(cd, 'drop.k_n_per_m')} ({d['k_source']})"),
+            ("damping c (N s/m)", f"{fmt_key(cd, 'drop.c_n_s_per_m')} ({d['c_source']})"),
+            ("damping ratio", fmt_key(cd, "drop.damping_ratio")),
+            ("mass (kg)", fmt_key(cd, "drop.mass_kg")),
+            ("clearance (mm)", fmt_key(cd, "drop.clearance_mm")),
+            ("max safe drop (cm)", fmt_key(cd, "drop.max_safe_height_cm"))), (1,))
+        t["drop"] = Table("drop", "Drop heights", ("drop cm", "v m/s", "x_max mm", "peak G", "spring %", "damper %", "rigid %", "holder strikes"),
+                          tuple((f"{h['height_cm']:g}", f"{h['v_impact_m_per_s']:.2f}", f"{h['x_max_mm']:.2f}", f"{h['peak_g']:.1f}",
+                                 f"{h['energy_spring_pct']:.1f}", f"{h['energy_damper_pct']:.1f}", f"{h['energy_rigid_pct']:.1f}",
+                                 "yes" if h["strikes"] else "no") for h in d["heights"]), (0, 1, 2, 3, 4, 5, 6))
+    t["props"] = Table("props", "Propeller margins", ("motor", "to cage mm", "to core mm", "to next prop mm"),
+                       tuple((p["motor"], f"{p['to_cage_mm']:.1f}", f"{p['to_core_mm']:.1f}", f"{p['to_neighbour_mm']:.1f}")
+                             for p in cd["frame"]["prop_margin_mm"]), (1, 2, 3))
+    t["cutlist"] = Table("cutlist", "Cut list", ("role", "cut length mm", "qty", "diameter mm", "material", "g each", "rods"),
+                         tuple((r["role"], f"{r['length_mm']:g}", str(r["qty"]), f"{r['diameter_mm']:g}", r["material"],
+                                f"{r['mass_g_each']:.3f}", " ".join(r["rods"])) for r in cd["cutlist"]), (1, 2, 3, 5))
+    st = cd["stock"]
+    t["stock"] = Table("stock", f"Stock plan: {st['count']} x {st['stock_length_mm']:g} mm (kerf {st['kerf_mm']:g} mm, lower bound {st['lower_bound']})",
+                       ("stock rod", "cuts mm", "offcut mm"),
+                       tuple((str(r["index"]), " + ".join(f"{c:g}" for c in r["cuts_mm"]), f"{r['offcut_mm']:g}") for r in st["rods"]), (0, 2))
+    if bom:
+        from .bom import COLUMNS, _row, total_g
+
+        t["bom"] = Table("bom", "Bill of materials", COLUMNS, tuple(tuple(_row(ln)) for ln in bom), (2, 5, 6, 7, 8),
+                         ("total", "", str(sum(ln.qty for ln in bom)), "", "", "", f"{total_g(bom):.2f}", "", "", ""))
+    if plates:
+        sliced = {p.plate: p for p in slice_report.plates} if slice_report else {}
+        t["plates"] = Table("plates", "Print plates", ("plate", "material", "parts", "file", "sliced g", "print time"),
+                            tuple((p.name, p.material, ", ".join(p.copies), p.threemf.name,
+                                   f"{sliced[p.name].grams:.1f}" if p.name in sliced else "",
+                                   _dur(sliced[p.name].time_s) if p.name in sliced else "") for p in plates), (4, 5))
+    if slice_report is not None:
+        t["slicer"] = Table("slicer", f"Slicer check ({slice_report.slicer})", ("material", "sliced g", "estimated g", "difference", "print time", "flag"),
+                            tuple((c.material, f"{c.sliced_g:.1f}", "" if c.estimated_g is None else f"{c.estimated_g:.1f}",
+                                   "" if c.diff_pct is None else f"{c.diff_pct:+.1f} %", _dur(c.time_s),
+                                   "over 10 %" if c.flagged else "ok") for c in slice_report.materials), (1, 2, 3, 4))
+    if steps:
+        t["assembly"] = Table("assembly", "Assembly steps", ("step", "what", "parts", "rods (cut length)", "glue"),
+                              tuple((str(s.number), f"{s.title}: {s.text}", ", ".join(s.parts),
+                                     ", ".join(f"{n} ({length:g} mm)" for n, length in s.rods), s.glue) for s in steps), (0,))
+    return t
+
+
+# -- writers ---------------------------------------------------------------------------------
+
+CSS = """
+body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;max-width:1200px;margin:2em auto;padding:0 1em;color:#222}
+h1{margin-bottom:.2em} h2{border-bottom:2px solid #ddd;padding-bottom:.2em;margin-top:2em}
+table{border-collapse:collapse;margin:.8em 0;font-size:.9em} th,td{border:1px solid #ccc;padding:.25em .5em;vertical-align:top}
+th{background:#f3f3f3;text-align:left} td.n{text-align:right;font-variant-numeric:tabular-nums} tfoot td{font-weight:bold}
+.PASS{background:#d9f2d9} .FAIL{background:#f7d4d4} .WARN{background:#fbefc9} .N\\/A{background:#eee}
+.status{font-weight:bold;padding:.1em .5em;border-radius:3px} img{max-width:100%;border:1px solid #ddd;margin:.3em 0}
+figure{display:inline-block;margin:.5em;vertical-align:top} figcaption{font-size:.85em;color:#555}
+.warn{color:#8a5a00}
+"""
+
+
+def _html_table(t: Table) -> str:
+    out = [f'<table id="{t.id}"><caption>{html.escape(t.title)}</caption><thead><tr>']
+    out += [f"<th>{html.escape(h)}</th>" for h in t.headers]
+    out.append("</tr></thead><tbody>")
+    for row in t.rows:
+        out.append("<tr>" + "".join(f'<td{" class=n" if i in t.numeric else ""}>{html.escape(c)}</td>' for i, c in enumerate(row)) + "</tr>")
+    out.append("</tbody>")
+    if t.footer:
+        out.append("<tfoot><tr>" + "".join(f'<td{" class=n" if i in t.numeric else ""}>{html.escape(c)}</td>' for i, c in enumerate(t.footer)) + "</tr></tfoot>")
+    out.append("</table>")
+    return "".join(out)
+
+
+def _md_table(t: Table) -> str:
+    def cell(c: str) -> str:
+        return c.replace("|", "/").replace("\n", " ")
+
+    out = [f"**{t.title}**", "", "| " + " | ".join(t.headers) + " |",
+           "|" + "|".join("---:" if i in t.numeric else "---" for i in range(len(t.headers))) + "|"]
+    out += ["| " + " | ".join(cell(c) for c in row) + " |" for row in t.rows]
+    if t.footer:
+        out.append("| " + " | ".join(cell(c) for c in t.footer) + " |")
+    return "\n".join(out) + "\n"
+
+
+def _img_html(path: Path, caption: str) -> str:
+    data = base64.b64encode(Path(path).read_bytes()).decode("ascii")
+    return (f'<figure><img src="data:image/png;base64,{data}" alt="{html.escape(caption)}">'
+            f"<figcaption>{html.escape(caption)}</figcaption></figure>")
+
+
+def _img_md(path: Path, caption: str, base: Path) -> str:
+    rel = Path(os.path.relpath(Path(path).resolve(), base.resolve())).as_posix()
+    return f"![{caption}]({rel})"
+
+
+def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str, Path] | None = None,
+                 bom: Sequence["BomLine"] = (), steps: Sequence["Step"] = (), plates: Sequence["PlateFile"] = (),
+                 slice_report: "SliceReport | None" = None) -> tuple[Path, Path]:
+    """Write `report.html` and `report.md` into out_dir (charts go to out_dir/report_files/).
+
+    `images`: caption -> PNG (renders of the assembly and parts), shown in the given order.
+    `plates`: what `write_plates` returned (their preview PNGs are shown). Returns (html, md)."""
+    from ..pipeline import check_dict
+
+    out_dir = Path(out_dir)
+    files = out_dir / FILES_DIR
+    files.mkdir(parents=True, exist_ok=True)
+    cd = check_dict(result)
+    name = cd["name"]
+    figs: dict[str, list[tuple[str, Path]]] = {"mass": [(  "mass by group", plot_mass_groups(cd["mass"], files / "mass_by_group.png"))]}
+    if result.drop is not None:
+        from .drop_plots import plot_drop_response, plot_energy_split
+
+        figs["drop"] = [("stiffness", plot_stiffness(cd["drop"], files / "stiffness.png")),
+                        ("drop response", plot_drop_response(result.drop, files / "drop_response.png")),
+                        ("energy split", plot_energy_split(result.drop, files / "energy_split.png"))]
+    verdicts = _verdicts(result, cd, plates, slice_report)
+    tables = _tables(result, cd, bom, steps, plates, slice_report)
+    warnings = list(slice_report.warnings) if slice_report is not None else []
+    if slice_report is not None:
+        from ..export.slicer import sliced_total_g
+
+        with_sliced = sliced_total_g(result.mass, slice_report)
+        if with_sliced > result.mass.limit_g:
+            warnings.append(f"with the slicer's filament grams the all-up weight is {with_sliced:.1f} g, over the "
+                            f"{result.mass.limit_g:g} g limit (the budget's estimate says {result.mass.total_g:.1f} g)")
+
+    sections: list[tuple[str, str, list]] = []  # (id, title, blocks) ; block = Table | ("img", caption, path) | ("p", text)
+    sections.append(("mass", "Mass budget", [tables["mass-budget"], tables["mass-groups"], *[("img", c, p) for c, p in figs["mass"]]]))
+    if "drop" in tables:
+        sections.append(("crash", "Stiffness and drop model", [tables["drop-model"], tables["drop"],
+                                                               *[("img", c, p) for c, p in figs.get("drop", [])]]))
+    sections.append(("frame", "Frame", [tables["props"], ("p", f"Battery holder clearance above the ground: {fmt_key(cd, 'frame.clearance_mm')} mm; "
+                                                             f"{cd['frame']['rods']} rods, {cd['frame']['joints']} joints.")]))
+    sections.append(("cuts", "Cut list and stock plan", [tables["cutlist"], tables["stock"]]))
+    if "bom" in tables:
+        sections.append(("bom-section", "Bill of materials", [tables["bom"]]))
+    if plates:
+        blocks: list = [tables["plates"]]
+        if "slicer" in tables:
+            blocks.append(tables["slicer"])
+        blocks += [("warn", w) for w in warnings]
+        blocks += [("img", f"plate {p.name}", p.preview) for p in plates]
+        sections.append(("plates-section", "Print plates", blocks))
+    if "assembly" in tables:
+        sections.append(("assembly-section", "Assembly", [tables["assembly"]]))
+    if images:
+        sections.append(("renders", "Renders", [("img", c, p) for c, p in images.items()]))
+
+    html_path, md_path = out_dir / "report.html", out_dir / "report.md"
+    html_path.write_text(_render_html(name, cd, verdicts, sections, warnings), encoding="utf-8")
+    md_path.write_text(_render_md(name, cd, verdicts, sections, warnings, out_dir), encoding="utf-8")
+    return html_path, md_path
+
+
+def _render_html(name: str, cd: Mapping, verdicts: list[Verdict], sections, warnings: list[str]) -> str:
+    out = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
+           f"<title>cogniframe report: {html.escape(name)}</title>", f"<style>{CSS}</style></head><body>",
+           f"<h1>cogniframe report: {html.escape(name)}</h1>",
+           f'<p>Verdict: <span class="status {cd["verdict"]}" data-key="verdict">{cd["verdict"]}</span></p>',
+           '<table id="verdicts"><caption>Verdicts</caption><thead><tr><th>check</th><th>status</th><th>detail</th></tr></thead><tbody>']
+    for v in verdicts:
+        out.append(f'<tr id="verdict-{v.key}"><td>{html.escape(v.label)}</td><td class="status {v.status}">{v.status}</td><td>{v.detail_html}</td></tr>')
+    out.append("</tbody></table>")
+    for w in warnings:
+        out.append(f'<p class="warn">warning: {html.escape(w)}</p>')
+    out.append("<nav><ul>" + "".join(f'<li><a href="#{sid}">{html.escape(title)}</a></li>' for sid, title, _ in sections) + "</ul></nav>")
+    for sid, title, blocks in sections:
+        out.append(f'<section id="{sid}"><h2>{html.escape(title)}</h2>')
+        for b in blocks:
+            if isinstance(b, Table):
+                out.append(_html_table(b))
+            elif b[0] == "img":
+                out.append(_img_html(b[2], b[1]))
+            elif b[0] == "warn":
+                out.append(f'<p class="warn">warning: {html.escape(b[1])}</p>')
+            else:
+                out.append(f"<p>{html.escape(b[1])}</p>")
+        out.append("</section>")
+    out.append("<footer><p>Generated by cogniframe from the params file; numbers as in <code>cogniframe check --json</code>.</p></footer>")
+    out.append("</body></html>")
+    return "\n".join(out) + "\n"
+
+
+def _render_md(name: str, cd: Mapping, verdicts: list[Verdict], sections, warnings: list[str], base: Path) -> str:
+    out = [f"# cogniframe report: {name}", "", f"Verdict: **{cd['verdict']}**", "", "| check | status | detail |", "|---|---|---|"]
+    out += [f"| {v.label} | {v.status} | {v.detail_md.replace('|', '/')} |" for v in verdicts]
+    out.append("")
+    out += [f"> warning: {w}" for w in warnings]
+    for sid, title, blocks in sections:
+        out += ["", f"## {title}", ""]
+        for b in blocks:
+            if isinstance(b, Table):
+                out.append(_md_table(b))
+            elif b[0] == "img":
+                out += [_img_md(b[2], b[1], base), ""]
+            elif b[0] == "warn":
+                out += [f"> warning: {b[1]}", ""]
+            else:
+                out += [b[1], ""]
+    return "\n".join(out).rstrip() + "\n"

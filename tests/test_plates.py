@@ -1,0 +1,167 @@
+"""Print plates: every copy placed once, inside the bed, apart by the margin; byte-stable files."""
+
+from __future__ import annotations
+
+import hashlib
+import re
+import zipfile
+
+import numpy as np
+import pytest
+import trimesh
+
+from cogniframe.errors import UserError
+from cogniframe.export.plates import PlateItem, pack_plates, parse_plate_name, part_of, plate_3mf_bytes, write_plates
+
+BED = (120.0, 120.0, 120.0)
+MARGIN = 4.0
+
+
+def _box(x, y, z):
+    m = trimesh.creation.box((x, y, z))
+    m.apply_translation(-m.bounds[0])
+    return m
+
+
+def _cyl(r, h):
+    m = trimesh.creation.cylinder(radius=r, height=h, sections=32)
+    m.apply_translation(-m.bounds[0])
+    return m
+
+
+def _items():
+    return [
+        PlateItem("knee", "tpu_95a", 4, _cyl(8, 12)),
+        PlateItem("corner_top", "tpu_95a", 4, _box(20, 18, 15)),
+        PlateItem("motor_mount", "tpu_95a", 4, _box(22, 22, 6)),
+        PlateItem("core_plate", "abs", 1, _box(40, 40, 3)),
+        PlateItem("battery_holder", "abs", 1, _box(39, 18, 72)),
+    ]
+
+
+def _rects_apart(plate, margin):
+    boxes = [(c.mesh.bounds[0][:2], c.mesh.bounds[1][:2]) for c in plate.copies]
+    for i, (alo, ahi) in enumerate(boxes):
+        for blo, bhi in boxes[i + 1:]:
+            gap_x = max(blo[0] - ahi[0], alo[0] - bhi[0])
+            gap_y = max(blo[1] - ahi[1], alo[1] - bhi[1])
+            assert max(gap_x, gap_y) >= margin - 1e-6, "two parts closer than the margin"
+
+
+def test_every_copy_once_inside_the_bed_and_apart():
+    plates = pack_plates(_items(), BED, MARGIN)
+    names = [c.name for p in plates for c in p.copies]
+    expected = [f"{n}_{k}" for n, q in (("knee", 4), ("corner_top", 4), ("motor_mount", 4), ("core_plate", 1),
+                                        ("battery_holder", 1)) for k in range(1, q + 1)]
+    assert sorted(names) == sorted(expected)
+    for p in plates:
+        assert {c.part for c in p.copies} <= {"knee", "corner_top", "motor_mount", "core_plate", "battery_holder"}
+        mats = {"abs" if c.part in ("core_plate", "battery_holder") else "tpu_95a" for c in p.copies}
+        assert mats == {p.material}, "one material per plate"
+        for c in p.copies:
+            lo, hi = c.mesh.bounds
+            assert lo[0] >= MARGIN / 2 - 1e-6 and lo[1] >= MARGIN / 2 - 1e-6
+            assert hi[0] <= BED[0] - MARGIN / 2 + 1e-6 and hi[1] <= BED[1] - MARGIN / 2 + 1e-6
+            assert abs(lo[2]) < 1e-9 and hi[2] <= BED[2]
+            assert np.allclose((c.x, c.y), lo[:2], atol=1e-6)
+        _rects_apart(p, MARGIN)
+    # the copies keep their volume (no scaling or mirroring by the layout)
+    knee = next(c for p in plates for c in p.copies if c.part == "knee")
+    assert knee.mesh.volume == pytest.approx(_cyl(8, 12).volume)
+
+
+def test_as_many_plates_as_needed():
+    # 54 mm footprints (50 + margin): 2 x 2 fit on a 120 mm bed (2 * 54 <= 120), 3 x 3 do not
+    plates = pack_plates([PlateItem("big", "abs", 10, _box(50, 50, 5))], BED, MARGIN)
+    assert [len(p.copies) for p in plates] == [4, 4, 2]
+    assert [p.index for p in plates] == [1, 2, 3]
+    assert [p.name for p in plates] == ["abs_1", "abs_2", "abs_3"]
+
+
+def test_part_turned_to_its_smallest_footprint():
+    bar = _box(100, 8, 5)
+    bar.apply_transform(trimesh.transformations.rotation_matrix(np.radians(40), [0, 0, 1]))
+    bar.apply_translation(-bar.bounds[0])
+    assert bar.extents[0] > 80 and bar.extents[1] > 60  # diagonal: a big square footprint
+    (plate,) = pack_plates([PlateItem("bar", "abs", 3, bar)], BED, MARGIN)
+    for c in plate.copies:
+        assert sorted(c.size[:2]) == pytest.approx([8, 100], abs=1e-6)
+
+
+def test_part_larger_than_the_bed_is_a_user_error():
+    with pytest.raises(UserError) as e:
+        pack_plates([PlateItem("core_plate", "abs", 1, _box(130, 40, 3))], BED, MARGIN)
+    msg = str(e.value)
+    assert "core_plate" in msg and "130.0 x 40.0 x 3.0" in msg and "printer.bed" in msg and "120 x 120 x 120" in msg
+    with pytest.raises(UserError, match="battery_holder.*printer.bed"):
+        pack_plates([PlateItem("battery_holder", "abs", 1, _box(30, 30, 121))], BED, MARGIN)
+
+
+def test_mesh_not_in_print_orientation_is_refused():
+    m = _box(10, 10, 10)
+    m.apply_translation([0, 0, 5])
+    with pytest.raises(ValueError, match="print orientation"):
+        pack_plates([PlateItem("x", "abs", 1, m)], BED, MARGIN)
+
+
+def test_zero_quantity_makes_no_plate():
+    assert pack_plates([PlateItem("x", "abs", 0, _box(10, 10, 10))], BED, MARGIN) == ()
+
+
+def test_3mf_has_named_objects_and_is_byte_stable(tmp_path):
+    plates = pack_plates(_items(), BED, MARGIN)
+    a = write_plates(plates, tmp_path / "a")
+    b = write_plates(pack_plates(_items(), BED, MARGIN), tmp_path / "b")
+    assert [f.name for f in a] == ["abs_1", "tpu_95a_1"]
+    for fa, fb in zip(a, b):
+        assert fa.threemf.read_bytes() == fb.threemf.read_bytes()
+        assert fa.preview.read_bytes() == fb.preview.read_bytes()
+    tpu = a[1]
+    with zipfile.ZipFile(tpu.threemf) as z:
+        assert all(i.date_time == (1980, 1, 1, 0, 0, 0) for i in z.infolist())
+        model = z.read("3D/3dmodel.model").decode()
+    names = re.findall(r'<object [^>]*name="([^"]+)"', model)
+    assert sorted(names) == sorted(tpu.copies) and len(names) == 12
+    uuids = re.findall(r'p:UUID="([^"]+)"', model)
+    assert len(set(uuids)) == len(uuids)  # stable but still unique
+    scene = trimesh.load(tpu.threemf, force="scene")
+    plate = next(p for p in plates if p.material == "tpu_95a")
+    assert sorted(scene.graph.nodes_geometry) == sorted(c.name for c in plate.copies)
+    for c in plate.copies:
+        tf, geom = scene.graph[c.name]
+        m = scene.geometry[geom].copy()
+        m.apply_transform(tf)
+        assert m.is_watertight and m.is_volume
+        assert np.allclose(m.bounds, c.mesh.bounds, atol=1e-6)
+
+
+def test_preview_png(tmp_path):
+    from PIL import Image
+
+    (f,) = write_plates(pack_plates([PlateItem("knee", "tpu_95a", 4, _cyl(8, 12))], BED, MARGIN), tmp_path)
+    img = np.asarray(Image.open(f.preview).convert("RGB")).astype(int)
+    assert img.shape[1] == 600
+    red = (img[..., 0] > 150) & (img[..., 1] < 100) & (img[..., 2] < 100)
+    assert 0.01 < red.mean() < 0.5  # the four TPU parts are drawn
+    assert img.std() > 10
+
+
+def test_rewriting_removes_stale_plates(tmp_path):
+    write_plates(pack_plates([PlateItem("big", "abs", 10, _box(50, 50, 5))], BED, MARGIN), tmp_path)
+    assert len(list(tmp_path.glob("*.3mf"))) == 3
+    write_plates(pack_plates([PlateItem("big", "abs", 2, _box(50, 50, 5))], BED, MARGIN), tmp_path)
+    assert sorted(p.name for p in tmp_path.glob("*")) == ["abs_1.3mf", "abs_1.png"]
+
+
+def test_names():
+    assert parse_plate_name("tpu_95a_12") == ("tpu_95a", 12)
+    with pytest.raises(ValueError):
+        parse_plate_name("tpu")
+    assert part_of("corner_top_3") == "corner_top" and part_of("knee") == "knee"
+
+
+def test_3mf_bytes_depend_only_on_the_plate():
+    p1 = pack_plates(_items(), BED, MARGIN)
+    p2 = pack_plates(list(reversed(_items())), BED, MARGIN)  # input order does not matter
+    assert [hashlib.sha256(plate_3mf_bytes(p)).hexdigest() for p in p1] == [
+        hashlib.sha256(plate_3mf_bytes(p)).hexdigest() for p in p2]

@@ -1,0 +1,104 @@
+"""Renders: real pixels (size, frame in view, TPU red present, not uniform), byte-stable PNGs.
+
+Meshes are made here (cylinders at the joints, boxes for the core), placed with the part list's
+placements, so the test does not depend on the CAD layer.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from cogniframe import pipeline
+from cogniframe import spec as spec_mod
+from cogniframe.report import renders
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def scene():
+    d = pipeline.design(spec_mod.load(ROOT / "params" / "carbon.yaml"))
+    meshes = {}
+    for p in d.parts:
+        if p.family in ("joint", "motor_mount"):
+            m = trimesh.creation.cylinder(radius=7, height=8, sections=24)
+        else:
+            m = trimesh.creation.box(p.estimate.envelope)
+        meshes[p.name] = m
+    return d, meshes
+
+
+def test_world_meshes_follow_the_placements(scene):
+    d, meshes = scene
+    world = renders.world_meshes(d.parts, meshes)
+    assert len(world) == sum(p.qty for p in d.parts)
+    knee = next(w for w in world if w.name == "knee_fr")
+    assert np.allclose(knee.mesh.centroid, d.frame.nodes["knee_fr"].pos, atol=1e-6)
+    # print_from_local: a mesh stored 5 mm up in print space lands back on the node
+    shift = np.eye(4)
+    shift[2, 3] = 5.0
+    moved = {n: m.copy().apply_transform(shift) for n, m in meshes.items()}
+    world2 = renders.world_meshes(d.parts, moved, {n: shift for n in meshes})
+    knee2 = next(w for w in world2 if w.name == "knee_fr")
+    assert np.allclose(knee2.mesh.centroid, knee.mesh.centroid, atol=1e-6)
+    segs = renders.rod_segments(d.frame)
+    assert len(segs) == len(d.frame.rods)
+    r = d.frame.rods["rod_arm_fl_1"]
+    seg = next(s for s in segs if s.name == r.name)
+    assert np.linalg.norm(np.subtract(seg.end, seg.start)) == pytest.approx(r.length)
+
+
+def test_assembly_renders_show_the_frame(scene, tmp_path):
+    d, meshes = scene
+    t0 = time.perf_counter()
+    out = renders.render_assembly(renders.world_meshes(d.parts, meshes), renders.rod_segments(d.frame), tmp_path,
+                                  title="carbon")
+    elapsed = time.perf_counter() - t0
+    assert set(out) == {"iso", "top", "front"}
+    stats = {v: renders.image_stats(p) for v, p in out.items()}
+    for v, s in stats.items():
+        assert (s["width"], s["height"]) == renders.SIZE, v
+        assert 0.05 < s["foreground"] < 0.90, (v, s)
+        assert s["red"] > 0.002, (v, s)  # TPU joints are red
+        assert s["dark"] > 0.01, (v, s)  # rods and core are black / dark grey
+        assert s["std"] > 20, (v, s)
+    # the three views differ
+    data = {v: p.read_bytes() for v, p in out.items()}
+    assert len(set(data.values())) == 3
+    assert elapsed < 60
+
+
+def test_frame_is_centred_and_fills_the_top_view(scene, tmp_path):
+    from PIL import Image
+
+    d, meshes = scene
+    out = renders.render_assembly([], renders.rod_segments(d.frame), tmp_path, views=("top",))
+    img = np.asarray(Image.open(out["top"]).convert("RGB")).astype(int)
+    fg = (img < 200).any(axis=2)
+    ys, xs = np.where(fg.any(axis=1))[0], np.where(fg.any(axis=0))[0]
+    h, w = img.shape[:2]
+    assert (ys.max() - ys.min()) > 0.8 * h  # the square frame fills the height of the top view
+    assert abs((xs.min() + xs.max()) / 2 - w / 2) < 0.05 * w and abs((ys.min() + ys.max()) / 2 - h / 2) < 0.05 * h
+
+
+def test_part_renders(scene, tmp_path):
+    d, meshes = scene
+    out = renders.render_parts({"knee": ("tpu_95a", meshes["knee"]), "core_plate": ("abs", meshes["core_plate"])}, tmp_path)
+    assert sorted(out) == ["core_plate", "knee"]
+    knee, plate = renders.image_stats(out["knee"]), renders.image_stats(out["core_plate"])
+    assert (knee["width"], knee["height"]) == renders.PART_SIZE
+    assert 0.05 < knee["foreground"] < 0.9 and knee["red"] > 0.03
+    assert 0.05 < plate["foreground"] < 0.9 and plate["red"] < 0.001 and plate["dark"] > 0.01
+
+
+def test_same_scene_same_bytes(scene, tmp_path):
+    d, meshes = scene
+    world = renders.world_meshes(d.parts, meshes)
+    a = renders.render_assembly(world, renders.rod_segments(d.frame), tmp_path / "a", views=("iso",))
+    b = renders.render_assembly(world, renders.rod_segments(d.frame), tmp_path / "b", views=("iso",))
+    assert a["iso"].read_bytes() == b["iso"].read_bytes()

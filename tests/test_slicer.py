@@ -1,0 +1,170 @@
+"""Slicer check: profiles from params, plate checks before slicing, real PrusaSlicer runs.
+
+Tests that run PrusaSlicer are skipped only when `prusa-slicer` is not on PATH (CI installs it).
+"""
+
+from __future__ import annotations
+
+import shutil
+import time
+
+import pytest
+import trimesh
+
+from cogniframe import spec as spec_mod
+from cogniframe.errors import UserError
+from cogniframe.export import slicer
+from cogniframe.export.plates import PlateItem, pack_plates, write_plates
+
+needs_slicer = pytest.mark.skipif(shutil.which("prusa-slicer") is None, reason="prusa-slicer is not installed")
+
+
+@pytest.fixture(scope="module")
+def spec():
+    return spec_mod.from_dict({"name": "t"})
+
+
+def _box(x, y, z):
+    m = trimesh.creation.box((x, y, z))
+    m.apply_translation(-m.bounds[0])
+    return m
+
+
+def _cyl(r, h):
+    m = trimesh.creation.cylinder(radius=r, height=h, sections=48)
+    m.apply_translation(-m.bounds[0])
+    return m
+
+
+def _ini(text: str) -> dict[str, str]:
+    return dict(line.split(" = ", 1) for line in text.splitlines() if " = " in line)
+
+
+def test_profile_from_params(spec):
+    tpu = _ini(slicer.profile_ini(spec, "tpu_95a", 1.0))
+    assert tpu["fill_density"] == "100%" and tpu["fill_pattern"] == "rectilinear"
+    assert tpu["support_material"] == "0" and tpu["brim_width"] == "0" and tpu["skirts"] == "0"
+    assert tpu["temperature"] == "228"
+    assert 25 <= float(tpu["perimeter_speed"]) <= 35 and 25 <= float(tpu["infill_speed"]) <= 35
+    assert tpu["filament_density"] == "1.22"
+    assert tpu["bed_shape"] == "0x0,120x0,120x120,0x120" and tpu["max_print_height"] == "120"
+    assert tpu["nozzle_diameter"] == "0.4" and tpu["layer_height"] == "0.2"
+    assert tpu["perimeters"] == "2" and tpu["top_solid_layers"] == "4" and tpu["bottom_solid_layers"] == "4"
+    core = _ini(slicer.profile_ini(spec, "abs", spec.core.infill))
+    assert core["fill_density"] == "10%" and core["filament_density"] == "1.1" and core["filament_type"] == "ABS"
+    custom = spec_mod.from_dict({"printer": {"bed": [180, 150, 100], "nozzle": 0.6, "layer_height": 0.3, "perimeters": 3}})
+    c = _ini(slicer.profile_ini(custom, "pla", 0.15))
+    assert c["bed_shape"] == "0x0,180x0,180x150,0x150" and c["max_print_height"] == "100"
+    assert c["nozzle_diameter"] == "0.6" and c["layer_height"] == "0.3" and c["perimeters"] == "3"
+    assert c["fill_density"] == "15%" and c["filament_density"] == "1.24"
+    assert slicer.default_infill(spec) == {"abs": 0.1, "tpu_95a": 1.0}
+
+
+def test_durations_and_gcode_stats(tmp_path):
+    assert slicer.parse_duration("13m 22s") == 802
+    assert slicer.parse_duration("1d 2h 3m 4s") == 93784
+    assert slicer.format_duration(802) == "13m 22s" and slicer.format_duration(3 * 3600 + 65) == "3h 01m"
+    g = tmp_path / "x.gcode"
+    g.write_text("G1 X1\n; filament used [mm] = 800.81\n; filament used [g] = 2.35\n"
+                 "; estimated printing time (normal mode) = 13m 22s\n")
+    assert slicer.read_gcode_stats(g) == (2.35, 802.0)
+    g.write_text("G1 X1\n")
+    with pytest.raises(UserError, match="filament used"):
+        slicer.read_gcode_stats(g)
+
+
+def _scene_3mf(path, meshes: dict):
+    s = trimesh.Scene()
+    for n, m in meshes.items():
+        s.add_geometry(m, geom_name=n, node_name=n)
+    path.write_bytes(s.export(file_type="3mf"))
+    return path
+
+
+def test_checks_before_slicing(tmp_path):
+    bed = (120, 120, 120)
+    ok = _box(10, 10, 5)
+    ok.apply_translation([10, 10, 0])
+    objs = slicer.check_plate(_scene_3mf(tmp_path / "abs_1.3mf", {"a_1": ok}), bed)
+    assert [o.name for o in objs] == ["a_1"] and objs[0].volume_mm3 == pytest.approx(500)
+
+    off = _box(30, 10, 5)
+    off.apply_translation([100, 10, 0])
+    with pytest.raises(UserError, match=r"b_1 spans x 100.0\.\.130.0.*printer.bed"):
+        slicer.check_plate(_scene_3mf(tmp_path / "abs_2.3mf", {"a_1": ok, "b_1": off}), bed)
+
+    tall = _box(10, 10, 130)
+    tall.apply_translation([40, 40, 0])
+    with pytest.raises(UserError, match="height 130.0"):
+        slicer.check_plate(_scene_3mf(tmp_path / "abs_3.3mf", {"t_1": tall}), bed)
+
+    broken = _box(10, 10, 5)
+    broken.apply_translation([40, 40, 0])
+    broken = trimesh.Trimesh(broken.vertices, broken.faces[:-1], process=False)  # one triangle missing
+    with pytest.raises(UserError, match="o_1 is not a closed solid"):
+        slicer.check_plate(_scene_3mf(tmp_path / "abs_4.3mf", {"o_1": broken}), bed)
+
+    other = _box(10, 10, 5)
+    other.apply_translation([15, 15, 0])
+    with pytest.raises(UserError, match="a_1 and c_1 overlap"):
+        slicer.check_plate(_scene_3mf(tmp_path / "abs_5.3mf", {"a_1": ok, "c_1": other}), bed)
+
+
+def test_slicer_messages_are_explained(tmp_path):
+    msg = slicer._explain_failure(tmp_path / "abs_1.3mf", 134, "[2026] [trace] init\nObjects could not fit on the bed\n")
+    assert "exit code 134" in msg and "printer.bed" in msg
+    msg = slicer._explain_failure(tmp_path / "abs_1.3mf", 1, "No layers were detected. You might want to repair")
+    assert "thinner than one layer" in msg
+    msg = slicer._explain_failure(tmp_path / "abs_1.3mf", 1, "[2026-11] [trace] x\nsomething odd happened\n")
+    assert "something odd happened" in msg and "[trace]" not in msg
+
+
+def test_without_a_slicer_says_so_once(monkeypatch, spec, tmp_path):
+    monkeypatch.setattr(slicer, "find_slicer", lambda: None)
+    monkeypatch.setattr(slicer, "_said_missing", False)
+    said = []
+    assert slicer.slice_plates([tmp_path / "tpu_95a_1.3mf"], spec, log=said.append) is None
+    assert slicer.slice_plates([tmp_path / "tpu_95a_1.3mf"], spec, log=said.append) is None
+    assert len(said) == 1 and "prusa-slicer" in said[0]
+
+
+def _plates(tmp_path, spec):
+    items = [PlateItem("cube", "tpu_95a", 3, _box(10, 10, 10)), PlateItem("puck", "tpu_95a", 2, _cyl(6, 4)),
+             PlateItem("plate", "abs", 1, _box(30, 20, 3))]
+    return write_plates(pack_plates(items, spec.printer.bed, spec.printer.margin), tmp_path)
+
+
+@needs_slicer
+def test_real_slice_grams_and_time(tmp_path, spec):
+    files = _plates(tmp_path, spec)
+    tpu_volume = 3 * 1000 + 2 * _cyl(6, 4).volume
+    t0 = time.perf_counter()
+    report = slicer.slice_plates([f.threemf for f in files], spec, {"tpu_95a": tpu_volume * 1.22e-3, "abs": 5.0})
+    elapsed = time.perf_counter() - t0
+    assert elapsed < 60, f"slicing two small plates took {elapsed:.1f} s"
+    assert [p.plate for p in report.plates] == ["abs_1", "tpu_95a_1"]
+    tpu = report.plates[1]
+    assert tpu.gcode.is_file() and (tmp_path / "tpu_95a.ini").is_file() and (tmp_path / "abs.ini").is_file()
+    # 100 % infill: the filament is the solid volume, within a few per cent
+    assert tpu.grams == pytest.approx(tpu_volume * 1.22e-3, rel=0.06)
+    assert tpu.time_s > 60
+    assert sorted(n for n, _ in tpu.objects) == ["cube_1", "cube_2", "cube_3", "puck_1", "puck_2"]
+    checks = {c.material: c for c in report.materials}
+    assert not checks["tpu_95a"].flagged
+    # 10 % infill ABS plate (1.8 cm^3 solid) against a 5 g estimate: flagged as a warning
+    assert checks["abs"].flagged and checks["abs"].sliced_g < 2.0
+    assert len(report.warnings) == 1 and report.warnings[0].startswith("abs:")
+    parts = report.part_totals()
+    assert sum(g for g, _ in parts.values()) == pytest.approx(report.total_g)
+    assert parts["cube"][0] > parts["puck"][0]
+    g = slicer.read_gcode_stats(tpu.gcode)
+    assert g == (tpu.grams, tpu.time_s)
+    assert report.to_dict()["plates"][1]["objects"] == [n for n, _ in tpu.objects]
+
+
+@needs_slicer
+def test_real_slicer_error_becomes_a_user_error(tmp_path, spec):
+    flat = _box(10, 10, 0.05)  # thinner than a layer
+    (f,) = write_plates(pack_plates([PlateItem("flat", "tpu_95a", 1, flat)], spec.printer.bed, 4), tmp_path)
+    with pytest.raises(UserError, match="thinner than one layer"):
+        slicer.slice_plates([f.threemf], spec)
