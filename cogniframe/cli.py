@@ -79,13 +79,14 @@ def schema() -> None:
     sys.stdout.write(json.dumps(spec_mod.json_schema(), indent=2) + "\n")
 
 
-def _register_physics() -> None:
-    from .commands import physics
+def _register_commands() -> None:
+    from .commands import fab, physics
 
     physics.register(app)
+    fab.register(app)
 
 
-_register_physics()
+_register_commands()
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,0 +1,109 @@
+"""`cogniframe build` end to end: folder appears whole, manifest, determinism, bad input untouched.
+
+One build per preset is shared by the tests of this module (CAD is the slow part).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import pytest
+import yaml
+
+from cogniframe import spec as spec_mod
+from cogniframe.build import run_build
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module", params=("carbon", "bamboo"))
+def built(request, tmp_path_factory):
+    params = ROOT / "params" / f"{request.param}.yaml"
+    out = tmp_path_factory.mktemp("build") / request.param
+    result = run_build(spec_mod.load(params), params, out, jobs=2)
+    return request.param, out, result
+
+
+def _sha(p: Path) -> str:
+    return hashlib.sha256(p.read_bytes()).hexdigest()
+
+
+def test_outputs_present(built):
+    name, out, result = built
+    assert result.out_dir == out and out.is_dir()
+    for rel in ("cutlist.csv", "cutlist.md", "mass.md", "check.json", "manifest.json", "assembly.step", "assembly.glb",
+                "plots/drop_response.png", "plots/energy_split.png"):
+        assert (out / rel).is_file() and (out / rel).stat().st_size > 0, rel
+    stls = sorted(p.relative_to(out).as_posix() for p in out.glob("stl/*/*.stl"))
+    assert "stl/tpu_95a/knee.stl" in stls and f"stl/{'abs' if name == 'carbon' else 'pla'}/core_plate.stl" in stls
+    assert len(list(out.glob("step/*.step"))) == len(stls)
+
+
+def test_manifest_lists_every_file_with_hash(built):
+    _, out, result = built
+    m = json.loads((out / "manifest.json").read_text())
+    files = {f["path"]: f for f in m["files"]}
+    on_disk = {p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()} - {"manifest.json"}
+    assert set(files) == on_disk
+    for rel, f in files.items():
+        assert f["sha256"] == _sha(out / rel) and f["size"] == (out / rel).stat().st_size
+    assert m["versions"]["cadquery"] and m["versions"]["cogniframe"]
+    assert m["params_sha256"] == _sha(ROOT / "params" / f"{m['name']}.yaml")
+
+
+def test_manifest_part_quantities_match_the_frame_graph(built):
+    name, out, result = built
+    check = json.loads((out / "check.json").read_text())
+    d = result.check.design
+    assert {p["name"]: p["qty"] for p in check["parts"]} == {p.name: p.qty for p in d.parts}
+    assert {b.name: b.qty for b in result.built} == {p.name: p.qty for p in d.parts}
+    tpu = sum(p.qty for p in d.parts if p.material == "tpu_95a")
+    assert tpu == 20  # 4 top corners, 4 feet, 4 knees, 4 core links, 4 motor mounts
+
+
+def test_build_mass_uses_cad_volumes(built):
+    _, out, result = built
+    check = json.loads((out / "check.json").read_text())
+    sources = {i["name"]: i["source"] for i in check["mass"]["items"]}
+    assert sources["knee"] == "cad" and sources["core_plate"] == "cad"
+    assert check["mass"]["total_g"] < 250
+
+
+def test_rebuild_is_byte_identical(built, tmp_path):
+    name, out, _ = built
+    params = ROOT / "params" / f"{name}.yaml"
+    again = run_build(spec_mod.load(params), params, tmp_path / name, jobs=1).out_dir
+    a = json.loads((out / "manifest.json").read_text())["files"]
+    b = json.loads((again / "manifest.json").read_text())["files"]
+    assert a == b
+    assert _sha(out / "manifest.json") == _sha(again / "manifest.json")
+
+
+def test_bad_params_leave_the_output_untouched(run_cli, tmp_path):
+    good = ROOT / "params" / "bamboo.yaml"
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "keep.txt").write_text("previous build")
+    data = yaml.safe_load(good.read_text())
+    data["rods"]["diameter"] = -3
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(yaml.safe_dump(data))
+    code, _, err = run_cli("build", bad, "-o", out)
+    assert code == 2 and "rods.diameter" in err and "Traceback" not in err
+    assert {p.name for p in tmp_path.iterdir()} == {"bad.yaml", "out"}
+    assert [p.name for p in out.iterdir()] == ["keep.txt"]
+
+
+def test_failure_mid_build_leaves_no_partial_folder(tmp_path, monkeypatch):
+    import cogniframe.build as b
+
+    def boom(*a, **k):
+        raise RuntimeError("simulated failure after the parts were built")
+
+    monkeypatch.setattr(b.pipeline, "check_dict", boom)
+    params = ROOT / "params" / "bamboo.yaml"
+    with pytest.raises(RuntimeError):
+        run_build(spec_mod.load(params), params, tmp_path / "bamboo", jobs=1)
+    assert list(tmp_path.iterdir()) == []
