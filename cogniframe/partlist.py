@@ -209,7 +209,8 @@ def _motor_mount(spec: Spec, frame: Frame) -> PartSpec:
     placements = tuple(Placement(m.name, CORNER_ROTATION[m.corner], _t(m.axis)) for m in frame.motors)
     params = (("bolt_spacing", motor.bolt_spacing), ("screw", screw.name), ("screw_clearance", screw.clearance_d),
               ("shaft_hole", motor.shaft_boss_d + 1.0), ("bell_d", motor.bell_d), ("seat_z", round(m0.seat_z - axis[2], 4)),
-              ("arm_rods", tuple(rods_local)), ("arm_slope_deg", round(m0.arm_slope_deg, 4)), ("width", width))
+              ("arm_rods", tuple(rods_local)), ("arm_slope_deg", round(m0.arm_slope_deg, 4)), ("width", width),
+              ("bore", round(spec.bore, 4)))
     hw = (HardwareLine(f"{screw.name} x 6 screw (motor to mount)", 4, screw.mass_g),)
     return PartSpec("motor_mount", "motor_mount", "exoskeleton", spec.joints.material, 1.0, placements, (), spec.joints.wall,
                     est, params, hw)

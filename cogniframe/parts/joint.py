@@ -220,6 +220,17 @@ def socket_cutter(s: PSocket, chamfer: float = CHAMFER):
     return hole.fuse(cone)
 
 
+def apply(shape, m: np.ndarray):
+    """Rigid 4x4 transform of a cq shape (a copy), via gp_Trsf."""
+    import cadquery as cq
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+    from OCP.gp import gp_Trsf
+
+    t = gp_Trsf()
+    t.SetValues(*[float(v) for v in np.asarray(m, float)[:3].ravel()])
+    return cq.Shape.cast(BRepBuilderAPI_Transform(shape.wrapped, t, True).Shape())
+
+
 def fuse_all(shapes):
     first, *rest = shapes
     return first.fuse(*rest).clean() if rest else first

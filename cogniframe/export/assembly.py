@@ -1,0 +1,81 @@
+"""The whole frame as one assembly: `assembly.step` (names, colours, placements) and `assembly.glb`.
+
+Rods are cylinders of the rod diameter from `rod.start` to `rod.end` (the frame graph); each printed
+part copy is its STEP (print orientation) moved by Placement.matrix() @ inv(print_from_local).
+Names: the instance (`knee_fl`, `corner_top_rr`, `core_link_fl`), `motor_mount_fl` for the motor
+mounts, the part name for single core parts, and the rod name (`rod_arm_fl_1`). Colours by
+material: TPU red, ABS/PLA (any other filament) dark grey, rods black.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from ..partlist import PartSpec
+from ..spec import Spec
+
+TPU_RED = (0.80, 0.10, 0.10)
+CORE_GREY = (0.25, 0.25, 0.25)
+ROD_BLACK = (0.03, 0.03, 0.03)
+
+
+def colour_of(material: str) -> tuple[float, float, float]:
+    return TPU_RED if material.startswith("tpu") else CORE_GREY
+
+
+def instance_name(part: PartSpec, instance: str) -> str:
+    if part.qty == 1:
+        return part.name
+    if instance.startswith(part.name):
+        return instance
+    return f"{part.name}_{instance.rsplit('_', 1)[-1]}"
+
+
+def world_from_print(part_placement_matrix: np.ndarray, print_from_local: np.ndarray) -> np.ndarray:
+    return np.asarray(part_placement_matrix) @ np.linalg.inv(np.asarray(print_from_local))
+
+
+def _location(m: np.ndarray):
+    import cadquery as cq
+    from OCP.gp import gp_Trsf
+
+    t = gp_Trsf()
+    t.SetValues(*[float(v) for v in np.asarray(m)[:3].ravel()])
+    return cq.Location(t)
+
+
+def build_assembly(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path):
+    """cq.Assembly of rods and placed part copies (parts read back from their STEP files)."""
+    import cadquery as cq
+
+    out_dir = Path(out_dir)
+    by_name = {b.name: b for b in built}
+    assy = cq.Assembly(name=spec.name)
+    for p in parts:
+        b = by_name[p.name]
+        shape = cq.importers.importStep(str(out_dir / b.step)).val()
+        for pl in p.placements:
+            m = world_from_print(pl.matrix(), b.print_from_local)
+            assy.add(shape, name=instance_name(p, pl.instance), color=cq.Color(*colour_of(p.material)), loc=_location(m))
+    for rod in frame.rods.values():
+        start, end = np.asarray(rod.start, float), np.asarray(rod.end, float)
+        axis = end - start
+        cyl = cq.Solid.makeCylinder(rod.diameter / 2, float(np.linalg.norm(axis)), cq.Vector(*start), cq.Vector(*axis))
+        assy.add(cyl, name=rod.name, color=cq.Color(*ROD_BLACK))
+    return assy
+
+
+def write_assembly(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path) -> tuple[Path, Path]:
+    """Write out_dir/assembly.step (deterministic header) and out_dir/assembly.glb."""
+    from .step import normalize_file
+
+    out_dir = Path(out_dir)
+    assy = build_assembly(spec, frame, parts, built, out_dir)
+    step, glb = out_dir / "assembly.step", out_dir / "assembly.glb"
+    assy.export(str(step))
+    normalize_file(step, spec.name)
+    assy.export(str(glb))
+    return step, glb

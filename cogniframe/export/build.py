@@ -1,0 +1,212 @@
+"""Build every distinct printed part: CAD in print orientation -> STL + STEP + metrics.
+
+`build_parts(spec, frame, parts, out_dir, jobs=None, cache_dir=None, progress=None)` writes
+`stl/<material>/<part>.stl` and `step/<part>.step` under `out_dir` and returns one `BuiltPart` per
+part, in the order given.
+
+* Cache: each part's STL, STEP and metrics are stored under `cache_dir/parts/<CAD_VERSION>/<key>/`,
+  keyed by `part.digest` (everything the CAD reads), CAD_VERSION, the mesh tolerances and the bed.
+  A rebuild with nothing changed only copies files and never imports CadQuery.
+* Parallel: jobs > 1 uses a process pool started with `forkserver` (CadQuery preloaded in the
+  server, so workers start warm) or `spawn` where forkserver is missing. Never `fork`: a fork after
+  any OCC operation can deadlock (stack-notes). jobs=None picks serial for one or two parts to
+  build and otherwise min(cpu count, parts to build).
+* Every part must fit `spec.printer.bed`; a part that fits only turned 90 deg on the bed is turned
+  (its `print_from_local` includes the turn); otherwise UserError names the part, its size, the bed
+  and the key that drives the size.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from ..errors import UserError
+from ..partlist import PartSpec
+from ..spec import Spec
+
+# Bump when any part's CAD changes shape: it is part of every cache key.
+CAD_VERSION = "cad-2025.1"
+
+
+@dataclass(frozen=True)
+class BuiltPart:
+    name: str
+    family: str
+    material: str
+    qty: int
+    stl: str  # relative to out_dir
+    step: str  # relative to out_dir
+    volume_mm3: float
+    area_h_mm2: float  # faces with |n_z| > 0.7 in print orientation
+    area_v_mm2: float
+    bbox_mm: tuple[float, float, float]  # print orientation
+    shells: int
+    watertight: bool
+    print_from_local: np.ndarray  # 4x4, print <- part local frame
+
+    def as_dict(self) -> dict:
+        return {"name": self.name, "family": self.family, "material": self.material, "qty": self.qty, "stl": self.stl,
+                "step": self.step, "volume_mm3": self.volume_mm3, "area_h_mm2": self.area_h_mm2,
+                "area_v_mm2": self.area_v_mm2, "bbox_mm": list(self.bbox_mm), "shells": self.shells,
+                "watertight": self.watertight, "print_from_local": np.asarray(self.print_from_local).tolist()}
+
+
+def stl_relpath(part: PartSpec) -> str:
+    return f"stl/{part.material}/{part.name}.stl"
+
+
+def step_relpath(part: PartSpec) -> str:
+    return f"step/{part.name}.step"
+
+
+def cache_key(part: PartSpec, bed) -> str:
+    from .mesh import ANGULAR_TOL, LINEAR_TOL
+
+    payload = json.dumps([part.digest, CAD_VERSION, LINEAR_TOL, ANGULAR_TOL, [float(b) for b in bed]])
+    return hashlib.sha256(payload.encode()).hexdigest()[:24]
+
+
+def build_parts(spec: Spec, frame, parts: Sequence[PartSpec], out_dir: str | Path, jobs: int | None = None,
+                cache_dir: str | Path | None = None, progress: Callable[[str], None] | None = None) -> tuple[BuiltPart, ...]:
+    out_dir = Path(out_dir)
+    bed = tuple(float(b) for b in spec.printer.bed)
+    results: dict[str, dict] = {}
+    todo: list[PartSpec] = []
+    for p in parts:
+        hit = _cache_get(p, bed, out_dir, cache_dir)
+        if hit is not None:
+            results[p.name] = hit
+            if progress:
+                progress(p.name)
+        else:
+            todo.append(p)
+    n_jobs = _jobs(jobs, len(todo))
+    if n_jobs <= 1:
+        for p in todo:
+            results[p.name] = build_part_files(p, bed, str(out_dir))
+            _cache_put(p, bed, out_dir, cache_dir, results[p.name])
+            if progress:
+                progress(p.name)
+    elif todo:
+        with ProcessPoolExecutor(max_workers=n_jobs, mp_context=_context()) as pool:
+            futures = {pool.submit(build_part_files, p, bed, str(out_dir)): p for p in todo}
+            for fut in as_completed(futures):
+                p = futures[fut]
+                results[p.name] = fut.result()
+                _cache_put(p, bed, out_dir, cache_dir, results[p.name])
+                if progress:
+                    progress(p.name)
+    return tuple(_built(p, results[p.name]) for p in parts)
+
+
+def _jobs(jobs: int | None, n: int) -> int:
+    if n <= 0:
+        return 0
+    if jobs is None:
+        return 1 if n <= 2 else max(1, min(os.cpu_count() or 1, n))
+    return max(1, min(int(jobs), n))
+
+
+def _context():
+    import multiprocessing as mp
+
+    try:
+        ctx = mp.get_context("forkserver")
+        ctx.set_forkserver_preload(["cogniframe.parts.registry", "cadquery", "trimesh"])
+        return ctx
+    except ValueError:
+        return mp.get_context("spawn")
+
+
+def _built(p: PartSpec, m: dict) -> BuiltPart:
+    return BuiltPart(p.name, p.family, p.material, p.qty, m["stl"], m["step"], m["volume_mm3"], m["area_h_mm2"],
+                     m["area_v_mm2"], tuple(m["bbox_mm"]), m["shells"], m["watertight"], np.asarray(m["print_from_local"]))
+
+
+# -- one part (runs in a worker) -------------------------------------------------------------
+
+def build_part_files(part: PartSpec, bed, out_dir: str) -> dict:
+    """Build one part's CAD, fit it on the bed, write its STL and STEP; return its metrics."""
+    from ..parts import registry
+    from ..parts.joint import apply
+    from . import mesh as mesh_mod
+    from .step import write_step
+
+    built = registry.build(part)
+    shape = built.shape
+    pfl = np.asarray(built.print_from_local, float)
+    bb = shape.BoundingBox()
+    size = np.array([bb.xlen, bb.ylen, bb.zlen])
+    if not fits(size, bed) and fits(size[[1, 0, 2]], bed):
+        turn = np.array([[0.0, -1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+        shape = apply(shape, turn)
+        pfl = turn @ pfl
+        bb = shape.BoundingBox()
+        size = np.array([bb.xlen, bb.ylen, bb.zlen])
+    if not fits(size, bed):
+        key = registry.get(part.family).size_key
+        raise UserError(
+            f"{part.name}: {size[0]:.1f} x {size[1]:.1f} x {size[2]:.1f} mm in print orientation does not fit the "
+            f"{bed[0]:g} x {bed[1]:g} x {bed[2]:g} mm printer bed. Fix: set printer.bed to at least "
+            f"{np.ceil(size[0]):.0f} x {np.ceil(size[1]):.0f} x {np.ceil(size[2]):.0f}, or make the part smaller ({key}).")
+    stl_rel, step_rel = stl_relpath(part), step_relpath(part)
+    mesh = mesh_mod.write_stl(shape, Path(out_dir) / stl_rel, name=part.name)
+    write_step(shape, Path(out_dir) / step_rel, part.name)
+    ah, av = mesh_mod.area_split(mesh)
+    return {"stl": stl_rel, "step": step_rel, "volume_mm3": round(float(mesh.volume), 3), "area_h_mm2": round(ah, 3),
+            "area_v_mm2": round(av, 3), "bbox_mm": [round(float(v), 4) for v in mesh.extents],
+            "shells": int(mesh.body_count), "watertight": bool(mesh.is_watertight),
+            "print_from_local": [[round(float(v), 12) for v in row] for row in pfl]}
+
+
+def fits(size, bed, tol: float = 1e-6) -> bool:
+    return all(float(s) <= float(b) + tol for s, b in zip(size, bed))
+
+
+# -- cache -----------------------------------------------------------------------------------
+
+def _entry(cache_dir, part: PartSpec, bed) -> Path:
+    return Path(cache_dir) / "parts" / CAD_VERSION / cache_key(part, bed)
+
+
+def _cache_get(part: PartSpec, bed, out_dir: Path, cache_dir) -> dict | None:
+    if cache_dir is None:
+        return None
+    entry = _entry(cache_dir, part, bed)
+    try:
+        meta = json.loads((entry / "meta.json").read_text())
+        for rel, src in ((meta["stl"], entry / "part.stl"), (meta["step"], entry / "part.step")):
+            dst = out_dir / rel
+            dst.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(src, dst)
+        return meta
+    except (OSError, ValueError, KeyError):
+        return None
+
+
+def _cache_put(part: PartSpec, bed, out_dir: Path, cache_dir, meta: dict) -> None:
+    """Store atomically; a cache that cannot be written is skipped, never an error."""
+    if cache_dir is None:
+        return
+    entry = _entry(cache_dir, part, bed)
+    tmp = entry.with_name(f".{entry.name}.{os.getpid()}.tmp")
+    try:
+        shutil.rmtree(tmp, ignore_errors=True)
+        tmp.mkdir(parents=True)
+        shutil.copyfile(out_dir / meta["stl"], tmp / "part.stl")
+        shutil.copyfile(out_dir / meta["step"], tmp / "part.step")
+        (tmp / "meta.json").write_text(json.dumps(meta, sort_keys=True))
+        if entry.exists():
+            shutil.rmtree(entry, ignore_errors=True)
+        tmp.rename(entry)
+    except OSError:
+        shutil.rmtree(tmp, ignore_errors=True)
