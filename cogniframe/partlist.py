@@ -154,7 +154,7 @@ def _joint(spec: Spec, frame: Frame, name: str, kind: str) -> PartSpec:
     if kind == "corner_bottom":
         params.append(("foot", True))  # the bottom corners are the feet: flat pad on the ground side
     return PartSpec(name, "joint", "exoskeleton", spec.joints.material, 1.0, placements, tuple(sockets),
-                    spec.joints.wall, _joint_estimate(spec, sockets, kind), tuple(params), hardware)
+                    spec.joints.wall, _joint_estimate(spec, sockets, kind, dict(params)), tuple(params), hardware)
 
 
 def _link_hole(spec: Spec) -> float:
@@ -162,26 +162,130 @@ def _link_hole(spec: Spec) -> float:
     return spec.core.plate_size / 2 - max(4.0, spec.core.plate_thickness + 1.5)
 
 
-def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str) -> Estimate:
-    """Sleeves of OD = bore + 2 wall from the hub to each socket mouth, plus a hub sphere, minus bores."""
-    od = spec.bore + 2 * spec.joints.wall
-    ring = math.pi / 4 * od**2
-    vol, area, pts = 0.0, 0.0, [np.zeros(3)]
-    for s in sockets:
-        length = max(s.seat + s.depth - od / 2, 0.0)
-        vol += ring * length - math.pi / 4 * s.bore**2 * s.depth
-        area += math.pi * od * length
-        pts += [np.asarray(s.port), s.mouth()]
-    ports = {s.port for s in sockets}
-    vol += len(ports) * math.pi / 6 * od**3
-    area += len(ports) * math.pi * od**2 / 2
-    if kind == "core_link":
-        t = spec.core.plate_thickness
-        vol += 12.0 * 12.0 * t
-        area += 2 * 144.0
-    ext = np.ptp(np.array(pts), axis=0) + od
-    env = tuple(sorted(float(x) for x in ext))  # printed lying on its largest face
-    return Estimate(vol, area / 3, 2 * area / 3, (env[2], env[1], env[0]))
+def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict | None = None) -> Estimate:
+    """Closed-form volume/areas of the joint as parts/joint.py builds it, in print orientation.
+
+    Pieces (r = OD/2 = bore/2 + wall, L = seat + depth): a sleeve parallel to the bed is a D
+    section (2r wide, flat on the bed up to its axis height h, round top: 2 r h + pi r^2 / 2); a
+    steep one a cylinder; a sloped one half a cylinder on a 0.9 x OD web down to the bed. Corners
+    add a round hub (and the foot pad), knee and core link stack the arm sockets in one block,
+    the core link adds a hub between the sleeves and its bolt tab. Minus the bores.
+    """
+    params = params or {}
+    j = spec.joints
+    r = spec.bore / 2 + j.wall
+    hole = math.pi / 4 * spec.bore**2
+    dirs = np.array([s.direction for s in sockets], float)
+    ports = np.array([s.port for s in sockets], float)
+    L = np.array([s.seat + s.depth for s in sockets], float)
+
+    def d_area(h: float) -> float:
+        return 2 * r * h + math.pi * r**2 / 2
+
+    vol = -sum(hole * s.depth for s in sockets)
+    a_h = a_v = 0.0
+    if kind in ("corner_top", "corner_bottom"):
+        up = -1.0 if dirs[np.abs(dirs[:, 2]) > 1e-6, 2].sum() < 0 else 1.0
+        vol += 2 * math.pi * r**3  # hub
+        a_h += 2 * math.pi * r**2
+        a_v += 4 * math.pi * r**2
+        for d, n in zip(dirs, L):
+            dz = d[2] * up
+            if abs(dz) < 1e-6:
+                vol += d_area(r) * n - math.pi * r**2 / 2 * (r + math.pi * r / 4)
+                a_h += (2 * r + math.pi * r / 2) * n
+                a_v += (2 * r + math.pi * r / 2) * n
+            elif dz >= math.cos(math.radians(45)):
+                vol += math.pi * r**2 * (n - r)
+                a_v += 2 * math.pi * r * n
+            else:
+                run = n * math.sqrt(1 - dz * dz)
+                h_mean = r + dz * n / 2
+                vol += math.pi * r**2 / 2 * n + 1.8 * r * h_mean * run - math.pi * r**2 / 2 * r
+                a_h += 1.8 * r * run + math.pi * r * n / 2
+                a_v += 2 * h_mean * run + math.pi * r * n / 2
+        if params.get("foot"):
+            vol += 1.5 * math.pi * r**2 * j.wall
+            a_h += 2.2 * math.pi * r**2
+        ext = np.ptp(np.vstack([ports, ports + dirs * L[:, None]]), axis=0) + 2 * r
+    else:
+        _, _, vt = np.linalg.svd(dirs)
+        w = vt[-1]
+        zc = ports @ w
+        z = zc - zc.min() + r  # axis heights in print orientation
+        par = [i for i in range(len(sockets)) if sum(dirs[i] @ dirs[k] > 1 - 1e-6 for k in range(len(sockets))) > 1]
+        rest = [i for i in range(len(sockets)) if i not in par]
+        sleeve_l = [sockets[i].depth + j.wall for i in range(len(sockets))]
+        blocks = [(z[par].max(), sleeve_l[par[0]])] + [(z[i], sleeve_l[i]) for i in rest]
+        for h, n in blocks:
+            vol += d_area(h) * n
+            a_h += (2 * r + math.pi * r / 2) * n
+            a_v += (2 * h + math.pi * r / 2) * n
+        for i in (rest if kind == "core_link" else []):  # a sleeve leaving at a small angle to the arm block runs partly inside it
+            sin_t = float(np.linalg.norm(np.cross(dirs[i], dirs[par[0]])))
+            s0, s1 = sockets[i].seat - j.wall, sockets[i].seat + sockets[i].depth
+            s_end = min(s1, 2 * r / sin_t) if sin_t > 1e-9 else s1
+            if s_end > s0:
+                overlap = 2 * r * (s_end - s0) - sin_t * (s_end**2 - s0**2) / 2
+                vol -= overlap * (z[i] + math.pi * r / 4)
+        top = float(z[rest].max() + r)
+        if kind == "knee":
+            vol += j.hinge_thickness * 2.7 * top
+            a_v += 2 * 2.7 * top
+        else:
+            s_back = sockets[par[0]].seat - j.wall
+            t = float(params.get("tab_thickness", spec.core.plate_thickness))
+            hole_d = float(params.get("screw_clearance", 2.4))
+            bolt = np.asarray(params.get("bolt_hole", (0.0, 0.0, 0.0)), float)
+            r_tab = hole_d / 2 + j.wall
+            tab_len = float(np.hypot(bolt[0], bolt[1])) + r_tab + 1.0
+            tab_h = float(bolt @ w - zc.min() + r + r_tab)
+            vol += tab_len * t * tab_h - math.pi / 4 * hole_d**2 * t
+            a_h += tab_len * t
+            a_v += 2 * tab_len * tab_h
+            # Hub: a prism over the convex hull of the sleeves' back faces and the tab root.
+            x = dirs[par[0]] - w * (dirs[par[0]] @ w)
+            x /= np.linalg.norm(x)
+            y = np.cross(w, x)
+            pts = []
+            for i in [par[0]] + rest:
+                d = dirs[i]
+                lat = np.cross(w, d)
+                lat /= np.linalg.norm(lat)
+                c = ports[i] + d * (sockets[i].seat - j.wall)
+                pts += [c + lat * r, c - lat * r]
+            e_u = bolt - w * (bolt @ w)
+            e_u[2] = 0.0
+            e_u /= max(float(np.linalg.norm(e_u)), 1e-9)
+            v0 = float(params.get("plate_top_z", 0.0))
+            pts += [e_u * 0.5 + np.array([0, 0, v0]), e_u * 0.5 + np.array([0, 0, v0 + t])]
+            hub_area = _hull_area(np.array([[p_ @ x, p_ @ y] for p_ in pts]))
+            hub_h = max(top, tab_h)
+            vol += hub_area * hub_h
+            a_h += hub_area
+            a_v += 2 * s_back * hub_h
+        ext = np.array([np.ptp(np.vstack([ports, ports + dirs * L[:, None]]) @ np.eye(3), axis=0).max() + 2 * r,
+                        2 * r + float(L.max()), float(z.max() + r)])
+    a_v += sum(math.pi * spec.bore * s.depth for s in sockets)
+    env = tuple(sorted(float(x) for x in ext))
+    return Estimate(vol, a_h, a_v, (env[2], env[1], env[0]))
+
+
+def _hull_area(pts: np.ndarray) -> float:
+    """Area of the convex hull of 2-D points (monotone chain + shoelace)."""
+    pts = sorted(map(tuple, np.round(pts, 9)))
+
+    def half(seq):
+        out: list = []
+        for p in seq:
+            while len(out) >= 2 and (out[-1][0] - out[-2][0]) * (p[1] - out[-2][1]) - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0]) <= 0:
+                out.pop()
+            out.append(p)
+        return out[:-1]
+
+    hull = np.array(half(pts) + half(pts[::-1]))
+    x, y = hull[:, 0], hull[:, 1]
+    return float(abs(x @ np.roll(y, -1) - y @ np.roll(x, -1)) / 2)
 
 
 # -- motor mount -----------------------------------------------------------------------------
@@ -245,11 +349,19 @@ def _battery_holder(spec: Spec, frame: Frame) -> PartSpec:
     t = c.holder_wall
     pitch, _ = STACK_PATTERNS[c.stack_pattern]
     screw = SCREWS[c.stack_screw]
-    # Open-ended sleeve: top, floor, two side walls, a back stop; printed standing on the back stop.
-    vol = 2 * w * length * t + 2 * length * (height - 2 * t) * t + w * height * t
-    area_v = 2 * w * length * 2 + 2 * length * height * 2  # the sleeve walls are vertical when printed on end
+    # Open-ended sleeve (floor, top, two side walls) with a back stop, printed standing on the back
+    # stop: the outer box minus the battery cavity (open at the front) minus the stack holes in the
+    # top, whose thickness is what the outer height leaves around the cavity (parts/core.py).
+    iw, il, ih = b.width, b.length, b.height + 1.0
+    skin = (height - ih) / 2
     holes = tuple((sx * pitch / 2, sy * pitch / 2) for sx in (-1, 1) for sy in (-1, 1))
-    est = Estimate(vol, 2 * w * height, area_v, (w, height, length))
+    vol = w * length * height - iw * il * ih - len(holes) * math.pi / 4 * screw.clearance_d**2 * skin
+    # Walls are vertical when printed on end: outside and cavity faces; horizontal: the back stop
+    # and the rim of the open end.
+    area_v = 2 * (w + height) * length + 2 * (iw + ih) * il
+    rim = w * height - iw * ih
+    area_h = w * height + rim
+    est = Estimate(vol, area_h, area_v, (w, height, length))
     params = (("inner", (b.width, b.length, b.height + 1.0)), ("wall", t), ("holes", holes), ("hole_d", screw.clearance_d),
               ("outer", (w, length, height)))
     return PartSpec("battery_holder", "battery_holder", "core", c.material, c.infill,

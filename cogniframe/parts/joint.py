@@ -131,7 +131,7 @@ def _arm_direction(part: PartSpec) -> np.ndarray:
     dirs = [np.asarray(s.direction, float) for s in part.sockets]
     for i in range(len(dirs)):
         for k in range(i + 1, len(dirs)):
-            if dirs[i] @ dirs[k] > 1 - 1e-9:
+            if dirs[i] @ dirs[k] > 1 - 1e-6:
                 return dirs[i]
     raise ValueError(f"{part.name}: no pair of parallel (arm) sockets")
 
@@ -297,7 +297,7 @@ def _corner(part: PartSpec, socks: list[PSocket], r: float):
 def _groups(socks: list[PSocket]) -> tuple[list[PSocket], list[PSocket]]:
     """(the parallel arm sockets, the others)."""
     for i in range(len(socks)):
-        par = [s for s in socks if s.direction @ socks[i].direction > 1 - 1e-9]
+        par = [s for s in socks if s.direction @ socks[i].direction > 1 - 1e-6]
         if len(par) > 1:
             return par, [s for s in socks if s not in par]
     raise ValueError("no parallel arm sockets")
