@@ -244,15 +244,20 @@ def overhangs(mesh: trimesh.Trimesh, max_angle_deg: float = 45.0, bridge_max: fl
             k = int(np.argmin(ext))
             width = float(ext[k])
             excused = False
-            if width <= bridge_max:
-                centre = mesh.triangles_center[fi]
-                c_xy = np.average(centre[:, :2], axis=0, weights=a[fi])
-                c_z = float(np.average(centre[:, 2], weights=a[fi]))
-                mid = (proj[:, k].max() + proj[:, k].min()) / 2
-                along = c_xy - (c_xy @ dirs2[k]) * dirs2[k]
-                probe_z = c_z - 0.1
-                probes = [np.r_[along + (mid + s * (width / 2 + 0.3)) * dirs2[k], probe_z] for s in (-1, 1)]
-                excused = bool(np.all(contains(mesh, probes)))
+            centre = mesh.triangles_center[fi]
+            c_xy = np.average(centre[:, :2], axis=0, weights=a[fi])
+            probe_z = float(np.average(centre[:, 2], weights=a[fi])) - 0.1
+            # Try the narrowest direction, then the one across it (a short hole through a thin
+            # wall is narrowest along its own axis but bridges across it).
+            for kk in (k, (k + len(angles) // 2) % len(angles)):
+                if ext[kk] > bridge_max:
+                    continue
+                mid = (proj[:, kk].max() + proj[:, kk].min()) / 2
+                along = c_xy - (c_xy @ dirs2[kk]) * dirs2[kk]
+                probes = [np.r_[along + (mid + sg * (ext[kk] / 2 + 0.3)) * dirs2[kk], probe_z] for sg in (-1, 1)]
+                if np.all(contains(mesh, probes)):
+                    excused = True
+                    break
             if not excused:
                 bad += area
             patches.append((area, width, excused))

@@ -319,8 +319,41 @@ def _footprint_rect(s: PSocket, start: float, end: float, half: float, grow: flo
     return [a - lat * h, b - lat * h, b + lat * h, a + lat * h]
 
 
-def _knee(part: PartSpec, socks: list[PSocket], r: float):
+@dataclass(frozen=True)
+class Hinge:
+    """The knee's living-hinge web in print coordinates (xy points, z from 0 to `height`)."""
+
+    start: np.ndarray  # xy, inside the upper-leg sleeve
+    end: np.ndarray  # xy, inside the arm block
+    normal: np.ndarray  # xy unit vector across the web (the bending direction)
+    thickness: float
+    height: float
+    probe: np.ndarray  # xy on the web's centre line, in the middle of the slot that frees the leg
+
+
+def knee_hinge(part: PartSpec) -> Hinge:
+    """Where the knee's hinge web runs (pure numpy; the CAD and the tests share it)."""
+    m = print_from_local(part)
+    socks = map_sockets(part, m)
+    r = (part.sockets[0].bore + 2 * part.wall) / 2
     h = float(part.param("hinge_thickness"))
+    arms, legs = _groups(socks)
+    a = arms[0]
+    s_back = a.seat - part.wall
+    hinged = min(legs, key=lambda s: float(s.direction @ a.direction))
+    c = hinged.at(hinged.seat - part.wall)
+    d = horizontal(a.direction)
+    lat = np.array([-d[1], d[0], 0.0])
+    off = float((c - a.port)[:2] @ lat[:2])
+    off = float(np.clip(off, -(r - h / 2 - 0.3), r - h / 2 - 0.3))
+    q = a.port + d * (s_back + 0.6) + lat * off
+    e = (q - c)[:2] / np.linalg.norm((q - c)[:2])
+    probe = (a.port + d * (s_back - HINGE_GAP / 2) + lat * off)[:2]
+    top = max(s.port[2] for s in legs) + r
+    return Hinge(c[:2] - e * 0.6, q[:2], np.array([-e[1], e[0]]), h, float(top), probe)
+
+
+def _knee(part: PartSpec, socks: list[PSocket], r: float):
     arms, legs = _groups(socks)
     a = arms[0]
     s_back = a.seat - part.wall
@@ -330,8 +363,6 @@ def _knee(part: PartSpec, socks: list[PSocket], r: float):
     rigid = [s for s in legs if s is not hinged]
     t_back = {id(s): s.seat - part.wall for s in legs}
     rigid_solids = [dsleeve(s.at(t_back[id(s)]), s.direction, s.depth + part.wall, s.port[2], r) for s in rigid]
-    top = max(s.port[2] for s in legs) + r
-
     # Upper leg, freed from everything rigid by HINGE_GAP ...
     upper = dsleeve(hinged.at(t_back[id(hinged)]), hinged.direction, hinged.depth + part.wall, hinged.port[2], r)
     clear = [prism(_footprint_rect(a, s_back, a.seat + a.depth, r, HINGE_GAP), -1.0, 1000.0)]
@@ -339,15 +370,8 @@ def _knee(part: PartSpec, socks: list[PSocket], r: float):
     upper = upper.cut(fuse_all(clear))
     # ... and joined to the arm block by the hinge web: from the centre of the upper leg's back
     # face straight to the arm block's back face.
-    c = hinged.at(t_back[id(hinged)])
-    d = horizontal(a.direction)
-    lat = np.array([-d[1], d[0], 0.0])
-    off = float((c - a.port)[:2] @ lat[:2])
-    off = float(np.clip(off, -(r - h / 2 - 0.3), r - h / 2 - 0.3))
-    q = a.port + d * (s_back + 0.6) + lat * off
-    e = (q - c)[:2] / np.linalg.norm((q - c)[:2])
-    web = box_along(c[:2] - e * 0.6, q[:2], h, 0.0, top)
-    body = fuse_all([block, *rigid_solids, upper, web])
+    web = knee_hinge(part)
+    body = fuse_all([block, *rigid_solids, upper, box_along(web.start, web.end, web.thickness, 0.0, web.height)])
     return finish(body, [socket_cutter(s) for s in socks])
 
 

@@ -1,0 +1,243 @@
+"""Every printed part of both presets: closed, printable without supports, on the bed, estimated right.
+
+The builds are shared (one per preset per test session) through `built_preset`, which the other
+CAD test files import too.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import tempfile
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from cogniframe import frame as frame_mod
+from cogniframe import partlist
+from cogniframe import spec as spec_mod
+from cogniframe.errors import UserError
+
+ROOT = Path(__file__).resolve().parents[1]
+PRESETS = ("carbon", "bamboo")
+FAMILIES = ("joint", "motor_mount", "core_plate", "battery_holder", "computer_mount")
+PART_NAMES = {
+    "carbon": ("corner_top", "corner_bottom", "knee", "core_link", "motor_mount", "core_plate", "battery_holder", "computer_mount"),
+    "bamboo": ("corner_top", "corner_bottom", "knee", "core_link", "motor_mount", "core_plate", "battery_holder"),
+}
+CASES = [(p, n) for p in PRESETS for n in PART_NAMES[p]]
+OVERHANG_MAX = 0.01  # unsupported fraction of the downward-facing area
+
+
+@functools.lru_cache(maxsize=None)
+def built_preset(name: str):
+    """Build a preset's parts once (no cache) into a temp dir; meshes re-read from the STL files."""
+    from cogniframe.export.build import build_parts
+    from cogniframe.export.mesh import load_stl
+
+    spec = spec_mod.load(ROOT / "params" / f"{name}.yaml")
+    frame = frame_mod.build(spec)
+    parts = partlist.build(spec, frame)
+    out = Path(tempfile.mkdtemp(prefix=f"cogniframe-test-{name}-"))
+    built = build_parts(spec, frame, parts, out, jobs=1)
+    meshes = {b.name: load_stl(out / b.stl) for b in built}
+    return SimpleNamespace(spec=spec, frame=frame, parts={p.name: p for p in parts}, built={b.name: b for b in built},
+                           out=out, meshes=meshes)
+
+
+def test_presets_have_the_expected_parts():
+    for p in PRESETS:
+        d = built_preset(p)
+        assert tuple(d.parts) == PART_NAMES[p]
+        assert {x.family for x in d.parts.values()} <= set(FAMILIES)
+
+
+@pytest.mark.parametrize("preset,name", CASES)
+def test_stl_is_a_closed_single_volume(preset, name):
+    d = built_preset(preset)
+    m, b = d.meshes[name], d.built[name]
+    assert m.is_watertight and m.is_volume
+    assert m.volume > 0
+    assert m.body_count == 1 == b.shells
+    assert b.watertight
+    assert b.volume_mm3 == pytest.approx(m.volume, rel=1e-6)
+    assert b.area_h_mm2 + b.area_v_mm2 == pytest.approx(m.area, rel=1e-6)
+
+
+@pytest.mark.parametrize("preset,name", CASES)
+def test_part_sits_flat_inside_the_bed(preset, name):
+    from cogniframe.export.mesh import flat_contact_ratio
+
+    d = built_preset(preset)
+    m = d.meshes[name]
+    assert m.bounds[0, 2] == pytest.approx(0.0, abs=1e-6)
+    assert np.all(m.extents <= np.asarray(d.spec.printer.bed) + 1e-6), f"{name} {m.extents} > bed"
+    assert flat_contact_ratio(m) >= 0.20
+
+
+@pytest.mark.parametrize("preset,name", CASES)
+def test_no_unsupported_overhang(preset, name):
+    from cogniframe.export.mesh import overhangs
+
+    oh = overhangs(built_preset(preset).meshes[name])
+    assert oh["fraction"] < OVERHANG_MAX, oh
+    assert oh["area"] < 1.0, oh
+
+
+@pytest.mark.parametrize("preset,name", CASES)
+def test_analytic_estimate_tracks_the_cad_volume(preset, name):
+    d = built_preset(preset)
+    est, cad = d.parts[name].estimate.volume, d.built[name].volume_mm3
+    assert abs(est / cad - 1) < 0.15, f"{name}: estimate {est:.0f} vs CAD {cad:.0f} mm^3"
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_core_plate_volume_is_box_minus_holes(preset):
+    d = built_preset(preset)
+    p = d.parts["core_plate"]
+    size, t, hole_d = p.param("size"), p.param("thickness"), p.param("hole_d")
+    closed = size * size * t - len(p.param("holes")) * math.pi / 4 * hole_d**2 * t
+    assert d.built["core_plate"].volume_mm3 == pytest.approx(closed, rel=0.005)
+
+
+def test_battery_holder_volume_is_box_minus_cavity():
+    d = built_preset("carbon")
+    p = d.parts["battery_holder"]
+    (w, length, h), (iw, il, ih) = p.param("outer"), p.param("inner")
+    skin = (h - ih) / 2
+    closed = w * length * h - iw * il * ih - 4 * math.pi / 4 * p.param("hole_d") ** 2 * skin
+    assert d.built["battery_holder"].volume_mm3 == pytest.approx(closed, rel=0.005)
+    # printed standing on its back stop: as tall as the holder is long
+    assert d.built["battery_holder"].bbox_mm[2] == pytest.approx(length)
+
+
+# -- the overhang measure itself ---------------------------------------------------------------
+
+def _mesh(shape):
+    from cogniframe.export.mesh import tessellate
+
+    return tessellate(shape)
+
+
+def test_overhang_measure_flags_a_cantilever_and_a_wide_hole_but_not_a_small_hole():
+    import cadquery as cq
+
+    from cogniframe.export.mesh import overhangs
+
+    mushroom = cq.Workplane().box(4, 4, 10, centered=(True, True, False)).faces(">Z").workplane().rect(20, 20).extrude(3)
+    assert overhangs(_mesh(mushroom))["fraction"] > 0.3
+    block = cq.Workplane().box(30, 16, 16, centered=(True, True, False))
+    small = block.cut(cq.Workplane("YZ").center(0, 8).circle(1.6).extrude(40, both=True))
+    wide = block.cut(cq.Workplane("YZ").center(0, 8).circle(5.0).extrude(40, both=True))
+    assert overhangs(_mesh(small))["area"] < 0.5
+    assert overhangs(_mesh(wide))["area"] > 20  # a 10 mm hole is not a bridge
+
+
+def test_flat_contact_ratio_of_a_ball_is_tiny():
+    import cadquery as cq
+
+    from cogniframe.export.mesh import flat_contact_ratio
+
+    ball = cq.Workplane().sphere(5).translate((0, 0, 5)).cut(cq.Workplane().box(20, 20, 0.2, centered=(True, True, False)))
+    assert flat_contact_ratio(_mesh(ball.translate((0, 0, -0.2)))) < 0.2
+
+
+# -- registry, bed fit ---------------------------------------------------------------------
+
+def test_registry_lists_families_and_rejects_unknown_ones():
+    from cogniframe.parts import registry
+
+    assert registry.families() == tuple(sorted(FAMILIES))
+    assert set(registry.sizes()) == set(FAMILIES)
+    with pytest.raises(ValueError) as e:
+        registry.get("wing")
+    for f in FAMILIES:
+        assert f in str(e.value)
+
+
+def test_part_larger_than_the_bed_is_a_user_error(tmp_path):
+    from cogniframe.export.build import build_parts
+
+    spec = spec_mod.from_dict({"printer": {"bed": [60, 60, 60]}})
+    frame = frame_mod.build(spec)
+    parts = [p for p in partlist.build(spec, frame) if p.name == "computer_mount"]
+    with pytest.raises(UserError) as e:
+        build_parts(spec, frame, parts, tmp_path, jobs=1)
+    msg = str(e.value)
+    assert "computer_mount" in msg and "65.0 x 30.0" in msg and "60 x 60 x 60" in msg
+    assert "printer.bed" in msg and "core.computer.hole_spacing" in msg
+
+
+def test_part_that_fits_only_turned_is_turned(tmp_path):
+    from cogniframe.export.build import build_parts
+    from cogniframe.export.mesh import load_stl
+
+    spec = spec_mod.from_dict({"printer": {"bed": [40, 70, 60]}})
+    frame = frame_mod.build(spec)
+    parts = [p for p in partlist.build(spec, frame) if p.name == "computer_mount"]
+    (b,) = build_parts(spec, frame, parts, tmp_path, jobs=1)
+    m = load_stl(tmp_path / b.stl)
+    assert m.extents[0] <= 40 and m.extents[1] <= 70
+    # the turn is part of print_from_local: the Pi holes still land where the transform says
+    hole = np.r_[parts[0].param("computer_holes")[0], 0.0, 1.0]
+    p = (b.print_from_local @ hole)[:3]
+    from cogniframe.export.mesh import contains
+
+    assert not contains(m, [p])[0]
+
+
+# -- socket walls and the knee hinge, measured on the mesh -----------------------------------
+
+def _rays_to_surface(mesh, origin, dirs):
+    from cogniframe.export.mesh import ray_first_hit
+
+    return ray_first_hit(mesh, np.tile(origin, (len(dirs), 1)), dirs)
+
+
+@pytest.mark.parametrize("preset,name", [(p, n) for p in PRESETS for n in ("corner_top", "corner_bottom", "knee", "core_link")])
+def test_socket_bore_and_walls(preset, name):
+    """At mid-depth the hole radius is bore/2, and the wall around it and behind its bottom is >= wall."""
+    from cogniframe.export.mesh import ray_first_hit
+    from cogniframe.parts.joint import map_sockets
+
+    d = built_preset(preset)
+    part, m = d.parts[name], d.meshes[name]
+    for s in map_sockets(part, d.built[name].print_from_local):
+        mid = s.at(s.seat + s.depth / 2)
+        u = np.cross(s.direction, [0.3, 0.5, 0.8])
+        u /= np.linalg.norm(u)
+        v = np.cross(s.direction, u)
+        ang = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+        dirs = np.outer(np.cos(ang), u) + np.outer(np.sin(ang), v)
+        radius = _rays_to_surface(m, mid, dirs)
+        assert np.allclose(radius, s.bore / 2, atol=0.02), (s.rod, radius)
+        # wall: from just outside the hole to the outer surface (rays that leave through the bed
+        # or the flat cut are fine: that is where the wall is the sleeve's flat side)
+        outer = ray_first_hit(m, mid + dirs * (s.bore / 2 + 0.01), dirs) + 0.01
+        assert outer.min() >= part.wall - 0.05, (s.rod, outer.min())
+        back = ray_first_hit(m, s.bottom - s.direction * 0.01, -s.direction[None, :])[0] + 0.01
+        assert back >= part.wall - 0.05, (s.rod, back)
+
+
+def test_knee_living_hinge_is_a_thin_web_between_slots():
+    import dataclasses
+
+    from cogniframe.export.mesh import contains, ray_first_hit, tessellate
+    from cogniframe.parts import joint
+
+    d = built_preset("carbon")
+    knee = d.parts["knee"]
+    for h in (1.2, 1.6):
+        part = dataclasses.replace(knee, params=tuple((k, h if k == "hinge_thickness" else v) for k, v in knee.params))
+        web = joint.knee_hinge(part)
+        m = tessellate(joint.build(part).shape)
+        mid = np.r_[web.probe, web.height / 2]
+        n = np.r_[web.normal, 0.0]
+        # through the web: material exactly hinge_thickness thick ...
+        t_in = ray_first_hit(m, [mid - n * 3], [n])[0]
+        t_out = ray_first_hit(m, [mid - n * 3 + n * (t_in + 0.01)], [n])[0] + 0.01
+        assert t_out == pytest.approx(h, abs=0.05)
+        # ... with open slots on both sides of it
+        assert not contains(m, [mid + n * (h / 2 + joint.HINGE_GAP / 2), mid - n * (h / 2 + joint.HINGE_GAP / 2)]).any()
