@@ -236,8 +236,9 @@ def test_knee_living_hinge_is_a_thin_web_between_slots():
         mid = np.r_[web.probe, web.height / 2]
         n = np.r_[web.normal, 0.0]
         # through the web: material exactly hinge_thickness thick ...
-        t_in = ray_first_hit(m, [mid - n * 3], [n])[0]
-        t_out = ray_first_hit(m, [mid - n * 3 + n * (t_in + 0.01)], [n])[0] + 0.01
+        start = mid - n * (h / 2 + joint.HINGE_GAP / 2)  # in the slot
+        t_in = ray_first_hit(m, [start], [n])[0]
+        t_out = ray_first_hit(m, [start + n * (t_in + 0.01)], [n])[0] + 0.01
         assert t_out == pytest.approx(h, abs=0.05)
         # ... with open slots on both sides of it
         assert not contains(m, [mid + n * (h / 2 + joint.HINGE_GAP / 2), mid - n * (h / 2 + joint.HINGE_GAP / 2)]).any()
