@@ -1,0 +1,95 @@
+"""The socket-fit coupon: one socket per clearance, measured on the mesh; closed, on the bed, stable."""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cogniframe import spec as spec_mod
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _loops_at(mesh, z):
+    """Closed section loops of `mesh` at height z: (equivalent diameter, centre xy) each."""
+    sec = mesh.section(plane_origin=[0, 0, z], plane_normal=[0, 0, 1])
+    flat, to_3d = sec.to_2D()
+    out = []
+    for v in flat.discrete:
+        x, y = v[:, 0], v[:, 1]
+        area = abs(x @ np.roll(y, -1) - y @ np.roll(x, -1)) / 2
+        c = (to_3d @ np.r_[v.mean(axis=0), 0.0, 1.0])[:2]
+        out.append((2 * np.sqrt(area / np.pi), c))
+    return out
+
+
+@pytest.fixture(scope="module", params=("carbon", "bamboo"))
+def coupon(request, tmp_path_factory):
+    from cogniframe.export.coupon import write_coupon
+    from cogniframe.export.mesh import load_stl
+
+    spec = spec_mod.load(ROOT / "params" / f"{request.param}.yaml")
+    path, clearances = write_coupon(spec, tmp_path_factory.mktemp("coupon") / "coupon.stl")
+    return spec, path, clearances, load_stl(path)
+
+
+def test_clearances_step_from_tight_to_loose(coupon):
+    _, _, clearances, _ = coupon
+    assert clearances == pytest.approx([-0.10, -0.05, 0.0, 0.05, 0.10, 0.15, 0.20, 0.25, 0.30])
+
+
+def test_one_hole_per_clearance_with_the_right_diameter(coupon):
+    spec, _, clearances, mesh = coupon
+    z = spec.joints.wall + spec.joints.socket_depth / 2  # mid-depth of the sockets
+    loops = _loops_at(mesh, z)
+    od = spec.rods.diameter + max(clearances) + 2 * spec.joints.wall
+    holes = sorted(d for d, _ in loops if d < od - 1.0)
+    bosses = [d for d, _ in loops if d >= od - 1.0]
+    assert len(holes) == len(clearances) == len(bosses)
+    assert holes == pytest.approx([spec.rods.diameter + c for c in clearances], abs=0.02)
+    # neighbouring sockets differ by the 0.05 mm step, measurably
+    assert np.diff(holes) == pytest.approx([0.05] * (len(holes) - 1), abs=0.01)
+
+
+def test_coupon_is_closed_flat_and_fits_the_bed(coupon):
+    from cogniframe.export.mesh import flat_contact_ratio, overhangs
+
+    spec, _, _, mesh = coupon
+    assert mesh.is_watertight and mesh.is_volume and mesh.body_count == 1
+    assert mesh.bounds[0, 2] == pytest.approx(0.0, abs=1e-9)
+    assert np.all(mesh.extents <= np.asarray(spec.printer.bed))
+    assert flat_contact_ratio(mesh) > 0.5
+    assert overhangs(mesh)["fraction"] < 0.01
+
+
+def test_labels_are_engraved(coupon):
+    """Every label cuts a floor 0.6 mm into the base: up-facing area at that depth, under each socket."""
+    from cogniframe.parts import coupon as cp
+
+    spec, _, clearances, mesh = coupon
+    z_floor = cp.BASE - cp.ENGRAVE
+    n = mesh.face_normals
+    c = mesh.triangles_center
+    floor = (np.abs(c[:, 2] - z_floor) < 1e-3) & (n[:, 2] > 0.99)
+    g = cp.layout(spec, clearances)
+    for x in g["xs"]:
+        near = floor & (np.abs(c[:, 0] - x) < g["pitch"] / 2)
+        assert mesh.area_faces[near].sum() > 1.0
+
+
+def test_coupon_bytes_are_stable(tmp_path):
+    from cogniframe.export.coupon import write_coupon
+
+    spec = spec_mod.load(ROOT / "params" / "carbon.yaml")
+    a, _ = write_coupon(spec, tmp_path / "a.stl")
+    b, _ = write_coupon(spec, tmp_path / "b.stl")
+    assert hashlib.sha256(a.read_bytes()).digest() == hashlib.sha256(b.read_bytes()).digest()
+
+
+def test_font_is_available_headless():
+    from cogniframe.parts.coupon import font_path
+
+    assert font_path() is not None, "install fonts-dejavu-core: the coupon labels need a TrueType font"
