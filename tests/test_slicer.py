@@ -44,7 +44,7 @@ def test_profile_from_params(spec):
     tpu = _ini(slicer.profile_ini(spec, "tpu_95a", 1.0))
     assert tpu["fill_density"] == "100%" and tpu["fill_pattern"] == "rectilinear"
     assert tpu["support_material"] == "0" and tpu["brim_width"] == "0" and tpu["skirts"] == "0"
-    assert tpu["temperature"] == "228"
+    assert tpu["temperature"] == "228" and tpu["seam_position"] == "rear"
     assert 25 <= float(tpu["perimeter_speed"]) <= 35 and 25 <= float(tpu["infill_speed"]) <= 35
     assert tpu["filament_density"] == "1.22"
     assert tpu["bed_shape"] == "0x0,120x0,120x120,0x120" and tpu["max_print_height"] == "120"

@@ -297,8 +297,12 @@ def plot_plate(plate: Plate, path: Path | str, size_in: float = 6.0, dpi: int = 
         ax.add_collection(PolyCollection(tri[up], facecolors=colour, edgecolors=colour, linewidths=0.3, alpha=0.85))
         ax.add_patch(Rectangle((c.x, c.y), c.size[0], c.size[1], fill=False, edgecolor="#555555",
                                linewidth=0.6, linestyle="--"))
-        fs = max(4.5, min(9.0, 0.9 * c.size[0] * pt_per_mm / (0.62 * max(len(c.name), 1))))
-        ax.text(c.x + c.size[0] / 2, c.y + c.size[1] / 2, c.name, ha="center", va="center", fontsize=fs,
+        base, _, k = c.name.rpartition("_")
+        label = f"{base}\n#{k}" if c.size[0] < 0.62 * 9.0 * len(c.name) / pt_per_mm else c.name  # 2 lines if narrow
+        longest = max(len(line) for line in label.splitlines())
+        fs = max(5.5, min(9.0, 0.95 * c.size[0] * pt_per_mm / (0.62 * longest)))
+        ax.text(c.x + c.size[0] / 2, c.y + c.size[1] / 2, label, ha="center", va="center", fontsize=fs,
+                linespacing=1.0,
                 color="black", bbox=dict(boxstyle="round,pad=0.15", facecolor="white", edgecolor="none", alpha=0.75))
     ax.set_xlim(-2, bx + 2)
     ax.set_ylim(-2, by + 2)

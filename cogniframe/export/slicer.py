@@ -123,6 +123,9 @@ def profile_ini(spec: Spec, material: str, infill: float) -> str:
         "support_material": "0",
         "skirts": "0",
         "brim_width": "0",
+        # PrusaSlicer 2.5's "aligned" seam placer takes ~80 % of the time on small joints (6 s vs 1.5 s
+        # for a motor mount); "rear" gives the same grams and puts every seam at the back.
+        "seam_position": "rear",
         "filament_type": s.filament_type,
         "filament_diameter": f"{FILAMENT_DIAMETER:g}",
         "filament_density": f"{mat.density_g_cm3:g}",

@@ -121,7 +121,7 @@ def _rods_polydata(rods: Sequence[RodSegment]):
     return pv.merge(tubes) if tubes else None
 
 
-def _set_view(p, view: str, bounds: np.ndarray) -> None:
+def _set_view(p, view: str, bounds: np.ndarray, zoom: float = 1.0) -> None:
     direction, up, parallel = VIEWS[view]
     lo, hi = bounds
     centre = (lo + hi) / 2
@@ -131,6 +131,8 @@ def _set_view(p, view: str, bounds: np.ndarray) -> None:
     p.camera.parallel_projection = parallel
     p.camera_position = [tuple(centre + d * dist), tuple(centre), up]
     p.reset_camera(bounds=(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]))
+    if zoom != 1.0 and not parallel:
+        p.camera.zoom(zoom)
     if parallel:  # fit the projected box (reset_camera fits the bounding sphere, which wastes space)
         u = np.asarray(up, float)
         right = np.cross(d, u) if np.linalg.norm(np.cross(d, u)) else np.array([1.0, 0.0, 0.0])
@@ -209,7 +211,7 @@ def render_parts(parts: Mapping[str, tuple[str, "trimesh.Trimesh"]], out_dir: Pa
             p.clear_actors()
             p.add_mesh(_pv(mesh), color=material_colour(material), smooth_shading=False)
             p.add_text(f"{name} ({material})", position="upper_left", font_size=9, color="black")
-            _set_view(p, "iso", np.asarray(mesh.bounds))
+            _set_view(p, "iso", np.asarray(mesh.bounds), zoom=1.35)  # one part: its bounding sphere is loose
             written[name] = _save(p.screenshot(return_img=True), out_dir / f"{name}.png")
     finally:
         p.close()

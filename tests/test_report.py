@@ -1,0 +1,209 @@
+"""report.html / report.md: numbers equal `check --json`, every image is an embedded PNG,
+every expected table is there, and the Markdown's images exist beside it."""
+
+from __future__ import annotations
+
+import base64
+import io
+import re
+import shutil
+from html.parser import HTMLParser
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from cogniframe import pipeline
+from cogniframe import spec as spec_mod
+from cogniframe.export.plates import PlateItem, pack_plates, write_plates
+from cogniframe.export.slicer import MaterialCheck, PlateSlice, SliceReport
+from cogniframe.report import assembly_steps, bom, html as report
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+class _Page(HTMLParser):
+    """Collects tables (by id, with their cell texts), images and data-key values."""
+
+    def __init__(self):
+        super().__init__()
+        self.tables: dict[str, list[list[str]]] = {}
+        self.images: list[str] = []
+        self.keys: dict[str, list[str]] = {}
+        self._table: str | None = None
+        self._cell: list[str] | None = None
+        self._key_stack: list[str | None] = []
+        self._key_text: dict[int, list[str]] = {}
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if tag == "table":
+            self._table = a.get("id", f"table{len(self.tables)}")
+            self.tables[self._table] = []
+        elif tag == "tr" and self._table:
+            self.tables[self._table].append([])
+        elif tag in ("td", "th"):
+            self._cell = []
+        elif tag == "img":
+            self.images.append(a.get("src", ""))
+        if tag not in ("img", "meta", "br"):
+            self._key_stack.append(a.get("data-key"))
+            if a.get("data-key"):
+                self._key_text[len(self._key_stack)] = []
+
+    def handle_endtag(self, tag):
+        if tag in ("td", "th") and self._cell is not None and self._table and self.tables[self._table]:
+            self.tables[self._table][-1].append("".join(self._cell).strip())
+            self._cell = None
+        elif tag == "table":
+            self._table = None
+        if tag not in ("img", "meta", "br") and self._key_stack:
+            depth = len(self._key_stack)
+            key = self._key_stack.pop()
+            if key:
+                self.keys.setdefault(key, []).append("".join(self._key_text.pop(depth)).strip())
+
+    def handle_data(self, data):
+        if self._cell is not None:
+            self._cell.append(data)
+        for buf in self._key_text.values():
+            buf.append(data)
+
+
+def _png(path: Path, colour=(200, 30, 30)) -> Path:
+    from PIL import Image
+
+    img = np.full((60, 80, 3), 255, np.uint8)
+    img[10:50, 10:70] = colour
+    Image.fromarray(img).save(path)
+    return path
+
+
+def _box(x, y, z):
+    m = trimesh.creation.box((x, y, z))
+    m.apply_translation(-m.bounds[0])
+    return m
+
+
+@pytest.fixture(scope="module", params=("carbon", "bamboo"))
+def written(request, tmp_path_factory):
+    out = tmp_path_factory.mktemp("report") / request.param
+    spec = spec_mod.load(ROOT / "params" / f"{request.param}.yaml")
+    result = pipeline.check(spec)
+    d = result.design
+    items = [PlateItem(p.name, p.material, p.qty, _box(*(min(v, 60.0) for v in p.estimate.envelope))) for p in d.parts]
+    plates = write_plates(pack_plates(items, spec.printer.bed, spec.printer.margin), out / "plates")
+    sliced = tuple(PlateSlice(f.name, f.material, f.threemf, f.threemf.with_suffix(".gcode"), 10.0 + i, 3600.0 * (i + 1),
+                              tuple((c, 100.0) for c in f.copies), 0.5) for i, f in enumerate(plates))
+    mats = {}
+    for s in sliced:
+        mats.setdefault(s.material, [0.0, 0.0])
+        mats[s.material][0] += s.grams
+        mats[s.material][1] += s.time_s
+    est = result.mass.by_material
+    slice_report = SliceReport("PrusaSlicer-test", sliced, tuple(MaterialCheck(m, g, est[m], t) for m, (g, t) in sorted(mats.items())),
+                               ("tpu_95a: made-up warning for the test",))
+    lines = bom.build_bom(spec, d, result.mass, slice_report)
+    steps = assembly_steps.assembly_steps(d)
+    renders_dir = out / "renders"
+    renders_dir.mkdir(parents=True)
+    images = {"assembly iso": _png(renders_dir / "assembly_iso.png"), "part knee": _png(renders_dir / "knee.png", (60, 60, 60))}
+    html_path, md_path = report.write_report(result, out, images, lines, steps, plates, slice_report)
+    page = _Page()
+    page.feed(html_path.read_text(encoding="utf-8"))
+    return result, out, html_path, md_path, page, plates, lines, steps
+
+
+def test_numbers_equal_check_json(written):
+    result, _, _, _, page, *_ = written
+    cd = pipeline.check_dict(result)
+    for key in ("mass.total_g", "mass.limit_g", "mass.margin_g", "drop.k_n_per_m", "drop.max_safe_height_cm",
+                "drop.clearance_mm"):
+        assert key in page.keys, key
+        assert set(page.keys[key]) == {report.fmt_key(cd, key)}, key
+    # and the formats really are the JSON's values rounded
+    assert page.keys["mass.total_g"][0] == f"{cd['mass']['total_g']:.2f}"
+    assert float(page.keys["drop.k_n_per_m"][0]) == pytest.approx(round(cd["drop"]["k_n_per_m"]))
+    assert float(page.keys["drop.max_safe_height_cm"][0]) == pytest.approx(round(cd["drop"]["max_safe_height_cm"], 1))
+    assert page.keys["verdict"] == [cd["verdict"]]
+    # the mass-budget table repeats the JSON's items and total
+    rows = page.tables["mass-budget"]
+    body = rows[1:-1]
+    assert [r[0] for r in body] == [i["name"] for i in cd["mass"]["items"]]
+    assert [r[4] for r in body] == [f"{i['mass_g']:.2f}" for i in cd["mass"]["items"]]
+    assert rows[-1][4] == f"{cd['mass']['total_g']:.2f}"
+    drop_rows = page.tables["drop"][1:]
+    assert [r[2] for r in drop_rows] == [f"{h['x_max_mm']:.2f}" for h in cd["drop"]["heights"]]
+    assert [r[1] for r in page.tables["cutlist"][1:]] == [f"{r['length_mm']:g}" for r in cd["cutlist"]]
+
+
+def test_verdicts_on_top(written):
+    result, _, html_path, _, page, *_ = written
+    text = html_path.read_text(encoding="utf-8")
+    assert text.index('id="verdicts"') < text.index('id="mass-budget"')
+    rows = {r[0]: r for r in page.tables["verdicts"][1:]}
+    assert set(rows) == {"Mass", "Crash margin", "Printability", "Design verdict"}
+    assert rows["Mass"][1] == ("PASS" if result.mass.total_g <= result.mass.limit_g else "FAIL")
+    assert rows["Printability"][1] == "WARN"  # the slice report carries a warning
+    assert rows["Design verdict"][1] == result.verdict
+
+
+def test_every_image_is_an_embedded_png(written):
+    from PIL import Image
+
+    _, _, _, _, page, plates, *_ = written
+    # mass chart + stiffness + drop response + energy split + 2 renders + one preview per plate
+    assert len(page.images) == 4 + 2 + len(plates)
+    for src in page.images:
+        assert src.startswith("data:image/png;base64,")
+        data = base64.b64decode(src.split(",", 1)[1], validate=True)
+        assert data[:8] == b"\x89PNG\r\n\x1a\n"
+        with Image.open(io.BytesIO(data)) as im:
+            im.verify()
+
+
+def test_every_table_is_present(written):
+    _, _, _, _, page, plates, lines, steps = written
+    for tid in ("verdicts", "mass-budget", "mass-groups", "drop-model", "drop", "props", "cutlist", "stock", "bom",
+                "plates", "slicer", "assembly"):
+        assert tid in page.tables and len(page.tables[tid]) > 1, tid
+    assert len(page.tables["bom"]) == 1 + len(lines) + 1  # header, lines, total
+    assert len(page.tables["assembly"]) == 1 + len(steps)
+    assert [r[0] for r in page.tables["plates"][1:]] == [p.name for p in plates]
+    assert page.tables["plates"][1][4] == "10.0"  # sliced grams shown per plate
+
+
+def test_markdown_twin(written):
+    result, out, _, md_path, *_ = written
+    md = md_path.read_text(encoding="utf-8")
+    cd = pipeline.check_dict(result)
+    assert md.startswith(f"# cogniframe report: {cd['name']}")
+    assert f"all-up weight {cd['mass']['total_g']:.2f} g" in md
+    assert f"max safe drop {cd['drop']['max_safe_height_cm']:.1f} cm" in md
+    for title in ("## Mass budget", "## Stiffness and drop model", "## Cut list and stock plan", "## Bill of materials",
+                  "## Print plates", "## Assembly", "## Renders"):
+        assert title in md
+    links = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", md)
+    assert links and all((out / link).is_file() for link in links)
+    assert "warning: tpu_95a: made-up warning for the test" in md
+
+
+def test_same_input_same_report(written, tmp_path):
+    result, out, html_path, md_path, page, plates, lines, steps = written
+    images = {"assembly iso": out / "renders" / "assembly_iso.png", "part knee": out / "renders" / "knee.png"}
+    h2, m2 = report.write_report(result, tmp_path, images, lines, steps, plates, None)
+    h3, _ = report.write_report(result, tmp_path / "again", images, lines, steps, plates, None)
+    assert h2.read_bytes() == h3.read_bytes()
+    assert "not sliced" in h2.read_text(encoding="utf-8")
+
+
+@pytest.mark.skipif(shutil.which("chromium") is None, reason="chromium is not installed (optional check)")
+def test_opens_in_headless_chromium(written, tmp_path):
+    import subprocess
+
+    _, _, html_path, *_ = written
+    shot = tmp_path / "shot.png"
+    subprocess.run(["chromium", "--headless", "--no-sandbox", "--disable-gpu", f"--screenshot={shot}",
+                    "--window-size=1200,2000", html_path.resolve().as_uri()], check=True, capture_output=True, timeout=120)
+    assert shot.is_file() and shot.stat().st_size > 10_000
