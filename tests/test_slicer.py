@@ -160,6 +160,10 @@ def test_real_slice_grams_and_time(tmp_path, spec):
     g = slicer.read_gcode_stats(tpu.gcode)
     assert g == (tpu.grams, tpu.time_s)
     assert report.to_dict()["plates"][1]["objects"] == [n for n, _ in tpu.objects]
+    # numbers only: no G-code left behind
+    again = slicer.slice_plates([files[1].threemf], spec, keep_gcode=False)
+    assert not again.plates[0].gcode.exists() and again.plates[0].gcode.parent != tmp_path
+    assert again.plates[0].grams == pytest.approx(tpu.grams, rel=0.01)
 
 
 @needs_slicer
@@ -168,3 +172,30 @@ def test_real_slicer_error_becomes_a_user_error(tmp_path, spec):
     (f,) = write_plates(pack_plates([PlateItem("flat", "tpu_95a", 1, flat)], spec.printer.bed, 4), tmp_path)
     with pytest.raises(UserError, match="thinner than one layer"):
         slicer.slice_plates([f.threemf], spec)
+
+
+def test_slice_command_without_plates(run_cli, tmp_path):
+    from pathlib import Path
+
+    params = Path(__file__).resolve().parents[1] / "params" / "carbon.yaml"
+    code, out, err = run_cli("slice", params, "-o", tmp_path / "empty")
+    assert code == 2
+    assert "no print plates" in err and "cogniframe build" in err
+
+
+@needs_slicer
+def test_slice_command_table(run_cli, tmp_path):
+    import json
+    from pathlib import Path
+
+    params = Path(__file__).resolve().parents[1] / "params" / "carbon.yaml"
+    spec = spec_mod.load(params)
+    _plates(tmp_path / "plates", spec)
+    (tmp_path / "check.json").write_text(json.dumps({"name": "carbon", "mass": {"by_material": {"tpu_95a": 5.0, "abs": 0.5}}}))
+    code, out, err = run_cli("slice", params, "-o", tmp_path)
+    assert code == 0, err
+    assert "tpu_95a_1" in out and "abs_1" in out and "total" in out
+    assert "check.json" in out  # compared with the build's own mass budget
+    data = json.loads((tmp_path / "plates" / "slice.json").read_text())
+    assert [p["plate"] for p in data["plates"]] == ["abs_1", "tpu_95a_1"]
+    assert all(p["grams"] > 0 and p["time_s"] > 0 for p in data["plates"])

@@ -42,11 +42,11 @@ def slice_cmd(
         raise UserError(f"{slicer.SLICER} is not on PATH, so the plates cannot be sliced. Fix: install PrusaSlicer "
                         f"(Debian/Ubuntu: apt-get install prusa-slicer) or open the 3MF files in {plate_dir} in its GUI.")
     d = pipeline.design(spec)
-    budget = mass_mod.budget(spec, d.frame, d.cut, d.parts)
+    estimated, source = _estimated_grams(folder, spec, d, mass_mod)
     infill: dict[str, float] = {}
     for p in d.parts:
         infill[p.material] = max(infill.get(p.material, 0.0), p.infill)
-    report = slicer.slice_plates(plates, spec, budget.by_material, infill=infill, exe=exe)
+    report = slicer.slice_plates(plates, spec, estimated, infill=infill, exe=exe)
     assert report is not None  # exe was found
 
     con = Console()
@@ -59,7 +59,7 @@ def slice_cmd(
     t.add_row("total", "", str(sum(len(p.objects) for p in report.plates)), f"{report.total_g:.1f}",
               slicer.format_duration(report.total_time_s), "", style="bold")
     con.print(t)
-    m = Table(title="Filament vs mass budget (analytic estimate; `build` uses CAD volumes)")
+    m = Table(title=f"Filament vs mass budget ({source})")
     for col in ("material", "sliced g", "estimated g", "difference"):
         m.add_column(col, justify="left" if col == "material" else "right")
     for c in report.materials:
@@ -71,6 +71,21 @@ def slice_cmd(
         con.print(f"[yellow]warning:[/] {w}")
     (plate_dir / "slice.json").write_text(json.dumps(report.to_dict(), indent=2) + "\n", encoding="utf-8")
     con.print(f"wrote G-code and profiles to {plate_dir}")
+
+
+def _estimated_grams(folder: Path, spec, design, mass_mod) -> tuple[dict[str, float], str]:
+    """Printed grams per material from the build's check.json (CAD volumes), else the analytic estimate."""
+    path = folder / "check.json"
+    if path.is_file():
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+            by = {str(k): float(v) for k, v in data["mass"]["by_material"].items()}
+            if data.get("name") == spec.name:
+                return by, f"from {path.name}, the build's mass budget"
+        except (ValueError, KeyError, TypeError, AttributeError):
+            pass  # unreadable or from another version: fall back to the analytic estimate below
+    budget = mass_mod.budget(spec, design.frame, design.cut, design.parts)
+    return budget.by_material, "analytic estimate: no check.json from `cogniframe build` in the folder"
 
 
 def register(app: typer.Typer) -> None:

@@ -28,6 +28,7 @@ import re
 import shutil
 import subprocess
 import sys
+import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -410,12 +411,15 @@ def _say_once(msg: str, log: Callable[[str], None] | None) -> None:
 
 def slice_plates(plates: Sequence[Path | str], spec: Spec, estimated_g: Mapping[str, float] | None = None,
                  infill: Mapping[str, float] | None = None, exe: str | None = None,
-                 log: Callable[[str], None] | None = None) -> SliceReport | None:
+                 log: Callable[[str], None] | None = None, keep_gcode: bool = True) -> SliceReport | None:
     """Slice every plate file (`<material>_<n>.3mf`); None (said once) if PrusaSlicer is missing.
 
     Profiles `<material>.ini` and G-code `<plate>.gcode` are written next to the plates.
     `estimated_g` is the mass budget's grams per material (`MassBudget.by_material`);
     `infill` the infill fraction per material (default: `default_infill(spec)`).
+    PrusaSlicer's G-code is not byte-stable (a timestamp, and multithreaded path order), so
+    `keep_gcode=False` slices into a temporary folder and keeps only the numbers (the
+    `PlateSlice.gcode` paths then no longer exist).
     """
     exe = exe or find_slicer()
     if exe is None:
@@ -425,22 +429,33 @@ def slice_plates(plates: Sequence[Path | str], spec: Spec, estimated_g: Mapping[
     infill = dict(infill) if infill is not None else default_infill(spec)
     paths = sorted(Path(p) for p in plates)
     profiles: dict[str, Path] = {}
-    results = []
-    for plate in paths:
-        try:
-            material, _ = parse_plate_name(plate.stem)
-        except ValueError as e:
-            raise UserError(f"{plate}: {e}. Fix: rebuild the plates with `cogniframe build`.") from None
-        try:
-            spec.material(material)
-        except KeyError:
-            raise UserError(f"{plate}: unknown material {material!r} for these params. Fix: rebuild the plates "
-                            f"with `cogniframe build` for this params file.") from None
-        if material not in profiles:
-            prof = plate.parent / f"{material}.ini"
-            prof.write_text(profile_ini(spec, material, infill.get(material, spec.core.infill)), encoding="utf-8")
-            profiles[material] = prof
-        results.append(slice_plate(plate, profiles[material], spec.printer.bed, exe))
+    results: list[PlateSlice] = []
+    with tempfile.TemporaryDirectory(prefix="cogniframe-gcode-") as tmp:
+        for plate in paths:
+            material = _plate_material(plate, spec)
+            if material not in profiles:
+                prof = plate.parent / f"{material}.ini"
+                prof.write_text(profile_ini(spec, material, infill.get(material, spec.core.infill)), encoding="utf-8")
+                profiles[material] = prof
+            gcode = None if keep_gcode else Path(tmp) / f"{plate.stem}.gcode"
+            results.append(slice_plate(plate, profiles[material], spec.printer.bed, exe, gcode=gcode))
+    return _report(exe, results, estimated_g)
+
+
+def _plate_material(plate: Path, spec: Spec) -> str:
+    try:
+        material, _ = parse_plate_name(plate.stem)
+    except ValueError as e:
+        raise UserError(f"{plate}: {e}. Fix: rebuild the plates with `cogniframe build`.") from None
+    try:
+        spec.material(material)
+    except KeyError:
+        raise UserError(f"{plate}: unknown material {material!r} for these params. Fix: rebuild the plates "
+                        f"with `cogniframe build` for this params file.") from None
+    return material
+
+
+def _report(exe: str, results: list[PlateSlice], estimated_g: Mapping[str, float] | None) -> SliceReport:
     mats: dict[str, list[float]] = {}
     for r in results:
         acc = mats.setdefault(r.material, [0.0, 0.0])
