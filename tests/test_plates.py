@@ -165,3 +165,31 @@ def test_3mf_bytes_depend_only_on_the_plate():
     p2 = pack_plates(list(reversed(_items())), BED, MARGIN)  # input order does not matter
     assert [hashlib.sha256(plate_3mf_bytes(p)).hexdigest() for p in p1] == [
         hashlib.sha256(plate_3mf_bytes(p)).hexdigest() for p in p2]
+
+
+_WRITE_IN_CHILD = """
+import sys, trimesh
+from cogniframe.export.plates import PlateItem, pack_plates, write_plates
+def box(x, y, z):
+    m = trimesh.creation.box((x, y, z)); m.apply_translation(-m.bounds[0]); return m
+def cyl(r, h):
+    m = trimesh.creation.cylinder(radius=r, height=h, sections=32); m.apply_translation(-m.bounds[0]); return m
+items = [PlateItem("knee", "tpu_95a", 4, cyl(8, 12)), PlateItem("corner_top", "tpu_95a", 4, box(20, 18, 15)),
+         PlateItem("motor_mount", "tpu_95a", 4, box(22, 22, 6)), PlateItem("core_plate", "abs", 1, box(40, 40, 3)),
+         PlateItem("battery_holder", "abs", 1, box(39, 18, 72))]
+write_plates(pack_plates(items, (120.0, 120.0, 120.0), 4.0), sys.argv[1])
+"""
+
+
+def test_same_bytes_in_another_process(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    write_plates(pack_plates(_items(), BED, MARGIN), tmp_path / "here")
+    env = {**os.environ, "PYTHONHASHSEED": "12345"}
+    subprocess.run([sys.executable, "-c", _WRITE_IN_CHILD, str(tmp_path / "there")], check=True, env=env, timeout=120)
+    here = sorted(p.name for p in (tmp_path / "here").iterdir())
+    assert here == sorted(p.name for p in (tmp_path / "there").iterdir())
+    for name in here:
+        assert (tmp_path / "here" / name).read_bytes() == (tmp_path / "there" / name).read_bytes(), name

@@ -102,3 +102,24 @@ def test_same_scene_same_bytes(scene, tmp_path):
     a = renders.render_assembly(world, renders.rod_segments(d.frame), tmp_path / "a", views=("iso",))
     b = renders.render_assembly(world, renders.rod_segments(d.frame), tmp_path / "b", views=("iso",))
     assert a["iso"].read_bytes() == b["iso"].read_bytes()
+
+
+_RENDER_IN_CHILD = """
+import sys
+from pathlib import Path
+from cogniframe import pipeline, spec as spec_mod
+from cogniframe.report import renders
+d = pipeline.design(spec_mod.load(Path(sys.argv[1])))
+renders.render_assembly([], renders.rod_segments(d.frame), sys.argv[2], views=("iso",))
+"""
+
+
+def test_same_bytes_in_another_process(scene, tmp_path):
+    import subprocess
+    import sys
+
+    d, _ = scene
+    here = renders.render_assembly([], renders.rod_segments(d.frame), tmp_path / "here", views=("iso",))
+    subprocess.run([sys.executable, "-c", _RENDER_IN_CHILD, str(ROOT / "params" / "carbon.yaml"), str(tmp_path / "there")],
+                   check=True, timeout=180, capture_output=True)
+    assert here["iso"].read_bytes() == (tmp_path / "there" / "assembly_iso.png").read_bytes()
