@@ -103,26 +103,30 @@ def print_from_local(part: PartSpec) -> np.ndarray:
         rot = FLIP_X if vertical.sum() < 0 else np.eye(3)
         return transform(rot, (0.0, 0.0, r))
     if part.name in ("knee", "core_link"):
-        w = _side_normal(dirs)
+        w = _side_normal(part, dirs)
         x = _arm_direction(part)
         x = x - w * (x @ w)
         x /= np.linalg.norm(x)
         y = np.cross(w, x)
         rot = np.vstack([x, y, w])
-        ports = np.array([s.port for s in part.sockets], float)
-        low = float((ports @ w).min())
+        ends = np.array([p for s in part.sockets for p in (s.port, s.mouth())], float)
+        low = float((ends @ w).min())
         return transform(rot, (0.0, 0.0, r - low))
     raise ValueError(f"unknown joint {part.name!r}; valid: {', '.join(JOINT_KINDS)}")
 
 
-def _side_normal(dirs: np.ndarray) -> np.ndarray:
-    """Unit normal of the plane holding every socket direction (the lateral axis), sign fixed."""
-    _, _, vt = np.linalg.svd(dirs)
-    w = vt[-1]
-    if np.abs(dirs @ w).max() > 1e-3:
-        raise ValueError("a knee/core-link joint needs every socket direction in one plane")
-    # Deterministic sign: point along the first socket port offset, else toward +x+y.
-    ref = np.array([1.0, 1.0, 0.25])
+def _side_normal(part: PartSpec, dirs: np.ndarray) -> np.ndarray:
+    """The lateral axis (vertical in print): normal to the legs' plane (knee) or to the arm and
+    strut (core link). In a square frame every socket lies in that plane; in a rectangular one the
+    arms tilt out of it by a few degrees and print as gently sloped sleeves."""
+    arm = _arm_direction(part)
+    others = [d for d in dirs if d @ arm < 1 - 1e-6]
+    if len(others) >= 2:
+        w = np.cross(others[0], others[1])
+    else:
+        w = np.cross(arm, others[0])
+    w /= np.linalg.norm(w)
+    ref = np.array([1.0, 1.0, 0.25])  # deterministic sign
     return w if w @ ref >= 0 else -w
 
 
@@ -201,13 +205,26 @@ def sloped_sleeve(start, d, length: float, r: float):
     p0 = np.asarray(start, float)
     p1 = p0 + d * length
     run = float((p1 - p0)[:2] @ h[:2])
-    # The web reaches under the whole cylinder: its ends lie in the planes of the end caps.
-    sa, ca = abs(float(d[2])), math.sqrt(1 - float(d[2]) ** 2)
+    # The web reaches under the whole cylinder: its ends lie in the planes of the end caps (the
+    # lowest point of an end cap is r sin(slope) ahead of the axis end, r cos(slope) below it).
+    sa, ca = float(d[2]), math.sqrt(1 - float(d[2]) ** 2)
     z0, z1 = float(p0[2]), float(p1[2])
-    outline = [(-r * sa, -1.0), (run + r * sa, -1.0), (run + r * sa, z1 - r * ca), (run, z1), (0, z0), (-r * sa, z0 - r * ca)]
+    outline = [(r * sa, -1.0), (run + r * sa, -1.0), (run + r * sa, z1 - r * ca), (run, z1), (0, z0), (r * sa, z0 - r * ca)]
     plane = cq.Plane(origin=(float(p0[0]), float(p0[1]), 0.0), xDir=tuple(h), normal=tuple(-lat))
     web = cq.Workplane(plane).polyline(outline).close().extrude(SKIRT * r, both=True).val()
     return cylinder(p0, d, length, r).fuse(web)
+
+
+def sleeve(s: PSocket, start: float, r: float, end: float | None = None):
+    """The print-safe sleeve of a socket from `start` (along it, from the port) to `end` (the mouth)."""
+    end = s.seat + s.depth if end is None else end
+    dz = float(s.direction[2])
+    length = end - start
+    if abs(dz) < 1e-9:
+        return dsleeve(s.at(start), s.direction, length, s.port[2], r)
+    if abs(dz) >= math.cos(math.radians(45)):
+        return cylinder(s.at(start), s.direction, length, r)
+    return sloped_sleeve(s.at(start), s.direction, length, r)
 
 
 def socket_cutter(s: PSocket, chamfer: float = CHAMFER):
@@ -304,9 +321,8 @@ def _groups(socks: list[PSocket]) -> tuple[list[PSocket], list[PSocket]]:
 
 
 def _block(arms: list[PSocket], r: float, start: float):
-    """The stacked arm sockets: one D-section block from `start` to the mouth, up to the top arm."""
-    top = max(arms, key=lambda s: s.port[2])
-    return dsleeve(top.at(start), top.direction, top.seat + top.depth - start, top.port[2], r)
+    """The stacked arm sockets: each arm's sleeve stands on the bed, so together they make one block."""
+    return fuse_all([sleeve(s, start, r) for s in arms])
 
 
 def _footprint_rect(s: PSocket, start: float, end: float, half: float, grow: float = 0.0):
@@ -362,16 +378,16 @@ def _knee(part: PartSpec, socks: list[PSocket], r: float):
     hinged = min(legs, key=lambda s: float(s.direction @ a.direction))
     rigid = [s for s in legs if s is not hinged]
     t_back = {id(s): s.seat - part.wall for s in legs}
-    rigid_solids = [dsleeve(s.at(t_back[id(s)]), s.direction, s.depth + part.wall, s.port[2], r) for s in rigid]
+    rigid_solids = [sleeve(s, t_back[id(s)], r) for s in rigid]
     # Upper leg, freed from everything rigid by HINGE_GAP ...
-    upper = dsleeve(hinged.at(t_back[id(hinged)]), hinged.direction, hinged.depth + part.wall, hinged.port[2], r)
+    upper = sleeve(hinged, t_back[id(hinged)], r)
     clear = [prism(_footprint_rect(a, s_back, a.seat + a.depth, r, HINGE_GAP), -1.0, 1000.0)]
     clear += [prism(_footprint_rect(s, t_back[id(s)], s.seat + s.depth, r, HINGE_GAP), -1.0, 1000.0) for s in rigid]
     upper = upper.cut(fuse_all(clear))
     # ... and joined to the arm block by the hinge web: from the centre of the upper leg's back
     # face straight to the arm block's back face.
     web = knee_hinge(part)
-    body = fuse_all([block, *rigid_solids, upper, box_along(web.start, web.end, web.thickness, 0.0, web.height)])
+    body = above_bed(fuse_all([block, *rigid_solids, upper, box_along(web.start, web.end, web.thickness, 0.0, web.height)]))
     return finish(body, [socket_cutter(s) for s in socks])
 
 
@@ -385,7 +401,7 @@ def _core_link(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarray):
     tops = []
     for s in others:
         t0 = s.seat - part.wall
-        pieces.append(dsleeve(s.at(t0), s.direction, s.depth + part.wall, s.port[2], r))
+        pieces.append(sleeve(s, t0, r))
         backs += _footprint_rect(s, t0, t0, r)
         tops.append(s.port[2] + r)
     # The tab: local z from plate_top_z to plate_top_z + tab_thickness, from just outside the
@@ -414,7 +430,7 @@ def _core_link(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarray):
     pieces.append(prism(_hull(np.array(backs)), 0.0, max(tops + [z_top])))
     cq = _cq()
     bolt_hole = cq.Solid.makeCylinder(hole_d / 2, t + 2.0, vec(bolt + e_v * (v0 - 1.0)), vec(e_v))
-    return finish(fuse_all(pieces), [socket_cutter(s) for s in socks] + [bolt_hole])
+    return finish(above_bed(fuse_all(pieces)), [socket_cutter(s) for s in socks] + [bolt_hole])
 
 
 def _hull(pts: np.ndarray) -> list[np.ndarray]:

@@ -1,0 +1,144 @@
+"""Export: byte-identical STL/STEP for the same params, STEP round trip, the part cache, assembly."""
+
+from __future__ import annotations
+
+import hashlib
+import time
+
+import numpy as np
+import pytest
+
+from cogniframe import frame as frame_mod
+from cogniframe import partlist
+from cogniframe import spec as spec_mod
+from test_parts import PART_NAMES, PRESETS, ROOT, built_preset
+
+
+def _sha(path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _design(preset="carbon", **changes):
+    data = spec_mod.load(ROOT / "params" / f"{preset}.yaml").model_dump(mode="json")
+    for key, value in changes.items():
+        section, name = key.split("__")
+        data[section][name] = value
+    spec = spec_mod.from_dict(data)
+    fr = frame_mod.build(spec)
+    return spec, fr, partlist.build(spec, fr)
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_same_params_give_byte_identical_stl_and_step(preset, tmp_path):
+    from cogniframe.export.build import build_parts
+
+    first = built_preset(preset)
+    spec, fr, parts = first.spec, first.frame, tuple(first.parts.values())
+    again = build_parts(spec, fr, parts, tmp_path, jobs=1)
+    for b in again:
+        a = first.built[b.name]
+        assert _sha(tmp_path / b.stl) == _sha(first.out / a.stl), b.name
+        assert _sha(tmp_path / b.step) == _sha(first.out / a.step), b.name
+
+
+def test_parallel_build_gives_the_same_bytes(tmp_path):
+    from cogniframe.export.build import build_parts
+
+    first = built_preset("carbon")
+    parts = tuple(first.parts.values())[:4]
+    again = build_parts(first.spec, first.frame, parts, tmp_path, jobs=2)
+    for b in again:
+        assert _sha(tmp_path / b.stl) == _sha(first.out / first.built[b.name].stl)
+        assert _sha(tmp_path / b.step) == _sha(first.out / first.built[b.name].step)
+        assert np.allclose(b.print_from_local, first.built[b.name].print_from_local)
+
+
+def test_step_header_has_no_timestamp_or_counter():
+    text = (built_preset("carbon").out / "step" / "knee.step").read_text(encoding="latin-1")
+    assert "2000-01-01T00:00:00" in text
+    assert "STEP translator" not in text
+    assert "PRODUCT('knee'" in text.replace("\n", "").replace(" ", "")
+
+
+@pytest.mark.parametrize("preset,name", [(p, n) for p in PRESETS for n in PART_NAMES[p]])
+def test_step_round_trip_is_one_solid_of_the_same_volume(preset, name):
+    import cadquery as cq
+
+    d = built_preset(preset)
+    shape = cq.importers.importStep(str(d.out / d.built[name].step))
+    solids = shape.solids().vals()
+    assert len(solids) == 1
+    assert solids[0].Volume() == pytest.approx(d.built[name].volume_mm3, rel=0.002)
+
+
+def test_files_are_laid_out_by_material(tmp_path):
+    d = built_preset("carbon")
+    for b in d.built.values():
+        assert b.stl == f"stl/{b.material}/{b.name}.stl" and b.step == f"step/{b.name}.step"
+        assert (d.out / b.stl).is_file() and (d.out / b.step).is_file()
+
+
+def test_cache_hit_is_fast_identical_and_reports_progress(tmp_path):
+    from cogniframe.export.build import build_parts
+
+    spec, fr, parts = _design()
+    cache = tmp_path / "cache"
+    build_parts(spec, fr, parts, tmp_path / "a", jobs=1, cache_dir=cache)
+    seen = []
+    t = time.perf_counter()
+    again = build_parts(spec, fr, parts, tmp_path / "b", jobs=1, cache_dir=cache, progress=seen.append)
+    elapsed = time.perf_counter() - t
+    assert elapsed < 2.0
+    assert sorted(seen) == sorted(p.name for p in parts)
+    for b in again:
+        assert _sha(tmp_path / "a" / b.stl) == _sha(tmp_path / "b" / b.stl)
+        assert _sha(tmp_path / "a" / b.step) == _sha(tmp_path / "b" / b.step)
+
+
+def test_only_changed_parts_are_rebuilt(tmp_path, monkeypatch):
+    from cogniframe.export import build as build_mod
+
+    cache = tmp_path / "cache"
+    spec, fr, parts = _design()
+    build_mod.build_parts(spec, fr, parts, tmp_path / "a", jobs=1, cache_dir=cache)
+    rebuilt = []
+    real = build_mod.build_part_files
+    monkeypatch.setattr(build_mod, "build_part_files", lambda p, *a: rebuilt.append(p.name) or real(p, *a))
+    # rod material: no printed part changes
+    spec2, fr2, parts2 = _design(rods__material="bamboo")
+    build_mod.build_parts(spec2, fr2, parts2, tmp_path / "b", jobs=1, cache_dir=cache)
+    assert rebuilt == []
+    # frame width: the joints whose socket angles change, and only those
+    spec3, fr3, parts3 = _design(frame__width=230)
+    build_mod.build_parts(spec3, fr3, parts3, tmp_path / "c", jobs=1, cache_dir=cache)
+    changed = {p.name for p, q in zip(parts, parts3) if p.digest != q.digest}
+    assert set(rebuilt) == changed and changed
+    assert "core_plate" not in changed
+
+
+def test_assembly_has_every_part_copy_and_rod_named_and_coloured(tmp_path):
+    import cadquery as cq
+
+    from cogniframe.export.assembly import write_assembly
+
+    d = built_preset("carbon")
+    step, glb = write_assembly(d.spec, d.frame, tuple(d.parts.values()), tuple(d.built.values()), d.out)
+    assert glb.stat().st_size > 10_000
+    assy = cq.Assembly.importStep(str(step))
+    names = {c.name for c in assy.children}
+    expected = {"knee_fl", "corner_top_rr", "core_link_rl", "motor_mount_fr", "core_plate", "battery_holder"}
+    expected |= set(d.frame.rods)
+    assert expected <= names
+    assert len(names) == sum(p.qty for p in d.parts.values()) + len(d.frame.rods)
+    colour = {c.name: c.color.toTuple()[:3] for c in assy.children if c.color is not None}
+    assert colour["knee_fl"][0] > 0.5 > colour["knee_fl"][1]  # TPU red
+    assert max(colour["rod_arm_fl_1"]) < 0.1  # rods black
+    assert 0.01 < colour["core_plate"][0] < 0.5 and colour["core_plate"][0] == pytest.approx(colour["core_plate"][2])
+    # a placed copy lands on its node: the knee's bounding box holds the knee node
+    knee = next(c for c in assy.children if c.name == "knee_fl")
+    bb = knee.toCompound().BoundingBox() if hasattr(knee, "toCompound") else knee.obj.moved(knee.loc).BoundingBox()
+    node = d.frame.nodes["knee_fl"].pos
+    assert bb.xmin - 1 <= node[0] <= bb.xmax + 1 and bb.zmin - 1 <= node[2] <= bb.zmax + 1
+    first = _sha(step)
+    write_assembly(d.spec, d.frame, tuple(d.parts.values()), tuple(d.built.values()), d.out)
+    assert _sha(step) == first
