@@ -142,3 +142,26 @@ def test_assembly_has_every_part_copy_and_rod_named_and_coloured(tmp_path):
     first = _sha(step)
     write_assembly(d.spec, d.frame, tuple(d.parts.values()), tuple(d.built.values()), d.out)
     assert _sha(step) == first
+
+
+def test_mesh_tolerances_agree_with_the_cache_key():
+    from cogniframe.export import build, mesh
+
+    assert (build.LINEAR_TOL, build.ANGULAR_TOL) == (mesh.LINEAR_TOL, mesh.ANGULAR_TOL)
+
+
+def test_assembly_cache_gives_the_same_files(tmp_path):
+    from cogniframe.export.assembly import write_assembly
+
+    d = built_preset("carbon")
+    args = (d.spec, d.frame, tuple(d.parts.values()), tuple(d.built.values()))
+    import shutil
+
+    for sub in ("a", "b"):
+        (tmp_path / sub).mkdir()
+        shutil.copytree(d.out / "step", tmp_path / sub / "step")
+    s1, g1 = write_assembly(*args, tmp_path / "a", cache_dir=tmp_path / "cache")
+    t = time.perf_counter()
+    s2, g2 = write_assembly(*args, tmp_path / "b", cache_dir=tmp_path / "cache")
+    assert time.perf_counter() - t < 0.5
+    assert _sha(s1) == _sha(s2) and _sha(g1) == _sha(g2)

@@ -9,6 +9,10 @@ material: TPU red, ABS/PLA (any other filament) dark grey, rods black.
 
 from __future__ import annotations
 
+import hashlib
+import json
+import os
+import shutil
 from pathlib import Path
 from typing import Sequence
 
@@ -68,14 +72,49 @@ def build_assembly(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir:
     return assy
 
 
-def write_assembly(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path) -> tuple[Path, Path]:
-    """Write out_dir/assembly.step (deterministic header) and out_dir/assembly.glb."""
+def assembly_key(spec: Spec, frame, parts: Sequence[PartSpec], built) -> str:
+    """Hash of everything the assembly files depend on (part geometry by digest, placements, rods)."""
+    from .build import CAD_VERSION, cache_key
+
+    bed = tuple(float(b) for b in spec.printer.bed)
+    by_name = {b.name: b for b in built}
+    payload = [CAD_VERSION, spec.name,
+               [[cache_key(p, bed), p.material, [(pl.instance, pl.rotation_deg, pl.origin) for pl in p.placements],
+                 np.round(np.asarray(by_name[p.name].print_from_local, float), 9).tolist()] for p in parts],
+               [[r.name, np.round(r.start, 9).tolist(), np.round(r.end, 9).tolist(), r.diameter] for r in frame.rods.values()]]
+    return hashlib.sha256(json.dumps(payload, default=float).encode()).hexdigest()[:24]
+
+
+def write_assembly(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path,
+                   cache_dir: str | Path | None = None) -> tuple[Path, Path]:
+    """Write out_dir/assembly.step (deterministic) and out_dir/assembly.glb.
+
+    With `cache_dir`, identical inputs copy the files from the cache (no CadQuery import).
+    """
+    out_dir = Path(out_dir)
+    step, glb = out_dir / "assembly.step", out_dir / "assembly.glb"
+    entry = Path(cache_dir) / "assembly" / assembly_key(spec, frame, parts, built) if cache_dir is not None else None
+    if entry is not None and (entry / "assembly.step").is_file() and (entry / "assembly.glb").is_file():
+        out_dir.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(entry / "assembly.step", step)
+        shutil.copyfile(entry / "assembly.glb", glb)
+        return step, glb
     from .step import normalize_file
 
-    out_dir = Path(out_dir)
     assy = build_assembly(spec, frame, parts, built, out_dir)
-    step, glb = out_dir / "assembly.step", out_dir / "assembly.glb"
     assy.export(str(step))
     normalize_file(step, spec.name)
     assy.export(str(glb))
+    if entry is not None:
+        tmp = entry.with_name(f".{entry.name}.{os.getpid()}.tmp")
+        try:
+            tmp.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(step, tmp / "assembly.step")
+            shutil.copyfile(glb, tmp / "assembly.glb")
+            if not entry.exists():
+                tmp.rename(entry)
+        except OSError:
+            pass
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
     return step, glb
