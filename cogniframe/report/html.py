@@ -318,7 +318,7 @@ def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str
         from ..export.slicer import sliced_total_g
 
         with_sliced = sliced_total_g(result.mass, slice_report)
-        if with_sliced > result.mass.limit_g:
+        if with_sliced > result.mass.limit_g >= result.mass.total_g:  # (over by the budget already: the mass verdict says so)
             warnings.append(f"with the slicer's filament grams the all-up weight is {with_sliced:.1f} g, over the "
                             f"{result.mass.limit_g:g} g limit (the budget's estimate says {result.mass.total_g:.1f} g)")
 
