@@ -63,7 +63,8 @@ def test_profile_from_params(spec):
 def test_durations_and_gcode_stats(tmp_path):
     assert slicer.parse_duration("13m 22s") == 802
     assert slicer.parse_duration("1d 2h 3m 4s") == 93784
-    assert slicer.format_duration(802) == "13m 22s" and slicer.format_duration(3 * 3600 + 65) == "3h 01m"
+    assert slicer.format_duration(802) == "13 min" and slicer.format_duration(3 * 3600 + 65) == "3h 01m"
+    assert slicer.format_duration(3 * 3600 + 59 * 60 + 50) == "4h 00m"
     g = tmp_path / "x.gcode"
     g.write_text("G1 X1\n; filament used [mm] = 800.81\n; filament used [g] = 2.35\n"
                  "; estimated printing time (normal mode) = 13m 22s\n")

@@ -267,10 +267,11 @@ def parse_duration(text: str) -> float:
 
 
 def format_duration(seconds: float) -> str:
-    s = int(round(seconds))
-    h, rem = divmod(s, 3600)
-    m, sec = divmod(rem, 60)
-    return f"{h}h {m:02d}m" if h else f"{m}m {sec:02d}s"
+    """Whole minutes ('16 min', '5h 23m'): PrusaSlicer's estimate moves by a few seconds between
+    runs of the same plate (thread-dependent path order), and nobody plans a print by the second."""
+    m_total = int(round(seconds / 60.0))
+    h, m = divmod(m_total, 60)
+    return f"{h}h {m:02d}m" if h else f"{m} min"
 
 
 def read_gcode_stats(path: Path | str) -> tuple[float, float]:

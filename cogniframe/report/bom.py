@@ -39,14 +39,14 @@ class BomLine:
     mass_g_each: float
     mass_g: float  # qty x each, as in the mass budget
     sliced_g: float | None = None  # printed parts: slicer grams for all copies
-    print_time_s: float | None = None  # printed parts: slicer time for all copies
+    print_time_s: float | None = None  # printed parts: slicer time for all copies (files show whole minutes)
     notes: str = ""
 
     def as_dict(self) -> dict:
         return {"category": self.category, "item": self.item, "qty": self.qty, "size": self.size,
                 "material": self.material, "mass_g_each": round(self.mass_g_each, 3), "mass_g": round(self.mass_g, 2),
                 "sliced_g": None if self.sliced_g is None else round(self.sliced_g, 2),
-                "print_time_s": None if self.print_time_s is None else round(self.print_time_s),
+                "print_time_min": None if self.print_time_s is None else round(self.print_time_s / 60.0),
                 "notes": self.notes}
 
 
@@ -151,12 +151,12 @@ def _row(ln: BomLine) -> list[str]:
 def to_csv(lines: Sequence[BomLine]) -> str:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["category", "item", "qty", "size", "material", "mass_g_each", "mass_g", "sliced_g", "print_time_s", "notes"])
+    w.writerow(["category", "item", "qty", "size", "material", "mass_g_each", "mass_g", "sliced_g", "print_time_min", "notes"])
     for ln in lines:
         d = ln.as_dict()
         w.writerow([d["category"], d["item"], d["qty"], d["size"], d["material"], f"{ln.mass_g_each:.3f}", f"{ln.mass_g:.2f}",
                     "" if d["sliced_g"] is None else f"{d['sliced_g']:.2f}",
-                    "" if d["print_time_s"] is None else d["print_time_s"], d["notes"]])
+                    "" if d["print_time_min"] is None else d["print_time_min"], d["notes"]])
     w.writerow(["total", "", sum(ln.qty for ln in lines), "", "", "", f"{total_g(lines):.2f}", "", "", ""])
     return buf.getvalue()
 
