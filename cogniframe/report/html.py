@@ -304,7 +304,7 @@ def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str
     files.mkdir(parents=True, exist_ok=True)
     cd = check_dict(result)
     name = cd["name"]
-    figs: dict[str, list[tuple[str, Path]]] = {"mass": [(  "mass by group", plot_mass_groups(cd["mass"], files / "mass_by_group.png"))]}
+    figs: dict[str, list[tuple[str, Path]]] = {"mass": [("mass by group", plot_mass_groups(cd["mass"], files / "mass_by_group.png"))]}
     if result.drop is not None:
         from .drop_plots import plot_drop_response, plot_energy_split
 
