@@ -24,6 +24,8 @@ Grams and time per part are the plate's totals shared out by each copy's volume 
 
 from __future__ import annotations
 
+import hashlib
+
 import re
 import shutil
 import subprocess
@@ -438,9 +440,35 @@ def slice_plates(plates: Sequence[Path | str], spec: Spec, estimated_g: Mapping[
                 prof = plate.parent / f"{material}.ini"
                 prof.write_text(profile_ini(spec, material, infill.get(material, spec.core.infill)), encoding="utf-8")
                 profiles[material] = prof
-            gcode = None if keep_gcode else Path(tmp) / f"{plate.stem}.gcode"
-            results.append(slice_plate(plate, profiles[material], spec.printer.bed, exe, gcode=gcode))
+            if keep_gcode:
+                results.append(slice_plate(plate, profiles[material], spec.printer.bed, exe))
+            else:
+                results.append(_slice_cached(plate, profiles[material], spec.printer.bed, exe, Path(tmp) / f"{plate.stem}.gcode"))
     return _report(exe, results, estimated_g)
+
+
+def _slice_cached(plate: Path, profile: Path, bed: Sequence[float], exe: str, gcode: Path) -> PlateSlice:
+    """slice_plate, reusing the numbers of an identical earlier run.
+
+    Keyed by the plate's bytes, the profile and the slicer's version: the same plate always
+    reports the same grams and time (PrusaSlicer's own estimate jitters by seconds between
+    runs), and a rebuild with nothing changed does not pay 10-20 s of slicing again.
+    """
+    from .. import cache
+
+    h = hashlib.sha256()
+    for chunk in (plate.read_bytes(), profile.read_bytes(), slicer_version(exe).encode(), repr(tuple(bed)).encode()):
+        h.update(chunk)
+    key = h.hexdigest()[:24]
+    hit = cache.load_json("slice", key)
+    if hit is not None:
+        check_plate(plate, bed)
+        return PlateSlice(plate.stem, hit["material"], plate, gcode, hit["grams"], hit["time_s"],
+                          tuple((n, v) for n, v in hit["objects"]), 0.0)
+    r = slice_plate(plate, profile, bed, exe, gcode=gcode)
+    cache.store_json("slice", key, {"material": r.material, "grams": r.grams, "time_s": r.time_s,
+                                    "objects": [list(o) for o in r.objects]})
+    return r
 
 
 def _plate_material(plate: Path, spec: Spec) -> str:
