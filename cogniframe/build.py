@@ -62,7 +62,7 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
         built = build_parts(spec, design.frame, design.parts, out, jobs=jobs,
                             cache_dir=cache_dir() if use_cache else None,
                             progress=lambda name: progress.update(task, advance=1, description=f"built {name}"))
-    write_assembly(spec, design.frame, design.parts, built, out)
+    write_assembly(spec, design.frame, design.parts, built, out, cache_dir=cache_dir() if use_cache else None)
 
     geometry = {b.name: PartGeometry(b.volume_mm3, b.area_h_mm2, b.area_v_mm2, "cad") for b in built}
     check = pipeline.check(spec, geometry)

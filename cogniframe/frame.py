@@ -280,7 +280,7 @@ def _node_seat(n: str, pos, edges, inc: list[int], spec: Spec) -> float:
 def _core(spec: Spec) -> Core:
     c, b = spec.core, spec.core.battery
     floor = wall = c.holder_wall
-    holder_h = b.height + floor + 1.0  # 1 mm slack so the pack slides in
+    holder_h = b.height + 2 * wall + 1.0  # floor + top wall, and 1 mm slack so the pack slides in
     holder_bottom = c.battery_clearance
     plate_z = holder_bottom + holder_h + c.plate_thickness / 2
     holder = Box("battery_holder", (0.0, 0.0, holder_bottom + holder_h / 2), (b.width + 2 * wall, b.length + wall, holder_h))
@@ -311,7 +311,12 @@ def _motor(k: str, rods: dict[str, Rod], spec: Spec) -> Motor:
             f"{rb:.0f} to {ra:.0f} mm from the centre. Fix: set motors.radius between {rb + 10:.0f} and {ra - 10:.0f}.")
     axis = pa + t * (pb - pa)
     slope = math.degrees(math.atan2(pa[2] - pb[2], ra - rb))
-    seat_z = float(axis[2]) + spec.rods.diameter / 2 + spec.joints.wall + 0.5
+    # The motor screws come up through the seat from below: leave room for their heads
+    # (ISO 4762 head height = d) above the rod clips, plus the seat plate itself.
+    from .materials import SCREWS
+
+    head = SCREWS[spec.motor.screw].d
+    seat_z = float(axis[2]) + spec.bore / 2 + spec.joints.wall + head + spec.joints.wall
     prop_z = seat_z + spec.motor.height
     return Motor(f"motor_{k}", k, (r1.name, r2.name), _t(axis), seat_z, prop_z, slope)
 

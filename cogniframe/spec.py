@@ -164,13 +164,13 @@ class Spec(_M):
                 raise _KeyProblem(path, f"unknown value {value!r}", f"use one of {', '.join(table)}")
         # A socket wall thinner than two extrusion lines prints as a single fragile line.
         min_wall = 2 * self.printer.nozzle
-        if self.joints.wall < min_wall:
+        if self.joints.wall < min_wall - 1e-9:
             raise _KeyProblem("joints.wall", f"{self.joints.wall} mm is thinner than two extrusion lines of the {self.printer.nozzle} mm nozzle",
                               f"set joints.wall to at least {min_wall:g}")
-        if self.joints.socket_depth < 2 * self.rods.diameter:
+        if self.joints.socket_depth < 2 * self.rods.diameter - 1e-9:
             raise _KeyProblem("joints.socket_depth", f"{self.joints.socket_depth} mm holds a {self.rods.diameter} mm rod by less than two diameters and will let go on impact",
                               f"set joints.socket_depth to at least {2 * self.rods.diameter:g}")
-        if self.joints.wall < 0.4 * self.rods.diameter:
+        if self.joints.wall < 0.4 * self.rods.diameter - 1e-9:
             raise _KeyProblem("joints.wall", f"{self.joints.wall} mm of TPU around a {self.rods.diameter} mm rod splits on impact (needs 40 % of the rod diameter)",
                               f"set joints.wall to at least {0.4 * self.rods.diameter:.2f}")
         if self.material(self.rods.material).printed:

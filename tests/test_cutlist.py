@@ -69,4 +69,6 @@ def test_csv_and_markdown(carbon):
     rows = list(csv.DictReader(io.StringIO(cutlist.to_csv(cut))))
     assert len(rows) == len(cut.rows) and float(rows[0]["length_mm"]) == cut.rows[0].length_mm
     md = cutlist.to_markdown(cut)
-    assert "| cage | 197.5 | 4 |" in md and "Stock plan: 4 stock rods of 1000 mm" in md
+    top = cut.rows[0]
+    assert f"| cage | {top.length_mm:g} | {top.qty} | 3 | carbon_rod |" in md
+    assert "Stock plan: 4 stock rods of 1000 mm" in md

@@ -80,14 +80,26 @@ def test_arm_rods_are_parallel_and_spaced(carbon):
 
 def test_seat_raised_where_rods_meet_at_sharp_angles(carbon):
     f = frame_mod.build(carbon)
-    # The strut and the arms arrive at the core link at a narrow angle: their bores must not meet.
-    link = f.nodes["core_link_fl"]
-    arm, strut = f.rods["rod_arm_fl_1"], f.rods["rod_strut_fl"]
-    ang = math.acos(np.dot(arm.socket_direction(link.name), strut.socket_direction(link.name)))
-    need = (carbon.bore / 2 + carbon.joints.wall / 2) / math.tan(ang / 2)
-    assert link.seat == pytest.approx(max(carbon.joints.seat, need), abs=0.01)
-    assert link.seat > carbon.joints.seat
-    assert f.nodes["corner_top_fl"].seat == carbon.joints.seat
+    # Strut and lower leg leave the foot in the same plane at a narrow angle: their bores must not meet.
+    foot = f.nodes["corner_bottom_fl"]
+    r = carbon.bore / 2 + carbon.joints.wall / 2
+    needs = []
+    for i, a in enumerate(foot.rods):
+        for b in foot.rods[i + 1:]:
+            ang = math.acos(np.dot(f.rods[a].socket_direction(foot.name), f.rods[b].socket_direction(foot.name)))
+            needs.append(r / math.tan(ang / 2))
+    leg, strut = f.rods["rod_leg_lower_fl"], f.rods["rod_strut_fl"]
+    ang = math.acos(np.dot(leg.socket_direction(foot.name), strut.socket_direction(foot.name)))
+    assert foot.seat >= r / math.tan(ang / 2) > carbon.joints.seat
+    assert foot.seat == pytest.approx(max(needs), abs=0.01)  # the sharpest pair decides
+    assert f.nodes["corner_top_fl"].seat == carbon.joints.seat  # 90 degree corners need no more
+
+
+def test_parallel_sockets_side_by_side_keep_the_base_seat(carbon):
+    # Arm rods reach the core link 6 mm beside the strut, more than bore + 2 walls: no clash.
+    f = frame_mod.build(carbon)
+    assert carbon.frame.arm_spacing / 2 >= carbon.bore + 2 * carbon.joints.wall
+    assert f.nodes["core_link_fl"].seat == carbon.joints.seat
 
 
 def test_carbon_rods_resemble_the_papers(carbon):
@@ -112,8 +124,10 @@ def test_clearance_from_geometry_is_the_holder_underside(preset):
 
 
 def test_rod_diameter_changes_bore_and_cut_lengths(carbon):
-    thick = carbon.model_copy(update={"rods": carbon.rods.model_copy(update={"diameter": 4.0})})
-    f3, f4 = frame_mod.build(carbon), frame_mod.build(spec_mod.from_dict(thick.model_dump()))
+    data = carbon.model_dump()
+    data["rods"]["diameter"] = 4.0
+    data["joints"]["wall"] = 1.6  # a 4 mm rod needs 40 % of its diameter in TPU
+    f3, f4 = frame_mod.build(carbon), frame_mod.build(spec_mod.from_dict(data))
     assert all(r.diameter == 4.0 for r in f4.rods.values())
     # the joint grows with the bore, so the ring nodes move in and the ring rods get shorter
     assert f4.rods["rod_cage_top_front"].length < f3.rods["rod_cage_top_front"].length

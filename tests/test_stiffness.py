@@ -150,7 +150,8 @@ def test_calibration_scales_only_the_joints():
 # -- trends from physics -----------------------------------------------------------------------
 
 def test_k_rises_with_rod_diameter_3_to_4_mm():
-    assert _k(_variant(rods={"diameter": 4.0})) > _k(_variant(rods={"diameter": 3.0}))
+    # same 1.6 mm joint wall for both: a 4 mm rod needs at least 1.6 mm (40 % of the rod)
+    assert _k(_variant(rods={"diameter": 4.0}, joints={"wall": 1.6})) > _k(_variant(rods={"diameter": 3.0}, joints={"wall": 1.6}))
 
 
 def test_k_rises_with_rod_modulus_bamboo_to_carbon():
