@@ -25,6 +25,9 @@ from .spec import Spec
 Vec = tuple[float, float, float]
 # Rotation about z taking the fl prototype to each corner (clockwise seen from above).
 CORNER_ROTATION = {"fl": 0.0, "fr": -90.0, "rr": -180.0, "rl": 90.0}
+# Two socket directions count as parallel (an arm pair) when their dot product exceeds 1 - this;
+# directions are stored rounded to 6 decimals, so 1e-6 is too tight (~0.8 deg here).
+PARALLEL_TOL = 1e-4
 
 
 @dataclass(frozen=True)
@@ -213,7 +216,7 @@ def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict |
         w = vt[-1]
         zc = ports @ w
         z = zc - zc.min() + r  # axis heights in print orientation
-        par = [i for i in range(len(sockets)) if sum(dirs[i] @ dirs[k] > 1 - 1e-6 for k in range(len(sockets))) > 1]
+        par = [i for i in range(len(sockets)) if sum(dirs[i] @ dirs[k] > 1 - PARALLEL_TOL for k in range(len(sockets))) > 1]
         rest = [i for i in range(len(sockets)) if i not in par]
         sleeve_l = [sockets[i].depth + j.wall for i in range(len(sockets))]
         blocks = [(z[par].max(), sleeve_l[par[0]])] + [(z[i], sleeve_l[i]) for i in rest]
@@ -228,7 +231,7 @@ def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict |
             if s_end > s0:
                 overlap = 2 * r * (s_end - s0) - sin_t * (s_end**2 - s0**2) / 2
                 vol -= overlap * (z[i] + math.pi * r / 4)
-        top = float(z[rest].max() + r)
+        top = float(z[rest].max() + r) if rest else float(z[par].max() + r)  # no strut: arm sockets only
         if kind == "knee":
             vol += j.hinge_thickness * 2.7 * top
             a_v += 2 * 2.7 * top

@@ -148,8 +148,10 @@ def test_rod_diameter_drives_every_bore_and_the_cut_list(tmp_path):
         return np.array(found), cutlist.build(spec, fr), fr
 
     base = spec_mod.load(__import__("test_parts").ROOT / "params" / "carbon.yaml")
-    thick = base.model_copy(update={"rods": base.rods.model_copy(update={"diameter": 4.0})})
-    thick = spec_mod.from_dict(thick.model_dump(mode="json"))
+    data = base.model_dump(mode="json")
+    data["rods"]["diameter"] = 4.0
+    data["joints"]["wall"] = 1.6  # a 4 mm rod needs 40 % of its diameter in TPU (spec rule)
+    thick = spec_mod.from_dict(data)
     b3, cut3, f3 = bores(base, tmp_path / "d3")
     b4, cut4, f4 = bores(thick, tmp_path / "d4")
     assert b3 == pytest.approx(3.0 + base.fit_clearance, abs=0.02)

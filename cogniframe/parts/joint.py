@@ -41,7 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..partlist import PartSpec
+from ..partlist import PARALLEL_TOL, PartSpec
 
 CHAMFER = 0.5  # mm, 45 deg, at every socket mouth
 HINGE_GAP = 0.8  # mm, slot each side of the knee's living hinge (two 0.4 mm lines wide)
@@ -120,11 +120,14 @@ def _side_normal(part: PartSpec, dirs: np.ndarray) -> np.ndarray:
     strut (core link). In a square frame every socket lies in that plane; in a rectangular one the
     arms tilt out of it by a few degrees and print as gently sloped sleeves."""
     arm = _arm_direction(part)
-    others = [d for d in dirs if d @ arm < 1 - 1e-6]
+    others = [d for d in dirs if d @ arm < 1 - PARALLEL_TOL]
     if len(others) >= 2:
         w = np.cross(others[0], others[1])
-    else:
+    elif others:
         w = np.cross(arm, others[0])
+    else:  # arm sockets only (frame.struts: false): lie the two arm sleeves side by side on the bed
+        pair = [np.asarray(s.port, float) for s in part.sockets if np.asarray(s.direction) @ arm > 1 - PARALLEL_TOL]
+        w = np.cross(arm, np.cross(arm, pair[1] - pair[0]))
     w /= np.linalg.norm(w)
     ref = np.array([1.0, 1.0, 0.25])  # deterministic sign
     return w if w @ ref >= 0 else -w
@@ -135,7 +138,7 @@ def _arm_direction(part: PartSpec) -> np.ndarray:
     dirs = [np.asarray(s.direction, float) for s in part.sockets]
     for i in range(len(dirs)):
         for k in range(i + 1, len(dirs)):
-            if dirs[i] @ dirs[k] > 1 - 1e-6:
+            if dirs[i] @ dirs[k] > 1 - PARALLEL_TOL:
                 return dirs[i]
     raise ValueError(f"{part.name}: no pair of parallel (arm) sockets")
 
@@ -314,7 +317,7 @@ def _corner(part: PartSpec, socks: list[PSocket], r: float):
 def _groups(socks: list[PSocket]) -> tuple[list[PSocket], list[PSocket]]:
     """(the parallel arm sockets, the others)."""
     for i in range(len(socks)):
-        par = [s for s in socks if s.direction @ socks[i].direction > 1 - 1e-6]
+        par = [s for s in socks if s.direction @ socks[i].direction > 1 - PARALLEL_TOL]
         if len(par) > 1:
             return par, [s for s in socks if s not in par]
     raise ValueError("no parallel arm sockets")
