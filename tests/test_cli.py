@@ -97,3 +97,11 @@ def test_errors_from_the_installed_command_have_no_traceback(tmp_path):
 def test_missing_file_is_exit_2(run_cli, tmp_path):
     code, _, err = run_cli("check", tmp_path / "missing.yaml")
     assert code == 2 and "no such params file" in err
+
+
+@pytest.mark.parametrize("preset", ["carbon", "bamboo"])
+def test_both_presets_pass_their_requirements(run_cli, preset):
+    code, out, _ = run_cli("check", ROOT / "params" / f"{preset}.yaml", "--json")
+    data = json.loads(out)
+    assert (code, data["verdict"], data["problems"]) == (0, "PASS", [])
+    assert data["drop"]["max_safe_height_cm"] > 100 and data["mass"]["total_g"] < 250
