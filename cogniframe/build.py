@@ -40,10 +40,17 @@ def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None 
               console: Console | None = None) -> BuildResult:
     console = console or Console(stderr=True)
     final = pipeline.output_dir(spec, out)
+    key = build_key(spec, params_path)
+    if use_cache and _up_to_date(final, key):
+        check = pipeline.check(spec)  # no CAD: only for the verdict and the caller's numbers
+        verdict = json.loads((final / "check.json").read_text())["verdict"]
+        console.print(f"{final} is up to date (same params, same cogniframe): nothing rebuilt", markup=False)
+        files = len(json.loads((final / "manifest.json").read_text())["files"]) + 1
+        return BuildResult(final, files, verdict, check, ())
     final.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.building-", dir=final.parent))
     try:
-        result = _build_into(spec, params_path, tmp, jobs, use_cache, console)
+        result = _build_into(spec, params_path, tmp, jobs, use_cache, console, key)
         _replace_dir(tmp, final)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -51,7 +58,34 @@ def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None 
     return BuildResult(final, result[0], result[1].verdict, result[1], result[2])
 
 
-def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_cache: bool, console: Console):
+def build_key(spec: Spec, params_path: Path) -> str:
+    """Everything a build's bytes depend on: the params, the installed stack and cogniframe's code."""
+    h = hashlib.sha256()
+    h.update(Path(params_path).read_bytes())
+    h.update(spec.digest().encode())
+    h.update(json.dumps(_versions(), sort_keys=True).encode())
+    pkg = Path(__file__).resolve().parent
+    for src in sorted(pkg.rglob("*.py")):
+        h.update(src.relative_to(pkg).as_posix().encode())
+        h.update(src.read_bytes())
+    return h.hexdigest()
+
+
+def _up_to_date(final: Path, key: str) -> bool:
+    """True when `final` was built with this key and every file it lists is still as written."""
+    try:
+        manifest = json.loads((final / "manifest.json").read_text())
+    except (OSError, ValueError):
+        return False
+    if manifest.get("build_key") != key:
+        return False
+    listed = {f["path"] for f in manifest["files"]}
+    present = {p.relative_to(final).as_posix() for p in final.rglob("*") if p.is_file()} - {"manifest.json"}
+    return listed == present and all(_sha256(final / f["path"]) == f["sha256"] for f in manifest["files"])
+
+
+def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_cache: bool, console: Console,
+                key: str):
     from .export.assembly import write_assembly
     from .export.build import build_parts
 
@@ -81,7 +115,7 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
     from .fabrication import write_fabrication
 
     write_fabrication(spec, check, built, out, console)
-    n = _write_manifest(spec, params_path, out)
+    n = _write_manifest(spec, params_path, out, key)
     return n, check, built
 
 
@@ -109,20 +143,25 @@ def _sha256(path: Path) -> str:
     return h.hexdigest()
 
 
-def _write_manifest(spec: Spec, params_path: Path, out: Path) -> int:
-    files = sorted(p for p in out.rglob("*") if p.is_file())
+def _versions() -> dict:
     versions = {"cogniframe": __version__}
     for dist in STACK:
         try:
             versions[dist] = metadata.version(dist)
         except metadata.PackageNotFoundError:
             versions[dist] = None
+    return versions
+
+
+def _write_manifest(spec: Spec, params_path: Path, out: Path, key: str) -> int:
+    files = sorted(p for p in out.rglob("*") if p.is_file())
     manifest = {
         "name": spec.name,
+        "build_key": key,
         "params_file": Path(params_path).name,
         "params_sha256": _sha256(Path(params_path)),
         "spec_sha256": spec.digest(),
-        "versions": versions,
+        "versions": _versions(),
         "files": [{"path": p.relative_to(out).as_posix(), "size": p.stat().st_size, "sha256": _sha256(p)} for p in files],
     }
     _write(out / "manifest.json", json.dumps(manifest, indent=2) + "\n")

@@ -107,3 +107,17 @@ def test_failure_mid_build_leaves_no_partial_folder(tmp_path, monkeypatch):
     with pytest.raises(RuntimeError):
         run_build(spec_mod.load(params), params, tmp_path / "bamboo", jobs=1)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_unchanged_rebuild_skips_work_and_tampering_rebuilds(built):
+    name, out, first = built
+    params = ROOT / "params" / f"{name}.yaml"
+    before = (out / "manifest.json").read_bytes()
+    again = run_build(spec_mod.load(params), params, out, jobs=1)
+    assert again.built == () and again.verdict == first.verdict  # nothing rebuilt
+    assert (out / "manifest.json").read_bytes() == before
+    original = (out / "cutlist.md").read_bytes()
+    (out / "cutlist.md").write_text("edited by hand\n")
+    fixed = run_build(spec_mod.load(params), params, out, jobs=1)
+    assert fixed.built != () and (out / "cutlist.md").read_bytes() == original
+    assert (out / "manifest.json").read_bytes() == before
