@@ -7,7 +7,6 @@ import sys
 from pathlib import Path
 from typing import Annotated, Optional
 
-import click
 import typer
 from rich.console import Console
 
@@ -97,13 +96,13 @@ def main(argv: list[str] | None = None) -> int:
     except UserError as e:
         err.print(f"error: {e}", markup=False)
         return e.exit_code
-    except click.exceptions.ClickException as e:
-        e.show()
+    except typer.Exit as e:
         return e.exit_code
-    except click.exceptions.Exit as e:
-        return e.exit_code
-    except click.exceptions.Abort:
+    except typer.Abort:
         return 1
+    except typer.TyperException as e:  # usage errors: unknown option, missing argument
+        e.show()
+        return getattr(e, "exit_code", 2)
     return rv if isinstance(rv, int) else 0
 
 

@@ -105,3 +105,17 @@ def test_both_presets_pass_their_requirements(run_cli, preset):
     data = json.loads(out)
     assert (code, data["verdict"], data["problems"]) == (0, "PASS", [])
     assert data["drop"]["max_safe_height_cm"] > 100 and data["mass"]["total_g"] < 250
+
+
+def test_usage_error_is_exit_2_without_traceback(run_cli):
+    code, out, err = run_cli("check", "--no-such-option")
+    assert code == 2 and "Traceback" not in err and "no-such-option" in err
+
+
+def test_cli_runs_without_a_top_level_click():
+    # typer >= 0.29 vendors click: a fresh install has no `click` package, so nothing may import it
+    code = ("import sys; sys.modules['click'] = None; from cogniframe.cli import main; "
+            "sys.exit(main(['check', 'params/bamboo.yaml', '--json']))")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout)["verdict"] == "PASS"
