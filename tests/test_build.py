@@ -121,3 +121,15 @@ def test_unchanged_rebuild_skips_work_and_tampering_rebuilds(built):
     fixed = run_build(spec_mod.load(params), params, out, jobs=1)
     assert fixed.built != () and (out / "cutlist.md").read_bytes() == original
     assert (out / "manifest.json").read_bytes() == before
+
+
+def test_cad_masses_match_the_papers_table(built):
+    name, out, _ = built
+    m = json.loads((out / "check.json").read_text())["mass"]
+    if name == "carbon":
+        assert m["groups"]["exoskeleton"] == pytest.approx(62, rel=0.10)
+        assert m["by_material"]["abs"] == pytest.approx(25, rel=0.10)
+        assert m["total_g"] == pytest.approx(236, rel=0.05)
+    else:  # the bamboo build: 34 g of TPU and 24 g of PLA
+        assert m["by_material"]["tpu_95a"] == pytest.approx(34, rel=0.10)
+        assert m["by_material"]["pla"] == pytest.approx(24, rel=0.10)
