@@ -119,3 +119,10 @@ def test_cli_runs_without_a_top_level_click():
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert r.returncode == 0, r.stderr
     assert json.loads(r.stdout)["verdict"] == "PASS"
+
+
+def test_part_too_big_for_the_printer_is_exit_2(run_cli, tmp_path):
+    p = _variant(tmp_path, "bamboo", printer={"bed": [80, 80, 80]})
+    code, out, err = run_cli("check", p)
+    assert code == 2 and out == ""
+    assert "battery_holder" in err and "printer.bed" in err and "80 x 80 x 80" in err
