@@ -32,7 +32,7 @@ class BuildResult:
     out_dir: Path
     files: int
     verdict: str
-    check: pipeline.CheckResult
+    check: pipeline.CheckResult | None  # None when the folder was already up to date
     built: tuple
 
 
@@ -42,11 +42,10 @@ def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None 
     final = pipeline.output_dir(spec, out)
     key = build_key(spec, params_path)
     if use_cache and _up_to_date(final, key):
-        check = pipeline.check(spec)  # no CAD: only for the verdict and the caller's numbers
         verdict = json.loads((final / "check.json").read_text())["verdict"]
         console.print(f"{final} is up to date (same params, same cogniframe): nothing rebuilt", markup=False)
         files = len(json.loads((final / "manifest.json").read_text())["files"]) + 1
-        return BuildResult(final, files, verdict, check, ())
+        return BuildResult(final, files, verdict, None, ())
     final.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.building-", dir=final.parent))
     try:

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import UserError
+from .materials import SCREWS, STACK_PATTERNS
 from .spec import Spec
 
 CORNERS = ("fl", "fr", "rr", "rl")
@@ -286,8 +287,6 @@ def _core(spec: Spec) -> Core:
     holder = Box("battery_holder", (0.0, 0.0, holder_bottom + holder_h / 2), (b.width + 2 * wall, b.length + wall, holder_h))
     battery = Box("battery", (0.0, wall / 2, holder_bottom + floor + b.height / 2), (b.width, b.length, b.height))
     plate = Box("core_plate", (0.0, 0.0, plate_z), (c.plate_size, c.plate_size, c.plate_thickness))
-    from .materials import STACK_PATTERNS
-
     board = STACK_PATTERNS[c.stack_pattern][1]
     stack_h = 16.0  # FC + 4-in-1 ESC on 8 mm standoffs
     top = plate_z + c.plate_thickness / 2
@@ -313,8 +312,6 @@ def _motor(k: str, rods: dict[str, Rod], spec: Spec) -> Motor:
     slope = math.degrees(math.atan2(pa[2] - pb[2], ra - rb))
     # The motor screws come up through the seat from below: leave room for their heads
     # (ISO 4762 head height = d) above the rod clips, plus the seat plate itself.
-    from .materials import SCREWS
-
     head = SCREWS[spec.motor.screw].d
     seat_z = float(axis[2]) + spec.bore / 2 + spec.joints.wall + head + spec.joints.wall
     prop_z = seat_z + spec.motor.height

@@ -114,7 +114,7 @@ def test_unchanged_rebuild_skips_work_and_tampering_rebuilds(built):
     params = ROOT / "params" / f"{name}.yaml"
     before = (out / "manifest.json").read_bytes()
     again = run_build(spec_mod.load(params), params, out, jobs=1)
-    assert again.built == () and again.verdict == first.verdict  # nothing rebuilt
+    assert again.built == () and again.check is None and again.verdict == first.verdict  # nothing rebuilt
     assert (out / "manifest.json").read_bytes() == before
     original = (out / "cutlist.md").read_bytes()
     (out / "cutlist.md").write_text("edited by hand\n")

@@ -6,7 +6,6 @@ import copy
 import math
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -262,3 +261,21 @@ def test_bad_arguments_raise():
 def test_module_does_not_import_cad():
     code = "import sys, cogniframe.analysis.stiffness as s; assert 'cadquery' not in sys.modules and 'OCP' not in sys.modules"
     subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)
+
+
+def test_cached_k_follows_a_change_in_the_materials_library(tmp_path, monkeypatch):
+    """The check path caches k on disk; the key must cover materials.py (library moduli), not
+    only the params file, or an edited TPU modulus would serve a stale k."""
+    from cogniframe.analysis import drop
+
+    s = _carbon()
+    key = drop._stiffness_key(s)
+    lib = Path(drop.__file__).resolve().parents[1] / "materials.py"
+    real = Path.read_bytes
+
+    def edited(self):
+        data = real(self)
+        return data + b"\n# edited modulus\n" if self.resolve() == lib else data
+
+    monkeypatch.setattr(Path, "read_bytes", edited)
+    assert drop._stiffness_key(s) != key

@@ -55,6 +55,7 @@ def _stiffness_key(spec: Spec) -> str:
     data = spec.model_dump(mode="json")
     inputs = {s: data[s] for s in ("materials", "frame", "rods", "joints", "core", "motors")}
     h = hashlib.sha256(json.dumps(inputs, sort_keys=True).encode())
-    for mod in ("cogniframe.analysis.stiffness", "cogniframe.frame"):
+    # every module the FE model reads from: library moduli live in materials.py, bore in spec.py
+    for mod in ("cogniframe.analysis.stiffness", "cogniframe.frame", "cogniframe.materials", "cogniframe.spec"):
         h.update(Path(find_spec(mod).origin).read_bytes())
     return h.hexdigest()[:24]

@@ -430,6 +430,7 @@ def slice_plates(plates: Sequence[Path | str], spec: Spec, estimated_g: Mapping[
                   f"(install it with `apt-get install prusa-slicer` to get grams and print times).", log)
         return None
     infill = dict(infill) if infill is not None else default_infill(spec)
+    version = slicer_version(exe)  # one probe of the slicer per call, not one per plate
     paths = sorted(Path(p) for p in plates)
     profiles: dict[str, Path] = {}
     results: list[PlateSlice] = []
@@ -443,11 +444,12 @@ def slice_plates(plates: Sequence[Path | str], spec: Spec, estimated_g: Mapping[
             if keep_gcode:
                 results.append(slice_plate(plate, profiles[material], spec.printer.bed, exe))
             else:
-                results.append(_slice_cached(plate, profiles[material], spec.printer.bed, exe, Path(tmp) / f"{plate.stem}.gcode"))
-    return _report(exe, results, estimated_g)
+                results.append(_slice_cached(plate, profiles[material], spec.printer.bed, exe, version,
+                                             Path(tmp) / f"{plate.stem}.gcode"))
+    return _report(version, results, estimated_g)
 
 
-def _slice_cached(plate: Path, profile: Path, bed: Sequence[float], exe: str, gcode: Path) -> PlateSlice:
+def _slice_cached(plate: Path, profile: Path, bed: Sequence[float], exe: str, version: str, gcode: Path) -> PlateSlice:
     """slice_plate, reusing the numbers of an identical earlier run.
 
     Keyed by the plate's bytes, the profile and the slicer's version: the same plate always
@@ -457,7 +459,7 @@ def _slice_cached(plate: Path, profile: Path, bed: Sequence[float], exe: str, gc
     from .. import cache
 
     h = hashlib.sha256()
-    for chunk in (plate.read_bytes(), profile.read_bytes(), slicer_version(exe).encode(), repr(tuple(bed)).encode()):
+    for chunk in (plate.read_bytes(), profile.read_bytes(), version.encode(), repr(tuple(bed)).encode()):
         h.update(chunk)
     key = h.hexdigest()[:24]
     hit = cache.load_json("slice", key)
@@ -484,7 +486,7 @@ def _plate_material(plate: Path, spec: Spec) -> str:
     return material
 
 
-def _report(exe: str, results: list[PlateSlice], estimated_g: Mapping[str, float] | None) -> SliceReport:
+def _report(version: str, results: list[PlateSlice], estimated_g: Mapping[str, float] | None) -> SliceReport:
     mats: dict[str, list[float]] = {}
     for r in results:
         acc = mats.setdefault(r.material, [0.0, 0.0])
@@ -496,7 +498,7 @@ def _report(exe: str, results: list[PlateSlice], estimated_g: Mapping[str, float
         f"{c.material}: the slicer uses {c.sliced_g:.1f} g, the mass budget estimates {c.estimated_g:.1f} g "
         f"({c.diff_pct:+.0f} %, more than {100 * TOLERANCE:.0f} %); trust the slicer's number and check the budget's margin."
         for c in checks if c.flagged)
-    return SliceReport(slicer_version(exe), tuple(results), checks, warnings)
+    return SliceReport(version, tuple(results), checks, warnings)
 
 
 def sliced_total_g(budget, report: SliceReport) -> float:
