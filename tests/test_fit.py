@@ -30,17 +30,16 @@ from cogniframe.analysis.fit import (
 )
 from cogniframe.errors import UserError
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+DATA = Path(__file__).resolve().parents[1] / "examples"  # shipped in the repo (examples/droptests/README.md)
 G = 9.81
 M = 0.241
 
 
 @pytest.fixture(scope="module")
 def shared() -> Path:
-    if not (SHARED / "data" / "droptests").is_dir():
-        pytest.fail(f"Shared drop-test data not found at {SHARED}/data/droptests: the repo must be "
-                    "cloned next to the 'shared' folder (as in CI).")
-    return SHARED / "data"
+    """The real drop-test and static data shipped with the project (never needs ../shared)."""
+    assert (DATA / "droptests" / "SoftBottom_50cm").is_dir(), f"example data missing from {DATA}"
+    return DATA
 
 
 @pytest.fixture(scope="module")
