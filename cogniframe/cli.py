@@ -79,10 +79,11 @@ def schema() -> None:
 
 
 def _register_commands() -> None:
-    from .commands import fab, physics
+    from .commands import explore, fab, physics
 
     physics.register(app)
     fab.register(app)
+    explore.register(app)
 
 
 _register_commands()
