@@ -138,7 +138,10 @@ def plot_pareto(table, path: Path, title: str) -> Path:
     ax.set_ylabel("max safe drop, cm (higher is better)")
     ax.set_title(title, fontsize=10)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="best")
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=8, loc="best")
+    else:
+        ax.text(0.5, 0.5, "no evaluated designs", ha="center", va="center", transform=ax.transAxes)
     fig.tight_layout()
     fig.savefig(path, metadata={"Software": None})
     plt.close(fig)
@@ -152,6 +155,12 @@ def plot_sensitivity(method: str, inputs: list[str], outputs: list[str], m: np.n
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(1.6 + 1.5 * max(1, len(outputs)), 1.4 + 0.45 * max(1, len(inputs))), dpi=110)
+    if m.size == 0:  # no design was evaluated: say so instead of an empty axis
+        ax.text(0.5, 0.5, "no evaluated designs", ha="center", va="center")
+        ax.set_axis_off()
+        fig.savefig(path, metadata={"Software": None})
+        plt.close(fig)
+        return path
     sobol = method.startswith("Sobol")
     vmax = 1.0 if sobol else max(1e-9, float(np.nanmax(np.abs(m))) if np.isfinite(m).any() else 1.0)
     im = ax.imshow(np.nan_to_num(m), cmap="viridis" if sobol else "RdBu_r", vmin=0 if sobol else -vmax, vmax=vmax, aspect="auto")

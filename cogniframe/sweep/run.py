@@ -190,6 +190,7 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[tuple[ob
         return
     n = workers or max(1, os.cpu_count() or 1)
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+                           scheduler_kwargs={"dashboard": False},
                            silence_logs=logging.ERROR)
     client = Client(cluster)
     try:

@@ -3,13 +3,14 @@
 Pure and seeded: the same sweep file gives the same designs in the same order. Unit-cube
 samplers come from scipy.stats.qmc (lhs), numpy (random) and SALib (sobol: Saltelli's design,
 so SALib can compute Sobol indices from the results). A range key maps u in [0, 1) to
-lo + u (hi - lo), rounded to DECIMALS (an integer key to the nearest integer); a choice key
+lo + u (hi - lo), rounded to DECIMALS (an integer key: each integer in the range an equal share); a choice key
 picks choices[floor(u n)].
 """
 
 from __future__ import annotations
 
 import itertools
+import math
 
 import numpy as np
 
@@ -23,8 +24,10 @@ def value(key: VaryKey, u: float):
     if key.is_choice:
         n = len(key.choices)
         return key.choices[min(int(u * n), n - 1)]
-    v = key.lo + float(u) * (key.hi - key.lo)
-    return int(round(v)) if key.integer else round(v, DECIMALS)
+    if key.integer:  # every integer in [lo, hi] gets an equal share of the unit interval
+        lo, hi = math.ceil(key.lo), math.floor(key.hi)
+        return min(hi, lo + int(float(u) * (hi - lo + 1)))
+    return round(key.lo + float(u) * (key.hi - key.lo), DECIMALS)
 
 
 def unit_samples(sweep: Sweep) -> np.ndarray:

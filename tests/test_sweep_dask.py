@@ -1,0 +1,191 @@
+"""Sweeps on real Dask clusters: a scheduler and two worker processes over TCP on 127.0.0.1,
+started and stopped by the test, and the default LocalCluster of the CLI.
+
+The results must equal a serial, in-process evaluation of the same designs (FE solved
+independently: the serial run uses its own stiffness cache), both workers must take part, a rerun
+must skip everything done, and invalid / timed-out designs are rows, not exceptions.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+import yaml
+
+from cogniframe.sweep import evaluate as ev
+from cogniframe.sweep import run as run_mod
+from cogniframe.sweep import spec as sweep_spec
+
+ROOT = Path(__file__).resolve().parents[1]
+CARBON = ROOT / "params" / "carbon.yaml"
+
+# On the carbon base (wall 1.2, socket_depth 8) a rod over 3 mm is INVALID (wall < 40 % of the rod),
+# so this box gives PASS, FAIL and INVALID rows.
+SWEEP = f"""base: {CARBON}
+samples: 10
+sampler: lhs
+seed: 5
+batch: 2
+vary:
+  rods.diameter: [2.6, 3.6]
+  frame.height: [105, 140]
+  rods.material: {{choices: [carbon_rod, bamboo]}}
+"""
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def tcp_cluster(tmp_path_factory):
+    """`dask scheduler` + two `dask worker` processes on 127.0.0.1 over TCP; yields the address."""
+    from distributed import Client
+
+    port = _free_port()
+    addr = f"tcp://127.0.0.1:{port}"
+    home = tmp_path_factory.mktemp("workers")  # the workers' own folder: they never see the client's files
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "COGNIFRAME_CACHE": str(home / "cache")}
+    dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
+    procs = [subprocess.Popen([*dask, "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
+                              cwd=home, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        for name in ("w1", "w2"):
+            procs.append(subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", addr, "--nthreads", "1",
+                                           "--nworkers", "1", "--name", name, "--no-dashboard", "--host", "127.0.0.1"],
+                                          cwd=home, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        deadline = time.monotonic() + 60
+        while True:
+            try:
+                with Client(addr, timeout="5s") as c:
+                    c.wait_for_workers(2, timeout=50)
+                break
+            except (OSError, TimeoutError):
+                if time.monotonic() > deadline:
+                    raise
+                time.sleep(0.5)
+        yield addr
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in procs:
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                p.wait()
+
+
+_SERIAL = """
+import json, sys
+from cogniframe.sweep import evaluate as ev, run, spec
+sw = spec.load(sys.argv[1])
+json.dump([ev.evaluate_one(sw.base_data, o, sw.settings.timeout_s, "serial") for _, o in run.plan(sw)], sys.stdout)
+"""
+
+
+def _serial_rows(sweep_path: Path, cache: Path) -> dict[str, dict]:
+    """Every design evaluated one after the other in a fresh process with its own FE cache and, as in
+    a Dask worker, single-threaded BLAS (the FE solve's last digits depend on the BLAS thread count)."""
+    one = {v: "1" for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
+    env = {**os.environ, **one, "PYTHONPATH": str(ROOT), "COGNIFRAME_CACHE": str(cache)}
+    out = subprocess.run([sys.executable, "-c", _SERIAL, str(sweep_path)], env=env, check=True, capture_output=True, text=True)
+    return {r["design_id"]: r for r in json.loads(out.stdout)}
+
+
+def _same(a, b) -> bool:
+    if isinstance(a, float) or isinstance(b, float):
+        if a is None or b is None or (isinstance(a, float) and math.isnan(a)) or (isinstance(b, float) and math.isnan(b)):
+            return (a is None or math.isnan(a)) and (b is None or math.isnan(b))
+        return math.isclose(a, b, rel_tol=1e-12, abs_tol=1e-12)
+    return a == b
+
+
+def _assert_equal_to_serial(table: pd.DataFrame, serial: dict[str, dict]) -> None:
+    assert sorted(table["design_id"]) == sorted(serial)
+    for rec in table.to_dict("records"):
+        want = serial[rec["design_id"]]
+        for col, v in want.items():
+            if col in ("worker", "seconds"):
+                continue
+            got = rec[col].item() if hasattr(rec[col], "item") else rec[col]
+            assert _same(got, v), (rec["design_id"], col, got, v)
+
+
+def test_tcp_cluster_equals_serial_both_workers_work_and_rerun_skips(tcp_cluster, tmp_path):
+    sw_path = tmp_path / "s.yaml"
+    sw_path.write_text(SWEEP)
+    sweep = sweep_spec.load(sw_path)
+    serial = _serial_rows(sw_path, tmp_path / "serial-cache")  # solves every FE model itself
+    out = tmp_path / "out"
+
+    first = run_mod.run_sweep(sweep, out, scheduler=tcp_cluster)
+    table = pd.read_parquet(out / "results.parquet")
+    assert first.designs == 10 and first.evaluated == 10 and first.workers == 2 and first.scheduler == tcp_cluster
+    _assert_equal_to_serial(table, serial)
+    verdicts = set(table["verdict"])
+    assert "INVALID" in verdicts and verdicts & {"PASS", "FAIL"}, verdicts
+    invalid = table[table["verdict"] == "INVALID"]
+    assert (invalid["rods.diameter"] > 3.0).all() and invalid["error"].str.contains("joints.wall").all()
+    assert table["worker"].nunique() == 2 and all(w.startswith("tcp://127.0.0.1:") for w in table["worker"])
+    assert len(list((out / "results").glob("*.parquet"))) == 5  # one file per batch of 2
+    for f in ("pareto.png", "sensitivity.png", "summary.md"):
+        assert (out / f).stat().st_size > 1000, f
+
+    t0 = time.perf_counter()
+    again = run_mod.run_sweep(sweep, out, scheduler=tcp_cluster, reports=False)
+    assert again.evaluated == 0 and again.skipped == 10 and again.workers == 0  # no cluster was even contacted
+    assert time.perf_counter() - t0 < 5
+    pd.testing.assert_frame_equal(pd.read_parquet(out / "results.parquet"), table)
+
+
+def test_killed_sweep_resumes_with_only_the_missing_designs(tcp_cluster, tmp_path):
+    sw_path = tmp_path / "s.yaml"
+    sw_path.write_text(SWEEP)
+    sweep = sweep_spec.load(sw_path)
+    out = tmp_path / "out"
+    run_mod.run_sweep(sweep, out, scheduler=tcp_cluster, reports=False)
+    batches = sorted((out / "results").glob("*.parquet"))
+    lost = pd.read_parquet(batches[0])["design_id"].tolist()
+    batches[0].unlink()  # as if the sweep had been killed with this batch in flight
+    again = run_mod.run_sweep(sweep, out, scheduler=tcp_cluster, reports=False)
+    assert again.evaluated == len(lost) == 2 and again.skipped == 8
+    assert sorted(pd.read_parquet(out / "results.parquet")["design_id"]) == sorted(i for i, _ in run_mod.plan(sweep))
+
+
+def test_cli_local_cluster_json_timeouts_recorded_and_retried(tmp_path, run_cli):
+    """The default LocalCluster (2 worker processes): --json counts; a design past timeout_s is a
+    TIMEOUT row; a rerun tries timed-out designs again and skips the rest."""
+    text = SWEEP.replace("samples: 10", "samples: 6")
+    (tmp_path / "s.yaml").write_text(text)
+    out = tmp_path / "out"
+    code, stdout, err = run_cli("sweep", tmp_path / "s.yaml", "-o", out, "--workers", "2", "--json")
+    assert code == 0, err
+    got = json.loads(stdout)
+    assert got["designs"] == 6 and got["pass"] + got["fail"] + got["invalid"] == 6 and got["workers"] == 2
+    assert got["scheduler"].startswith("tcp://127.0.0.1:") and got["seconds"] > 0
+    assert "batch of 2" in err  # a plain line per batch when stderr is not a terminal
+    table = pd.read_parquet(out / "results.parquet")
+    assert table["worker"].nunique() == 2
+
+    (tmp_path / "t.yaml").write_text(text.replace("seed: 5", "seed: 6\ntimeout_s: 0.000001"))
+    out2 = tmp_path / "out2"
+    code, stdout, err = run_cli("sweep", tmp_path / "t.yaml", "-o", out2, "--workers", "2", "--json")
+    assert code == 0, err
+    got = json.loads(stdout)
+    assert got["timeout"] == 6 and got["designs"] == 6
+    rows = pd.read_parquet(out2 / "results.parquet")
+    assert (rows["verdict"] == "TIMEOUT").all() and rows["error"].str.contains("1e-06 s").all()
+    code, stdout, _ = run_cli("sweep", tmp_path / "t.yaml", "-o", out2, "--workers", "2", "--json")
+    assert json.loads(stdout)["evaluated"] == 6  # timed-out designs are not "done"
