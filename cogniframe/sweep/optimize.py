@@ -184,16 +184,15 @@ def run_optimize(sweep: Sweep, objectives: list[Objective], constraints: list[Co
     t0 = time.perf_counter()
     optuna.logging.set_verbosity(optuna.logging.WARNING)
 
-    def constraints_func(trial):
-        return trial.user_attrs.get("constraints", [1.0])
-
+    # optuna >= 5 reads constraints set on the trial; older versions need a constraints_func
+    native = hasattr(optuna.trial.Trial, "set_constraint")
+    extra = {} if native else {"constraints_func": lambda trial: trial.user_attrs.get("constraints", [1.0])}
     seed = sweep.settings.seed
     if len(objectives) == 1:
-        sampler = optuna.samplers.TPESampler(seed=seed, constraints_func=constraints_func, multivariate=True,
-                                             constant_liar=True, n_startup_trials=min(10, max(2, n_trials // 4)))
+        sampler = optuna.samplers.TPESampler(seed=seed, multivariate=True, constant_liar=True,
+                                             n_startup_trials=min(10, max(2, n_trials // 4)), **extra)
     else:
-        sampler = optuna.samplers.NSGAIISampler(seed=seed, constraints_func=constraints_func,
-                                                population_size=max(4, min(50, n_trials // 4)))
+        sampler = optuna.samplers.NSGAIISampler(seed=seed, population_size=max(4, min(50, n_trials // 4)), **extra)
     study = optuna.create_study(directions=[o.direction for o in objectives], sampler=sampler)
     dists = _distributions(sweep)
     rows: list[dict] = []
@@ -212,15 +211,20 @@ def run_optimize(sweep: Sweep, objectives: list[Objective], constraints: list[Co
                 rows.append(row)
                 values = [row.get(o.name) for o in objectives]
                 if row["verdict"] in ("PASS", "FAIL") and all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
-                    t.set_user_attr("constraints", [0.0 if row["verdict"] == "PASS" else 1.0] + [
-                        min(c.violation(row), 1e9) for c in constraints])
+                    cons = {"verdict PASS": 0.0 if row["verdict"] == "PASS" else 1.0}
+                    cons.update({str(c): min(c.violation(row), 1e9) for c in constraints})
+                    if native:
+                        for name, v in cons.items():
+                            t.set_constraint(name, v)
+                    else:
+                        t.set_user_attr("constraints", list(cons.values()))
                     study.tell(t, values)
                 else:
                     study.tell(t, state=TrialState.FAIL)
             done += k
             _write_trials(out_dir, rows)
             if progress:
-                progress(run_mod.BatchDone(tuple(got), got[0]["worker"] if got else "", done, n_trials, time.perf_counter() - tb))
+                progress(run_mod.BatchDone(tuple(got), got[0]["worker"] if got else "", done, n_trials, time.perf_counter() - tb, "round"))
         best_rows, pareto = ranked(rows, objectives, constraints)
         cad_rows: tuple[dict, ...] = ()
         if cad and best_rows:

@@ -43,6 +43,7 @@ class BatchDone:
     done: int
     total: int
     seconds: float
+    label: str = "batch"  # optimize reports whole ask/tell rounds
 
 
 @dataclass(frozen=True)
@@ -334,7 +335,7 @@ def progress_printer(stream=None) -> Callable[[BatchDone], None]:
         for r in b.rows:
             verdicts[r["verdict"]] = verdicts.get(r["verdict"], 0) + 1
         v = ", ".join(f"{n} {k}" for k, n in sorted(verdicts.items()))
-        stream.write(f"batch of {len(b.rows)} ({v}) from {b.worker}: {b.done}/{b.total} done, "
+        stream.write(f"{b.label} of {len(b.rows)} ({v}) from {b.worker}: {b.done}/{b.total} done, "
                      f"{b.done / max(b.seconds, 1e-9):.1f} designs/s\n")
         stream.flush()
 
