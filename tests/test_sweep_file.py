@@ -193,3 +193,58 @@ def test_plan_ids_are_hashes_of_the_full_params(tmp_path):
     sw = sweep_spec.load(sweep_file(tmp_path, GOOD))
     ids = [i for i, _ in run_mod.plan(sw)]
     assert len(set(ids)) == 8 and all(len(i) == 16 for i in ids)
+
+
+# -- sensitivity (closed forms) ------------------------------------------------------------
+
+LINEAR = """base: BASE
+samples: SAMPLES
+sampler: SAMPLER
+seed: 1
+vary:
+  core.battery.mass: [40, 70]
+  motors.prop_mass: [0.5, 3.0]
+"""
+
+
+def _linear_table(sweep):
+    """mass = 100 + battery + 4 prop (the budget is additive): a table with a known answer."""
+    import pandas as pd
+
+    rows = []
+    for _, o in run_mod.plan(sweep):
+        rows.append({"design_id": ev.design_id(ev.apply_overrides(sweep.base_data, o)), **o, "verdict": "PASS",
+                     "mass_g": 100 + o["core.battery.mass"] + 4 * o["motors.prop_mass"]})
+    return pd.DataFrame(rows)
+
+
+def test_sobol_total_indices_match_the_variance_shares_of_a_linear_model(tmp_path):
+    from cogniframe.sweep import report
+
+    sw = sweep_spec.load(sweep_file(tmp_path, LINEAR.replace("SAMPLES", "256").replace("SAMPLER", "sobol")))
+    method, inputs, outputs, m, _ = report.sensitivity(sw, _linear_table(sw))
+    assert method.startswith("Sobol") and outputs == ["mass_g"]
+    # Var(battery) = 30^2/12 = 75, Var(4 prop) = 16 * 2.5^2 / 12 = 8.33: ST = 0.9 and 0.1
+    assert m[:, 0] == pytest.approx([0.9, 0.1], abs=0.03)
+
+
+def test_src_of_a_linear_model_is_slope_times_sigma_ratio(tmp_path):
+    from cogniframe.sweep import report
+
+    sw = sweep_spec.load(sweep_file(tmp_path, LINEAR.replace("SAMPLES", "200").replace("SAMPLER", "lhs")))
+    table = _linear_table(sw)
+    method, inputs, outputs, m, r2 = report.sensitivity(sw, table)
+    sb, sp = table["core.battery.mass"].std(ddof=0), table["motors.prop_mass"].std(ddof=0)
+    sy = table["mass_g"].std(ddof=0)
+    assert method.startswith("standardized") and r2["mass_g"] == pytest.approx(1.0, abs=1e-9)
+    assert m[:, 0] == pytest.approx([sb / sy, 4 * sp / sy], rel=1e-6)
+
+
+def test_pareto_front_is_the_passing_non_dominated_set():
+    import pandas as pd
+
+    from cogniframe.sweep import report
+
+    t = pd.DataFrame({"design_id": list("abcde"), "verdict": ["PASS", "PASS", "PASS", "FAIL", "PASS"],
+                      "mass_g": [200.0, 210.0, 205.0, 150.0, 220.0], "max_safe_drop_cm": [100.0, 150.0, 90.0, 300.0, 150.0]})
+    assert list(report.pareto_front(t)["design_id"]) == ["a", "b"]

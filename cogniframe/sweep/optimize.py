@@ -179,7 +179,7 @@ def run_optimize(sweep: Sweep, objectives: list[Objective], constraints: list[Co
     from optuna.trial import TrialState
 
     out_dir = Path(out_dir) if out_dir is not None else Path("out") / "sweeps" / f"{sweep.stem}-optimize"
-    run_mod.claim_folder(out_dir, "optimize", sweep)
+    run_mod.claim_folder(out_dir, "optimize", sweep, write=False)
     n_trials = trials or sweep.settings.samples
     t0 = time.perf_counter()
     optuna.logging.set_verbosity(optuna.logging.WARNING)
@@ -197,6 +197,7 @@ def run_optimize(sweep: Sweep, objectives: list[Objective], constraints: list[Co
     dists = _distributions(sweep)
     rows: list[dict] = []
     with run_mod.dask_client(scheduler, workers) as (client, scheduler_addr, n_workers):
+        run_mod.claim_folder(out_dir, "optimize", sweep)
         size = batch or sweep.settings.batch or 4
         per_round = max(1, n_workers * size)
         done = 0

@@ -71,8 +71,10 @@ def default_out(sweep: Sweep) -> Path:
     return Path("out") / "sweeps" / sweep.stem
 
 
-def claim_folder(out_dir: Path, kind: str, sweep: Sweep) -> None:
-    """Create or re-enter a folder cogniframe made; refuse one it did not (exit 2, nothing written)."""
+def claim_folder(out_dir: Path, kind: str, sweep: Sweep, write: bool = True) -> None:
+    """Create or re-enter a folder cogniframe made; refuse one it did not (exit 2, nothing written).
+
+    write=False only checks (call it before any slow or failing step, then again with write=True)."""
     marker = out_dir / MARKER
     if out_dir.exists() and not out_dir.is_dir():
         raise UserError(f"{out_dir}: exists and is not a folder. Fix: give -o a folder path.")
@@ -86,6 +88,8 @@ def claim_folder(out_dir: Path, kind: str, sweep: Sweep) -> None:
         if owner.get("kind") != kind:
             raise UserError(f"{out_dir}: the folder holds a `cogniframe {owner.get('kind')}` run, not a {kind}. "
                             "Fix: give -o another folder.")
+    if not write:
+        return
     out_dir.mkdir(parents=True, exist_ok=True)
     _write_atomic(marker, json.dumps({"kind": kind, "sweep": sweep.path, "base": sweep.base_path,
                                       "digest": sweep.digest(), "code": code_digest()}, indent=2) + "\n")
@@ -173,7 +177,7 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[tuple[ob
         logging.getLogger(name).setLevel(logging.ERROR)
     if scheduler:
         try:
-            client = Client(scheduler, timeout="20s")
+            client = Client(scheduler, timeout="10s")
         except (OSError, TimeoutError) as e:
             raise UserError(f"--scheduler {scheduler}: cannot reach a Dask scheduler there ({e}). "
                             "Fix: start one (`dask scheduler` and `dask worker ADDRESS`) or leave --scheduler out "
@@ -256,7 +260,7 @@ def evaluate_all(client, base: dict, items: list[dict], timeout_s: float, size: 
 def run_sweep(sweep: Sweep, out_dir: Path | None = None, scheduler: str | None = None, workers: int | None = None,
               progress: Callable[[BatchDone], None] | None = None, reports: bool = True) -> SweepResult:
     out_dir = Path(out_dir) if out_dir is not None else default_out(sweep)
-    claim_folder(out_dir, "sweep", sweep)
+    claim_folder(out_dir, "sweep", sweep, write=False)
     t0 = time.perf_counter()
     code = code_digest()
     designs = plan(sweep)
@@ -268,6 +272,7 @@ def run_sweep(sweep: Sweep, out_dir: Path | None = None, scheduler: str | None =
     scheduler_addr, n_workers = scheduler or "", 0
     if todo:
         with dask_client(scheduler, workers) as (client, scheduler_addr, n_workers):
+            claim_folder(out_dir, "sweep", sweep)
             size = batch_size(len(todo), n_workers, sweep.settings.batch)
             count = {"n": 0}
             tb = time.perf_counter()
@@ -278,7 +283,13 @@ def run_sweep(sweep: Sweep, out_dir: Path | None = None, scheduler: str | None =
                 if progress:
                     progress(BatchDone(tuple(rows), rows[0]["worker"], count["n"], len(todo), time.perf_counter() - tb))
 
-            evaluate_all(client, sweep.base_data, [o for _, o in todo], sweep.settings.timeout_s, size, n_workers, on_batch)
+            try:
+                evaluate_all(client, sweep.base_data, [o for _, o in todo], sweep.settings.timeout_s, size, n_workers, on_batch)
+            except KeyboardInterrupt:
+                consolidate(out_dir, designs, code)  # what finished is in results.parquet; a rerun resumes
+                raise
+    else:
+        claim_folder(out_dir, "sweep", sweep)
     table = consolidate(out_dir, designs, code)
     counts = table["verdict"].value_counts().to_dict() if len(table) else {}
     result = SweepResult(out_dir, len(designs), len(todo), len(designs) - len(todo), {k: int(v) for k, v in counts.items()},
