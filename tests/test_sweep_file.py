@@ -248,3 +248,17 @@ def test_pareto_front_is_the_passing_non_dominated_set():
     t = pd.DataFrame({"design_id": list("abcde"), "verdict": ["PASS", "PASS", "PASS", "FAIL", "PASS"],
                       "mass_g": [200.0, 210.0, 205.0, 150.0, 220.0], "max_safe_drop_cm": [100.0, 150.0, 90.0, 300.0, 150.0]})
     assert list(report.pareto_front(t)["design_id"]) == ["a", "b"]
+
+
+def test_set_values_apply_to_every_design_and_are_checked(tmp_path):
+    sw = sweep_spec.load(sweep_file(tmp_path, GOOD + "set:\n  core.battery.mass: 40\n  requirements.drop_heights_cm: [50, 120]\n"))
+    assert sw.base_data["core"]["battery"]["mass"] == 40 and sw.fixed == ("core.battery.mass", "requirements.drop_heights_cm")
+    row = ev.evaluate_one(sw.base_data, sample.designs(sw)[0], 60)
+    data = ev.apply_overrides(yaml.safe_load(CARBON.read_text()), {"core.battery.mass": 40, "requirements.drop_heights_cm": [50, 120],
+                                                                  **sample.designs(sw)[0]})
+    data["name"] = "carbon"
+    assert row["design_id"] == ev.design_id(data)
+    msg = error_of(sweep_file(tmp_path, GOOD + "set:\n  core.battery.mass: 900\n"))
+    assert "set.core.battery.mass (line 10)" in msg and "<= 500" in msg
+    msg = error_of(sweep_file(tmp_path, GOOD + "set:\n  core.batery.mass: 40\n"))
+    assert "set.core.batery.mass (line 10)" in msg and "did you mean 'core.battery'" in msg

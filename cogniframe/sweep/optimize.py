@@ -287,23 +287,21 @@ def write_best_yaml(sweep: Sweep, row: dict, path: Path) -> list[str]:
     doc = yaml.load(sweep.base_text)
     if doc is None:
         doc = CommentedMap()
-    changed = []
+    targets = {f: report_get(sweep.base_data, f) for f in sweep.fixed}  # the sweep file's set: values
     for k in sweep.keys:
-        new = row[k.name]
-        if hasattr(new, "item"):
-            new = new.item()  # numpy scalar -> Python
-        if k.integer and isinstance(new, float):
-            new = int(round(new))
+        v = _py(row[k.name])  # numpy scalar -> Python
+        targets[k.name] = int(round(v)) if k.integer and isinstance(v, float) else v
+    changed = []
+    for name, new in targets.items():
         node = doc
-        parts = k.name.split(".")
+        parts = name.split(".")
         for p in parts[:-1]:
             if node.get(p) is None:
                 node[p] = CommentedMap()
             node = node[p]
-        old = node.get(parts[-1]) if parts[-1] in node else report_get(sweep.base_data, k.name)
-        if old != new:
+        if parts[-1] not in node or node[parts[-1]] != new:
             node[parts[-1]] = new
-            changed.append(k.name)
+            changed.append(name)
     buf = io.StringIO()
     yaml.dump(doc, buf)
     tmp = path.with_name(f".{path.name}.tmp")

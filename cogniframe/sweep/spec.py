@@ -52,6 +52,7 @@ class SweepFile(_M):
     batch: Annotated[int, Field(ge=1, le=10_000, description="designs per Dask task; null = automatic")] | None = None
     timeout_s: Annotated[float, Field(gt=0, le=86_400, description="per-design time limit, s; a design over it is recorded as TIMEOUT")] = 60.0
     vary: Annotated[dict[str, tuple[float, float] | Choices], Field(min_length=1, description="dotted params key -> [lo, hi] or {choices: [...]}")]
+    set: dict[str, Any] = Field(default_factory=dict, description="dotted params key -> value, applied to every design (and to the base it is compared with), e.g. a faster stiffness model")
 
 
 @dataclass(frozen=True)
@@ -74,7 +75,8 @@ class Sweep:
     keys: tuple[VaryKey, ...]
     base_path: str
     base_text: str  # the base params file's text (travels to the workers; they never read a disk)
-    base_data: dict  # parsed base (name filled in as spec.load does)
+    base_data: dict  # parsed base (name filled in as spec.load does) with the `set:` values applied
+    fixed: tuple[str, ...] = ()  # the `set:` keys
 
     @property
     def stem(self) -> str:
@@ -121,11 +123,24 @@ def from_dict(data: dict, source: str = "<sweep>", text: str | None = None, fold
     base_text = Path(base_path).read_text(encoding="utf-8")
     base_data = yaml.safe_load(base_text) or {}
     base_data.setdefault("name", Path(base_path).stem)
+    fixed = {}
+    for name, v in settings.set.items():
+        _check_value(name, v, base_spec, f"{source}: set.{name}{_line(text, ('set', name))}", containers=True)
+        fixed[name] = v
+    if fixed:
+        from .evaluate import apply_overrides
+
+        base_data = apply_overrides(base_data, fixed)
+        try:
+            base_spec = params_spec.from_dict(base_data, source=f"{base_path} with {source}'s set:")
+        except UserError as e:
+            raise UserError(f"{source}: set{_line(text, ('set',))}: the base with these values does not validate: {e} "
+                            "Fix: change the values under set.") from None
     keys = tuple(_vary_key(name, rng, base_spec, source, text) for name, rng in settings.vary.items())
     if settings.sampler == "sobol" and len(keys) < 2:
         raise UserError(f"{source}: sampler{_line(text, ('sampler',))}: Sobol indices need at least two keys under vary. "
                         "Fix: add a key to vary, or use sampler: lhs.")
-    return Sweep(str(source), settings, keys, str(base_path), base_text, base_data)
+    return Sweep(str(source), settings, keys, str(base_path), base_text, base_data, tuple(fixed))
 
 
 def _find_base(base: str, source: str, text: str | None, folder: Path | None) -> Path:
@@ -141,7 +156,7 @@ def _find_base(base: str, source: str, text: str | None, folder: Path | None) ->
 
 # -- resolving a dotted key against the params schema ---------------------------------------
 
-def _field_at(dotted: str):
+def _field_at(dotted: str, containers: bool = False):
     """(annotation with its constraints, description) of a params key, or a reason it is not one."""
     model: Any = params_spec.Spec
     parts = dotted.split(".")
@@ -169,7 +184,7 @@ def _field_at(dotted: str):
             else:
                 return None, f"{'.'.join(parts[:i + 1])} is a value, it has no key {parts[i + 1]!r}"
     inner = _unwrap(ann)
-    if isinstance(inner, type) and issubclass(inner, BaseModel) or typing.get_origin(inner) in (dict, tuple, list):
+    if isinstance(inner, type) and issubclass(inner, BaseModel) or (not containers and typing.get_origin(inner) in (dict, tuple, list)):
         return None, f"{dotted} is a section or a list, not one value; vary one of its keys"
     return (ann, desc), None
 
@@ -190,28 +205,33 @@ def _unwrap(ann):
     return ann
 
 
-def _vary_key(name: str, rng, base_spec, source: str, text: str | None) -> VaryKey:
-    where = f"{source}: vary.{name}{_line(text, ('vary', name))}"
-    found, why = _field_at(name)
+def _check_value(name: str, v, base_spec, where: str, containers: bool = False):
+    """The key's annotation after checking that `name` is a params key and `v` a value it allows."""
+    found, why = _field_at(name, containers)
     if found is None:
         raise UserError(f"{where}: not a params key ({why}). Fix: use a dotted key of the params file, e.g. rods.diameter "
                         "(`cogniframe schema` lists them).")
     ann, desc = found
-    adapter = TypeAdapter(ann)
-    bounds = _bounds_text(ann)
+    try:
+        TypeAdapter(ann).validate_python(v, strict=False)
+    except ValidationError as e:
+        msg = e.errors()[0]["msg"].lower()
+        raise UserError(f"{where}: {v!r} is outside what the params file allows ({msg}). "
+                        f"Fix: keep {name} within {_bounds_text(ann) or desc or 'the schema'}.") from None
+    if name.endswith(".material") and isinstance(v, str):
+        lib = {**params_spec.MATERIALS, **base_spec.materials}
+        if v not in lib:
+            raise UserError(f"{where}: unknown material {v!r}. Fix: use one of {', '.join(sorted(lib))}, "
+                            "or define it under materials: in the base file.")
+    return ann
+
+
+def _vary_key(name: str, rng, base_spec, source: str, text: str | None) -> VaryKey:
+    where = f"{source}: vary.{name}{_line(text, ('vary', name))}"
     values = list(rng.choices) if isinstance(rng, Choices) else list(rng)
+    ann = None
     for v in values:
-        try:
-            adapter.validate_python(v, strict=False)
-        except ValidationError as e:
-            msg = e.errors()[0]["msg"].lower()
-            raise UserError(f"{where}: {v!r} is outside what the params file allows ({msg}). "
-                            f"Fix: keep vary.{name} within {bounds or desc or 'the schema'}.") from None
-        if name.endswith(".material") and isinstance(v, str):
-            lib = {**params_spec.MATERIALS, **base_spec.materials}
-            if v not in lib:
-                raise UserError(f"{where}: unknown material {v!r}. Fix: use one of {', '.join(sorted(lib))}, "
-                                "or define it under materials: in the base file.")
+        ann = _check_value(name, v, base_spec, where)
     if isinstance(rng, Choices):
         return VaryKey(name, choices=tuple(rng.choices))
     lo, hi = float(rng[0]), float(rng[1])
