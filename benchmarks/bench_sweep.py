@@ -42,11 +42,15 @@ vary:
 
 
 def rate_of(run_sweep, sweep, out, workers):
+    """(designs/s wall over the batches, designs/s the workers' CPU time allows, wall of the run)."""
+    import pandas as pd
+
     marks = []
     res = run_sweep(sweep, out, workers=workers, progress=lambda b: marks.append((b.done, b.seconds)), reports=False)
     # designs/s from the first to the last finished batch: excludes cluster start-up and warm-up
     (d0, t0), (d1, t1) = marks[0], marks[-1]
-    return (d1 - d0) / max(t1 - t0, 1e-9), res.seconds
+    cpu = pd.read_parquet(out / "results.parquet")["cpu_seconds"]
+    return (d1 - d0) / max(t1 - t0, 1e-9), workers / float(cpu.median()), res.seconds
 
 
 def breakdown(n: int = 12) -> dict[str, float]:
@@ -61,7 +65,7 @@ def breakdown(n: int = 12) -> dict[str, float]:
     base["name"] = "carbon"
     t: dict[str, list[float]] = {k: [] for k in ("validate", "frame", "parts+cut+mass", "FE stiffness", "impact model", "whole design (FE cached)")}
     for i in range(n + 1):
-        clock = time.perf_counter
+        clock = time.thread_time
         a = clock(); s = spec_mod.from_dict(ev.apply_overrides(base, {"frame.height": 105 + 2.31 * i})); b = clock()
         fr = frame.build(s); c = clock()
         parts = partlist.build(s, fr); cut = cutlist.build(s, fr); budget = mass.budget(s, fr, cut, parts, None); d = clock()
@@ -83,18 +87,21 @@ def main() -> None:
     from cogniframe.sweep import spec
     from cogniframe.sweep.run import run_sweep
 
-    cold, warm, startup, resume_all, resume_half = [], [], [], [], []
+    cold, warm, startup, resume_all, resume_half, cold_cpu, warm_cpu = [], [], [], [], [], [], []
+    load0 = os.getloadavg()[0]
     for r in range(args.repeat):
         with tempfile.TemporaryDirectory() as tmp:
             tmp = Path(tmp)
             os.environ["COGNIFRAME_CACHE"] = str(tmp / "cache")  # the workers inherit it: cold FE cache
             (tmp / "s.yaml").write_text(sweep_text(args.designs))
             sweep = spec.load(tmp / "s.yaml")
-            rate, wall = rate_of(run_sweep, sweep, tmp / "cold", args.workers)
+            rate, cpu_rate, wall = rate_of(run_sweep, sweep, tmp / "cold", args.workers)
             cold.append(rate)
+            cold_cpu.append(cpu_rate)
             startup.append(wall - args.designs / rate)
-            rate, _ = rate_of(run_sweep, sweep, tmp / "warm", args.workers)
+            rate, cpu_rate, _ = rate_of(run_sweep, sweep, tmp / "warm", args.workers)
             warm.append(rate)
+            warm_cpu.append(cpu_rate)
             t0 = time.perf_counter()
             run_sweep(sweep, tmp / "cold", workers=args.workers, reports=False)
             resume_all.append(time.perf_counter() - t0)
@@ -107,13 +114,16 @@ def main() -> None:
     med = statistics.median
     print(f"{args.designs} designs (examples/sweeps/carbon.yaml box), LocalCluster of {args.workers} worker processes, "
           f"{os.cpu_count()} cores, median of {args.repeat}:")
-    print(f"  cold (FE solved per design):      {med(cold):6.1f} designs/s")
-    print(f"  warm (FE cached in the workers):  {med(warm):6.1f} designs/s")
+    print(f"  load average at start {load0:.1f}, at end {os.getloadavg()[0]:.1f} (wall rates fall when the cores are shared)")
+    print(f"  cold (FE solved per design):      {med(cold):6.1f} designs/s wall; "
+          f"{med(cold_cpu):6.1f} designs/s on {args.workers} dedicated cores (from the median CPU time per design)")
+    print(f"  warm (FE cached in the workers):  {med(warm):6.1f} designs/s wall; "
+          f"{med(warm_cpu):6.1f} designs/s on {args.workers} dedicated cores")
     print(f"  cluster start + warm-up + reports overhead per run: {med(startup):.1f} s")
     print(f"  resume, everything done:          {med(resume_all):6.2f} s (no cluster started)")
     print(f"  resume, half the batches lost:    {med(resume_half):6.2f} s ({res.evaluated} designs re-run, cached FE)")
-    print("per design, serial, single-threaded BLAS (median ms):")
-    for k, v in breakdown().items():
+    print("per design, serial, single-threaded BLAS (median CPU ms of this thread):")
+    for k, v in breakdown().items():  # CPU time of this thread: independent of other load
         print(f"  {k:28s} {v:7.1f}")
 
 

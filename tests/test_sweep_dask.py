@@ -117,7 +117,7 @@ def _assert_equal_to_serial(table: pd.DataFrame, serial: dict[str, dict]) -> Non
     for rec in table.to_dict("records"):
         want = serial[rec["design_id"]]
         for col, v in want.items():
-            if col in ("worker", "seconds"):
+            if col in ("worker", "seconds", "cpu_seconds"):
                 continue
             got = rec[col].item() if hasattr(rec[col], "item") else rec[col]
             assert _same(got, v), (rec["design_id"], col, got, v)
@@ -178,6 +178,9 @@ def test_cli_local_cluster_json_timeouts_recorded_and_retried(tmp_path, run_cli)
     assert "batch of 2" in err  # a plain line per batch when stderr is not a terminal
     table = pd.read_parquet(out / "results.parquet")
     assert table["worker"].nunique() == 2
+    code, stdout, _ = run_cli("sweep", tmp_path / "s.yaml", "-o", out, "--workers", "2", "--json")
+    again = json.loads(stdout)
+    assert code == 0 and again["evaluated"] == 0 and again["skipped"] == 6 and again["pass"] == got["pass"]
 
     (tmp_path / "t.yaml").write_text(text.replace("seed: 5", "seed: 6\ntimeout_s: 0.000001"))
     out2 = tmp_path / "out2"

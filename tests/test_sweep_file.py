@@ -262,3 +262,23 @@ def test_set_values_apply_to_every_design_and_are_checked(tmp_path):
     assert "set.core.battery.mass (line 10)" in msg and "<= 500" in msg
     msg = error_of(sweep_file(tmp_path, GOOD + "set:\n  core.batery.mass: 40\n"))
     assert "set.core.batery.mass (line 10)" in msg and "did you mean 'core.battery'" in msg
+
+
+def test_sweep_schema_lists_the_sweep_keys(run_cli):
+    import json
+
+    code, out, _ = run_cli("sweep-schema")
+    props = json.loads(out)["properties"]
+    assert code == 0 and {"base", "vary", "sampler", "samples", "seed", "set", "timeout_s"} <= set(props)
+
+
+def test_why_no_design_is_feasible_is_told_from_the_trials():
+    from cogniframe.sweep import optimize as opt
+
+    c = opt.parse_constraint("max_safe_drop_cm >= 500")
+    rows = [{"design_id": "a", "verdict": "PASS", "max_safe_drop_cm": 180.0}, {"design_id": "b", "verdict": "PASS", "max_safe_drop_cm": 210.5},
+            {"design_id": "c", "verdict": "INVALID", "max_safe_drop_cm": None}]
+    ranked, pareto = opt.ranked(rows, opt.parse_objectives(["mass_g"], []), [c])
+    assert ranked == [] and pareto == []
+    note = opt.why_none(rows, [opt.Objective("mass_g", "minimize")], [c])
+    assert "2 violates max_safe_drop_cm >= 500" in note and "1 verdict INVALID" in note and "b with max_safe_drop_cm = 210.5" in note

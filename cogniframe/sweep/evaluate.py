@@ -8,7 +8,7 @@ A row is a flat dict: `design_id`, every varied key under its dotted name, `verd
 (PASS, FAIL, INVALID, TIMEOUT or ERROR), `problems`, `error`, the outputs (`mass_g`, `k_n_per_m`,
 `max_safe_drop_cm`, `prop_margin_mm`, ...; plus every scalar of any further section of
 `check --json`, e.g. `stiffness.k_lateral_n_per_m` or `flight.hover_time_min`, under its dotted
-name), `worker` and `seconds`.
+name), `worker`, `seconds` (wall) and `cpu_seconds` (the evaluating thread's CPU time).
 """
 
 from __future__ import annotations
@@ -134,7 +134,7 @@ def evaluate_one(base: dict, overrides: dict, timeout_s: float, worker: str = ""
     """The full row of one design (never raises for a bad design)."""
     params = apply_overrides(base, overrides)
     did = design_id(params)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.thread_time()
     try:
         try:
             out = run_with_timeout(lambda: check_row(params, f"design {did}"), timeout_s)
@@ -144,7 +144,7 @@ def evaluate_one(base: dict, overrides: dict, timeout_s: float, worker: str = ""
             out = {"verdict": "ERROR", "problems": "", "error": f"{type(e).__name__}: {e}"}
     except DesignTimeout:  # the watchdog fired just as the design finished
         out = {"verdict": "TIMEOUT", "problems": "", "error": f"cut off after {timeout_s:g} s (sweep timeout_s)"}
-    seconds = time.perf_counter() - t0
+    seconds, cpu = time.perf_counter() - t0, time.thread_time() - c0
     if seconds > timeout_s and out["verdict"] != "TIMEOUT":
         # finished before the watchdog got the GIL (it waits up to the interpreter's switch interval,
         # 5 ms): still over the limit, so recorded as what the limit says
@@ -152,7 +152,9 @@ def evaluate_one(base: dict, overrides: dict, timeout_s: float, worker: str = ""
     row = {"design_id": did, **overrides}
     row.update({k: None for k in OUTPUTS})
     row.update(out)
-    row.update({"worker": worker, "seconds": round(seconds, 6)})
+    # cpu_seconds: this thread's CPU time, what the design costs on a core of its own (seconds is
+    # wall time and grows when the machine is shared)
+    row.update({"worker": worker, "seconds": round(seconds, 6), "cpu_seconds": round(cpu, 6)})
     return row
 
 
