@@ -173,8 +173,21 @@ def _worker_address() -> str:
         return "local"
 
 
+def code_digest() -> str:
+    """Hash of the modules a design's evaluation runs (cogniframe/*.py, analysis/, this file)."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    h = hashlib.sha256()
+    for p in sorted([*root.glob("*.py"), *(root / "analysis").glob("*.py"), Path(__file__)]):
+        h.update(p.name.encode())
+        h.update(p.read_bytes())
+    return h.hexdigest()[:12]
+
+
 def warm_up() -> str:
-    """Run once per worker (client.run): import the pipeline and the FE library before the clock starts."""
+    """Run on every worker (client.run) before the clock starts: import the pipeline and the FE
+    library, and return the worker's code hash (the client refuses workers running other code)."""
     from .. import pipeline  # noqa: F401
     from ..analysis import drop, impact  # noqa: F401
 
@@ -183,4 +196,4 @@ def warm_up() -> str:
         import Pynite  # noqa: F401
     except ImportError:
         pass
-    return "ok"
+    return code_digest()

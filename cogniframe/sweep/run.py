@@ -103,12 +103,7 @@ def _write_atomic(path: Path, text: str) -> None:
 
 def code_digest() -> str:
     """Hash of the modules a design's evaluation runs: rows from other code are not reused."""
-    root = Path(__file__).resolve().parents[1]
-    h = hashlib.sha256()
-    for p in sorted([*root.glob("*.py"), *(root / "analysis").glob("*.py"), Path(ev.__file__)]):
-        h.update(p.name.encode())
-        h.update(p.read_bytes())
-    return h.hexdigest()[:12]
+    return ev.code_digest()
 
 
 # -- the plan and the resume log -------------------------------------------------------------
@@ -183,20 +178,24 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[tuple[ob
                             "Fix: start one (`dask scheduler` and `dask worker ADDRESS`) or leave --scheduler out "
                             "to run on local worker processes.") from None
         try:
-            if workers:
-                client.wait_for_workers(workers, timeout=60)
-            n = len(client.scheduler_info(n_workers=-1)["workers"]) if _has_n_workers(client) else len(client.scheduler_info()["workers"])
-            if n == 0:
-                client.wait_for_workers(1, timeout=60)
-                n = len(client.scheduler_info()["workers"])
-            yield client, scheduler, n
+            want = workers or 1
+            try:
+                client.wait_for_workers(want, timeout=60)
+            except TimeoutError:
+                raise UserError(f"--scheduler {scheduler}: fewer than {want} Dask worker(s) joined within 60 s. "
+                                f"Fix: start workers (`dask worker {scheduler} --nthreads 1`)"
+                                + (" or lower --workers." if workers else ".")) from None
+            info = client.scheduler_info(n_workers=-1) if _has_n_workers(client) else client.scheduler_info()
+            yield client, scheduler, len(info["workers"])
         finally:
             client.close()
         return
     n = workers or max(1, os.cpu_count() or 1)
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                           scheduler_kwargs={"dashboard": False},
-                           silence_logs=logging.ERROR)
+    # no dashboard; the scheduler's small HTTP server on a free localhost port (not 8787: another
+    # cluster may hold it, and not on every interface)
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
+                           scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
+                           silence_logs=logging.CRITICAL)  # shutdown chatter of the workers is not the user's business
     client = Client(cluster)
     try:
         yield client, cluster.scheduler_address, n
@@ -226,7 +225,13 @@ def evaluate_all(client, base: dict, items: list[dict], timeout_s: float, size: 
     """
     from distributed import as_completed
 
-    client.run(ev.warm_up)
+    codes = client.run(ev.warm_up)
+    mine = ev.code_digest()
+    other = {addr: c for addr, c in codes.items() if c != mine}
+    if other:
+        raise UserError(f"Dask worker(s) {', '.join(sorted(other))} run different cogniframe code than this machine "
+                        f"(code hash {', '.join(sorted(set(other.values())))} against {mine}): their rows would not match. "
+                        "Fix: install the same cogniframe version on every worker and restart them.")
     base_f = client.scatter([base], broadcast=True)[0]  # a list: a dict would be scattered per key
     batches = [items[i:i + size] for i in range(0, len(items), size)]
     index = {}

@@ -19,6 +19,7 @@ and the fix. `base` is read relative to the sweep file's folder, else to the cur
 from __future__ import annotations
 
 import difflib
+import os
 import hashlib
 import json
 import typing
@@ -146,7 +147,7 @@ def from_dict(data: dict, source: str = "<sweep>", text: str | None = None, fold
 def _find_base(base: str, source: str, text: str | None, folder: Path | None) -> Path:
     tried = []
     for root in ([folder] if folder is not None else []) + [Path.cwd()]:
-        p = Path(base) if Path(base).is_absolute() else root / base
+        p = Path(base) if Path(base).is_absolute() else Path(os.path.normpath(root / base))
         tried.append(str(p))
         if p.is_file():
             return p
