@@ -56,14 +56,15 @@ def tcp_cluster(tmp_path_factory):
     port = _free_port()
     addr = f"tcp://127.0.0.1:{port}"
     home = tmp_path_factory.mktemp("workers")  # the workers' own folder: they never see the client's files
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "COGNIFRAME_CACHE": str(home / "cache")}
+    one = {v: "1" for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}  # as a nanny sets them
+    env = {**os.environ, **one, "PYTHONPATH": str(ROOT), "COGNIFRAME_CACHE": str(home / "cache")}
     dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
     procs = [subprocess.Popen([*dask, "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
                               cwd=home, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
     try:
         for name in ("w1", "w2"):
             procs.append(subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", addr, "--nthreads", "1",
-                                           "--nworkers", "1", "--name", name, "--no-dashboard", "--host", "127.0.0.1"],
+                                           "--no-nanny", "--name", name, "--no-dashboard", "--host", "127.0.0.1"],
                                           cwd=home, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
         deadline = time.monotonic() + 60
         while True:
@@ -164,11 +165,10 @@ def test_killed_sweep_resumes_with_only_the_missing_designs(tcp_cluster, tmp_pat
     assert sorted(pd.read_parquet(out / "results.parquet")["design_id"]) == sorted(i for i, _ in run_mod.plan(sweep))
 
 
-def test_cli_local_cluster_json_timeouts_recorded_and_retried(tmp_path, run_cli):
-    """The default LocalCluster (2 worker processes): --json counts; a design past timeout_s is a
-    TIMEOUT row; a rerun tries timed-out designs again and skips the rest."""
-    text = SWEEP.replace("samples: 10", "samples: 6")
-    (tmp_path / "s.yaml").write_text(text)
+def test_cli_default_local_cluster_equals_serial_and_rerun_skips(tmp_path, run_cli):
+    """The default LocalCluster (2 worker processes) through the CLI: --json counts, a plain line per
+    batch, both workers, rows equal to the serial evaluation, and a rerun that evaluates nothing."""
+    (tmp_path / "s.yaml").write_text(SWEEP.replace("samples: 10", "samples: 6"))
     out = tmp_path / "out"
     code, stdout, err = run_cli("sweep", tmp_path / "s.yaml", "-o", out, "--workers", "2", "--json")
     assert code == 0, err
@@ -178,20 +178,22 @@ def test_cli_local_cluster_json_timeouts_recorded_and_retried(tmp_path, run_cli)
     assert "batch of 2" in err  # a plain line per batch when stderr is not a terminal
     table = pd.read_parquet(out / "results.parquet")
     assert table["worker"].nunique() == 2
+    _assert_equal_to_serial(table, _serial_rows(tmp_path / "s.yaml", tmp_path / "serial-cache"))
     code, stdout, _ = run_cli("sweep", tmp_path / "s.yaml", "-o", out, "--workers", "2", "--json")
     again = json.loads(stdout)
     assert code == 0 and again["evaluated"] == 0 and again["skipped"] == 6 and again["pass"] == got["pass"]
 
-    (tmp_path / "t.yaml").write_text(text.replace("seed: 5", "seed: 6\ntimeout_s: 0.000001"))
-    out2 = tmp_path / "out2"
-    code, stdout, err = run_cli("sweep", tmp_path / "t.yaml", "-o", out2, "--workers", "2", "--json")
-    assert code == 0, err
-    got = json.loads(stdout)
-    assert got["timeout"] == 6 and got["designs"] == 6
-    rows = pd.read_parquet(out2 / "results.parquet")
-    assert (rows["verdict"] == "TIMEOUT").all() and rows["error"].str.contains("1e-06 s").all()
-    code, stdout, _ = run_cli("sweep", tmp_path / "t.yaml", "-o", out2, "--workers", "2", "--json")
-    assert json.loads(stdout)["evaluated"] == 6  # timed-out designs are not "done"
+
+def test_timed_out_designs_are_recorded_and_tried_again(tcp_cluster, tmp_path):
+    """A design past timeout_s is a TIMEOUT row, the sweep goes on, and a rerun tries it again."""
+    (tmp_path / "t.yaml").write_text(SWEEP.replace("samples: 10", "samples: 4").replace("seed: 5", "seed: 6\ntimeout_s: 0.000001"))
+    sweep = sweep_spec.load(tmp_path / "t.yaml")
+    first = run_mod.run_sweep(sweep, tmp_path / "out", scheduler=tcp_cluster)
+    assert first.counts == {"TIMEOUT": 4}
+    rows = pd.read_parquet(tmp_path / "out" / "results.parquet")
+    assert (rows["verdict"] == "TIMEOUT").all() and rows["error"].str.contains("1e-06 s").all() and rows["mass_g"].isna().all()
+    again = run_mod.run_sweep(sweep, tmp_path / "out", scheduler=tcp_cluster, reports=False)
+    assert again.evaluated == 4 and again.skipped == 0  # timed-out designs are not "done"
 
 
 # -- optimize --------------------------------------------------------------------------------
@@ -258,3 +260,23 @@ def test_optimize_two_objectives_gives_a_pareto_set(tcp_cluster, tmp_path):
 def test_optimize_option_errors_exit_2(tmp_path, run_cli, args, says):
     code, _, err = run_cli("optimize", EXAMPLE, "-o", tmp_path / "o", *args)
     assert code == 2 and says in err and not (tmp_path / "o").exists()
+
+
+@pytest.mark.slow
+def test_cad_of_a_design_is_built_and_verified_on_a_worker(tcp_cluster):
+    """--cad: the design's parts are built by a Dask worker into its own temporary folder and come
+    back verified (watertight single shells on the bed); the base preset's parts all pass."""
+    from distributed import Client
+
+    from cogniframe import pipeline
+    from cogniframe import spec as spec_mod
+    from cogniframe.sweep import optimize as opt
+
+    sweep = sweep_spec.load(EXAMPLE)
+    row = {k.name: ev.apply_overrides(sweep.base_data, {})[k.name.split(".")[0]][k.name.split(".")[1]] for k in sweep.keys}
+    row["design_id"] = "base"
+    with Client(tcp_cluster) as client:
+        (got,) = opt.build_cad(client, sweep, [row])
+    n_parts = len(pipeline.design(spec_mod.from_dict(sweep.base_data)).parts)
+    assert got["ok"] and got["failures"] == [] and got["parts"] == n_parts
+    assert got["worker"].startswith("tcp://127.0.0.1:") and got["volume_mm3"] > 10_000

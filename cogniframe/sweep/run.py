@@ -351,7 +351,8 @@ def progress_printer(stream=None) -> Callable[[BatchDone], None]:
         for r in b.rows:
             verdicts[r["verdict"]] = verdicts.get(r["verdict"], 0) + 1
         v = ", ".join(f"{n} {k}" for k, n in sorted(verdicts.items()))
-        stream.write(f"{b.label} of {len(b.rows)} ({v}) from {b.worker}: {b.done}/{b.total} done, "
+        origin = f" from {b.worker}" if b.label == "batch" else ""
+        stream.write(f"{b.label} of {len(b.rows)} ({v}){origin}: {b.done}/{b.total} done, "
                      f"{b.done / max(b.seconds, 1e-9):.1f} designs/s\n")
         stream.flush()
 
