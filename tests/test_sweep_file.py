@@ -156,8 +156,10 @@ def test_row_matches_check_json_of_the_same_params(tmp_path):
 
 def test_new_sections_of_check_json_flow_into_the_row():
     row = ev.outputs({"verdict": "PASS", "problems": [], "mass": {"total_g": 200.0},
-                      "stiffness": {"k_lateral_n_per_m": 1234.5, "modes": [1, 2]}, "flight": {"hover_time_min": 7.5}})
-    assert row["stiffness.k_lateral_n_per_m"] == 1234.5 and row["flight.hover_time_min"] == 7.5
+                      "stiffness": {"k_lateral_n_per_m": 1234.5, "modes": [1, 2]}, "flight": {"hover_time_min": 7.5},
+                      "peak_g": 88.5, "note": "text"})
+    assert row["stiffness.k_lateral_n_per_m"] == 1234.5 and row["flight.hover_time_min"] == 7.5 and row["peak_g"] == 88.5
+    assert "note" not in row
     assert "stiffness.modes" not in row and row["mass_g"] == 200.0
 
 

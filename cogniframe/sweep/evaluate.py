@@ -87,8 +87,12 @@ def outputs(d: dict) -> dict:
         "stock_rods": (d.get("stock") or {}).get("count"),
     }
     for section, value in d.items():
-        if section not in _KNOWN and isinstance(value, dict):
+        if section in _KNOWN or section in row:
+            continue
+        if isinstance(value, dict):
             row.update(_flatten(value, section))
+        elif isinstance(value, (bool, int, float)) and value is not None:  # a top-level scalar, e.g. peak_g
+            row[section] = value
     return row
 
 

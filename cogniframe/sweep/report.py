@@ -16,7 +16,8 @@ from pathlib import Path
 import numpy as np
 
 FRONT_X, FRONT_Y = "mass_g", "max_safe_drop_cm"  # minimise mass, maximise the safe drop
-MAIN_OUTPUTS = ("mass_g", "k_n_per_m", "max_safe_drop_cm", "prop_margin_mm")
+MAIN_OUTPUTS = ("mass_g", "k_n_per_m", "max_safe_drop_cm", "prop_margin_mm", "peak_g")
+MAX_OUTPUTS = 8  # columns of the sensitivity figure: the main outputs first, then other stages' (stiffness.*, flight.*)
 _EVALUATED = ("PASS", "FAIL")
 
 
@@ -26,7 +27,8 @@ def output_columns(table) -> list[str]:
     for c in table.columns:
         if "." in c and c.split(".")[0] in ("stiffness", "flight") and _numeric(table[c]):
             cols.append(c)
-    return [c for c in cols if _numeric(table[c]) and table[c].notna().any()]
+    cols = [c for c in cols if _numeric(table[c]) and table[c].notna().any() and table[c].nunique() > 1]
+    return cols[:MAX_OUTPUTS]
 
 
 def _numeric(s) -> bool:
