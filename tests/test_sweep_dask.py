@@ -82,7 +82,7 @@ def tcp_cluster(tmp_path_factory):
             p.terminate()
         for p in procs:
             try:
-                p.wait(timeout=20)
+                p.wait(timeout=5)  # a worker still inside a design finishes it first; do not wait long
             except subprocess.TimeoutExpired:
                 p.kill()
                 p.wait()
@@ -149,6 +149,32 @@ def test_tcp_cluster_equals_serial_both_workers_work_and_rerun_skips(tcp_cluster
     assert again.evaluated == 0 and again.skipped == 10 and again.workers == 0  # no cluster was even contacted
     assert time.perf_counter() - t0 < 5
     pd.testing.assert_frame_equal(pd.read_parquet(out / "results.parquet"), table)
+
+
+def test_sweep_killed_mid_run_loses_only_batches_in_flight(tcp_cluster, tmp_path):
+    """`cogniframe sweep` killed (SIGKILL) after its first batch: the rerun evaluates exactly the
+    designs without a row, and the result is complete."""
+    import signal
+
+    sw_path = tmp_path / "k.yaml"
+    sw_path.write_text(SWEEP.replace("samples: 10", "samples: 16").replace("seed: 5", "seed: 7").replace("batch: 2", "batch: 1"))
+    out = tmp_path / "out"
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.Popen([sys.executable, "-m", "cogniframe", "sweep", str(sw_path), "-o", str(out), "--scheduler", tcp_cluster],
+                            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 60
+    while not list((out / "results").glob("*.parquet")) and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    done = set()
+    for f in (out / "results").glob("*.parquet"):
+        done |= set(pd.read_parquet(f)["design_id"])
+    assert 1 <= len(done) < 16, len(done)
+    sweep = sweep_spec.load(sw_path)
+    again = run_mod.run_sweep(sweep, out, scheduler=tcp_cluster, reports=False)
+    assert again.evaluated == 16 - len(done) and again.skipped == len(done)
+    assert sorted(pd.read_parquet(out / "results.parquet")["design_id"]) == sorted(i for i, _ in run_mod.plan(sweep))
 
 
 def test_killed_sweep_resumes_with_only_the_missing_designs(tcp_cluster, tmp_path):
