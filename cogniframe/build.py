@@ -37,6 +37,8 @@ class BuildResult:
 def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None = None, use_cache: bool = True,
               console: Console | None = None) -> BuildResult:
     console = console or Console(stderr=True)
+    with spec.blamed():
+        pipeline.design(spec)  # a design that cannot exist is refused before any folder is touched
     final = pipeline.output_dir(spec, out)
     key = build_key(spec, params_path)
     if use_cache and _up_to_date(final, key):

@@ -230,11 +230,14 @@ def build(spec: Spec) -> Frame:
 
     for r in rods.values():
         if r.length < 2 * j.socket_depth + 5:
-            raise spec.error(
-                "joints.socket_depth",
-                f"the {r.name} rod would be only {r.length:.1f} mm long, too short to sit in two "
-                f"{j.socket_depth:g} mm sockets", "enlarge frame.width/frame.height, reduce frame.knee_inset, "
-                f"or make joints.socket_depth at most {max(0.0, (r.length - 5) / 2):.1f}")
+            deepest = (r.length - 5) / 2
+            has = f"would be only {r.length:.1f} mm long" if r.length > 0 else "has no room at all between its joints"
+            fix = (f"make joints.socket_depth at most {deepest:.1f}, or enlarge frame.width/frame.depth/frame.height"
+                   if deepest >= 2 * spec.rods.diameter else
+                   "enlarge frame.width/frame.depth/frame.height or reduce frame.knee_inset: this frame is too small "
+                   f"for {spec.rods.diameter:g} mm rods in sockets at least two diameters deep")
+            raise spec.error("joints.socket_depth", f"the {r.name} rod {has}, too short to sit in two "
+                             f"{j.socket_depth:g} mm sockets", fix)
 
     motors = tuple(_motor(k, rods, spec) for k in CORNERS)
     frame = Frame(nodes, rods, motors, core, ground_z=0.0)

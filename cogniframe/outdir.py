@@ -96,8 +96,25 @@ def _names(entries: list[str]) -> str:
 
 @contextmanager
 def lock(final: Path):
-    """Hold the exclusive lock of output folder `final` (non-blocking: a second writer is an OutputError)."""
+    """Hold the exclusive lock of output folder `final` (non-blocking: a second writer is an OutputError).
+
+    Parent folders it has to create are removed again if they are still empty at the end (a failed
+    build leaves no trace)."""
+    made = [p for p in (final.parent, *final.parent.parents) if not os.path.lexists(p)]
     final.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        with _locked(final) as path:
+            yield path
+    finally:
+        for p in made:  # deepest first
+            try:
+                p.rmdir()
+            except OSError:
+                break
+
+
+@contextmanager
+def _locked(final: Path):
     path = final.parent / f".{final.name}.cogniframe-lock"
     while True:
         fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)

@@ -202,10 +202,10 @@ class Spec(_M):
             raise _KeyProblem("core.holder_wall", f"{self.core.holder_wall} mm is thinner than two extrusion lines of the "
                               f"{pr.nozzle} mm nozzle", f"set core.holder_wall to at least {2 * pr.nozzle:g}")
         if pr.perimeters * pr.nozzle > 2 * self.joints.wall + 1e-9:
-            raise _KeyProblem("printer.perimeters", f"{pr.perimeters} perimeters of a {pr.nozzle} mm nozzle need "
-                              f"{pr.perimeters * pr.nozzle:.2f} mm of wall on each side, far more than the {self.joints.wall} mm socket wall "
-                              "(the slicer would leave gaps)", f"set printer.perimeters to at most {max(1, int(2 * self.joints.wall / pr.nozzle))} "
-                              "or thicken joints.wall")
+            raise _KeyProblem("printer.perimeters", f"{pr.perimeters} perimeters of the {pr.nozzle} mm nozzle are "
+                              f"{pr.perimeters * pr.nozzle:.2f} mm thick, more than twice the {self.joints.wall} mm socket wall: the "
+                              "slicer cannot place them and would print something other than what the mass model assumes",
+                              f"set printer.perimeters to at most {max(1, int(2 * self.joints.wall / pr.nozzle + 1e-9))} or thicken joints.wall")
         if self.material(self.rods.material).printed:
             raise _KeyProblem("rods.material", f"{self.rods.material!r} is a printed filament; rods are never printed", "use carbon_rod or bamboo")
         core_half = self.core.plate_size / 2
@@ -310,7 +310,8 @@ def load(path: str | Path) -> Spec:
     if data is None:
         data = {}
     if not isinstance(data, dict):
-        raise UserError(f"{path}: the file must be a mapping of sections (frame:, rods:, joints: ...), not a {type(data).__name__}.")
+        raise UserError(f"{path}: the file must be a mapping of sections (frame:, rods:, joints: ...), not a "
+                        f"{type(data).__name__}. Fix: start from a preset such as params/carbon.yaml (`cogniframe schema` lists every key).")
     data.setdefault("name", slug(path.stem))
     return from_dict(data, source=str(path), text=text)
 
