@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import sys
+import threading
 from pathlib import Path
 from typing import Annotated, Optional
 
@@ -112,29 +114,47 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv or os.environ.get("COGNIFRAME_DEBUG", "") not in ("", "0")
     argv = [a for a in argv if a != "--debug"]
+    sigint: list[int] = []
+
+    def on_sigint(signum, frame):
+        sigint.append(signum)
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGINT, on_sigint) if threading.current_thread() is threading.main_thread() else None
     try:
         rv = app(args=argv, standalone_mode=False)
     except UserError as e:
         err.print(f"error: {e}", markup=False)
         return e.exit_code
     except KeyboardInterrupt:
-        err.print("interrupted: nothing was written; any previous output is as it was.", markup=False)
-        return INTERRUPTED_EXIT
-    except typer.Exit as e:
-        return e.exit_code
+        return _interrupted(err)
+    except typer.Exit as e:  # typer turns Ctrl-C into Exit(130)
+        return _interrupted(err) if e.exit_code == INTERRUPTED_EXIT or sigint else e.exit_code
     except typer.Abort:
-        return 1
+        return _interrupted(err) if sigint else 1
     except typer.TyperException as e:  # usage errors: unknown option, missing argument
         e.show()
         return getattr(e, "exit_code", 2)
     except Exception as e:  # noqa: BLE001 -- a bug: say so plainly
+        if sigint:  # Ctrl-C inside C code (an import, OCC) can surface as any exception
+            return _interrupted(err)
         if debug:
             import traceback
 
             traceback.print_exc()
         err.print(bug_message(e, "cogniframe " + " ".join(argv)), markup=False)
         return BUG_EXIT
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
+    if sigint or rv == INTERRUPTED_EXIT:  # non-standalone typer returns Ctrl-C as the value 130
+        return _interrupted(err)
     return rv if isinstance(rv, int) else 0
+
+
+def _interrupted(err: Console) -> int:
+    err.print("interrupted: nothing was written; any previous output is as it was.", markup=False)
+    return INTERRUPTED_EXIT
 
 
 def entry() -> None:
