@@ -284,3 +284,12 @@ def test_why_no_design_is_feasible_is_told_from_the_trials():
     assert ranked == [] and pareto == []
     note = opt.why_none(rows, [opt.Objective("mass_g", "minimize")], [c])
     assert "2 violates max_safe_drop_cm >= 500" in note and "1 verdict INVALID" in note and "b with max_safe_drop_cm = 210.5" in note
+
+
+def test_second_sweep_into_a_folder_being_written_is_refused(tmp_path, run_cli):
+    from cogniframe.outdir import lock
+
+    out = tmp_path / "out"
+    with lock(out):  # as a running sweep holds it
+        code, _, err = run_cli("sweep", sweep_file(tmp_path, GOOD), "-o", out)
+    assert code == 2 and "is writing" in err and not out.exists()

@@ -175,11 +175,18 @@ def ranked(rows: list[dict], objectives, constraints) -> tuple[list[dict], list[
 def run_optimize(sweep: Sweep, objectives: list[Objective], constraints: list[Constraint], out_dir: Path | None = None,
                  trials: int | None = None, scheduler: str | None = None, workers: int | None = None, cad: int = 0,
                  progress: Callable | None = None, batch: int | None = None) -> OptimizeResult:
-    import optuna
-    from optuna.trial import TrialState
+    from ..outdir import lock
 
     out_dir = Path(out_dir) if out_dir is not None else Path("out") / "sweeps" / f"{sweep.stem}-optimize"
     run_mod.claim_folder(out_dir, "optimize", sweep, write=False)
+    with lock(out_dir):  # one optimize per folder at a time
+        return _run_optimize(sweep, objectives, constraints, out_dir, trials, scheduler, workers, cad, progress, batch)
+
+
+def _run_optimize(sweep, objectives, constraints, out_dir: Path, trials, scheduler, workers, cad, progress, batch) -> OptimizeResult:
+    import optuna
+    from optuna.trial import TrialState
+
     n_trials = trials or sweep.settings.samples
     t0 = time.perf_counter()
     optuna.logging.set_verbosity(optuna.logging.WARNING)

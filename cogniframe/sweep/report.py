@@ -145,7 +145,7 @@ def plot_pareto(table, path: Path, title: str) -> Path:
     else:
         ax.text(0.5, 0.5, "no evaluated designs", ha="center", va="center", transform=ax.transAxes)
     fig.tight_layout()
-    fig.savefig(path, metadata={"Software": None})
+    fig.savefig(path, metadata={"Software": "cogniframe"})
     plt.close(fig)
     return path
 
@@ -160,7 +160,7 @@ def plot_sensitivity(method: str, inputs: list[str], outputs: list[str], m: np.n
     if m.size == 0:  # no design was evaluated: say so instead of an empty axis
         ax.text(0.5, 0.5, "no evaluated designs", ha="center", va="center")
         ax.set_axis_off()
-        fig.savefig(path, metadata={"Software": None})
+        fig.savefig(path, metadata={"Software": "cogniframe"})
         plt.close(fig)
         return path
     sobol = method.startswith("Sobol")
@@ -176,7 +176,7 @@ def plot_sensitivity(method: str, inputs: list[str], outputs: list[str], m: np.n
     ax.set_title(method, fontsize=9)
     fig.colorbar(im, ax=ax, shrink=0.8)
     fig.tight_layout()
-    fig.savefig(path, metadata={"Software": None})
+    fig.savefig(path, metadata={"Software": "cogniframe"})
     plt.close(fig)
     return path
 

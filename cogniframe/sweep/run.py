@@ -264,8 +264,18 @@ def evaluate_all(client, base: dict, items: list[dict], timeout_s: float, size: 
 
 def run_sweep(sweep: Sweep, out_dir: Path | None = None, scheduler: str | None = None, workers: int | None = None,
               progress: Callable[[BatchDone], None] | None = None, reports: bool = True) -> SweepResult:
+    """Evaluate the sweep's designs not done yet into `out_dir` (locked: a second sweep into the same
+    folder is refused, exit 2, instead of both evaluating the same designs)."""
+    from ..outdir import lock
+
     out_dir = Path(out_dir) if out_dir is not None else default_out(sweep)
     claim_folder(out_dir, "sweep", sweep, write=False)
+    with lock(out_dir):
+        return _run_sweep(sweep, out_dir, scheduler, workers, progress, reports)
+
+
+def _run_sweep(sweep: Sweep, out_dir: Path, scheduler: str | None, workers: int | None,
+               progress: Callable[[BatchDone], None] | None, reports: bool) -> SweepResult:
     t0 = time.perf_counter()
     code = code_digest()
     designs = plan(sweep)
