@@ -165,7 +165,20 @@ def evaluate_one(base: dict, overrides: dict, timeout_s: float, worker: str = ""
 def evaluate_batch(base: dict, batch: list[dict], timeout_s: float) -> list[dict]:
     """A Dask task: every design of `batch` in turn on this worker; rows in the same order."""
     worker = _worker_address()
-    return [evaluate_one(base, overrides, timeout_s, worker) for overrides in batch]
+    rows = []
+    for overrides in batch:
+        try:
+            rows.append(evaluate_one(base, overrides, timeout_s, worker))
+        except DesignTimeout:  # a watchdog that fired in the last instructions of evaluate_one
+            rows.append(_timeout_row(base, overrides, timeout_s, worker))
+    return rows
+
+
+def _timeout_row(base: dict, overrides: dict, timeout_s: float, worker: str) -> dict:
+    row = {"design_id": design_id(apply_overrides(base, overrides)), **overrides, **{k: None for k in OUTPUTS},
+           "verdict": "TIMEOUT", "problems": "", "error": f"cut off after {timeout_s:g} s (sweep timeout_s)"}
+    row.update({"worker": worker, "seconds": timeout_s, "cpu_seconds": None})
+    return row
 
 
 def _worker_address() -> str:
