@@ -293,3 +293,20 @@ def test_second_sweep_into_a_folder_being_written_is_refused(tmp_path, run_cli):
     with lock(out):  # as a running sweep holds it
         code, _, err = run_cli("sweep", sweep_file(tmp_path, GOOD), "-o", out)
     assert code == 2 and "is writing" in err and not out.exists()
+
+
+def test_best_yaml_edits_only_the_changed_values_and_keeps_comments(tmp_path):
+    from cogniframe.sweep import optimize as opt
+
+    sw = sweep_spec.load(sweep_file(tmp_path, GOOD + "set:\n  requirements.drop_heights_cm: [50, 120]\n"))
+    row = {"rods.diameter": np.float64(2.75), "frame.height": 120.0, "rods.material": "bamboo"}  # height unchanged
+    changed = opt.write_best_yaml(sw, row, tmp_path / "best.yaml")
+    assert changed == ["requirements.drop_heights_cm", "rods.diameter", "rods.material"]
+    before, after = CARBON.read_text().splitlines(), (tmp_path / "best.yaml").read_text().splitlines()
+    diff = [(a, b) for a, b in zip(before, after) if a != b]
+    assert len(before) == len(after) and len(diff) == 3
+    assert "  diameter: 2.75         # mm" in after
+    assert any(b.startswith("  drop_heights_cm: [50, 120]") and "# heights in the crash table" in b for _, b in diff)
+    assert any(b.startswith("  material: bamboo") and "# pultruded" in b for _, b in diff)
+    best = spec_mod.load(tmp_path / "best.yaml")
+    assert best.rods.diameter == 2.75 and best.frame.height == 120 and best.requirements.drop_heights_cm == (50, 120)

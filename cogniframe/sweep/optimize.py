@@ -284,7 +284,7 @@ def write_best_yaml(sweep: Sweep, row: dict, path: Path) -> list[str]:
     import io
 
     from ruamel.yaml import YAML
-    from ruamel.yaml.comments import CommentedMap
+    from ruamel.yaml.comments import CommentedMap, CommentedSeq
 
     yaml = YAML()  # round trip: comments, key order, quoting
     yaml.preserve_quotes = True
@@ -307,6 +307,12 @@ def write_best_yaml(sweep: Sweep, row: dict, path: Path) -> list[str]:
                 node[p] = CommentedMap()
             node = node[p]
         if parts[-1] not in node or node[parts[-1]] != new:
+            old = node.get(parts[-1])
+            if isinstance(new, (list, tuple)):  # keep a flow-style list ([50, 100]) in flow style
+                seq = CommentedSeq(new)
+                if getattr(old, "fa", None) is not None and old.fa.flow_style():
+                    seq.fa.set_flow_style()
+                new = seq
             node[parts[-1]] = new
             changed.append(name)
     buf = io.StringIO()
