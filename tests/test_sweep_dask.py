@@ -92,7 +92,8 @@ _SERIAL = """
 import json, sys
 from cogniframe.sweep import evaluate as ev, run, spec
 sw = spec.load(sys.argv[1])
-json.dump([ev.evaluate_one(sw.base_data, o, sw.settings.timeout_s, "serial") for _, o in run.plan(sw)], sys.stdout)
+json.dump([ev.evaluate_one(sw.base_data, o, sw.settings.timeout_s, "serial", sw.base_text, sw.base_label)
+           for _, o in run.plan(sw)], sys.stdout)
 """
 
 

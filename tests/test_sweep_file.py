@@ -164,9 +164,19 @@ def test_new_sections_of_check_json_flow_into_the_row():
 
 
 def test_invalid_design_is_a_row_with_its_error():
-    base = yaml.safe_load(CARBON.read_text())
-    row = ev.evaluate_one(base, {"rods.diameter": 5.0}, 60)  # socket_depth 8 < 2 x 5
-    assert row["verdict"] == "INVALID" and "joints.socket_depth" in row["error"] and row["mass_g"] is None
+    text = CARBON.read_text()
+    base = yaml.safe_load(text)
+    row = ev.evaluate_one(base, {"rods.diameter": 5.0}, 60, text=text, base_name="carbon.yaml")  # socket_depth 8 < 2 x 5
+    assert row["verdict"] == "INVALID" and row["mass_g"] is None
+    assert row["error"].startswith(f"design {row['design_id']} of carbon.yaml: joints.socket_depth (line 24)")
+
+
+def test_a_stage_error_names_the_key_by_its_line_in_the_base():
+    """A propeller that hits the cage (found by the frame stage, after validation): the key is set in
+    the base file, so the message gives its line there, not "default applies"."""
+    text = CARBON.read_text()
+    row = ev.evaluate_one(yaml.safe_load(text), {"motors.prop_diameter": 120.0}, 60, text=text, base_name="carbon.yaml")
+    assert row["verdict"] == "INVALID" and "motors.prop_diameter (line 52)" in row["error"], row["error"]
 
 
 def test_timeout_cuts_a_running_design_off():

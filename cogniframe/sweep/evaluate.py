@@ -52,16 +52,22 @@ def design_id(params: dict) -> str:
     return hashlib.sha256(json.dumps(params, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
 
-def check_row(params: dict, source: str) -> dict:
-    """Validate and check one design; INVALID (with the error text) instead of raising."""
+def check_row(params: dict, source: str, text: str | None = None) -> dict:
+    """Validate and check one design; INVALID (with the error text) instead of raising.
+
+    `text` is the base file's text: messages then give a key's line in the base file (the varied
+    keys sit on the same lines), and never call a key the base sets "not set in the file"."""
     from .. import pipeline
     from .. import spec as spec_mod
     from ..errors import UserError
 
+    spec = None
     try:
-        spec = spec_mod.from_dict(params, source=source)
+        spec = spec_mod.from_dict(params, source=source, text=text)
         result = pipeline.check(spec)
     except UserError as e:
+        if spec is not None and hasattr(spec, "located"):
+            e = spec.located(e)
         return {"verdict": "INVALID", "problems": "", "error": str(e)}
     return outputs(pipeline.check_dict(result))
 
@@ -134,14 +140,15 @@ def run_with_timeout(fn, timeout_s: float):
         timer.cancel()
 
 
-def evaluate_one(base: dict, overrides: dict, timeout_s: float, worker: str = "") -> dict:
-    """The full row of one design (never raises for a bad design)."""
+def evaluate_one(base: dict, overrides: dict, timeout_s: float, worker: str = "", text: str | None = None,
+                 base_name: str = "the base") -> dict:
+    """The full row of one design (never raises for a bad design). `text`: the base file's text."""
     params = apply_overrides(base, overrides)
     did = design_id(params)
     t0, c0 = time.perf_counter(), time.thread_time()
     try:
         try:
-            out = run_with_timeout(lambda: check_row(params, f"design {did}"), timeout_s)
+            out = run_with_timeout(lambda: check_row(params, f"design {did} of {base_name}", text), timeout_s)
         except DesignTimeout:
             out = {"verdict": "TIMEOUT", "problems": "", "error": f"cut off after {timeout_s:g} s (sweep timeout_s)"}
         except Exception as e:  # a bug or a numerical failure in one design must not stop the sweep
@@ -162,13 +169,14 @@ def evaluate_one(base: dict, overrides: dict, timeout_s: float, worker: str = ""
     return row
 
 
-def evaluate_batch(base: dict, batch: list[dict], timeout_s: float) -> list[dict]:
+def evaluate_batch(base: dict, batch: list[dict], timeout_s: float, text: str | None = None,
+                   base_name: str = "the base") -> list[dict]:
     """A Dask task: every design of `batch` in turn on this worker; rows in the same order."""
     worker = _worker_address()
     rows = []
     for overrides in batch:
         try:
-            rows.append(evaluate_one(base, overrides, timeout_s, worker))
+            rows.append(evaluate_one(base, overrides, timeout_s, worker, text, base_name))
         except DesignTimeout:  # a watchdog that fired in the last instructions of evaluate_one
             rows.append(_timeout_row(base, overrides, timeout_s, worker))
     return rows

@@ -213,7 +213,8 @@ def _run_optimize(sweep, objectives, constraints, out_dir: Path, trials, schedul
             k = min(per_round, n_trials - done)
             asked = [study.ask(dists) for _ in range(k)]
             overrides = [_overrides(sweep, t.params) for t in asked]
-            got = run_mod.evaluate_all(client, sweep.base_data, overrides, sweep.settings.timeout_s, size, n_workers)
+            got = run_mod.evaluate_all(client, sweep.base_data, overrides, sweep.settings.timeout_s, size, n_workers,
+                                       text=sweep.base_text, base_name=sweep.base_label)
             for t, row in zip(asked, got):
                 row = {"trial": t.number, **row}
                 rows.append(row)
@@ -238,7 +239,7 @@ def _run_optimize(sweep, objectives, constraints, out_dir: Path, trials, schedul
         if cad and best_rows:
             cad_rows = build_cad(client, sweep, best_rows[:cad])
             (out_dir / "cad.json").write_text(json.dumps(list(cad_rows), indent=2) + "\n")
-    base = ev.evaluate_one(sweep.base_data, {}, sweep.settings.timeout_s, "client")
+    base = ev.evaluate_one(sweep.base_data, {}, sweep.settings.timeout_s, "client", sweep.base_text, sweep.base_label)
     best = best_rows[0] if best_rows else None
     note = "" if best is not None else why_none(rows, objectives, constraints)
     if best is not None:

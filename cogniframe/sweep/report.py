@@ -201,7 +201,7 @@ def base_outputs(sweep) -> dict:
     """The base design's row (evaluated here, on the client: it is one check)."""
     from . import evaluate as ev
 
-    return ev.evaluate_one(sweep.base_data, {}, sweep.settings.timeout_s, "client")
+    return ev.evaluate_one(sweep.base_data, {}, sweep.settings.timeout_s, "client", sweep.base_text, sweep.base_label)
 
 
 def write_reports(out_dir: Path, sweep, table, result) -> None:
@@ -265,6 +265,6 @@ def _reason(text) -> str:
     import re
 
     t = str(text or "").split("; ")[0]
-    t = re.sub(r"^design [0-9a-f]+: ", "", t)
+    t = re.sub(r"^design [0-9a-f]+ of [^:]+: ", "", t)
     t = re.sub(r"\d+(\.\d+)?", "#", t)
     return t[:160].replace("|", "/")

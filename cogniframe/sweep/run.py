@@ -218,7 +218,8 @@ def batch_size(n_designs: int, n_workers: int, requested: int | None) -> int:
 
 
 def evaluate_all(client, base: dict, items: list[dict], timeout_s: float, size: int, n_workers: int,
-                 on_batch: Callable[[list[dict]], None] | None = None) -> list[dict]:
+                 on_batch: Callable[[list[dict]], None] | None = None, text: str | None = None,
+                 base_name: str = "the base") -> list[dict]:
     """Evaluate `items` (overrides) in batches of `size` on the cluster; rows in the order of `items`.
 
     At most 2 batches per worker are in flight, so a kill loses little and results stream back.
@@ -232,7 +233,7 @@ def evaluate_all(client, base: dict, items: list[dict], timeout_s: float, size: 
         raise UserError(f"Dask worker(s) {', '.join(sorted(other))} run different cogniframe code than this machine "
                         f"(code hash {', '.join(sorted(set(other.values())))} against {mine}): their rows would not match. "
                         "Fix: install the same cogniframe version on every worker and restart them.")
-    base_f = client.scatter([base], broadcast=True)[0]  # a list: a dict would be scattered per key
+    base_f, text_f = client.scatter([base, text], broadcast=True)  # a list: a dict would be scattered per key
     batches = [items[i:i + size] for i in range(0, len(items), size)]
     index = {}
     rows_by_batch: dict[int, list[dict]] = {}
@@ -242,7 +243,7 @@ def evaluate_all(client, base: dict, items: list[dict], timeout_s: float, size: 
         nxt = next(todo, None)
         if nxt is None:
             break
-        fut = client.submit(ev.evaluate_batch, base_f, nxt[1], timeout_s, pure=False)
+        fut = client.submit(ev.evaluate_batch, base_f, nxt[1], timeout_s, text_f, base_name, pure=False)
         index[fut.key] = nxt[0]
         ac.add(fut)
     for fut in ac:
@@ -254,7 +255,7 @@ def evaluate_all(client, base: dict, items: list[dict], timeout_s: float, size: 
             on_batch(rows)
         nxt = next(todo, None)
         if nxt is not None:
-            f2 = client.submit(ev.evaluate_batch, base_f, nxt[1], timeout_s, pure=False)
+            f2 = client.submit(ev.evaluate_batch, base_f, nxt[1], timeout_s, text_f, base_name, pure=False)
             index[f2.key] = nxt[0]
             ac.add(f2)
     return [r for i in range(len(batches)) for r in rows_by_batch[i]]
@@ -299,7 +300,8 @@ def _run_sweep(sweep: Sweep, out_dir: Path, scheduler: str | None, workers: int 
                     progress(BatchDone(tuple(rows), rows[0]["worker"], count["n"], len(todo), time.perf_counter() - tb))
 
             try:
-                evaluate_all(client, sweep.base_data, [o for _, o in todo], sweep.settings.timeout_s, size, n_workers, on_batch)
+                evaluate_all(client, sweep.base_data, [o for _, o in todo], sweep.settings.timeout_s, size, n_workers, on_batch,
+                             sweep.base_text, sweep.base_label)
             except KeyboardInterrupt:
                 consolidate(out_dir, designs, code)  # what finished is in results.parquet; a rerun resumes
                 raise

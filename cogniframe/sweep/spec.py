@@ -80,6 +80,11 @@ class Sweep:
     fixed: tuple[str, ...] = ()  # the `set:` keys
 
     @property
+    def base_label(self) -> str:
+        """How messages name the base params file ("carbon.yaml")."""
+        return Path(self.base_path).name
+
+    @property
     def stem(self) -> str:
         return Path(self.path).stem
 
