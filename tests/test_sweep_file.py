@@ -320,3 +320,9 @@ def test_best_yaml_edits_only_the_changed_values_and_keeps_comments(tmp_path):
     assert any(b.startswith("  material: bamboo") and "# pultruded" in b for _, b in diff)
     best = spec_mod.load(tmp_path / "best.yaml")
     assert best.rods.diameter == 2.75 and best.frame.height == 120 and best.requirements.drop_heights_cm == (50, 120)
+
+
+def test_sobol_example_is_a_full_saltelli_design():
+    sw = sweep_spec.load(ROOT / "examples" / "sweeps" / "carbon-sobol.yaml")
+    assert sw.settings.sampler == "sobol" and len(sw.keys) == 6
+    assert len(sample.designs(sw)) == 64 * (6 + 2)
