@@ -77,10 +77,9 @@ def get_files(kind: str, key: str, dest: Path, root: Path | None = None):
             dst.parent.mkdir(parents=True, exist_ok=True)
             shutil.copyfile(entry / "files" / rel, dst)
         return {"value": meta["value"]}
-    except FileNotFoundError:
-        return None
-    except (OSError, ValueError, KeyError, TypeError):
-        shutil.rmtree(entry, ignore_errors=True)
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        if entry.exists():  # half an entry (meta.json or a file missing, damaged): drop it, it is rebuilt
+            shutil.rmtree(entry, ignore_errors=True)
         return None
 
 
@@ -130,3 +129,21 @@ def code_hash(*patterns: str) -> str:
                 h.update(src.relative_to(pkg).as_posix().encode() + b"\0" + src.read_bytes())
         _CODE[patterns] = h.hexdigest()[:16]
     return _CODE[patterns]
+
+
+def fingerprint(obj) -> str:
+    """Deterministic JSON of plain data, dataclasses and numpy values (for keys)."""
+    import dataclasses
+
+    def default(o):
+        if dataclasses.is_dataclass(o) and not isinstance(o, type):
+            return {f.name: getattr(o, f.name) for f in dataclasses.fields(o)}
+        if hasattr(o, "tolist"):
+            return o.tolist()
+        if isinstance(o, Path):
+            return o.as_posix()
+        if isinstance(o, (set, frozenset)):
+            return sorted(o)
+        raise TypeError(f"cannot fingerprint {type(o).__name__}")
+
+    return json.dumps(obj, sort_keys=True, default=default, separators=(",", ":"))

@@ -65,8 +65,9 @@ def _profile(ctx, material: str) -> str:
 
 def slice_key(ctx, material: str):
     found = ctx.slicer.get()
-    return [found[1] if found else None, [v["sha256"] for v in ctx[f"plates:{material}"]], _profile(ctx, material),
-            ctx.bed]
+    if not found:
+        return None  # no PrusaSlicer: nothing to slice or store
+    return [found[1], [v["sha256"] for v in ctx[f"plates:{material}"]], _profile(ctx, material), ctx.bed]
 
 
 def make_slice(ctx, material: str) -> Made:
@@ -75,7 +76,7 @@ def make_slice(ctx, material: str) -> Made:
 
     found = ctx.slicer.get()
     if not found:
-        return Made(store=False)
+        return Made()
     exe, version = found
     ini = ctx.out / "plates" / f"{material}.ini"
     ini.write_text(_profile(ctx, material), encoding="utf-8")

@@ -40,6 +40,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from . import cache
+from .cache import fingerprint
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,6 @@ class Made:
 
     files: tuple[str, ...] = ()
     value: Any = None
-    store: bool = True  # False: do not cache this result (e.g. the slicer is missing)
 
 
 @dataclass(frozen=True)
@@ -97,7 +97,7 @@ class Context:
 @dataclass(frozen=True)
 class Record:
     task: str
-    status: str  # "ran" | "cached" | "always" (no key: cheap, always runs)
+    status: str  # "ran" | "cached" | "always" (not cached: cheap, in memory, or nothing to store)
     seconds: float
 
 
@@ -130,30 +130,16 @@ def expand(steps: Sequence[Step], rows: Iterable[Mapping[str, str]]) -> list[Tas
 
 
 def task_key(task: Task, ctx: Context) -> str | None:
+    """The task's cache key, or None when it is not cached (no key function, caching off, or the key
+    function returned None: nothing worth storing this time, e.g. no slicer installed)."""
     if task.step.key is None or not ctx.use_cache:
         return None
     inputs = task.step.key(ctx, **task.vars)
+    if inputs is None:
+        return None
     payload = [task.step.name, dict(task.vars), inputs, cache.code_hash(*task.step.code) if task.step.code else "",
                ctx.stack]
     return hashlib.sha256(fingerprint(payload).encode()).hexdigest()[:32]
-
-
-def fingerprint(obj) -> str:
-    """Deterministic JSON of plain data, dataclasses and numpy values (for keys)."""
-    import dataclasses
-
-    def default(o):
-        if dataclasses.is_dataclass(o) and not isinstance(o, type):
-            return {f.name: getattr(o, f.name) for f in dataclasses.fields(o)}
-        if hasattr(o, "tolist"):
-            return o.tolist()
-        if isinstance(o, Path):
-            return o.as_posix()
-        if isinstance(o, (set, frozenset)):
-            return sorted(o)
-        raise TypeError(f"cannot fingerprint {type(o).__name__}")
-
-    return json.dumps(obj, sort_keys=True, default=default, separators=(",", ":"))
 
 
 def _kind(task: Task) -> str:
@@ -174,9 +160,9 @@ def _do(task: Task, ctx: Context) -> tuple[Any, str]:
     value = made.value
     if task.step.key is not None:  # the same plain JSON whether it ran or came from the cache
         value = json.loads(json.dumps(value))
-    if key is not None and made.store:
+    if key is not None:
         cache.put_files(_kind(task), key, ctx.out, made.files, value)
-    return value, ("ran" if task.step.key is not None else "always")
+    return value, ("ran" if key is not None or (task.step.key is not None and not ctx.use_cache) else "always")
 
 
 def run(tasks: Sequence[Task], ctx: Context, threads: int = 8,

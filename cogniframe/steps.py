@@ -32,7 +32,6 @@ from .fabrication import (bom, figures_key, make_figures, make_plates, make_prev
                           make_slice, plates_key, previews_key, render_part_key, renders_key, report, slice_key)
 from .graph import Made, Step
 
-PART_CODE = ("parts/*.py", "export/build.py", "export/mesh.py", "export/step.py", "partlist.py")
 
 
 class BuildContext(graph.Context):
@@ -117,9 +116,9 @@ def estimate(ctx) -> Made:
 
 
 def part_key(ctx, material: str, part: str):
-    from .export.build import ANGULAR_TOL, CAD_VERSION, LINEAR_TOL
+    from .export.build import cache_key
 
-    return [ctx.part(part).digest, CAD_VERSION, LINEAR_TOL, ANGULAR_TOL, ctx.bed]
+    return cache_key(ctx.part(part), ctx.bed)  # the part's CAD inputs (not its infill or placements), bed, code
 
 
 def make_part(ctx, material: str, part: str) -> Made:
@@ -189,7 +188,7 @@ def make_plots(ctx) -> Made:
 STEPS = (
     #    target                    needs                                  make           key               code / where
     Step("estimate",               (),                                    estimate),
-    Step("part:{material}/{part}", (),                                    make_part,     part_key,         PART_CODE, "wait"),
+    Step("part:{material}/{part}", (),                                    make_part,     part_key,         (),        "wait"),
     Step("check",                  ("estimate", "part:*"),                check),
     Step("plates:{material}",      ("part:{material}/*",),                make_plates,   plates_key,       ("export/plates.py",)),
     Step("slice:{material}",       ("plates:{material}",),                make_slice,    slice_key,        ("export/slicer.py",), "wait"),

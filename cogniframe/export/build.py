@@ -5,8 +5,8 @@
 part, in the order given.
 
 * Cache: each part's STL, STEP and metrics are stored under `cache_dir/parts/<key>/` (cache.put_files:
-  each file's sha256 is kept and checked on every read), keyed by `part.digest` (everything the CAD
-  reads), the source of the CAD code (PART_CODE), the mesh tolerances and the bed.
+  each file's sha256 is kept and checked on every read), keyed by `geometry_digest(part)` (every part
+  field the CAD reads), the source of the CAD code (PART_CODE), the mesh tolerances and the bed.
   A rebuild with nothing changed only copies files and never imports CadQuery.
 * Parallel: jobs > 1 uses a process pool started with `forkserver` (CadQuery preloaded in the
   server, so workers start warm) or `spawn` where forkserver is missing. Never `fork`: a fork after
@@ -79,10 +79,25 @@ LINEAR_TOL, ANGULAR_TOL = 0.02, 0.15
 PART_CODE = ("parts/*.py", "export/build.py", "export/mesh.py", "export/step.py")
 
 
+# PartSpec fields the CAD does not read (where copies go, the mass model's inputs, the BOM): a change
+# to them must not rebuild the part. Every other field, including any added later, is in the key.
+NOT_CAD = ("placements", "estimate", "hardware", "group", "infill", "digest")
+
+
+def geometry_digest(part: PartSpec) -> str:
+    """Hash of every PartSpec field the part's CAD and file names can depend on."""
+    import dataclasses
+
+    from ..cache import fingerprint
+
+    data = {f.name: getattr(part, f.name) for f in dataclasses.fields(part) if f.name not in NOT_CAD}
+    return hashlib.sha256(fingerprint(data).encode()).hexdigest()[:24]
+
+
 def cache_key(part: PartSpec, bed) -> str:
     from ..cache import code_hash
 
-    payload = json.dumps([part.digest, CAD_VERSION, code_hash(*PART_CODE), LINEAR_TOL, ANGULAR_TOL,
+    payload = json.dumps([geometry_digest(part), CAD_VERSION, code_hash(*PART_CODE), LINEAR_TOL, ANGULAR_TOL,
                           [float(b) for b in bed]])
     return hashlib.sha256(payload.encode()).hexdigest()[:24]
 
