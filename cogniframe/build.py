@@ -7,6 +7,7 @@ model -> text outputs and plots -> fabrication package (plates, slicer, BOM, ren
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import os
@@ -161,6 +162,12 @@ def _sha256(path: Path) -> str:
 
 
 def _versions() -> dict:
+    return dict(_installed_versions())
+
+
+@functools.cache
+def _installed_versions() -> dict:
+    """Looked up once per process (each metadata lookup scans sys.path)."""
     versions = {"cogniframe": __version__}
     for dist in STACK:
         try:

@@ -129,6 +129,9 @@ def profile_ini(spec: Spec, material: str, infill: float) -> str:
         # PrusaSlicer 2.5's "aligned" seam placer takes ~80 % of the time on small joints (6 s vs 1.5 s
         # for a motor mount); "rear" gives the same grams and puts every seam at the back.
         "seam_position": "rear",
+        # Simplify sliced outlines to 0.0125 mm (PrusaSlicer's default 0 keeps every facet edge): a third
+        # less slicing time on the joint plate, the same grams and the print time within seconds.
+        "resolution": "0.0125",
         "filament_type": s.filament_type,
         "filament_diameter": f"{FILAMENT_DIAMETER:g}",
         "filament_density": f"{mat.density_g_cm3:g}",
