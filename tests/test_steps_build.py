@@ -44,11 +44,11 @@ def _params(folder: Path, change: tuple[str, object] | None = None) -> Path:
     return p
 
 
-def _build(params: Path, out: Path, slicer: bool, use_cache: bool = True):
+def _build(params: Path, out: Path, slicer: bool, use_cache: bool = True, console=None):
     with pytest.MonkeyPatch.context() as mp:
         if not slicer:
             mp.setattr(slicer_mod, "find_slicer", lambda: None)
-        return run_build(spec_mod.load(params), params, out, jobs=2, use_cache=use_cache)
+        return run_build(spec_mod.load(params), params, out, jobs=2, use_cache=use_cache, console=console)
 
 
 def _ran(result) -> set[str]:
@@ -80,11 +80,23 @@ def test_cold_build_runs_every_step_once(warm):
 
 
 def test_unchanged_build_reruns_nothing_and_gives_the_same_bytes(warm, tmp_path):
+    import io
+
+    from rich.console import Console
+
     root, params, first = warm
-    again = _build(params, tmp_path / "again", slicer=True)
+    log = io.StringIO()
+    again = _build(params, tmp_path / "again", slicer=True, console=Console(file=log, width=100))
     assert _ran(again) == set()
     assert {t for t, s in again.steps if s == "cached"} == _ran(first)
     assert _files(tmp_path / "again") == _files(first.out_dir)
+    # not a terminal: one plain line per step, cached ones marked, then a count
+    lines = log.getvalue().splitlines()
+    n = len(again.steps)
+    assert sum(line.startswith("[") for line in lines) == n
+    assert any(line.endswith("cached") and "part:tpu_95a/knee" in line for line in lines)
+    assert f"{n} steps: {n - len(_ran(first))} ran, {len(_ran(first))} cached" in lines
+    assert "\x1b[" not in log.getvalue()  # no colours or cursor moves in a log file
 
 
 def test_a_damaged_cache_entry_is_rebuilt_in_a_real_build(warm, tmp_path):
