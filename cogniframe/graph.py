@@ -18,7 +18,8 @@ without a key is cheap and in memory only (a check, a text file): it always runs
 Where a step runs: `where="main"` steps run one at a time on the calling thread, in list order
 (Python work: matplotlib, VTK, trimesh); `where="wait"` steps each get a thread, because they
 mostly wait for another process (the CAD process pool, PrusaSlicer), so they overlap with the
-main ones and with each other.
+main ones and with each other. `after` orders without being an input (not in the key): e.g.
+renders start after the plates are laid out, so a long render never delays the slicer.
 
 Why not a library: doit tracks whether targets are up to date *in place* (a dbm of file
 checksums per task) while a build here fills a fresh temporary folder from a content-addressed
@@ -59,7 +60,7 @@ class Step:
     key: Callable[..., Any] | None = None  # key(ctx, **vars) -> JSON-able inputs; None: always run
     code: tuple[str, ...] = ()  # cogniframe sources (globs) the step's output depends on
     where: str = "main"  # "main" or "wait"
-    doc: str = ""
+    after: tuple[str, ...] = ()  # order only, not inputs: start after these (patterns like needs)
 
 
 @dataclass(frozen=True)
@@ -68,6 +69,7 @@ class Task:
     step: Step
     vars: Mapping[str, str]
     needs: tuple[str, ...]  # task names
+    after: tuple[str, ...] = ()  # task names that must finish first (scheduling only, not in the key)
 
 
 @dataclass
@@ -118,14 +120,17 @@ def expand(steps: Sequence[Step], rows: Iterable[Mapping[str, str]]) -> list[Tas
         raise ValueError(f"duplicate task names: {sorted(n for n in names if names.count(n) > 1)}")
     tasks = []
     for i, (name, step, binding) in enumerate(named):
-        needs = []
-        for pat in step.needs:
-            pat = pat.format(**binding)
-            hits = [n for n in names[:i] if fnmatch.fnmatchcase(n, pat)]  # only earlier steps: no cycles
-            if not hits and "*" not in pat:
-                raise ValueError(f"{name} needs {pat!r}, which no earlier step makes")
-            needs += [h for h in hits if h not in needs]
-        tasks.append(Task(name, step, binding, tuple(needs)))
+        resolved = []
+        for patterns in (step.needs, step.after):
+            found: list[str] = []
+            for pat in patterns:
+                pat = pat.format(**binding)
+                hits = [n for n in names[:i] if fnmatch.fnmatchcase(n, pat)]  # only earlier steps: no cycles
+                if not hits and "*" not in pat:
+                    raise ValueError(f"{name} needs {pat!r}, which no earlier step makes")
+                found += [h for h in hits if h not in found]
+            resolved.append(tuple(found))
+        tasks.append(Task(name, step, binding, resolved[0], resolved[1]))
     return tasks
 
 
@@ -185,7 +190,7 @@ def run(tasks: Sequence[Task], ctx: Context, threads: int = 8,
             on_done(rec)
 
     def ready(t: Task) -> bool:
-        return all(n in done for n in t.needs)
+        return all(n in done for n in t.needs) and all(n in done for n in t.after)
 
     with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="step") as pool:
         running: dict = {}

@@ -196,7 +196,8 @@ STEPS = (
     Step("plots",                  ("check",),                            make_plots,    plots_key,        ("report/drop_plots.py", "analysis/impact.py")),
     Step("figures",                ("check",),                            make_figures,  figures_key,      ("report/html.py", "report/drop_plots.py")),
     Step("previews:{material}",    ("plates:{material}",),                make_previews, previews_key,     ("export/plates.py",)),
-    Step("render:{part}",          ("part:*/{part}",),                    make_render_part, render_part_key, ("report/renders.py", "export/plates.py")),
+    Step("render:{part}",          ("part:*/{part}",),                    make_render_part, render_part_key, ("report/renders.py", "export/plates.py"),
+         after=("plates:*",)),  # a render never holds up the slicer
     Step("renders",                ("part:*",),                           make_renders,  renders_key,      ("report/renders.py", "export/plates.py", "report/assembly_steps.py")),
     Step("bom",                    ("check", "slice:*"),                  bom),
     Step("report",                 ("check", "bom", "plots", "figures", "previews:*", "render:*", "renders"), report),

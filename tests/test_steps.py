@@ -186,3 +186,25 @@ def test_code_changes_are_part_of_the_key(tmp_path, private_cache, monkeypatch):
     monkeypatch.setitem(cache._CODE, ("graph.py",), "edited")  # as if graph.py had been edited
     graph.run(graph.expand(steps, [{}]), graph.Context(tmp_path, {}))
     assert ran == [1, 1]
+
+
+def test_after_orders_without_being_an_input(tmp_path, private_cache):
+    """`after` only orders: the step waits for it but its key does not read it."""
+    order = []
+    seen = {"slow": 0}
+
+    def steps():
+        return (Step("render", (), lambda ctx: order.append("render") or Made(), key=lambda ctx: "same", after=("plates",)),
+                Step("plates", (), lambda ctx: order.append("plates") or Made(), key=lambda ctx: seen["slow"]))
+
+    with pytest.raises(ValueError, match="needs 'plates'"):  # like needs: only earlier steps
+        graph.expand(steps(), [{}])
+    good = (Step("plates", (), lambda ctx: order.append("plates") or Made(), key=lambda ctx: seen["slow"]),
+            Step("render", (), lambda ctx: order.append("render") or Made(), key=lambda ctx: "same", after=("plates",)))
+    (plates, render) = graph.expand(good, [{}])
+    assert render.after == ("plates",) and render.needs == ()
+    graph.run([render, plates], graph.Context(tmp_path, {}))  # listed first, still runs second
+    assert order == ["plates", "render"]
+    seen["slow"] = 1  # plates reruns; render's key does not read it, so it stays cached
+    records = graph.run([render, plates], graph.Context(tmp_path, {}))
+    assert {r.task: r.status for r in records} == {"plates": "ran", "render": "cached"}
