@@ -94,7 +94,7 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
     cad = steps.CadPool(jobs or os.cpu_count() or 1)
     log = lambda m: console.print(m, markup=False, highlight=False)  # noqa: E731
     ctx = steps.BuildContext(out, {"spec": spec, "design": design, "cad": cad, "slicer": steps.Slicer(log), "log": log},
-                        stack=json.dumps(_versions(), sort_keys=True), use_cache=use_cache)
+                              stack=steps.stack_fingerprint(), use_cache=use_cache)
     tasks = graph.expand(steps.STEPS, steps.rows(design))
     try:
         with _StepProgress(console, len(tasks), spec.name) as progress:

@@ -170,7 +170,7 @@ def _do(task: Task, ctx: Context) -> tuple[Any, str]:
     return value, ("ran" if key is not None or (task.step.key is not None and not ctx.use_cache) else "always")
 
 
-def run(tasks: Sequence[Task], ctx: Context, threads: int = 8,
+def run(tasks: Sequence[Task], ctx: Context, threads: int = 16,
         on_start: Callable[[str], None] | None = None,
         on_done: Callable[[Record], None] | None = None) -> list[Record]:
     """Run every task once its needs are done. Main-thread tasks run in list order, one at a time;

@@ -24,6 +24,7 @@ only inside steps that run.
 
 from __future__ import annotations
 
+import json
 import threading
 
 from . import graph
@@ -32,6 +33,25 @@ from .fabrication import (bom, figures_key, make_figures, make_plates, make_prev
                           make_slice, plates_key, previews_key, render_part_key, renders_key, report, slice_key)
 from .graph import Made, Step
 
+
+
+# Libraries whose versions are in every step's key, besides build.STACK (which the manifest lists).
+EXTRA_STACK = ("rectpack", "pillow", "lxml", "networkx", "rich")
+
+
+def stack_fingerprint() -> str:
+    """Versions of everything that shapes the output bytes: part of every cache key."""
+    from importlib import metadata
+
+    from .build import _versions
+
+    versions = _versions()
+    for dist in EXTRA_STACK:
+        try:
+            versions[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            versions[dist] = None
+    return json.dumps(versions, sort_keys=True)
 
 
 class BuildContext(graph.Context):
