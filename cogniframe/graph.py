@@ -93,7 +93,8 @@ class Context:
 
     def each(self, pattern: str) -> dict[str, Any]:
         """Values of the finished tasks matching `pattern`, by task name, in name order."""
-        return {n: v for n, v in sorted(self.values.items()) if fnmatch.fnmatchcase(n, pattern)}
+        done = dict(self.values)  # a copy: "wait" steps read while the main thread adds values
+        return {n: v for n, v in sorted(done.items()) if fnmatch.fnmatchcase(n, pattern)}
 
 
 @dataclass(frozen=True)
