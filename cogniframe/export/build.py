@@ -147,8 +147,27 @@ def _jobs(jobs: int | None, n: int) -> int:
 
 def make_pool(workers: int) -> ProcessPoolExecutor:
     """A process pool for CadQuery work: forkserver with CadQuery preloaded (workers start warm), or
-    spawn where forkserver is missing; never fork (a fork after any OCC operation can deadlock)."""
-    return ProcessPoolExecutor(max_workers=max(1, int(workers)), mp_context=_context())
+    spawn where forkserver is missing; never fork (a fork after any OCC operation can deadlock).
+    Workers die with the build: a killed build leaves no worker writing into its temp folder."""
+    return ProcessPoolExecutor(max_workers=max(1, int(workers)), mp_context=_context(), initializer=_die_with_parent)
+
+
+def _die_with_parent() -> None:
+    """Linux: have the kernel SIGKILL this worker when its parent (the forkserver, which exits when the
+    build does) dies. Elsewhere a no-op; build_part_files still never recreates a vanished folder."""
+    import signal
+    import sys
+
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL))  # 1 = PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return
+    if os.getppid() == 1:  # the parent died before prctl: nobody will read our results
+        os._exit(1)
 
 
 def _context():
@@ -195,6 +214,8 @@ def build_part_files(part: PartSpec, bed, out_dir: str) -> dict:
             f"{np.ceil(size[0]):.0f} x {np.ceil(size[1]):.0f} x {np.ceil(size[2]):.0f}, or make the part smaller ({key}).",
             key="printer.bed")
     stl_rel, step_rel = stl_relpath(part), step_relpath(part)
+    if not Path(out_dir).is_dir():  # the build was stopped and its temp folder removed: never recreate it
+        raise FileNotFoundError(f"{out_dir}: the build folder is gone")
     mesh = mesh_mod.write_stl(shape, Path(out_dir) / stl_rel, LINEAR_TOL, ANGULAR_TOL, name=part.name)
     write_step(shape, Path(out_dir) / step_rel, part.name)
     ah, av = mesh_mod.area_split(mesh)
