@@ -61,13 +61,11 @@ def check_row(params: dict, source: str, text: str | None = None) -> dict:
     from .. import spec as spec_mod
     from ..errors import UserError
 
-    spec = None
     try:
         spec = spec_mod.from_dict(params, source=source, text=text)
-        result = pipeline.check(spec)
+        with spec.blamed():  # a later stage's error gains the key's line, as in `cogniframe check`
+            result = pipeline.check(spec)
     except UserError as e:
-        if spec is not None and hasattr(spec, "located"):
-            e = spec.located(e)
         return {"verdict": "INVALID", "problems": "", "error": str(e)}
     return outputs(pipeline.check_dict(result))
 
