@@ -27,12 +27,14 @@ import uuid
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
-import trimesh
 
 from ..errors import UserError
+
+if TYPE_CHECKING:  # trimesh is imported where it is used: reading a plate's names needs none of it
+    import trimesh
 
 SCALE = 100  # packing units per mm (rectpack works best with integers)
 TURN_GAIN = 0.10  # turn a part to its min-area footprint only if that saves this much bed area
@@ -116,11 +118,15 @@ class PlateFile:
 # -- layout ----------------------------------------------------------------------------------
 
 def _rot_z(deg: float) -> np.ndarray:
+    import trimesh
+
     return trimesh.transformations.rotation_matrix(math.radians(deg), [0, 0, 1])
 
 
 def _footprint_turn(mesh: trimesh.Trimesh) -> float:
     """Degrees to turn about z so the footprint's bounding rectangle is smallest (0 if not worth it)."""
+    import trimesh
+
     pts = np.asarray(mesh.vertices)[:, :2]
     ext = np.ptp(pts, axis=0)
     area = float(ext[0] * ext[1])
@@ -250,6 +256,8 @@ _UUID_RE = re.compile(rb'p:UUID="[0-9a-fA-F-]{36}"')
 
 def plate_3mf_bytes(plate: Plate) -> bytes:
     """The plate as a 3MF (trimesh scene export, one named object per copy), byte-stable."""
+    import trimesh
+
     scene = trimesh.Scene()
     for c in plate.copies:
         scene.add_geometry(c.mesh, geom_name=c.name, node_name=c.name)
@@ -343,6 +351,8 @@ def read_plate(path: Path | str, bed: Sequence[float], margin: float) -> Plate:
 
     The build draws each preview from the 3MF it wrote, so a preview is a function of the plate
     file alone and can be cached by the file's hash."""
+    import trimesh
+
     path = Path(path)
     material, index = parse_plate_name(path.stem)
     scene = trimesh.load(path, force="scene")
