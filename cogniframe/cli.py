@@ -79,10 +79,11 @@ def schema() -> None:
 
 
 def _register_commands() -> None:
-    from .commands import fab, physics
+    from .commands import fab, maker, physics
 
     physics.register(app)
     fab.register(app)
+    maker.register(app)
 
 
 _register_commands()
