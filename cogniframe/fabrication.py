@@ -19,10 +19,11 @@ def write_fabrication(spec, check, built, out: Path, console: Console) -> None:
     d = check.design
     meshes = {b.name: trimesh.load(out / b.stl, force="mesh") for b in built}
     items = [plates_mod.PlateItem(b.name, b.material, b.qty, meshes[b.name]) for b in built]
-    plates = plates_mod.write_plates(plates_mod.pack_plates(items, spec.printer.bed, spec.printer.margin), out / "plates")
     infill: dict[str, float] = {}
     for p in d.parts:
         infill[p.material] = max(infill.get(p.material, 0.0), p.infill)
+    plates = plates_mod.write_plates(plates_mod.pack_plates(items, spec.printer.bed, spec.printer.margin), out / "plates",
+                                     configs=slicer.project_configs(spec, infill))
     console.print(f"slicing {len(plates)} plates", markup=False)
     # G-code is not byte-stable (timestamp, threaded path order): keep its numbers, not the file.
     sliced = slicer.slice_plates([p.threemf for p in plates], spec, check.mass.by_material, infill=infill,

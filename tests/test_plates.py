@@ -193,3 +193,17 @@ def test_same_bytes_in_another_process(tmp_path):
     assert here == sorted(p.name for p in (tmp_path / "there").iterdir())
     for name in here:
         assert (tmp_path / "here" / name).read_bytes() == (tmp_path / "there" / name).read_bytes(), name
+
+
+def test_3mf_carries_prusaslicer_settings_and_stays_byte_stable(tmp_path):
+    configs = {"tpu_95a": "; generated\n; fill_density = 100%\n", "abs": "; generated\n; fill_density = 10%\n"}
+    a = write_plates(pack_plates(_items(), BED, MARGIN), tmp_path / "a", configs=configs)
+    b = write_plates(pack_plates(_items(), BED, MARGIN), tmp_path / "b", configs=configs)
+    plain = write_plates(pack_plates(_items(), BED, MARGIN), tmp_path / "c")
+    for fa, fb, fc in zip(a, b, plain):
+        assert fa.threemf.read_bytes() == fb.threemf.read_bytes()
+        with zipfile.ZipFile(fa.threemf) as z, zipfile.ZipFile(fc.threemf) as zc:
+            assert z.read("Metadata/Slic3r_PE.config").decode() == configs[fa.material]
+            assert z.getinfo("Metadata/Slic3r_PE.config").date_time == (1980, 1, 1, 0, 0, 0)
+            assert "Metadata/Slic3r_PE.config" not in zc.namelist()
+            assert z.read("3D/3dmodel.model") == zc.read("3D/3dmodel.model")  # geometry untouched
