@@ -37,10 +37,10 @@ class BuildResult:
 
 
 def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None = None, use_cache: bool = True,
-              console: Console | None = None) -> BuildResult:
+              console: Console | None = None, gcode: bool = False) -> BuildResult:
     console = console or Console(stderr=True)
     final = pipeline.output_dir(spec, out)
-    key = build_key(spec, params_path)
+    key = build_key(spec, params_path) + ("+gcode" if gcode else "")  # issue 14: a --gcode build differs
     if use_cache and _up_to_date(final, key):
         verdict = json.loads((final / "check.json").read_text())["verdict"]
         console.print(f"{final} is up to date (same params, same cogniframe): nothing rebuilt", markup=False)
@@ -49,7 +49,7 @@ def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None 
     final.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.building-", dir=final.parent))
     try:
-        result = _build_into(spec, params_path, tmp, jobs, use_cache, console, key)
+        result = _build_into(spec, params_path, tmp, jobs, use_cache, console, key, gcode=gcode)
         _replace_dir(tmp, final)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -84,7 +84,7 @@ def _up_to_date(final: Path, key: str) -> bool:
 
 
 def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_cache: bool, console: Console,
-                key: str):
+                key: str, gcode: bool = False):
     from .export.assembly import write_assembly
     from .export.build import build_parts
 
@@ -113,7 +113,7 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
 
     from .fabrication import write_fabrication
 
-    write_fabrication(spec, check, built, out, console)
+    write_fabrication(spec, check, built, out, console, keep_gcode=gcode)
     n = _write_manifest(spec, params_path, out, key)
     return n, check, built
 
@@ -162,6 +162,8 @@ def _write_manifest(spec: Spec, params_path: Path, out: Path, key: str) -> int:
         "spec_sha256": spec.digest(),
         "versions": _versions(),
         "files": [{"path": p.relative_to(out).as_posix(), "size": p.stat().st_size, "sha256": _sha256(p)} for p in files],
+        # outside the identical-rebuild promise (issue 14): `build --gcode`'s G-code has a timestamp and threaded path order
+        "not_reproducible": [p.relative_to(out).as_posix() for p in files if p.suffix == ".gcode"],
     }
     _write(out / "manifest.json", json.dumps(manifest, indent=2) + "\n")
     return len(files) + 1

@@ -8,7 +8,7 @@ from pathlib import Path
 from rich.console import Console
 
 
-def write_fabrication(spec, check, built, out: Path, console: Console) -> None:
+def write_fabrication(spec, check, built, out: Path, console: Console, keep_gcode: bool = False) -> None:
     import trimesh
 
     from .export import plates as plates_mod
@@ -25,9 +25,10 @@ def write_fabrication(spec, check, built, out: Path, console: Console) -> None:
     plates = plates_mod.write_plates(plates_mod.pack_plates(items, spec.printer.bed, spec.printer.margin), out / "plates",
                                      configs=slicer.project_configs(spec, infill))
     console.print(f"slicing {len(plates)} plates", markup=False)
-    # G-code is not byte-stable (timestamp, threaded path order): keep its numbers, not the file.
+    # G-code is not byte-stable (timestamp, threaded path order): keep its numbers, not the file,
+    # unless `build --gcode` asked for it (then it is listed as not_reproducible in the manifest).
     sliced = slicer.slice_plates([p.threemf for p in plates], spec, check.mass.by_material, infill=infill,
-                                 log=lambda m: console.print(m, markup=False), keep_gcode=False)
+                                 log=lambda m: console.print(m, markup=False), keep_gcode=keep_gcode)
     lines = bom.build_bom(spec, d, check.mass, sliced, sizes={b.name: b.bbox_mm for b in built})
     bom.write_bom(lines, out)
     steps = assembly_steps.assembly_steps(d)
@@ -37,4 +38,8 @@ def write_fabrication(spec, check, built, out: Path, console: Console) -> None:
     views = renders.render_assembly(world, renders.rod_segments(d.frame), out / "renders", title=spec.name)
     part_pngs = renders.render_parts({b.name: (b.material, meshes[b.name]) for b in built}, out / "renders" / "parts")
     images = {f"assembly {v}": p for v, p in views.items()} | {f"part {n}": p for n, p in part_pngs.items()}
-    write_report(check, out, images, lines, steps, plates, sliced)
+    from .report.viewer import design_items
+
+    pfl = {b.name: b.print_from_local for b in built}
+    write_report(check, out, images, lines, steps, plates, sliced,
+                 viewer_items=design_items(d, meshes, pfl, check.mass, plates))
