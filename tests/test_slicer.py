@@ -253,3 +253,31 @@ def test_3mf_slices_with_its_own_settings_and_no_profile(tmp_path):
     subprocess.run([shutil.which("prusa-slicer"), "--loglevel", "1", "--export-gcode", "--dont-arrange",
                     str(bare[0].threemf), "-o", str(gcode)], capture_output=True, text=True, timeout=300, check=True)
     assert _gcode_settings(gcode)["fill_density"] != "100%"
+
+
+@needs_slicer
+@pytest.mark.slow
+def test_build_gcode_keeps_gcode_per_plate_outside_the_promise(run_cli, tmp_path):
+    import json
+    from pathlib import Path
+
+    PARAMS = Path(__file__).resolve().parents[1] / "params"
+    out = tmp_path / "carbon"
+    code, _, err = run_cli("build", PARAMS / "carbon.yaml", "-o", out, "--gcode")
+    assert code == 0, err
+    plates = sorted(p.stem for p in (out / "plates").glob("*.3mf"))
+    gcodes = sorted(p.stem for p in (out / "plates").glob("*.gcode"))
+    assert gcodes == plates and plates == ["abs_1", "tpu_95a_1"]
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["not_reproducible"] == [f"plates/{n}.gcode" for n in gcodes]
+    assert set(manifest["not_reproducible"]) <= {f["path"] for f in manifest["files"]}
+    tpu = _gcode_settings(out / "plates" / "tpu_95a_1.gcode")
+    core = _gcode_settings(out / "plates" / "abs_1.gcode")
+    assert tpu["fill_density"] == "100%" and core["fill_density"] == "10%"
+    # the report's numbers come from these very files
+    check = json.loads((out / "check.json").read_text())
+    assert check["verdict"] == "PASS"
+    grams, _ = slicer.read_gcode_stats(out / "plates" / "tpu_95a_1.gcode")
+    assert grams > 30
+    code, _, err = run_cli("build", PARAMS / "carbon.yaml", "-o", out, "--gcode")
+    assert code == 0 and "nothing rebuilt" in err  # a --gcode build is kept by the next --gcode build
