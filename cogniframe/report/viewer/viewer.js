@@ -59,8 +59,8 @@ export function start(THREE, OrbitControls, root, scene_data, geometry_b64) {
   const controls = new OrbitControls(camera, canvas);
   controls.enableDamping = false;
   function home() {
-    const dir = new THREE.Vector3(1, -1.25, 0.9).normalize();
-    camera.position.copy(centre).addScaledVector(dir, radius / Math.sin(THREE.MathUtils.degToRad(camera.fov / 2)) * 0.8);
+    const dir = new THREE.Vector3(1, 1, 0.8).normalize();  // as the iso render: y is the front
+    camera.position.copy(centre).addScaledVector(dir, radius / Math.sin(THREE.MathUtils.degToRad(camera.fov / 2)) * 0.92);
     camera.near = radius / 50;
     camera.far = radius * 20;
     camera.updateProjectionMatrix();
