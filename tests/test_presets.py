@@ -147,3 +147,5 @@ def test_new_refuses_to_overwrite(run_cli, tmp_path):
     assert path.read_text(encoding="utf-8") == "keep me\n"
     code, _, err = run_cli("new", "x", "--from", "steel", cwd=tmp_path)
     assert code == 2 and "carbon, bamboo" in err and not (tmp_path / "x.yaml").exists()
+    code, _, err = run_cli("new", ".hidden", cwd=tmp_path)  # the same name rule as spec.load
+    assert code == 2 and "e.g. hidden" in err and not list(tmp_path.glob("*hidden*"))

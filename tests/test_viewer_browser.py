@@ -19,7 +19,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
-import yaml
 
 from cogniframe import pipeline
 from cogniframe import spec as spec_mod

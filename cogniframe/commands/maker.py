@@ -24,7 +24,6 @@ from cogniframe.errors import UserError
 
 PRESETS = ("carbon", "bamboo")
 SCHEMA_LINE = "# yaml-language-server: $schema="
-_NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
 
 
 def printers_cmd(json_out: Annotated[bool, typer.Option("--json", help="print JSON instead of a table")] = False) -> None:
@@ -86,9 +85,12 @@ def new_cmd(
     if path.suffix in (".yaml", ".yml"):
         path = path.with_suffix("")
     stem = path.name
-    if not _NAME_RE.match(stem):
+    from cogniframe.spec import NAME_RE, slug
+
+    if not NAME_RE.fullmatch(stem):
         raise UserError(f"{name}: not a usable design name (it names the file and the output folder out/{stem}). "
-                        f"Fix: use letters, digits, '-', '_' or '.', starting with a letter or digit, e.g. mydrone.")
+                        f"Fix: use letters, digits, '-', '_' and '.', not starting with '.', at most 64 characters, "
+                        f"e.g. {slug(stem)}.")
     target = path.with_name(stem + ".yaml")
     if target.exists():
         raise UserError(f"{target}: already exists; `cogniframe new` never overwrites a file. Fix: choose another "
