@@ -302,7 +302,8 @@ def test_viewer_section_under_the_verdicts(tmp_path):
     text = html_path.read_text(encoding="utf-8")
     assert text.index('id="verdicts"') < text.index('id="viewer-section"') < text.index('<section id="mass"')
     assert '<li><a href="#viewer-section">3D view</a></li>' in text
-    assert "cf-viewer" not in md_path.read_text(encoding="utf-8")
+    md = md_path.read_text(encoding="utf-8")
+    assert "cf-viewer" not in md and md.index("3D view of the assembly is in report.html") < md.index("## Mass budget")
     knee = next(i for i in items if i.name == "knee_fl")
     assert knee.plate == "tpu_95a_1" and knee.qty == 4 and knee.mass_g == pytest.approx(
         next(m.mass_g_each for m in result.mass.items if m.name == "knee"))

@@ -354,7 +354,10 @@ def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str
         viewer_html = viewer_section(viewer_items)
     html_path, md_path = out_dir / "report.html", out_dir / "report.md"
     html_path.write_text(_render_html(name, cd, verdicts, sections, warnings, viewer_html), encoding="utf-8")
-    md_path.write_text(_render_md(name, cd, verdicts, sections, warnings, out_dir), encoding="utf-8")
+    md = _render_md(name, cd, verdicts, sections, warnings, out_dir)
+    if viewer_html:  # the 3D view needs a browser: point there from the Markdown twin
+        md = md.replace("\n## ", "\nThe interactive 3D view of the assembly is in report.html (open it in a browser).\n\n## ", 1)
+    md_path.write_text(md, encoding="utf-8")
     return html_path, md_path
 
 
