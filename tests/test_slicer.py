@@ -227,7 +227,7 @@ def test_project_config_is_the_profile_as_prusaslicer_3mf_comments(spec):
     cfg = slicer.project_config(spec, "tpu_95a", 1.0)
     lines = cfg.splitlines()
     assert all(ln.startswith("; ") for ln in lines)
-    assert dict(ln[2:].split(" = ", 1) for ln in lines[1:]) == ini
+    assert dict(ln[2:].split(" = ", 1) for ln in lines[1:]) == {"printer_technology": "FFF", **ini}
     custom = spec_mod.from_dict({"core": {"infill": 0.25}})
     assert slicer.project_configs(custom) == {"abs": slicer.project_config(custom, "abs", 0.25),
                                               "tpu_95a": slicer.project_config(custom, "tpu_95a", 1.0)}
