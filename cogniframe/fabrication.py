@@ -39,15 +39,17 @@ def make_plates(ctx, material: str) -> Made:
     value = []
     for plate in pl.pack_plates(items, ctx.spec.printer.bed, ctx.spec.printer.margin):
         f3 = folder / f"{plate.name}.3mf"
-        f3.write_bytes(pl.plate_3mf_bytes(plate, _config(ctx, material)))
+        data = pl.plate_3mf_bytes(plate, _config(ctx, material))
+        f3.write_bytes(data)
         value.append({"name": plate.name, "material": plate.material, "threemf": f"plates/{f3.name}",
                       "preview": f"plates/{plate.name}.png", "copies": [c.name for c in plate.copies],
-                      "volume_mm3": plate.volume_mm3, "sha256": file_sha256(f3)})
+                      "volume_mm3": plate.volume_mm3, "sha256": file_sha256(f3), "model_sha256": pl.model_sha256(data)})
     return Made(tuple(v["threemf"] for v in value), value)
 
 
 def previews_key(ctx, material: str):
-    return [[v["name"], v["sha256"]] for v in ctx[f"plates:{material}"]] + [ctx.bed, float(ctx.spec.printer.margin)]
+    # the layout only (3D/3dmodel.model): a print setting inside the 3MF does not change the picture
+    return [[v["name"], v["model_sha256"]] for v in ctx[f"plates:{material}"]] + [ctx.bed, float(ctx.spec.printer.margin)]
 
 
 def make_previews(ctx, material: str) -> Made:

@@ -266,6 +266,14 @@ def plate_3mf_bytes(plate: Plate, config: str | None = None) -> bytes:
     return _stable_zip(raw, plate.name, extra)
 
 
+def model_sha256(threemf: bytes) -> str:
+    """sha256 of a 3MF's geometry and layout (`3D/3dmodel.model`), not of the settings beside it."""
+    import hashlib
+
+    with zipfile.ZipFile(io.BytesIO(threemf)) as z:
+        return hashlib.sha256(z.read("3D/3dmodel.model")).hexdigest()
+
+
 def _stable_zip(raw: bytes, seed: str, extra: Mapping[str, bytes] | None = None) -> bytes:
     """Rewrite a 3MF zip: UUIDs derived from `seed` and their position, fixed entry dates; `extra`
     entries (name -> bytes) are appended in name order."""
