@@ -53,6 +53,7 @@ def carbon_report(tmp_path_factory):
     from cogniframe.export.build import build_parts
 
     out = tmp_path_factory.mktemp("viewer") / "carbon"
+    out.mkdir()
     spec = spec_mod.load(ROOT / "params" / "carbon.yaml")
     d = pipeline.design(spec)
     built = build_parts(spec, d.frame, d.parts, out, cache_dir=cache_dir())
