@@ -192,7 +192,6 @@ def bom(ctx) -> Made:
 
 
 def report(ctx) -> Made:
-    from .export.plates import PlateFile
     from .report import html
 
     lines, steps, sliced = ctx["bom"]
@@ -203,15 +202,38 @@ def report(ctx) -> Made:
             shutil.copyfile(ctx.out / "plots" / name, files / name)
         figures["drop"] = [("stiffness", files / "stiffness.png"), ("drop response", files / "drop_response.png"),
                            ("energy split", files / "energy_split.png")]
-    plates = [PlateFile(v["name"], v["material"], ctx.out / v["threemf"], ctx.out / v["preview"], tuple(v["copies"]),
-                        v["volume_mm3"]) for vs in ctx.each("plates:*").values() for v in vs]
-    plates.sort(key=lambda p: (p.material, p.name))
+    plates = _plate_files(ctx)
     images = {f"assembly {v}": ctx.out / "renders" / f"assembly_{v}.png" for v in ctx["renders"]}
     images |= {f"part {p}": ctx.out / "renders" / "parts" / f"{p}.png" for p in sorted(x.name for x in ctx.design.parts)}
-    from .report.viewer import design_items
+    html.write_report(ctx["check"], ctx.out, images, lines, steps, plates, sliced, figures=figures,
+                      viewer_html=ctx["viewer"])
+    return Made(("report.html", "report.md"))
+
+
+def _plate_files(ctx):
+    from .export.plates import PlateFile
+
+    plates = [PlateFile(v["name"], v["material"], ctx.out / v["threemf"], ctx.out / v["preview"], tuple(v["copies"]),
+                        v["volume_mm3"]) for vs in ctx.each("plates:*").values() for v in vs]
+    return sorted(plates, key=lambda p: (p.material, p.name))
+
+
+def viewer_key(ctx):
+    """The 3D view shows the parts' meshes where they sit, the rods, each part's grams and plate."""
+    names = {p.name for p in ctx.design.parts}
+    grams = [[i.name, i.mass_g_each] for i in ctx["check"].mass.items if i.name in names]
+    rods = [[r.role, r.length_mm, r.mass_g, list(r.rods)] for r in ctx.design.cut.rows]
+    plates = [[v["name"], v["copies"]] for vs in ctx.each("plates:*").values() for v in vs]
+    return [renders_key(ctx), grams, rods, plates]
+
+
+def make_viewer(ctx) -> Made:
+    """The report's interactive 3D-view section (HTML with the geometry inline), as a cached value:
+    a change that moves no part and no part's grams (a battery's mass) reuses it, with no mesh loaded."""
+    from .report.viewer import design_items, viewer_section
 
     d = ctx.design
     items = design_items(d, {p.name: ctx.mesh(p.name) for p in d.parts},
-                         {p.name: ctx.part_value(p.name)["print_from_local"] for p in d.parts}, ctx["check"].mass, plates)
-    html.write_report(ctx["check"], ctx.out, images, lines, steps, plates, sliced, figures=figures, viewer_items=items)
-    return Made(("report.html", "report.md"))
+                         {p.name: ctx.part_value(p.name)["print_from_local"] for p in d.parts}, ctx["check"].mass,
+                         _plate_files(ctx))
+    return Made((), viewer_section(items))
