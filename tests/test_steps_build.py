@@ -139,8 +139,9 @@ CHANGES = [
     ("core.plate_size", 44, False, _part_change("core_plate", "core_link", "corner_bottom", "knee", "motor_mount")),
     ("printer.margin", 5, True, {f"plates:{TPU}", f"plates:{ABS}", f"previews:{TPU}", f"previews:{ABS}",
                                  f"slice:{TPU}", f"slice:{ABS}"}),
-    ("core.infill", 0.15, True, MASS | {f"slice:{ABS}"}),  # a print setting: no part, no plate changes
-    ("printer.layer_height", 0.25, True, MASS | {f"slice:{TPU}", f"slice:{ABS}"}),
+    # print settings: no part changes; the plates carry them in the 3MF (issue 14), the previews stay
+    ("core.infill", 0.15, True, MASS | {f"plates:{ABS}", f"slice:{ABS}"}),
+    ("printer.layer_height", 0.25, True, MASS | {f"plates:{TPU}", f"plates:{ABS}", f"slice:{TPU}", f"slice:{ABS}"}),
 ]
 
 
