@@ -219,17 +219,17 @@ def _plate_files(ctx):
 
 
 def viewer_key(ctx):
-    """The 3D view shows the parts' meshes where they sit, the rods, each part's grams and plate."""
-    names = {p.name for p in ctx.design.parts}
-    grams = [[i.name, i.mass_g_each] for i in ctx["check"].mass.items if i.name in names]
-    rods = [[r.role, r.length_mm, r.mass_g, list(r.rods)] for r in ctx.design.cut.rows]
-    plates = [[v["name"], v["copies"]] for vs in ctx.each("plates:*").values() for v in vs]
-    return [renders_key(ctx), grams, rods, plates]
+    """What the 3D view shows: each part's mesh (STL hash), copies, placement and grams each, the plates'
+    copies, the rods and the cut list."""
+    d = ctx.design
+    grams = {i.name: i.mass_g_each for i in ctx["check"].mass.items}
+    return [[[p.name, p.material, p.qty, p.placements, ctx.part_value(p.name)["stl_sha256"],
+              ctx.part_value(p.name)["print_from_local"], grams.get(p.name)] for p in d.parts],
+            [[p.name, p.copies] for p in _plate_files(ctx)], list(d.frame.rods.values()), d.cut.rows]
 
 
 def make_viewer(ctx) -> Made:
-    """The report's interactive 3D-view section (HTML with the geometry inline), as a cached value:
-    a change that moves no part and no part's grams (a battery's mass) reuses it, with no mesh loaded."""
+    """The report's interactive 3D view (issue 14) as one HTML section, kept as this step's value."""
     from .report.viewer import design_items, viewer_section
 
     d = ctx.design

@@ -12,7 +12,7 @@
     previews:{material}       plates:{material}                        plate files
     render:{part}             part:*/{part}                            the part's STL hash, material
     renders                   part:*                                   STL hashes, placements, rods
-    viewer                    check part:* plates:*                    STL hashes, placements, rods, part grams, plates
+    viewer                    check plates:*                           STL hashes, placements, grams each, plates, rods, cut list
     bom                       check slice:*                            (always: BOM, assembly steps)
     report                    everything above                         (always: HTML and Markdown from the files above)
 
@@ -221,7 +221,7 @@ STEPS = (
     Step("render:{part}",          ("part:*/{part}",),                    make_render_part, render_part_key, ("report/renders.py", "export/plates.py"),
          after=("plates:*",)),  # a render never holds up the slicer
     Step("renders",                ("part:*",),                           make_renders,  renders_key,      ("report/renders.py", "export/plates.py", "report/assembly_steps.py")),
-    Step("viewer",                 ("check", "part:*", "plates:*"),       make_viewer,   viewer_key,       ("report/viewer/*", "report/assembly_steps.py", "export/plates.py")),
+    Step("viewer",                 ("check", "plates:*"),                 make_viewer,   viewer_key,       ("report/viewer/*", "export/plates.py", "report/assembly_steps.py")),
     Step("bom",                    ("check", "slice:*"),                  bom),
     Step("report",                 ("check", "bom", "plots", "figures", "previews:*", "render:*", "renders", "viewer"), report),
 )

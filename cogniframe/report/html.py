@@ -320,8 +320,9 @@ def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str
     `images`: caption -> PNG (renders of the assembly and parts), shown in the given order.
     `plates`: what `write_plates` returned (their preview PNGs are shown).
     `viewer_items`: the assembly as named meshes (`viewer.design_items` + any vitamins): an
-    interactive 3D view right under the verdicts (HTML only); `viewer_html`: that section already
-    made (`viewer.viewer_section`, the build caches it as a step). Returns (html, md)."""
+    interactive 3D view right under the verdicts (HTML only). `viewer_html`: that section already
+    made (`viewer.viewer_section`; the build caches it as a step), instead of `viewer_items`.
+    Returns (html, md)."""
     from ..pipeline import check_dict
 
     out_dir = Path(out_dir)
