@@ -208,10 +208,11 @@ def report(ctx) -> Made:
     plates.sort(key=lambda p: (p.material, p.name))
     images = {f"assembly {v}": ctx.out / "renders" / f"assembly_{v}.png" for v in ctx["renders"]}
     images |= {f"part {p}": ctx.out / "renders" / "parts" / f"{p}.png" for p in sorted(x.name for x in ctx.design.parts)}
-    from .report.viewer import design_items
+    from .report.viewer import design_items, read_stl
 
     d = ctx.design
-    items = design_items(d, {p.name: ctx.mesh(p.name) for p in d.parts},
+    # numpy's STL reader, not trimesh: a build that changes no part imports no mesh library
+    items = design_items(d, {p.name: read_stl(ctx.out / ctx.part_value(p.name)["stl"]) for p in d.parts},
                          {p.name: ctx.part_value(p.name)["print_from_local"] for p in d.parts}, ctx["check"].mass, plates)
     html.write_report(ctx["check"], ctx.out, images, lines, steps, plates, sliced, figures=figures, viewer_items=items)
     return Made(("report.html", "report.md"))
