@@ -230,10 +230,11 @@ def viewer_key(ctx):
 
 def make_viewer(ctx) -> Made:
     """The report's interactive 3D view (issue 14) as one HTML section, kept as this step's value."""
-    from .report.viewer import design_items, viewer_section
+    from .report.viewer import design_items, read_stl, viewer_section
 
     d = ctx.design
-    items = design_items(d, {p.name: ctx.mesh(p.name) for p in d.parts},
+    # numpy's STL reader, not trimesh: the 3D view never needs the mesh library
+    items = design_items(d, {p.name: read_stl(ctx.out / ctx.part_value(p.name)["stl"]) for p in d.parts},
                          {p.name: ctx.part_value(p.name)["print_from_local"] for p in d.parts}, ctx["check"].mass,
                          _plate_files(ctx))
     return Made((), viewer_section(items))
