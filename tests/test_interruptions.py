@@ -46,6 +46,23 @@ def wait_mid_build(proc: subprocess.Popen, final: Path, timeout: float = 120.0) 
     pytest.fail("the build never started writing parts")
 
 
+def left_running(tmp_path: Path, timeout: float = 15.0) -> list[str]:
+    """Processes of the killed build still alive after `timeout` (its CAD forkserver runs with the
+    build's folder on its sys.path, so its command line names tmp_path)."""
+    import psutil
+
+    end = time.monotonic() + timeout
+    while True:
+        alive = []
+        for p in psutil.process_iter(["pid", "cmdline"]):
+            cmd = " ".join(p.info["cmdline"] or [])
+            if str(tmp_path) in cmd and p.pid != os.getpid():
+                alive.append(f"{p.pid}: {cmd[:120]}")
+        if not alive or time.monotonic() > end:
+            return alive
+        time.sleep(0.2)
+
+
 def beside(final: Path) -> list[str]:
     return sorted(p.name for p in final.parent.iterdir())
 
@@ -55,10 +72,11 @@ def test_sigkill_mid_build_keeps_previous_output_and_next_build_cleans_up(tmp_pa
     before = snapshot(final)
     proc = start_build(final, tmp_path / "cache")
     temp = wait_mid_build(proc, final)
-    proc.send_signal(signal.SIGKILL)
+    proc.send_signal(signal.SIGKILL)  # the build process alone, as `kill -9 PID` does
     proc.wait(30)
     assert snapshot(final) == before
     assert temp.is_dir()  # what a killed build leaves: a stale temp folder (and its lock file)
+    assert left_running(tmp_path) == []  # its CAD server and workers end with it
 
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))
     code, out, err = run_cli("build", PARAMS, "-o", final, "-j", "1", cwd=tmp_path)

@@ -150,25 +150,42 @@ def make_pool(workers: int) -> ProcessPoolExecutor:
     """A process pool for CadQuery work: forkserver with CadQuery preloaded (workers start warm), or
     spawn where forkserver is missing; never fork (a fork after any OCC operation can deadlock).
     Workers die with the build: a killed build leaves no worker writing into its temp folder."""
-    return ProcessPoolExecutor(max_workers=max(1, int(workers)), mp_context=_context(), initializer=_die_with_parent)
+    return ProcessPoolExecutor(max_workers=max(1, int(workers)), mp_context=_context(), initializer=_die_with_build,
+                               initargs=(os.getpid(),))
 
 
-def _die_with_parent() -> None:
-    """Linux: have the kernel SIGKILL this worker when its parent (the forkserver, which exits when the
-    build does) dies. Elsewhere a no-op; build_part_files still never recreates a vanished folder."""
-    import signal
-    import sys
+def _die_with_build(build_pid: int) -> None:
+    """Exit this worker as soon as the build process `build_pid` is gone (even by SIGKILL).
 
-    if not sys.platform.startswith("linux"):
-        return
-    try:
-        import ctypes
+    A worker's parent is the forkserver, not the build, and the forkserver only exits once every
+    worker has (they hold its keep-alive pipe), so neither the kernel's parent-death signal nor the
+    forkserver would end them: a killed build used to leave its server and workers running, and a
+    worker could still write into the temp folder after the next build had cleaned it. A daemon
+    thread waits on the build's pidfd (Linux) or polls it, then ends the worker; with the workers
+    gone the forkserver exits too."""
+    import select
+    import threading
+    import time
 
-        ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL))  # 1 = PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        return
-    if os.getppid() == 1:  # the parent died before prctl: nobody will read our results
+    def watch() -> None:
+        try:
+            fd = os.pidfd_open(build_pid)
+        except (AttributeError, OSError):
+            fd = None
+        if fd is not None:
+            select.select([fd], [], [])  # readable when the build has exited
+        else:
+            while True:
+                time.sleep(0.5)
+                try:
+                    os.kill(build_pid, 0)
+                except ProcessLookupError:
+                    break
+                except PermissionError:
+                    pass
         os._exit(1)
+
+    threading.Thread(target=watch, name="die-with-build", daemon=True).start()
 
 
 def _context():
