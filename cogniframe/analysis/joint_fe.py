@@ -161,8 +161,8 @@ def condense(points: np.ndarray, tets: np.ndarray, e_mpa: float, nu: float, ties
 
         Kuu = Kuu + spring.assemble(fb)
         # Coupling with the body's six rigid motions, by quadrature on the same facets.
-        x = fb.global_coordinates().value  # (3, nf, nq)
-        n = fb.normals.value  # (3, nf, nq)
+        x = np.asarray(fb.global_coordinates())  # (3, nf, nq)
+        n = np.asarray(fb.normals)  # (3, nf, nq)
         dx = fb.dx  # (nf, nq)
         r = _rigid_modes(x, tie.ref)  # (6, 3, nf, nq)
         rn = np.einsum("jinq,inq->jnq", r, n)
@@ -173,7 +173,7 @@ def condense(points: np.ndarray, tets: np.ndarray, e_mpa: float, nu: float, ties
         phi = fb.basis  # list over local dofs of DiscreteField tuples
         dofs = fb.element_dofs  # (n_local, nf)
         for ld in range(dofs.shape[0]):
-            val = phi[ld][0].value  # (3, nf, nq)
+            val = np.asarray(phi[ld][0])  # (3, nf, nq)
             contrib = np.einsum("ink,aink,nk->an", val, kr, dx)  # (6, nf)
             np.add.at(Kur, (dofs[ld][:, None], np.arange(6 * ti, 6 * ti + 6)[None, :]), -contrib.T)
     X = _solve_many(Kuu, Kur)

@@ -45,7 +45,7 @@ import numpy as np
 # payload stiffness k from the FE joint model equals the paper's static 7040 N/m
 # (`calibrate_tpu_factor`); never per preset, load case or method. Printed TPU is softer than
 # moulded test bars (voids between extrusion lines, weak inter-layer bond, anisotropy).
-TPU_PRINTED_MODULUS_FACTOR = 0.62
+TPU_PRINTED_MODULUS_FACTOR = 0.290
 # ------------------------------------------------------------------------------------------
 
 TPU_NU = 0.48  # Poisson's ratio of TPU 95A (nearly incompressible elastomer)
@@ -287,12 +287,13 @@ def analytic_joint(spec, part, factor: float | None = None) -> JointStiffness:
 
 # -- solid FE ----------------------------------------------------------------------------------
 
-def fe_joint(spec, part, factor: float | None = None, mesh_mm: float = FE_MESH_MM) -> JointStiffness:
+def fe_joint(spec, part, factor: float | None = None, mesh_mm: float | None = None) -> JointStiffness:
     """Super-element from the solid FE of the part's CAD (see the module docstring)."""
     from . import joint_fe
     from ..parts import joint as joint_cad
 
     t0 = time.perf_counter()
+    mesh_mm = FE_MESH_MM if mesh_mm is None else mesh_mm
     itf = interface(spec, factor)
     built = joint_cad.build(part)
     m = built.print_from_local
@@ -373,7 +374,8 @@ def geometry_key(spec, part, method: str, factor: float | None, mesh_mm: float) 
     the interface (clearance, layer height), materials, method, and this module's source."""
     itf = interface(spec, factor)
     rod = spec.material(spec.rods.material)
-    data = [_CACHE_VERSION, part.digest, method, itf.e, itf.g, itf.h, rod.e_mpa, spec.rods.diameter, mesh_mm]
+    # the FE takes the rods as rigid: their modulus does not enter (the closed forms are not cached)
+    data = [_CACHE_VERSION, part.digest, method, itf.e, itf.g, itf.h, spec.rods.diameter, mesh_mm, FE_CURVATURE]
     h = hashlib.sha256(json.dumps(data, default=str).encode())
     for mod in ("joint_stiffness.py", "joint_fe.py"):
         h.update((Path(__file__).parent / mod).read_bytes())
@@ -382,10 +384,11 @@ def geometry_key(spec, part, method: str, factor: float | None, mesh_mm: float) 
 
 
 def joint_stiffness(spec, part, method: str = "fe", factor: float | None = None,
-                    mesh_mm: float = FE_MESH_MM, use_cache: bool = True) -> JointStiffness:
+                    mesh_mm: float | None = None, use_cache: bool = True) -> JointStiffness:
     """The super-element of one distinct joint, cached by geometry hash."""
     from .. import cache
 
+    mesh_mm = FE_MESH_MM if mesh_mm is None else mesh_mm
     if method not in ("fe", "analytic"):
         raise ValueError(f"joint stiffness method must be 'fe' or 'analytic', got {method!r}")
     if method == "analytic":
