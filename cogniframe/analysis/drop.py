@@ -19,7 +19,7 @@ from ..frame import Frame
 from ..spec import Spec
 from . import impact
 
-_MODULES = ("cogniframe.analysis.stiffness", "cogniframe.analysis.framefe", "cogniframe.analysis.joint_stiffness",
+_MODULES = ("cogniframe.analysis.stiffness", "cogniframe.analysis.impact_nl", "cogniframe.analysis.impact", "cogniframe.analysis.framefe", "cogniframe.analysis.joint_stiffness",
             "cogniframe.analysis.joint_fe", "cogniframe.frame", "cogniframe.partlist", "cogniframe.parts.joint",
             "cogniframe.materials", "cogniframe.spec")
 
@@ -99,8 +99,15 @@ def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropR
 
 def peak_prediction(spec: Spec, total_mass_g: float, drop: impact.DropResult, exo_mass_g: float) -> dict:
     """Predicted peak |a| (G, as the logger sees it) per drop height, from the better-validated model."""
+    heights = sorted({*spec.requirements.drop_heights_cm, spec.requirements.design_drop_height_cm})
+    key = _stiffness_key(spec, "peaks", total_mass_g, drop.k_n_per_m, drop.c_n_s_per_m, exo_mass_g, heights, drop.clearance_mm)
+    hit = cache.load_json("peaks", key)
+    if hit is not None:
+        return hit
     from . import impact_nl
 
-    return impact_nl.design_peaks(total_mass_g / 1000.0, drop.k_n_per_m, drop.c_n_s_per_m, exo_mass_g / 1000.0,
-                                  sorted({*spec.requirements.drop_heights_cm, spec.requirements.design_drop_height_cm}),
-                                  drop.clearance_mm)
+    out = impact_nl.design_peaks(total_mass_g / 1000.0, drop.k_n_per_m, drop.c_n_s_per_m, exo_mass_g / 1000.0,
+                                  heights, drop.clearance_mm)
+    out = json.loads(json.dumps(out))
+    cache.store_json("peaks", key, out)
+    return out
