@@ -30,7 +30,7 @@ def evaluate_design(spec: Spec, frame: Frame, total_mass_g: float) -> impact.Dro
     if spec.model.k_n_per_m is not None:
         k, k_source = spec.model.k_n_per_m, "measured"
     else:
-        k, k_source = predicted_k_n_per_m(spec, frame), "predicted"
+        k, k_source = predicted_k_n_per_m(spec, frame, total_mass_g), "predicted"
     if spec.model.c_n_s_per_m is not None:
         c, c_source = spec.model.c_n_s_per_m, "measured"
     else:
@@ -40,16 +40,24 @@ def evaluate_design(spec: Spec, frame: Frame, total_mass_g: float) -> impact.Dro
                            k_source=k_source, c_source=c_source)
 
 
-def predicted_k_n_per_m(spec: Spec, frame: Frame) -> float:
-    """Frame-model stiffness, cached by a hash of everything the model reads and of its source."""
-    key = _stiffness_key(spec)
+def predicted_k_n_per_m(spec: Spec, frame: Frame, total_mass_g: float | None = None) -> float:
+    """Frame-model stiffness, cached by a hash of everything the model reads and of its source.
+
+    With the mass, the secant stiffness at the design drop's force (the fit's play included,
+    `stiffness.play_springs`); the force k x_max depends on k, so it is iterated to a fixed point."""
+    key = _stiffness_key(spec, None if total_mass_g is None else round(total_mass_g, 6))
     hit = cache.load_json("stiffness", key)
     if hit is not None:
         return float(hit["k_n_per_m"])
     from .. import partlist
-    from .stiffness import predict_stiffness
+    from .stiffness import joint_models, predict_stiffness, secant_k
 
-    k = predict_stiffness(spec, frame, partlist.build(spec, frame), joint_model=spec.model.stiffness_model).k_n_per_m
+    parts = partlist.build(spec, frame)
+    joints = joint_models(spec, parts, spec.model.stiffness_model)
+    if total_mass_g is None:
+        k = predict_stiffness(spec, frame, parts, joints=joints).k_n_per_m
+    else:
+        k = secant_k(spec, frame, parts, joints, total_mass_g)
     cache.store_json("stiffness", key, {"k_n_per_m": k})
     return k
 
@@ -59,7 +67,8 @@ def _stiffness_key(spec: Spec, *extra) -> str:
 
     data = spec.model_dump(mode="json")
     inputs = {s: data[s] for s in ("materials", "frame", "rods", "joints", "core", "motors", "printer")}
-    inputs["stiffness_model"] = data["model"].get("stiffness_model", "fe")
+    inputs["model"] = data["model"]
+    inputs["requirements"] = {k: data["requirements"][k] for k in ("design_drop_height_cm", "clearance")}
     h = hashlib.sha256(json.dumps([inputs, extra], sort_keys=True, default=str).encode())
     # every module the model reads from: library moduli live in materials.py, bore in spec.py
     for mod in _MODULES:

@@ -133,7 +133,7 @@ def masses_g(spec, frame, parts, total_mass_g: float | None) -> dict:
 
 def build_model(spec, frame, parts, joints: dict, *, feet: str = "sliding", rod_segments: int = 1,
                 masses: dict | None = None, only_roles: tuple[str, ...] | None = None,
-                with_payload_support: bool = False) -> Model:
+                play: dict | None = None) -> Model:
     """The frame model. ``only_roles`` keeps only rods of those roles (and joints they touch)."""
     if feet not in ("sliding", "pinned"):
         raise ValueError(f"feet must be 'sliding' or 'pinned', got {feet!r}")
@@ -200,6 +200,10 @@ def build_model(spec, frame, parts, joints: dict, *, feet: str = "sliding", rod_
                     if np.linalg.norm(fe.nodes[name] - ref_w) > 1e-3:
                         raise RuntimeError(f"stiffness model: socket mouth of {rn} at {pl.instance} is off by "
                                            f"{np.linalg.norm(fe.nodes[name] - ref_w):.3g} mm")
+                    if play and name in play:  # the fit's play: a secant spring rod end <-> socket body
+                        body = fe.add_node(f"{name}:sock", ref_w)
+                        fe.add_spring((name, body), np.block([[play[name], -play[name]], [-play[name], play[name]]]))
+                        name = body
                 node_names.append(name)
                 keep.append(li)
             if only_roles is not None and not any(":free" not in n for n in node_names if n != pl.instance):
@@ -295,8 +299,8 @@ class StiffnessResult:
     rod_axial_per_n: tuple[tuple[str, float], ...] = ()  # rod axial force per N on the payload (tension +)
 
 
-def _solve_payload(spec, frame, parts, joints, feet: str = "sliding", load_n: float = DEFAULT_LOAD_N):
-    mdl = build_model(spec, frame, parts, joints, feet=feet)
+def _solve_payload(spec, frame, parts, joints, feet: str = "sliding", load_n: float = DEFAULT_LOAD_N, play=None):
+    mdl = build_model(spec, frame, parts, joints, feet=feet, play=play)
     fe = mdl.fe
     K = fe.stiffness()
     fixed = _floor_bc(mdl, K, feet)
@@ -307,9 +311,62 @@ def _solve_payload(spec, frame, parts, joints, feet: str = "sliding", load_n: fl
     return mdl, K, u
 
 
+PLAY_FRICTION_N = 1.0  # a rod in a printed socket holds ~1 N by friction before it slides into its play
+_PLAY_BIG = 1.0e6
+
+
+def play_springs(spec, frame, parts, joints, design_force_n: float, iterations: int = 3) -> dict:
+    """Secant springs of the fit's play at the design drop's force, per rod end node.
+
+    A rod in a bore with radial clearance g = fit_clearance / 2 moves g sideways and tilts
+    2 g / L (L the socket depth) before it bears; under a socket load F (moment M) across the
+    rod that play is a series compliance g / F (2 g / L / M). Evaluated at the forces the
+    sockets carry at the design drop (iterated, the play redistributes them), floored at
+    PLAY_FRICTION_N. An interference fit (clearance <= 0) has no play. This is the one place
+    the model is not linear: k becomes a secant stiffness at the design drop's force, as the
+    paper's static k is a secant over its 0-115 N test."""
+    g = max(spec.fit_clearance, 0.0) / 2
+    if g <= 0 or design_force_n <= 0:
+        return {}
+    play: dict = {}
+    for _ in range(iterations):
+        mdl, K, u = _solve_payload(spec, frame, parts, joints, load_n=design_force_n, play=play or None)
+        fe = mdl.fe
+        idx = fe.index()
+        new = {}
+        for nodes, Ks in fe.springs:
+            if len(nodes) == 2 and nodes[1] == nodes[0] + ":sock":
+                continue  # a play spring itself
+            dofs = np.concatenate([np.arange(6 * idx[n], 6 * idx[n] + 6) for n in nodes])
+            f = Ks @ u[dofs]
+            for j, n in enumerate(nodes):
+                base = n[:-5] if n.endswith(":sock") else n
+                if base.count(":") != 1 or base.endswith(":free"):
+                    continue
+                rn, tag = base.split(":")
+                r = frame.rods[rn]
+                end = r.a if tag == "a" else r.b
+                axis = r.socket_direction(end.node)
+                F, M = f[6 * j:6 * j + 3], f[6 * j + 3:6 * j + 6]
+                f_lat = max(float(np.linalg.norm(F - axis * (F @ axis))), PLAY_FRICTION_N)
+                m_lat = max(float(np.linalg.norm(M - axis * (M @ axis))), PLAY_FRICTION_N * end.depth / 2)
+                k_lat, k_rot = f_lat / g, m_lat / (2 * g / end.depth)
+                from .joint_stiffness import _socket_frame
+
+                R = _socket_frame(axis)
+                D = np.diag([_PLAY_BIG, k_lat, k_lat, _PLAY_BIG * 1e3, k_rot, k_rot])
+                T = np.zeros((6, 6))
+                T[:3, :3] = T[3:, 3:] = R
+                new[base] = T.T @ D @ T
+        play = new
+    return play
+
+
 def predict_stiffness(spec, frame, parts=None, *, joint_model: str = "fe", factor: float | None = None,
-                      load_n: float = DEFAULT_LOAD_N, feet: str = "sliding", joints: dict | None = None) -> StiffnessResult:
-    """Payload vertical stiffness of the design."""
+                      load_n: float = DEFAULT_LOAD_N, feet: str = "sliding", joints: dict | None = None,
+                      design_force_n: float | None = None) -> StiffnessResult:
+    """Payload vertical stiffness of the design; with ``design_force_n`` the secant stiffness at
+    that force, the fit's play included (`play_springs`)."""
     from .joint_stiffness import TPU_PRINTED_MODULUS_FACTOR
 
     if not (load_n > 0 and math.isfinite(load_n)):
@@ -320,7 +377,8 @@ def predict_stiffness(spec, frame, parts=None, *, joint_model: str = "fe", facto
 
         parts = partlist.build(spec, frame)
     joints = joints if joints is not None else joint_models(spec, parts, joint_model, factor)
-    mdl, K, u = _solve_payload(spec, frame, parts, joints, feet, load_n)
+    play = play_springs(spec, frame, parts, joints, design_force_n) if design_force_n else None
+    mdl, K, u = _solve_payload(spec, frame, parts, joints, feet, load_n, play)
     fe = mdl.fe
     d = -u[_dof(fe, mdl.payload, 2)]
     if not (d > 0 and math.isfinite(d)):
@@ -344,15 +402,42 @@ def predict_stiffness(spec, frame, parts=None, *, joint_model: str = "fe", facto
         rod_axial_per_n=tuple((k, float(min(v))) for k, v in sorted(per_rod.items())))
 
 
-def calibrate_tpu_factor(spec, frame, target_n_per_m: float = PAPER_K_N_PER_M, joint_model: str = "fe",
-                         start: float = 0.6, rtol: float = 1e-4) -> float:
+def design_force(spec, frame, total_mass_g: float, k: float) -> float:
+    """Spring force k x_max at the design drop (x_max capped at the clearance), N."""
+    from . import impact
+
+    m = total_mass_g / 1000.0
+    c = spec.model.c_n_s_per_m if spec.model.c_n_s_per_m is not None else impact.damping_from_ratio(spec.model.damping_ratio, k, m)
+    clearance = spec.requirements.clearance if spec.requirements.clearance is not None else frame.clearance_mm
+    r = impact.simulate_height(m, c, k, spec.requirements.design_drop_height_cm, clearance)
+    return k * min(r.x_max_mm, clearance) / 1000.0
+
+
+def secant_k(spec, frame, parts, joints, total_mass_g: float) -> float:
+    """k at the design drop's force, play included: fixed point of k -> force -> k (N/m)."""
+    k = predict_stiffness(spec, frame, parts, joints=joints).k_n_per_m
+    for _ in range(6):
+        k_new = predict_stiffness(spec, frame, parts, joints=joints,
+                                  design_force_n=design_force(spec, frame, total_mass_g, k)).k_n_per_m
+        done = abs(k_new - k) < 1e-5 * k
+        k = k_new
+        if done:
+            break
+    return k
+
+
+def calibrate_tpu_factor(spec, frame, total_mass_g: float, target_n_per_m: float = PAPER_K_N_PER_M,
+                         joint_model: str = "fe", start: float = 0.3, rtol: float = 1e-4) -> float:
     """The printed-TPU modulus factor that makes `frame` reach `target_n_per_m` (set once, carbon).
 
     k is nearly proportional to the factor (the rods are ~1000x stiffer than the TPU), so a
     fixed-point iteration f <- f * target / k converges in a few steps."""
+    from .. import partlist
+
+    parts = partlist.build(spec, frame)
     f = start
     for _ in range(12):
-        k = predict_stiffness(spec, frame, joint_model=joint_model, factor=f).k_n_per_m
+        k = secant_k(spec, frame, parts, joint_models(spec, parts, joint_model, f), total_mass_g)
         nf = f * target_n_per_m / k
         if abs(nf - f) < rtol * f:
             return nf
@@ -458,21 +543,22 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
     m_kg = total_mass_g / 1000.0
 
     # 1. payload vertical
-    mdl, K, u = _solve_payload(spec, frame, parts, joints)
+    f_design = design_force_n if design_force_n is not None else 95.0
+    play = play_springs(spec, frame, parts, joints, f_design) or None
+    mdl, K, u = _solve_payload(spec, frame, parts, joints, play=play)
     fe = mdl.fe
     idx = fe.index()
     d_pay = -u[_dof(fe, mdl.payload, 2)]
     k = 1000.0 * DEFAULT_LOAD_N / d_pay
-    f_design = design_force_n if design_force_n is not None else k * 0.0136
 
     # 2. wall: the +x side face against a wall (joints on that face held, sticking contact)
-    wall = _wall_case(spec, frame, parts, joints, masses, damping_ratio)
+    wall = _wall_case(spec, frame, parts, joints, masses, damping_ratio, play)
 
     # 3. thrust
-    thrust = _thrust_case(spec, frame, parts, joints, masses)
+    thrust = _thrust_case(spec, frame, parts, joints, masses, play)
 
     # 4. modes (free flight)
-    modes = _modes(spec, frame, parts, joints, masses)
+    modes = _modes(spec, frame, parts, joints, masses, play=play)
     n_rot = hover_rotor_hz(spec, total_mass_g)
     near = None
     for i, fhz in enumerate(modes):
@@ -514,12 +600,13 @@ def _end_rot(mdl: Model, frame, rn: str, tag: str) -> float:
     r = frame.rods[rn]
     end = r.a if tag == "a" else r.b
     js = mdl.joints[mdl.instance_part[end.node]]
-    lab = next(l for l, n in mdl.joint_nodes[end.node].items() if n == mdl.rod_nodes[rn][0 if tag == "a" else 1])
+    node = mdl.rod_nodes[rn][0 if tag == "a" else 1]
+    lab = next(l for l, n in mdl.joint_nodes[end.node].items() if n in (node, node + ":sock"))
     return js.socket_rotational_stiffness(lab)
 
 
-def _wall_case(spec, frame, parts, joints, masses, zeta: float) -> dict:
-    mdl = build_model(spec, frame, parts, joints)
+def _wall_case(spec, frame, parts, joints, masses, zeta: float, play=None) -> dict:
+    mdl = build_model(spec, frame, parts, joints, play=play)
     fe = mdl.fe
     K = fe.stiffness()
     x_wall = spec.frame.width / 2
@@ -555,12 +642,12 @@ def _wall_case(spec, frame, parts, joints, masses, zeta: float) -> dict:
             "gap_mm": gap, "damping_ratio": zeta}
 
 
-def _thrust_case(spec, frame, parts, joints, masses) -> dict:
+def _thrust_case(spec, frame, parts, joints, masses, play=None) -> dict:
     thrust_g = max_thrust_g(spec)
     thrust_n = thrust_g * G / 1000.0
     out = {"max_thrust_g": thrust_g}
     for label, roles in (("full", None), ("arms_only", ("arm",))):
-        mdl = build_model(spec, frame, parts, joints, only_roles=roles)
+        mdl = build_model(spec, frame, parts, joints, only_roles=roles, play=play)
         fe = mdl.fe
         K = fe.stiffness()
         fixed = np.zeros(K.shape[0], dtype=bool)
@@ -584,10 +671,10 @@ def _thrust_case(spec, frame, parts, joints, masses) -> dict:
     return out
 
 
-def _modes(spec, frame, parts, joints, masses, n: int = N_MODES, rod_segments: int = 4) -> list[float]:
+def _modes(spec, frame, parts, joints, masses, n: int = N_MODES, rod_segments: int = 4, play=None) -> list[float]:
     from scipy.linalg import eigh
 
-    mdl = build_model(spec, frame, parts, joints, rod_segments=rod_segments, masses=masses)
+    mdl = build_model(spec, frame, parts, joints, rod_segments=rod_segments, masses=masses, play=play)
     fe = mdl.fe
     K = fe.stiffness()
     M = fe.mass()
@@ -623,12 +710,15 @@ def _strain(spec, frame, parts, joints, mdl: Model, u: np.ndarray, eps_break: fl
     eps_s, where = 0.0, None
     d = spec.rods.diameter
     for nodes, Ks in fe.springs:
+        if len(nodes) == 2 and nodes[1] == nodes[0] + ":sock":
+            continue  # a play spring
         dofs = np.concatenate([np.arange(6 * idx[n], 6 * idx[n] + 6) for n in nodes])
         f = Ks @ u[dofs]
         for j, n in enumerate(nodes):
-            if ":" not in n or n.endswith(":free"):
+            n = n[:-5] if n.endswith(":sock") else n
+            if n.count(":") != 1 or n.endswith(":free"):
                 continue
-            rn, tag = n.rsplit(":", 1)
+            rn, tag = n.split(":")
             r = frame.rods[rn]
             end = r.a if tag == "a" else r.b
             axis = r.socket_direction(end.node)
