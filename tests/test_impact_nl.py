@@ -35,10 +35,10 @@ def test_two_mass_with_a_rigid_light_exoskeleton_is_the_kelvin_voigt_model():
 
     m, c, k = 0.241, 46.0, 7040.0
     p = N.TwoMass(m, 1e-6, k, c, 1e9, 0.0)
-    t, xp, a, _ = N.two_mass_response(p, 50.0, 30)
+    t, xp, a, _ = N.two_mass_response(p, 50.0, 8)  # up to x_max (7.3 ms); after it the feet may lift
     x_kv, _, a_kv = response(t, m - 1e-6, c, k, impact_velocity(50.0))
     assert np.allclose(xp, x_kv, atol=2e-5)  # m, 20 um of a 9.6 mm compression
-    assert a[5:] == pytest.approx(np.abs(a_kv[5:]) / G, rel=0.02, abs=0.5)
+    assert a[1:] == pytest.approx(np.abs(a_kv[1:]) / G, rel=0.02, abs=0.5)
 
 
 def test_two_mass_momentum_and_contact_only_pushes():
