@@ -140,19 +140,22 @@ def _first_mode(s, method="analytic") -> float:
 @pytest.mark.parametrize("sections_lo, sections_hi", [
     ({"joints": {"socket_depth": 8}}, {"joints": {"socket_depth": 12}}),
     ({"joints": {"wall": 1.2}}, {"joints": {"wall": 1.8}}),
+    ({"joints": {"hinge_thickness": 0.8}}, {"joints": {"hinge_thickness": 1.6}}),
     ({"rods": {"material": "bamboo"}}, {"rods": {"material": "carbon_rod"}}),
 ])
-def test_first_mode_rises_with_depth_wall_and_rod_stiffness(sections_lo, sections_hi):
+def test_first_mode_rises_with_depth_wall_hinge_and_rod_stiffness(sections_lo, sections_hi):
     assert _first_mode(_variant(**sections_hi)) > _first_mode(_variant(**sections_lo))
 
 
-def test_analytic_and_fe_joints_agree_within_a_factor_3(carbon_fe):
+def test_analytic_and_fe_joints_agree_on_k_within_a_factor_2(carbon_fe):
     # the closed forms are a cross-check, not a substitute: they take the joint body as rigid in
-    # bending and the sleeve as a plain tube in tension (docs/stiffness-model.md gives the ratio)
-    s, f, p, joints = carbon_fe
-    fe = st.predict_stiffness(s, f, p, joints=joints).k_n_per_m
-    an = st.predict_stiffness(s, f, p, joint_model="analytic").k_n_per_m
-    assert fe / 3 < an < fe * 3
+    # bending and the sleeve as a plain tube in tension (docs/stiffness-model.md gives the ratios:
+    # carbon +5 %, bamboo -44 %; their modes are ~4x too high)
+    for base in ("carbon", "bamboo"):
+        s, f, p = _design(spec_mod.load(ROOT / "params" / f"{base}.yaml"))
+        fe = st.predict_stiffness(s, f, p).k_n_per_m
+        an = st.predict_stiffness(s, f, p, joint_model="analytic").k_n_per_m
+        assert fe / 2 < an < fe * 2, base
 
 
 # -- load cases -------------------------------------------------------------------------------------
@@ -185,7 +188,8 @@ def test_buckling_axial_force_is_linear_in_the_design_force(carbon_fe, carbon_ca
     s, f, p, joints = carbon_fe
     double = st.load_cases(s, f, p, 241.0, joints=joints, design_force_n=190.0)
     a, b = carbon_cases.buckling, double.buckling
-    assert b["min_margin"] == pytest.approx(a["min_margin"] / 2, rel=1e-3)
+    # linear but for the fit's play (a secant at each force): close to half
+    assert b["min_margin"] == pytest.approx(a["min_margin"] / 2, rel=0.02)
 
 
 def test_symmetry_four_corners_behave_alike(carbon_fe):

@@ -172,7 +172,7 @@ def _socket_local_k(spec, sock, itf: Interface, hinge: tuple[float, float, float
     L = sock.depth
     i_rod = math.pi * rod_d**4 / 64
     e, g = itf.e, itf.g
-    k_found = e * rod_d / (itf.h + wall)
+    k_found = e * rod_d / itf.h
     f = bef_end_flexibility(L, rod_e * i_rod, k_found)
     if hinge is not None:  # the leg hangs on the living-hinge web
         l_web, width, t = hinge
