@@ -161,10 +161,12 @@ def _socket_local_k(spec, sock, itf: Interface, hinge: tuple[float, float, float
                     rod_e: float, rod_d: float, wall: float) -> np.ndarray:
     """6x6 stiffness of one socket at its mouth, in the socket frame (x out along the rod).
 
-    In bending the joint body behind the socket bottom (hub, neighbouring sleeves) is taken as
-    rigid; axially the sleeve and the seat carry the load back to the centre. The rod bears on the sleeve over the socket depth through a Winkler foundation made of the
-    interface layer and the sleeve wall in series, k_f = E d / (h_i + wall) (N/mm per mm: the
-    rod's projected width d pressing a pad h_i + wall thick). Lateral/rotation: Hetenyi's
+    In bending the joint body behind the socket bottom (hub, neighbouring sleeves) and the sleeve
+    wall are taken as rigid; axially the sleeve and the seat carry the load back to the centre.
+    The rod bears on the sleeve over the socket depth through a Winkler foundation, the
+    interface layer: k_f = E d / h_i (N/mm per mm: the rod's projected width d pressing a layer
+    h_i thick). (A pad of h_i + wall was tried: it makes a thicker wall softer in bending, the
+    wrong trend, because the real wall is not backed by anything rigid.) Lateral/rotation: Hetenyi's
     finite beam (the rod, EI of the rod) on that foundation; axial: interface shear over the
     bore wall and bearing on the socket bottom; torsion: interface shear. The knee's hinged leg
     adds the living-hinge web (a strip bending about the fold axis) in series.
