@@ -61,7 +61,8 @@ def _gmsh():
     import gmsh
 
     if not gmsh.isInitialized():
-        gmsh.initialize(["-noenv"], readConfigFiles=False)
+        # interruptible=False: gmsh would otherwise replace the SIGINT handler (Ctrl-C must stay the CLI's)
+        gmsh.initialize(["-noenv"], readConfigFiles=False, interruptible=False)
     gmsh.option.setNumber("General.Terminal", 0)
     gmsh.option.setNumber("General.NumThreads", 1)
     gmsh.option.setNumber("Mesh.MaxNumThreads3D", 1)
