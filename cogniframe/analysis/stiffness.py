@@ -591,7 +591,7 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
     # 6. TPU strain at the design drop
     strain = _strain(spec, frame, parts, joints, mdl, u * scale, TPU_ELONGATION_AT_BREAK, interface(spec), hinged_socket, hinge_geometry)
 
-    jinfo = {name: {"method": js.method, "dofs": js.n_dofs, "solve_s": round(js.seconds, 3)} for name, js in joints.items()}
+    jinfo = {name: {"method": js.method, "dofs": js.n_dofs} for name, js in joints.items()}  # no timings: byte-stable output
     return LoadCases(k, joint_model, TPU_PRINTED_MODULUS_FACTOR, wall["k_lateral_n_per_m"], wall, thrust, tuple(modes), n_rot, near,
                      buckling, strain, jinfo, time.perf_counter() - t0)
 
