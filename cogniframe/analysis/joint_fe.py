@@ -82,7 +82,10 @@ def mesh_occ(build, h: float, name: str = "part", curvature: int = 12) -> tuple[
         gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", curvature)
         gmsh.option.setNumber("Mesh.Algorithm3D", 1)
         gmsh.option.setNumber("Mesh.Optimize", 1)
-        gmsh.model.mesh.generate(3)
+        try:
+            gmsh.model.mesh.generate(3)
+        except Exception as exc:  # gmsh raises bare Exception
+            raise RuntimeError(f"gmsh could not mesh {name}: {exc}") from None
         tags, coords, _ = gmsh.model.mesh.getNodes()
         etypes, _, enodes = gmsh.model.mesh.getElements(3)
         tet = [enodes[i] for i, t in enumerate(etypes) if t == 4]

@@ -93,7 +93,18 @@ def joint_models(spec, parts, method: str = "fe", factor: float | None = None) -
     """The super-element of every distinct joint (cached FE, or closed forms)."""
     from .joint_stiffness import joint_stiffness
 
-    return {p.name: joint_stiffness(spec, p, method, factor) for p in joint_parts(parts)}
+    out = {}
+    for p in joint_parts(parts):
+        try:
+            out[p.name] = joint_stiffness(spec, p, method, factor)
+        except RuntimeError:
+            # a solid the mesher cannot handle (reported by gmsh/joint_fe as RuntimeError, or a
+            # bore whose surface was not found): fall back to the closed forms for this joint
+            # rather than fail the whole check; the method is reported per joint
+            if method != "fe":
+                raise
+            out[p.name] = joint_stiffness(spec, p, "analytic", factor)
+    return out
 
 
 def _match_rod(frame, node_name: str, port_w: np.ndarray, dir_w: np.ndarray) -> str:
