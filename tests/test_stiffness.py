@@ -223,3 +223,16 @@ def test_cached_k_key_follows_the_materials_library(monkeypatch):
 
     monkeypatch.setattr(Path, "read_bytes", edited)
     assert drop._stiffness_key(s) != key
+
+
+def test_a_joint_the_mesher_cannot_handle_falls_back_to_closed_forms(monkeypatch):
+    s, f, p = _design(spec_mod.load(CARBON))
+
+    def broken(*a, **k):
+        raise RuntimeError("gmsh could not mesh joint")
+
+    monkeypatch.setattr(JS, "fe_joint", broken)
+    monkeypatch.setattr(JS, "FE_MESH_MM", 1.234)  # a cache key no other test has filled
+    joints = st.joint_models(s, p, "fe")
+    assert {js.method for js in joints.values()} == {"analytic"}
+    assert st.predict_stiffness(s, f, p, joints=joints).k_n_per_m > 0
