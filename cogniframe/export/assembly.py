@@ -11,8 +11,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import shutil
 from pathlib import Path
 from typing import Sequence
 
@@ -89,32 +87,22 @@ def write_assembly(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir:
                    cache_dir: str | Path | None = None) -> tuple[Path, Path]:
     """Write out_dir/assembly.step (deterministic) and out_dir/assembly.glb.
 
-    With `cache_dir`, identical inputs copy the files from the cache (no CadQuery import).
+    With `cache_dir`, identical inputs copy the files from a verified cache entry (no CadQuery import).
     """
     out_dir = Path(out_dir)
     step, glb = out_dir / "assembly.step", out_dir / "assembly.glb"
-    entry = Path(cache_dir) / "assembly" / assembly_key(spec, frame, parts, built) if cache_dir is not None else None
-    if entry is not None and (entry / "assembly.step").is_file() and (entry / "assembly.glb").is_file():
-        out_dir.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(entry / "assembly.step", step)
-        shutil.copyfile(entry / "assembly.glb", glb)
-        return step, glb
+    key = assembly_key(spec, frame, parts, built) if cache_dir is not None else None
+    if key is not None:
+        from .. import cache
+
+        if cache.get_files("assembly", key, out_dir, root=Path(cache_dir)) is not None:
+            return step, glb
     from .step import normalize_file
 
     assy = build_assembly(spec, frame, parts, built, out_dir)
     assy.export(str(step))
     normalize_file(step, spec.name)
     assy.export(str(glb))
-    if entry is not None:
-        tmp = entry.with_name(f".{entry.name}.{os.getpid()}.tmp")
-        try:
-            tmp.mkdir(parents=True, exist_ok=True)
-            shutil.copyfile(step, tmp / "assembly.step")
-            shutil.copyfile(glb, tmp / "assembly.glb")
-            if not entry.exists():
-                tmp.rename(entry)
-        except OSError:
-            pass
-        finally:
-            shutil.rmtree(tmp, ignore_errors=True)
+    if key is not None:
+        cache.put_files("assembly", key, out_dir, ["assembly.step", "assembly.glb"], None, root=Path(cache_dir))
     return step, glb

@@ -186,7 +186,7 @@ def pack_plates(items: Sequence[PlateItem], bed: Sequence[float], margin: float)
                     f"part {item.name} ({w:.1f} x {d:.1f} x {h:.1f} mm in print orientation) does not fit the "
                     f"{bed3[0]:g} x {bed3[1]:g} x {bed3[2]:g} mm build volume (printer.bed) with {edge:g} mm kept "
                     f"from the bed edges (half of printer.margin). Fix: set printer.bed to your printer's real build "
-                    f"volume, lower printer.margin, or make the part smaller (e.g. frame or core sizes).")
+                    f"volume, lower printer.margin, or make the part smaller (e.g. frame or core sizes).", key="printer.bed")
             shapes[item.name] = (m, deg)
 
         packer = rectpack.newPacker(mode=rectpack.PackingMode.Offline, bin_algo=rectpack.PackingBin.Global,
@@ -336,6 +336,27 @@ def write_plates(plates: Sequence[Plate], out_dir: Path | str) -> tuple[PlateFil
         png = plot_plate(p, out_dir / f"{p.name}.png")
         written.append(PlateFile(p.name, p.material, f3, png, tuple(c.name for c in p.copies), p.volume_mm3))
     return tuple(written)
+
+
+def read_plate(path: Path | str, bed: Sequence[float], margin: float) -> Plate:
+    """A plate read back from its 3MF (what `plot_plate` needs: copies in bed coordinates, by name).
+
+    The build draws each preview from the 3MF it wrote, so a preview is a function of the plate
+    file alone and can be cached by the file's hash."""
+    path = Path(path)
+    material, index = parse_plate_name(path.stem)
+    scene = trimesh.load(path, force="scene")
+    copies = []
+    for node in scene.graph.nodes_geometry:
+        tf, geom = scene.graph[node]
+        mesh = scene.geometry[geom].copy()
+        mesh.apply_transform(tf)
+        lo, ext = mesh.bounds[0], mesh.extents
+        copies.append(PlacedCopy(str(node), part_of(str(node)), float(lo[0]), float(lo[1]),
+                                 (float(ext[0]), float(ext[1]), float(ext[2])), 0.0, mesh))
+    copies.sort(key=lambda c: (c.part, int(c.name.rsplit("_", 1)[1]) if c.name.rsplit("_", 1)[-1].isdigit() else 0))
+    bed3 = (float(bed[0]), float(bed[1]), float(bed[2]))
+    return Plate(material, index, bed3, float(margin), tuple(copies))
 
 
 def parse_plate_name(stem: str) -> tuple[str, int]:
