@@ -359,3 +359,24 @@ def test_check_fails_a_rod_that_buckles_naming_it(run_cli, tmp_path):
                      rods={"material": "balsa"})
     assert code == 1
     assert any("buckles" in p and "rod_strut_" in p for p in d["problems"]), d["problems"]
+
+
+def test_check_json_is_the_same_bytes_fresh_and_cached(tmp_path, monkeypatch):
+    # the physics caches store sorted JSON: a fresh answer must print in that order too
+    import subprocess
+    import sys
+
+    env = {"COGNIFRAME_CACHE": str(tmp_path / "cache")}
+    import os
+
+    outs = [subprocess.run([sys.executable, "-m", "cogniframe", "check", str(ROOT / "params" / "carbon.yaml"), "--json"],
+                           capture_output=True, cwd=ROOT, env={**os.environ, **env}).stdout for _ in range(2)]
+    # the second is answered from the physics caches (and main's whole-answer cache)
+    assert outs[0] == outs[1] and b'"stiffness"' in outs[0]
+    # and once more with only the whole-answer cache removed: physics from the JSON caches
+    import shutil
+
+    shutil.rmtree(tmp_path / "cache" / "check", ignore_errors=True)
+    third = subprocess.run([sys.executable, "-m", "cogniframe", "check", str(ROOT / "params" / "carbon.yaml"), "--json"],
+                           capture_output=True, cwd=ROOT, env={**os.environ, **env}).stdout
+    assert third == outs[0]
