@@ -125,7 +125,7 @@ class RequirementsSection(_M):
     design_drop_height_cm: Annotated[float, Field(ge=0, le=2000, description="the drop the frame must survive without a battery-holder strike, cm")] = 100
     clearance: Annotated[float, Field(gt=0, le=200, description="payload travel before the battery holder hits the ground, mm; null = from the geometry")] | None = None
     drop_heights_cm: tuple[Annotated[float, Field(gt=0, le=2000)], ...] = (50, 100, 150, 262)
-    wall_impact_speed_m_s: Annotated[float, Field(ge=0, le=50, description="side-on wall impact speed the frame must take with no propeller or core part reaching the wall, m/s (the paper flew into walls at up to 7 m/s; this linear model lets the presets reach 4-5 m/s, see docs/stiffness-model.md)")] = 3.0
+    wall_impact_speed_m_s: Annotated[float, Field(ge=0, le=50, description="side-on wall impact speed the frame must take with no propeller or core part reaching the wall, m/s (the paper flew into walls at up to 7 m/s; this conservative linear model gives the presets 3.0 and 4.1 m/s, see docs/stiffness-model.md)")] = 2.5
     max_peak_g: Annotated[float, Field(gt=0, le=10000, description="highest predicted peak deceleration allowed at the design drop, G (as the logger sees it); null = no limit")] | None = None
 
 

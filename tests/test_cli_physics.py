@@ -333,7 +333,7 @@ def test_check_json_has_the_stiffness_load_cases(run_cli):
     assert code == 0 and d["verdict"] == "PASS"
     assert s["k_n_per_m"] == pytest.approx(d["drop"]["k_n_per_m"], rel=1e-6) == pytest.approx(7040, rel=0.15)
     assert s["joint_model"] == "fe"
-    assert s["k_lateral_n_per_m"] > 0 and s["wall"]["max_wall_speed_m_s"] >= 3.0
+    assert s["k_lateral_n_per_m"] > 0 and s["wall"]["max_wall_speed_m_s"] >= 2.5
     t = s["thrust"]
     assert t["arms_only_motor_deflection_mm_per_n"] > t["motor_deflection_mm_per_n"] > 0 and t["motor_tilt_deg"] > 0
     assert len(s["modes_hz"]) >= 6 and s["modes_hz"] == sorted(s["modes_hz"])

@@ -41,23 +41,18 @@ def evaluate_design(spec: Spec, frame: Frame, total_mass_g: float) -> impact.Dro
 
 
 def predicted_k_n_per_m(spec: Spec, frame: Frame, total_mass_g: float | None = None) -> float:
-    """Frame-model stiffness, cached by a hash of everything the model reads and of its source.
-
-    With the mass, the secant stiffness at the design drop's force (the fit's play included,
-    `stiffness.play_springs`); the force k x_max depends on k, so it is iterated to a fixed point."""
-    key = _stiffness_key(spec, None if total_mass_g is None else round(total_mass_g, 6))
+    """Frame-model stiffness (the secant with the fit's play, `stiffness.secant_k`), cached by a
+    hash of everything the model reads and of its source. It does not depend on the mass."""
+    key = _stiffness_key(spec)
     hit = cache.load_json("stiffness", key)
     if hit is not None:
         return float(hit["k_n_per_m"])
     from .. import partlist
-    from .stiffness import joint_models, predict_stiffness, secant_k
+    from .stiffness import joint_models, secant_k
 
     parts = partlist.build(spec, frame)
     joints = joint_models(spec, parts, spec.model.stiffness_model)
-    if total_mass_g is None:
-        k = predict_stiffness(spec, frame, parts, joints=joints).k_n_per_m
-    else:
-        k = secant_k(spec, frame, parts, joints, total_mass_g)
+    k = secant_k(spec, frame, parts, joints)
     cache.store_json("stiffness", key, {"k_n_per_m": k})
     return k
 
@@ -67,8 +62,7 @@ def _stiffness_key(spec: Spec, *extra) -> str:
 
     data = spec.model_dump(mode="json")
     inputs = {s: data[s] for s in ("materials", "frame", "rods", "joints", "core", "motors", "printer")}
-    inputs["model"] = data["model"]
-    inputs["requirements"] = {k: data["requirements"][k] for k in ("design_drop_height_cm", "clearance")}
+    inputs["stiffness_model"] = data["model"].get("stiffness_model", "fe")
     h = hashlib.sha256(json.dumps([inputs, extra], sort_keys=True, default=str).encode())
     # every module the model reads from: library moduli live in materials.py, bore in spec.py
     for mod in _MODULES:
