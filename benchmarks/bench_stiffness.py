@@ -1,16 +1,19 @@
-"""Time a full stiffness evaluation (frame graph -> PyNite model -> k) for the carbon preset.
+"""Time the stiffness physics: joint FE (cold), frame solve and load cases (joints cached), and
+`cogniframe check` in a fresh process (cold cache vs cached).
 
-    python benchmarks/bench_stiffness.py [params.yaml] [--repeat N]
+    python benchmarks/bench_stiffness.py [params.yaml] [--repeat N] [--skip-cold]
 
-Prints the import costs, the first (cold) evaluation, and the median / best of N warm ones,
-split into frame-graph build, FE model build and solve + read-out.
+Prints medians. The cold joint FE and the cold check run in a throw-away cache folder.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -18,56 +21,55 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 
+def _median(f, n: int) -> float:
+    ts = []
+    for _ in range(n):
+        t0 = time.perf_counter()
+        f()
+        ts.append(time.perf_counter() - t0)
+    return statistics.median(ts)
+
+
+def _check_process(params: str, env: dict) -> float:
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "cogniframe", "check", params, "--json"], cwd=ROOT, env=env,
+                   stdout=subprocess.DEVNULL, check=False)
+    return time.perf_counter() - t0
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("params", nargs="?", default=str(ROOT / "params" / "carbon.yaml"))
-    ap.add_argument("--repeat", type=int, default=20)
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--skip-cold", action="store_true", help="skip the cold joint FE and the cold check")
     args = ap.parse_args(argv)
 
-    t0 = time.perf_counter()
-    from cogniframe import frame as frame_mod
-    from cogniframe import spec as spec_mod
-    from cogniframe.analysis import stiffness as st
-    t1 = time.perf_counter()
-    import Pynite  # noqa: F401  (imported lazily by the stiffness module; timed on its own here)
-    t2 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as cache:
+        os.environ["COGNIFRAME_CACHE"] = cache
+        env = {**os.environ, "PYTHONPATH": str(ROOT)}
+        from cogniframe import frame as frame_mod
+        from cogniframe import partlist
+        from cogniframe import spec as spec_mod
+        from cogniframe.analysis import joint_stiffness as JS
+        from cogniframe.analysis import stiffness as st
 
-    path = Path(args.params)
-    spec = spec_mod.load(path) if path.is_file() else spec_mod.from_dict({})
-    label = path.name if path.is_file() else "default spec (no params file)"
-
-    t3 = time.perf_counter()
-    first = st.predict_stiffness(spec, frame_mod.build(spec))
-    cold = time.perf_counter() - t3
-
-    total, graph, model, solve = [], [], [], []
-    for _ in range(args.repeat):
-        a = time.perf_counter()
-        f = frame_mod.build(spec)
-        b = time.perf_counter()
-        mdl = st.build_model(spec, f)
-        c = time.perf_counter()
-        mdl.fe.analyze_linear(check_stability=False, sparse=False)
-        st.payload_deflection(mdl)
-        d = time.perf_counter()
-        st.predict_stiffness(spec, f)
-        e = time.perf_counter()
-        graph.append(b - a)
-        model.append(c - b)
-        solve.append(d - c)
-        total.append((b - a) + (e - d))  # a full evaluation: frame graph + predict_stiffness
-
-    ms = lambda xs: f"median {1000 * statistics.median(xs):7.1f} ms   best {1000 * min(xs):7.1f} ms"  # noqa: E731
-    print(f"stiffness benchmark: {label}")
-    print(f"  k = {first.k_n_per_m:.0f} N/m (k_top {first.k_top_n_per_m:.0f} N/m), calibration {first.calibration:g}, "
-          f"{first.n_nodes} nodes, {first.n_members} members")
-    print(f"  import cogniframe (spec, frame, stiffness)   {1000 * (t1 - t0):7.1f} ms")
-    print(f"  import Pynite                                 {1000 * (t2 - t1):7.1f} ms")
-    print(f"  first evaluation (cold)                       {1000 * cold:7.1f} ms")
-    print(f"  full evaluation, {args.repeat} warm runs:  {ms(total)}")
-    print(f"    frame graph                          {ms(graph)}")
-    print(f"    FE model build                       {ms(model)}")
-    print(f"    solve + read-out                     {ms(solve)}")
+        s = spec_mod.load(args.params)
+        f = frame_mod.build(s)
+        parts = partlist.build(s, f)
+        if not args.skip_cold:
+            print(f"cold `check` process (joint FE + load cases):  {_check_process(args.params, env):7.2f} s")
+            for p in st.joint_parts(parts):
+                js = JS.fe_joint(s, p)
+                print(f"  joint FE {p.name:14s} {js.n_dofs:6d} DOF  {js.seconds:6.2f} s")
+        joints = st.joint_models(s, parts, "fe")
+        an = st.joint_models(s, parts, "analytic")
+        print(f"closed-form joints (all four), median:         {_median(lambda: st.joint_models(s, parts, 'analytic'), args.repeat) * 1e3:7.1f} ms")
+        print(f"frame k, FE joints cached, median:             {_median(lambda: st.predict_stiffness(s, f, parts, joints=joints), args.repeat) * 1e3:7.1f} ms")
+        print(f"frame k, closed-form joints, median:           {_median(lambda: st.predict_stiffness(s, f, parts, joints=an), args.repeat) * 1e3:7.1f} ms")
+        print(f"all load cases (joints cached), median:        {_median(lambda: st.load_cases(s, f, parts, 240.0, joints=joints, design_force_n=95.0), max(1, args.repeat // 2)):7.2f} s")
+        if not args.skip_cold:
+            _check_process(args.params, env)
+        print(f"cached `check` process, median:                {statistics.median(_check_process(args.params, env) for _ in range(args.repeat)):7.2f} s")
     return 0
 
 

@@ -34,6 +34,8 @@ class CheckResult:
     mass: mass_mod.MassBudget
     drop: object | None  # analysis.impact.DropResult once the physics stage is available
     problems: tuple[str, ...]
+    stiffness: dict | None = None  # analysis.drop.load_cases: wall, thrust, modes, buckling, strain
+    peak: dict | None = None  # analysis.impact_nl.design_peaks: predicted peak G per drop height
 
     @property
     def verdict(self) -> str:
@@ -66,13 +68,52 @@ def check(spec: Spec, geometry: dict | None = None) -> CheckResult:
     d = design(spec)
     budget = mass_mod.budget(spec, d.frame, d.cut, d.parts, geometry)
     drop = _drop(spec, d, budget)
-    return CheckResult(d, budget, drop, tuple(_problems(spec, budget, drop)))
+    stiffness, peak = _physics(spec, d, budget, drop)
+    problems = _problems(spec, budget, drop) + _physics_problems(spec, stiffness, peak)
+    return CheckResult(d, budget, drop, tuple(problems), stiffness, peak)
 
 
 def _drop(spec: Spec, d: Design, budget: mass_mod.MassBudget):
     from .analysis import drop as drop_mod
 
     return drop_mod.evaluate_design(spec, d.frame, budget.total_g)
+
+
+def _physics(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop):
+    """The frame's load cases and the predicted peak deceleration (both cached on disk)."""
+    from .analysis import drop as drop_mod
+
+    if drop is None:
+        return None, None
+    cases = drop_mod.load_cases(spec, d.frame, budget.total_g, drop)
+    peak = drop_mod.peak_prediction(spec, budget.total_g, drop, budget.groups["exoskeleton"])
+    return cases, peak
+
+
+def _physics_problems(spec: Spec, stiffness: dict | None, peak: dict | None) -> list[str]:
+    out = []
+    req = spec.requirements
+    if stiffness is not None:
+        wall = stiffness["wall"]
+        if wall["max_wall_speed_m_s"] < req.wall_impact_speed_m_s:
+            out.append(f"side-on wall impact: the {wall['limited_by']} reaches the wall from "
+                       f"{wall['max_wall_speed_m_s']:.1f} m/s, below the required {req.wall_impact_speed_m_s:g} m/s "
+                       f"(requirements.wall_impact_speed_m_s; stiffer or wider frame, smaller props)")
+        b = stiffness.get("min_buckling_margin")
+        if b is not None and b < 1.0:
+            out.append(f"{stiffness['critical_rod']} buckles at the {stiffness['design_drop_height_cm']:g} cm design drop "
+                       f"(Euler margin {b:.2f} < 1: axial {stiffness['buckling'][0]['axial_n']:.0f} N vs "
+                       f"{stiffness['buckling'][0]['euler_n']:.0f} N; thicker or stiffer rods, shorter spans)")
+        st = stiffness.get("strain") or {}
+        if st and st["peak"] >= st["elongation_at_break"]:
+            out.append(f"TPU strain {100 * st['peak']:.0f} % at the design drop exceeds TPU's elongation at break "
+                       f"{100 * st['elongation_at_break']:.0f} % (thicker hinge/walls, softer landing)")
+    if peak is not None and req.max_peak_g is not None:
+        worst = next(h for h in peak["heights"] if h["height_cm"] == req.design_drop_height_cm)
+        if worst["peak_g"] > req.max_peak_g:
+            out.append(f"predicted peak deceleration {worst['peak_g']:.0f} G at the {req.design_drop_height_cm:g} cm design drop "
+                       f"({peak['model']}) is above requirements.max_peak_g = {req.max_peak_g:g} G")
+    return out
 
 
 def _problems(spec: Spec, budget: mass_mod.MassBudget, drop) -> list[str]:
@@ -105,6 +146,10 @@ def check_dict(result: CheckResult) -> dict:
     }
     if result.drop is not None:
         out["drop"] = result.drop.to_dict()
+    if result.stiffness is not None:
+        out["stiffness"] = result.stiffness
+    if result.peak is not None:
+        out["peak_g"] = result.peak
     return out
 
 

@@ -103,6 +103,7 @@ class MotorsSection(_M):
     radius: Annotated[float, Field(ge=20, le=300, description="motor axis distance from the frame centre, in plan, mm")] = 82
     prop_diameter: Annotated[float, Field(ge=25, le=260, description="propeller diameter, mm (3 in = 76.2)")] = 76.2
     prop_mass: Annotated[float, Field(ge=0, le=30, description="g each")] = 1.0
+    max_thrust_g: Annotated[float, Field(gt=0, le=5000, description="static thrust of one motor at full throttle, g (thrust load case); null = the motor class's typical value (1104 on 3S with 3025 props: 190 g; 1404 on 2S with 4 in props: 200 g)")] | None = None
 
 
 class Component(_M):
@@ -143,12 +144,15 @@ class RequirementsSection(_M):
     design_drop_height_cm: Annotated[float, Field(ge=0, le=2000, description="the drop the frame must survive without a battery-holder strike, cm")] = 100
     clearance: Annotated[float, Field(gt=0, le=200, description="payload travel before the battery holder hits the ground, mm; null = from the geometry")] | None = None
     drop_heights_cm: tuple[Annotated[float, Field(gt=0, le=2000)], ...] = (50, 100, 150, 262)
+    wall_impact_speed_m_s: Annotated[float, Field(ge=0, le=50, description="side-on wall impact speed the frame must take with no propeller or core part reaching the wall, m/s (the paper flew into walls at up to 7 m/s; this conservative linear model gives the presets 3.0 and 4.1 m/s, see docs/stiffness-model.md)")] = 2.5
+    max_peak_g: Annotated[float, Field(gt=0, le=10000, description="highest predicted peak deceleration allowed at the design drop, G (as the logger sees it); null = no limit")] | None = None
 
 
 class ModelSection(_M):
     k_n_per_m: Annotated[float, Field(gt=0, le=1e7, description="measured stiffness (from `cogniframe fit`); null = predict from the frame")] | None = None
     c_n_s_per_m: Annotated[float, Field(gt=0, le=1e5, description="measured damping; null = from damping_ratio")] | None = None
     damping_ratio: Annotated[float, Field(gt=0, le=5, description="used when c_n_s_per_m is null (paper: 0.558)")] = 0.558
+    stiffness_model: Literal["fe", "analytic"] = Field("fe", description="joint stiffness: fe = solid finite elements of each joint's CAD (cached), analytic = closed forms (fast, for sweeps)")
 
 
 class Spec(_M):

@@ -269,3 +269,114 @@ def test_fit_bad_loss_and_missing_data_exit_2(csv_drops, tmp_path):
     assert "--loss" in run("fit", csv_drops / "low", "--loss", "huber").message
     r = run("fit", tmp_path / "nope", "--height", 50, "--mass", 0.241)
     assert r.exit_code == 2 and "does not exist" in r.message
+
+
+# ---- fit --model / --predict (peak deceleration) ---------------------------------------------
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "droptests"
+
+
+def test_fit_kv_predict_gives_logger_peaks_and_keeps_the_fit():
+    plain = run("fit", EXAMPLES / "SoftBottom_50cm", "--mass", 0.241, "--json")
+    r = run("fit", EXAMPLES / "SoftBottom_50cm", "--mass", 0.241, "--predict", 100, "--predict", 150, "--json")
+    assert r.exit_code == 0, r
+    d, p = json.loads(r.stdout), json.loads(plain.stdout)
+    assert d["k_n_per_m"] == p["k_n_per_m"] and d["c_n_s_per_m"] == p["c_n_s_per_m"]  # default model unchanged
+    assert d["model"] == "kelvin-voigt"
+    assert [x["height_cm"] for x in d["predictions"]] == [100, 150]
+    assert {"height_cm", "peak_g", "x_max_mm", "strikes"} == set(d["predictions"][0])
+    # the filtered model peak at 100 cm, as the logger sees it: under the measured 127.4 G median
+    assert d["predictions"][0]["peak_g"] == pytest.approx(model_accel_g(0.241, d["c_n_s_per_m"], d["k_n_per_m"], 100, 120).max(), abs=0.006)
+    assert d["predictions"][0]["peak_g"] < 127.4
+
+
+def test_fit_nonlinear_predict_json():
+    r = run("fit", EXAMPLES / "SoftBottom_50cm", "--mass", 0.241, "--model", "nonlinear", "--predict", 100, "--json")
+    assert r.exit_code == 0, r
+    d = json.loads(r.stdout)
+    assert d["model"] == "nonlinear" and d["exo_mass_kg"] == 0.062
+    assert d["contact_k_n_per_m"] > 10 * d["k_n_per_m"]  # the floor contact is much stiffer than the frame
+    (p,) = d["predictions"]
+    assert p["height_cm"] == 100 and 40 < p["peak_g"] < 127.4 and p["strikes"] is False
+
+
+def test_fit_nonlinear_table_and_bad_model():
+    r = run("fit", EXAMPLES / "SoftBottom_50cm", "--mass", 0.241, "--model", "nonlinear", "--predict", 100)
+    assert r.exit_code == 0 and "two-mass" in r.stdout and "Predictions" in r.stdout
+    bad = run("fit", EXAMPLES / "SoftBottom_50cm", "--mass", 0.241, "--model", "hertz")
+    assert bad.exit_code == 2 and "--model" in bad.message
+    neg = run("fit", EXAMPLES / "SoftBottom_50cm", "--mass", 0.241, "--predict", -5)
+    assert neg.exit_code == 2 and "--predict" in neg.message
+
+
+# ---- check: the stiffness section and its FAIL conditions ------------------------------------
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _check(run_cli, tmp_path, **sections):
+    import yaml
+
+    data = yaml.safe_load((ROOT / "params" / "carbon.yaml").read_text())
+    for sec, values in sections.items():
+        data.setdefault(sec, {}).update(values)
+    p = tmp_path / "carbon_variant.yaml"
+    p.write_text(yaml.safe_dump(data))
+    code, out, _ = run_cli("check", p, "--json")
+    return code, json.loads(out)
+
+
+def test_check_json_has_the_stiffness_load_cases(run_cli):
+    code, out, _ = run_cli("check", ROOT / "params" / "carbon.yaml", "--json")
+    d = json.loads(out)
+    s = d["stiffness"]
+    assert code == 0 and d["verdict"] == "PASS"
+    assert s["k_n_per_m"] == pytest.approx(d["drop"]["k_n_per_m"], rel=1e-6) == pytest.approx(7040, rel=0.15)
+    assert s["joint_model"] == "fe"
+    assert s["k_lateral_n_per_m"] > 0 and s["wall"]["max_wall_speed_m_s"] >= 2.5
+    t = s["thrust"]
+    assert t["arms_only_motor_deflection_mm_per_n"] > t["motor_deflection_mm_per_n"] > 0 and t["motor_tilt_deg"] > 0
+    assert len(s["modes_hz"]) >= 6 and s["modes_hz"] == sorted(s["modes_hz"])
+    assert s["min_buckling_margin"] > 1 and s["buckling"][0]["rod"] == s["critical_rod"]
+    assert 0 < s["strain"]["hinge"] < s["strain"]["elongation_at_break"]
+    assert d["peak_g"]["model"] in ("kelvin-voigt", "nonlinear")
+    assert [h["height_cm"] for h in d["peak_g"]["heights"]] == [50, 100, 150, 262]
+
+
+def test_check_fails_below_the_paper_wall_speed(run_cli, tmp_path):
+    code, d = _check(run_cli, tmp_path, requirements={"wall_impact_speed_m_s": 7.0})
+    assert code == 1 and any("wall impact" in p and "7 m/s" in p for p in d["problems"])
+
+
+def test_check_fails_above_max_peak_g(run_cli, tmp_path):
+    code, d = _check(run_cli, tmp_path, requirements={"max_peak_g": 30})
+    assert code == 1 and any("peak deceleration" in p and "max_peak_g" in p for p in d["problems"])
+
+
+def test_check_fails_a_rod_that_buckles_naming_it(run_cli, tmp_path):
+    # rods of a very soft wood: the struts buckle at the design drop
+    code, d = _check(run_cli, tmp_path, materials={"balsa": {"density_g_cm3": 0.15, "e_mpa": 1500.0, "g_mpa": 100.0}},
+                     rods={"material": "balsa"})
+    assert code == 1
+    assert any("buckles" in p and "rod_strut_" in p for p in d["problems"]), d["problems"]
+
+
+def test_check_json_is_the_same_bytes_fresh_and_cached(tmp_path, monkeypatch):
+    # the physics caches store sorted JSON: a fresh answer must print in that order too
+    import subprocess
+    import sys
+
+    env = {"COGNIFRAME_CACHE": str(tmp_path / "cache")}
+    import os
+
+    outs = [subprocess.run([sys.executable, "-m", "cogniframe", "check", str(ROOT / "params" / "carbon.yaml"), "--json"],
+                           capture_output=True, cwd=ROOT, env={**os.environ, **env}).stdout for _ in range(2)]
+    # the second is answered from the physics caches (and main's whole-answer cache)
+    assert outs[0] == outs[1] and b'"stiffness"' in outs[0]
+    # and once more with only the whole-answer cache removed: physics from the JSON caches
+    import shutil
+
+    shutil.rmtree(tmp_path / "cache" / "check", ignore_errors=True)
+    third = subprocess.run([sys.executable, "-m", "cogniframe", "check", str(ROOT / "params" / "carbon.yaml"), "--json"],
+                           capture_output=True, cwd=ROOT, env={**os.environ, **env}).stdout
+    assert third == outs[0]

@@ -244,12 +244,26 @@ def fit(
     no_lowpass: Annotated[bool, typer.Option("--no-lowpass", help="Compare the raw model, without the paper's low-pass filter.")] = False,
     lowpass_rad_per_s: Annotated[float, typer.Option("--lowpass-rad-per-s", help="Low-pass corner w of H(s) = w/(s+w), rad/s.")] = 500.0,
     loss: Annotated[str, typer.Option("--loss", help="cauchy: log(1 + total MSE) as the paper; mse: the total.")] = "cauchy",
+    model: Annotated[str, typer.Option("--model", help="kelvin-voigt: the paper's one-mass model (default); nonlinear: the two-mass model with the exoskeleton's own mass on a unilateral floor contact (docs/impact-model.md).")] = "kelvin-voigt",
+    predict: Annotated[Optional[list[float]], typer.Option("--predict", help="Drop height in cm to predict (repeatable): median peak |a| as the logger sees it (500 rad/s low-pass), x_max and whether the holder strikes.")] = None,
+    exo_mass_kg: Annotated[float, typer.Option("--exo-mass-kg", help="Exoskeleton (rods + joints) mass in kg for --model nonlinear (paper's build: 0.062).")] = 0.062,
+    clearance_mm: Annotated[float, typer.Option("--clearance-mm", help="Battery-holder clearance for the strike flag of --predict, mm.")] = 16.0,
 ) -> None:
     """Fit damping c and stiffness k to accelerometer drop tests with the paper's procedure."""
     from cogniframe.analysis import fit as F
 
+    from cogniframe.analysis import impact_nl
+
     if loss not in F.LOSSES:
         raise UserError(f"Option --loss is '{loss}'; use 'cauchy' (the paper's) or 'mse'.")
+    if model not in impact_nl.MODELS:
+        raise UserError(f"Option --model is '{model}'; use 'kelvin-voigt' (the paper's, default) or 'nonlinear'.")
+    for h in predict or []:
+        _positive(h, "--predict", "cm", "100")
+    _positive(clearance_mm, "--clearance-mm", "mm", "16")
+    if model == "nonlinear" and write is not None:
+        raise UserError("Option --write stores the Kelvin-Voigt c and k in the params file; it cannot be combined "
+                        "with --model nonlinear. Drop --write, or fit with --model kelvin-voigt.")
     if not no_lowpass:
         _positive(lowpass_rad_per_s, "--lowpass-rad-per-s", "rad/s", "500")
     params = _load_params(write) if write is not None else None
@@ -264,6 +278,9 @@ def fit(
                             "the model fits one mass. Give --mass <kg> to choose.")
         mass_kg = manifest_masses[0]
     _positive(mass_kg, "--mass", "kg", "0.241")
+    if model == "nonlinear" and not 0 < exo_mass_kg < mass_kg:
+        raise UserError(f"Option --exo-mass-kg is {exo_mass_kg:g}; it must be more than 0 and less than the total "
+                        f"mass {mass_kg:g} kg (the paper's exoskeleton: --exo-mass-kg 0.062).")
     k_static = F.fit_static_stiffness(static, mass_kg) if static is not None else None
 
     # Several DATA arguments at the same height are one height: trimmed and averaged together.
@@ -285,7 +302,12 @@ def fit(
                 trials, h, skipped=skipped + bad, source=", ".join(map(str, groups[h]))))
 
     lowpass = None if no_lowpass else lowpass_rad_per_s
+    if model == "nonlinear":
+        _fit_nonlinear(heights_data, mass_kg, exo_mass_kg, lowpass, loss, predict or [], clearance_mm, as_json, k_static)
+        return
     result = F.fit_drop_tests(heights_data, mass_kg, lowpass_rad_per_s=lowpass, loss=loss)
+    predictions = impact_nl.predict("kelvin-voigt", mass_kg, result.c_n_s_per_m, result.k_n_per_m, predict or [],
+                                    clearance_mm, lowpass_rad_per_s=lowpass) if predict else None
 
     if plot is not None:
         from cogniframe.report.drop_plots import plot_fit
@@ -298,6 +320,9 @@ def fit(
         d = result.to_dict()
         if k_static is not None:
             d["static_k_n_per_m"] = k_static
+        if predictions is not None:
+            d["model"] = "kelvin-voigt"
+            d["predictions"] = predictions
         sys.stdout.write(json.dumps(d) + "\n")
         err = _stderr()
         for s in result.skipped:
@@ -326,6 +351,8 @@ def fit(
         per.add_row(f"{h.height_cm:g}", str(h.trials_used), str(h.trials_skipped),
                     f"{h.peak_median_g:.1f}", f"{h.rmse_g:.1f}")
     out.print(per)
+    if predictions:
+        _print_predictions(out, predictions)
     out.print(f"m = {mass_kg:g} kg, loss {loss}, "
               + ("no low-pass" if lowpass is None else f"low-pass {lowpass:g} rad/s")
               + f", {result.evaluations} evaluations")
@@ -335,6 +362,52 @@ def fit(
         out.print(f"wrote {plot}")
     if write is not None:
         out.print(f"wrote model.k_n_per_m and model.c_n_s_per_m to {write}")
+
+
+def _print_predictions(out, predictions: list[dict]) -> None:
+    from rich.table import Table
+
+    t = Table(title="Predictions (peak |a| as the logger sees it, 500 rad/s low-pass)")
+    for col in ("height cm", "peak G", "x_max mm", "strike"):
+        t.add_column(col, justify="right")
+    for p in predictions:
+        t.add_row(f"{p['height_cm']:g}", f"{p['peak_g']:.1f}", f"{p['x_max_mm']:.2f}", "yes" if p["strikes"] else "no")
+    out.print(t)
+
+
+def _fit_nonlinear(heights_data, mass_kg, exo_mass_kg, lowpass, loss, predict, clearance_mm, as_json, k_static) -> None:
+    from cogniframe.analysis import fit as F
+    from cogniframe.analysis import impact_nl
+
+    r = F.fit_nonlinear(heights_data, mass_kg, exo_mass_kg, lowpass_rad_per_s=lowpass, loss=loss)
+    preds = impact_nl.predict("nonlinear", mass_kg, r.c_n_s_per_m, r.k_n_per_m, predict, clearance_mm, m_exo=exo_mass_kg,
+                              k_c=r.contact_k_n_per_m, c_c=r.contact_c_n_s_per_m, lowpass_rad_per_s=lowpass)
+    d = r.to_dict()
+    d["lowpass_rad_per_s"] = lowpass
+    d["loss_kind"] = loss
+    d["predictions"] = preds
+    if k_static is not None:
+        d["static_k_n_per_m"] = k_static
+    if as_json:
+        sys.stdout.write(json.dumps(d) + "\n")
+        return
+    from rich.table import Table
+
+    out = _stdout()
+    t = Table(title="Drop-test fit: two-mass model (nonlinear)")
+    t.add_column("quantity")
+    t.add_column("value", justify="right")
+    for label, v in (("c (N s/m)", f"{r.c_n_s_per_m:.2f}"), ("k (N/m)", f"{r.k_n_per_m:.1f}"),
+                     ("contact k_c (N/m)", f"{r.contact_k_n_per_m:.4g}"), ("contact c_c (N s/m)", f"{r.contact_c_n_s_per_m:.4g}"),
+                     ("exoskeleton mass (kg)", f"{exo_mass_kg:g}"), ("loss", f"{r.loss:.4f}")):
+        t.add_row(label, v)
+    if k_static is not None:
+        t.add_row("static k (N/m)", f"{k_static:.1f}")
+    out.print(t)
+    for h in r.heights:
+        out.print(f"{h['height_cm']:g} cm: {h['trials_used']} trials, median peak {h['peak_median_g']:.1f} G, RMSE {h['rmse_g']:.1f} G")
+    if preds:
+        _print_predictions(out, preds)
 
 
 def register(app: typer.Typer) -> None:

@@ -271,6 +271,32 @@ figure{display:inline-block;margin:.5em;vertical-align:top} figcaption{font-size
 """
 
 
+def _stiffness_blocks(cd: Mapping) -> list:
+    """The `stiffness` section of check --json as one table and a note (wall, thrust, modes,
+    buckling, TPU strain and its fatigue caveat, predicted peak deceleration)."""
+    s = cd["stiffness"]
+    t, w, st = s["thrust"], s["wall"], s["strain"]
+    rows = [("payload stiffness k (N/m)", f"{s['k_n_per_m']:.0f} (joints: {s['joint_model']}, printed TPU at {s['tpu_modulus_factor']:g} x datasheet)"),
+            ("side-on (wall) stiffness (N/m)", f"{s['k_lateral_n_per_m']:.0f}"),
+            ("highest wall speed (m/s)", f"{w['max_wall_speed_m_s']:.1f} (then the {w['limited_by']} reaches the wall)"),
+            ("motor deflection at full thrust (mm/N)", f"{t['motor_deflection_mm_per_n']:.3f}, tilt {t['motor_tilt_deg']:.2f} deg"),
+            ("arms alone (mm/N)", f"{t['arms_only_motor_deflection_mm_per_n']:.2f}: the exoskeleton stiffens the arms "
+                                  f"{t['exoskeleton_stiffening']:.0f} times"),
+            ("first modes (Hz)", ", ".join(f"{f:.1f}" for f in s["modes_hz"][:6]) + f" (rotor at hover {s['hover_rotor_hz']:.0f} Hz"
+             + (f"; mode {s['mode_near_rotor']['mode']} within 15 %)" if s["mode_near_rotor"] else ")")),
+            ("min buckling margin", f"{s['min_buckling_margin']:.2f} ({s['critical_rod']}, at the {s['design_drop_height_cm']:g} cm design drop)"
+             if s["min_buckling_margin"] is not None else "no rod in compression"),
+            ("peak TPU strain at the design drop", f"hinge {100 * st['hinge']:.1f} %, sockets {100 * st['socket']:.1f} % "
+                                                    f"(elongation at break {100 * st['elongation_at_break']:.0f} %)")]
+    if "peak_g" in cd:
+        pk = cd["peak_g"]
+        rows.append((f"predicted peak |a| ({pk['model']}, logger)", ", ".join(f"{h['height_cm']:g} cm: {h['peak_g']:.0f} G" for h in pk["heights"])))
+    note = ("Fatigue: TPU living hinges and sockets flex on every crash; the strain above is a single-event check against "
+            "breaking. How many crashes a printed TPU hinge survives is not known (the paper names it as the open question): "
+            "inspect the knee hinges after hard landings and reprint them when they whiten or crack.")
+    return [Table("load-cases", "Load cases", ("quantity", "value"), tuple(rows), ()), ("p", note)]
+
+
 def _html_table(t: Table) -> str:
     out = [f'<table id="{t.id}"><caption>{html.escape(t.title)}</caption><thead><tr>']
     out += [f"<th>{html.escape(h)}</th>" for h in t.headers]
@@ -347,6 +373,8 @@ def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str
     if "drop" in tables:
         sections.append(("crash", "Stiffness and drop model", [tables["drop-model"], tables["drop"],
                                                                *[("img", c, p) for c, p in figs.get("drop", [])]]))
+    if "stiffness" in cd:
+        sections.append(("load-cases", "Frame load cases", _stiffness_blocks(cd)))
     sections.append(("frame", "Frame", [tables["props"], ("p", f"Battery holder clearance above the ground: {fmt_key(cd, 'frame.clearance_mm')} mm; "
                                                              f"{cd['frame']['rods']} rods, {cd['frame']['joints']} joints.")]))
     sections.append(("cuts", "Cut list and stock plan", [tables["cutlist"], tables["stock"]]))
