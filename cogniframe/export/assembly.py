@@ -33,7 +33,7 @@ def colour_of(material: str) -> tuple[float, float, float]:
 def instance_name(part: PartSpec, instance: str) -> str:
     if part.qty == 1:
         return part.name
-    if instance.startswith(part.name):
+    if instance.startswith(part.name) or instance.startswith(str(dict(part.params).get("kind", part.name))):
         return instance
     return f"{part.name}_{instance.rsplit('_', 1)[-1]}"
 
