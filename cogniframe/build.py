@@ -96,9 +96,10 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
                             cache_dir=cache_dir() if use_cache else None,
                             progress=lambda name: progress.update(task, advance=1, description=f"built {name}"))
     write_assembly(spec, design.frame, design.parts, built, out, cache_dir=cache_dir() if use_cache else None)
+    clash = _clash_check(spec, design, built, out, use_cache)
 
     geometry = {b.name: PartGeometry(b.volume_mm3, b.area_h_mm2, b.area_v_mm2, "cad") for b in built}
-    check = pipeline.check(spec, geometry)
+    check = pipeline.check(spec, geometry, clash=clash)
     data = pipeline.check_dict(check)
     _write(out / "check.json", json.dumps(data, indent=2) + "\n")
     _write(out / "cutlist.csv", cutlist.to_csv(design.cut))
@@ -116,6 +117,14 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
     write_fabrication(spec, check, built, out, console)
     n = _write_manifest(spec, params_path, out, key)
     return n, check, built
+
+
+def _clash_check(spec: Spec, design, built, out: Path, use_cache: bool):
+    """Issue 13: every pair of solids in the assembly (printed parts, rods, vitamins) and every
+    propeller's clearance; writes clash.json; its clashes become FAIL problems of the check."""
+    from .export.assembly import run_clash_check
+
+    return run_clash_check(spec, design.frame, design.parts, built, out, cache_dir=cache_dir() if use_cache else None)
 
 
 def _mass_markdown(check: pipeline.CheckResult) -> str:

@@ -34,6 +34,8 @@ class CheckResult:
     mass: mass_mod.MassBudget
     drop: object | None  # analysis.impact.DropResult once the physics stage is available
     problems: tuple[str, ...]
+    flight: object | None = None  # analysis.flight.FlightResult (issue 13)
+    clash: object | None = None  # analysis.clash.ClashResult, from `build` only (issue 13)
 
     @property
     def verdict(self) -> str:
@@ -62,12 +64,29 @@ def _check_printer_fit(spec: Spec, parts) -> None:
                 f"or shrink the part (for the battery holder: core.battery; for the core plate: core.plate_size).")
 
 
-def check(spec: Spec, geometry: dict | None = None) -> CheckResult:
-    """Mass budget, crash margin and requirements; `geometry` = CAD volumes when known."""
+def check(spec: Spec, geometry: dict | None = None, clash=None) -> CheckResult:
+    """Mass budget, crash margin, flight and requirements; `geometry` = CAD volumes when known,
+    `clash` = the build's clash check (analysis.clash.ClashResult) when known."""
     d = design(spec)
     budget = mass_mod.budget(spec, d.frame, d.cut, d.parts, geometry)
     drop = _drop(spec, d, budget)
-    return CheckResult(d, budget, drop, tuple(_problems(spec, budget, drop)))
+    from .analysis import flight as flight_mod
+
+    flight = flight_mod.evaluate(spec, budget.total_g)
+    problems = _problems(spec, budget, drop) + _aircraft_problems(spec, flight, clash)
+    return CheckResult(d, budget, drop, tuple(problems), flight, clash)
+
+
+def _aircraft_problems(spec: Spec, flight, clash) -> list[str]:
+    """Issue 13: thrust-to-weight below requirements.min_thrust_to_weight; any clash."""
+    out = []
+    if flight is not None and flight.thrust_to_weight < spec.requirements.min_thrust_to_weight:
+        out.append(f"thrust-to-weight {flight.thrust_to_weight:.2f} is below {spec.requirements.min_thrust_to_weight:g} "
+                   f"(requirements.min_thrust_to_weight): {flight.max_thrust_g_per_motor:.0f} g per motor lifts "
+                   f"{flight.mass_g:.0f} g; choose stronger motors, bigger props, more cells or a lighter design")
+    if clash is not None:
+        out += clash.messages()
+    return out
 
 
 def _drop(spec: Spec, d: Design, budget: mass_mod.MassBudget):
@@ -106,6 +125,10 @@ def check_dict(result: CheckResult) -> dict:
     }
     if result.drop is not None:
         out["drop"] = result.drop.to_dict()
+    if result.flight is not None:
+        out["flight"] = result.flight.summary()
+    if result.clash is not None:
+        out["clash"] = result.clash.to_dict()
     return out
 
 

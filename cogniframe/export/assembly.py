@@ -69,7 +69,89 @@ def build_assembly(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir:
         axis = end - start
         cyl = cq.Solid.makeCylinder(rod.diameter / 2, float(np.linalg.norm(axis)), cq.Vector(*start), cq.Vector(*axis))
         assy.add(cyl, name=rod.name, color=cq.Color(*ROD_BLACK))
+    from ..vitamins import to_cq, vitamins
+
+    for v in vitamins(spec, frame):
+        assy.add(to_cq(v), name=v.name, color=cq.Color(*v.colour))
     return assy
+
+
+# -- issue 13: the clash check over everything in the assembly --------------------------------
+
+def rod_mesh(rod, sections: int = 48):
+    import trimesh
+
+    start, end = np.asarray(rod.start, float), np.asarray(rod.end, float)
+    return trimesh.creation.cylinder(radius=rod.diameter / 2, segment=np.vstack([start, end]), sections=sections)
+
+
+def bodies(spec: Spec, frame, parts: Sequence[PartSpec], built, meshes: dict) -> list:
+    """Every solid of the aircraft for the clash check: part copies (their print meshes with the
+    world <- print transform), rods, vitamins (propellers as discs)."""
+    from ..analysis.clash import Body
+    from ..vitamins import to_trimesh, vitamins
+
+    by_name = {b.name: b for b in built}
+    out = []
+    for p in parts:
+        for pl in p.placements:
+            out.append(Body(instance_name(p, pl.instance), "part", meshes[p.name],
+                            world_from_print(pl.matrix(), by_name[p.name].print_from_local)))
+    for rod in frame.rods.values():
+        out.append(Body(rod.name, "rod", rod_mesh(rod)))
+    for v in vitamins(spec, frame):
+        out.append(Body(v.name, "propeller" if v.disc else "vitamin", to_trimesh(v), None, v.disc is not None))
+    return out
+
+
+def own_motor_pairs(frame) -> frozenset:
+    """Each propeller sits on its own motor's shaft: that pair is not a clash."""
+    return frozenset(frozenset((f"propeller_{m.corner}", f"motor_{m.corner}")) for m in frame.motors)
+
+
+CLASH_VERSION = "clash-1"
+
+
+def run_clash_check(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path,
+                    cache_dir: str | Path | None = None):
+    """The build step: check_clashes, cached under the assembly key (the same solids give the same
+    answer), written to out_dir/clash.json. Returns the ClashResult."""
+    from ..analysis import clash
+
+    out_dir = Path(out_dir)
+    key = hashlib.sha256(json.dumps([CLASH_VERSION, assembly_key(spec, frame, parts, built), spec.requirements.prop_margin,
+                                     clash.TOLERANCE_MM3]).encode()).hexdigest()[:24]
+    entry = Path(cache_dir) / "clash" / f"{key}.json" if cache_dir is not None else None
+    result = None
+    if entry is not None and entry.is_file():
+        try:
+            result = clash.from_dict(json.loads(entry.read_text()))
+        except (OSError, ValueError, KeyError):
+            result = None
+    if result is None:
+        result = check_clashes(spec, frame, parts, built, out_dir)
+        if entry is not None:
+            try:
+                entry.parent.mkdir(parents=True, exist_ok=True)
+                tmp = entry.with_name(f".{entry.name}.{os.getpid()}.tmp")
+                tmp.write_text(json.dumps(result.to_dict(), sort_keys=True))
+                tmp.replace(entry)
+            except OSError:
+                pass
+    (out_dir / "clash.json").write_text(json.dumps(result.to_dict(), indent=2) + "\n", encoding="utf-8")
+    return result
+
+
+def check_clashes(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path):
+    """The build's clash check (one call after the assembly is written): part meshes read back from
+    their STL files; returns analysis.clash.ClashResult (its clashes are FAIL problems)."""
+    from ..analysis import clash
+    from .mesh import load_stl
+
+    out_dir = Path(out_dir)
+    meshes = {b.name: load_stl(out_dir / b.stl) for b in built}
+    return clash.check(bodies(spec, frame, parts, built, meshes), prop_margin=spec.requirements.prop_margin,
+                       ignore=own_motor_pairs(frame))
 
 
 def assembly_key(spec: Spec, frame, parts: Sequence[PartSpec], built) -> str:
@@ -81,8 +163,16 @@ def assembly_key(spec: Spec, frame, parts: Sequence[PartSpec], built) -> str:
     payload = [CAD_VERSION, spec.name,
                [[cache_key(p, bed), p.material, [(pl.instance, pl.rotation_deg, pl.origin) for pl in p.placements],
                  np.round(np.asarray(by_name[p.name].print_from_local, float), 9).tolist()] for p in parts],
-               [[r.name, np.round(r.start, 9).tolist(), np.round(r.end, 9).tolist(), r.diameter] for r in frame.rods.values()]]
+               [[r.name, np.round(r.start, 9).tolist(), np.round(r.end, 9).tolist(), r.diameter] for r in frame.rods.values()],
+               _vitamin_key(spec, frame)]
     return hashlib.sha256(json.dumps(payload, default=float).encode()).hexdigest()[:24]
+
+
+def _vitamin_key(spec: Spec, frame) -> list:
+    from ..vitamins import vitamins
+
+    return [[v.name, v.colour, [[p.kind, p.centre, p.size, p.rot, p.axis, p.radius, p.length] for p in v.prims]]
+            for v in vitamins(spec, frame)]
 
 
 def write_assembly(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path,
