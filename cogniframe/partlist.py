@@ -231,8 +231,12 @@ def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict |
             a_h += 2.2 * math.pi * r**2
         ext = np.ptp(np.vstack([ports, ports + dirs * L[:, None]]), axis=0) + 2 * r
     else:
-        _, _, vt = np.linalg.svd(dirs)
+        _, sv, vt = np.linalg.svd(dirs)
         w = vt[-1]
+        if sv[1] < 1e-6 * sv[0]:  # parallel arm sockets only (no strut): the SVD's normal is arbitrary;
+            off = ports[1] - ports[0]  # use the one across the pair, as parts/joint.py prints it
+            w = np.cross(dirs[0], np.cross(dirs[0], off))
+            w /= np.linalg.norm(w)
         zc = ports @ w
         z = zc - zc.min() + r  # axis heights in print orientation
         par = [i for i in range(len(sockets)) if sum(dirs[i] @ dirs[k] > 1 - PARALLEL_TOL for k in range(len(sockets))) > 1]
@@ -541,15 +545,17 @@ def _camera_mount(spec: Spec, frame: Frame) -> PartSpec:
     c = spec.core
     g = camera_mount_geometry(spec, frame)
     screw = SCREWS[c.stack_screw]
-    base_a = g["width"] * (g["y_front"] - g["y_back"])
-    up_a = g["width"] * g["height"]
-    hole_base = 4 * math.pi / 4 * screw.clearance_d**2
-    hole_up = 4 * math.pi / 4 * g["camera_hole_d"] ** 2
-    vol = (base_a - hole_base) * g["base_t"] + (up_a - hole_up) * g["wall"]
-    # printed on its side: the faces of the L are vertical, the two ends horizontal
-    prof = (g["y_front"] - g["y_back"]) * g["base_t"] + g["height"] * g["wall"]
-    area_v = 2 * (base_a + up_a) + 2 * (g["y_front"] - g["y_back"] + g["height"]) * g["width"] * 0.0
-    est = Estimate(vol, 2 * prof, area_v, (g["y_front"] - g["y_back"] + g["height"] * 0.5, g["height"] + g["base_t"], g["width"]))
+    w, yf, yb, bt, wall, height = g["width"], g["y_front"], g["y_back"], g["base_t"], g["wall"], g["height"]
+    corner = max(0.0, w / 2 - (g["corner_cut"] - (yf - wall))) ** 2 / 2  # each front corner cut off the base (behind the upright)
+    bw, hy = min(w / 2 - 4.0, 6.0), min(5.0, (yf - yb) / 2 - 8.0)
+    base_win = _hexagon_area(2 * bw, 2 * hy) if bw > 2.0 and hy > 1.0 and bw >= hy else 0.0
+    up_win = _hexagon_area(height - 12.0, 10.0) if height - 6.0 > 10.0 else 0.0
+    base_a = w * (yf - yb) - 2 * corner - base_win - 4 * math.pi / 4 * screw.clearance_d**2
+    up_a = w * height - up_win - 4 * math.pi / 4 * g["camera_hole_d"] ** 2
+    vol = base_a * bt + up_a * wall
+    # printed as it sits: the base's faces are horizontal, the upright's vertical
+    area_v = 2 * up_a + 2 * (w + yf - yb) * bt
+    est = Estimate(vol, 2 * base_a + w * wall, area_v, (w, yf - yb, height + bt))
     origin = (0.0, 0.0, frame.core.plate.hi[2])
     params = tuple((k, v) for k, v in g.items())
     hw = (HardwareLine("M2 x 6 screw + nut (camera to mount)", 4, SCREWS["M2"].mass_g + 0.1),)

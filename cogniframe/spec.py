@@ -85,7 +85,7 @@ class ComputerSection(_M):
 
 class CameraSection(_M):
     model: str = Field("pi_camera_v2", description="camera vitamin (see cogniframe/vitamins.py)")
-    tilt_deg: Annotated[float, Field(ge=-30, le=60, description="camera tilt above the horizon, degrees (0 = looking straight forward)")] = 0.0
+    tilt_deg: Annotated[float, Field(ge=-30, le=45, description="camera tilt above the horizon, degrees (0 = looking straight forward; the upright prints leaning, so at most 45)")] = 0.0
 
 
 class FlowSensorSection(_M):
@@ -105,8 +105,8 @@ class CoreSection(_M):
     computer: ComputerSection | None = ComputerSection()
     spacer_thickness: Annotated[float, Field(ge=0, le=10, description="the sensor mount / spacer between the battery holder and the core plate, mm: lifts the plate and its TPU links clear of the holder")] = 2.0
     strap_width: Annotated[float, Field(ge=5, le=30, description="hook-and-loop battery strap width, mm: sets the strap slots at the holder mouth")] = 10
-    camera: CameraSection | None = CameraSection()
-    flow_sensor: FlowSensorSection | None = FlowSensorSection()
+    camera: CameraSection | None = Field(None, description="camera bracket at the front of the core (needs a components line with vitamin: pi_camera_v2)")
+    flow_sensor: FlowSensorSection | None = Field(None, description="downward optical-flow + ToF board behind the holder (needs a components line with vitamin: matek_3901_l0x)")
 
 
 class MotorsSection(_M):

@@ -175,14 +175,9 @@ def sensor_mount_from_local(part: PartSpec) -> np.ndarray:
     return transform(np.eye(3), (0.0, 0.0, 0.0))
 
 
-# camera mount: printed on its side, local x -> print z, local y -> print x, local z -> print y
-CAMERA_PRINT = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
-
-
 def camera_mount_from_local(part: PartSpec) -> np.ndarray:
-    w = float(part.param("width"))
-    y_back = float(part.param("y_back"))
-    return transform(CAMERA_PRINT, (-y_back, 0.0, w / 2))
+    """Printed as it sits: the base on the bed, the upright standing (leaning by tilt_deg <= 45)."""
+    return transform(np.eye(3), (0.0, 0.0, 0.0))
 
 
 def camera_upright_matrix(part_params: dict) -> np.ndarray:
@@ -197,8 +192,8 @@ def camera_upright_matrix(part_params: dict) -> np.ndarray:
 
 
 def build_camera_mount(part: PartSpec) -> Built:
-    """Base plate under the FC stack + the camera upright at the plate's front edge (tilted), built
-    in the local frame and turned onto its side for printing (the L profile on the bed)."""
+    """Base plate under the FC stack + the camera upright at the plate's front edge (tilted), printed
+    as it sits: windows pointed along z, camera holes are 2.2 mm horizontal holes."""
     import cadquery as cq
 
     p = dict(part.params)
@@ -221,7 +216,8 @@ def build_camera_mount(part: PartSpec) -> Built:
     body = body.cut(cq.Solid.makeBox(4 * w, 4 * (yf - yb) + 4 * height, 4 * height, cq.Vector(-2 * w, -2 * (yf - yb) - height, -4 * height)))
     cc = float(p["corner_cut"])
     for sx in (-1.0, 1.0):  # front corners of the base, clear of the core links' tabs
-        tri = [(sx * (cc - yf - 5.0), yf + 5.0), (sx * (cc + 50.0), -50.0), (sx * (cc + 50.0), yf + 5.0)]
+        y_cut = yf - wall  # behind the upright only, so the upright never overhangs the cut
+        tri = [(sx * (cc - y_cut), y_cut), (sx * (cc + 50.0), -50.0), (sx * (cc + 50.0), y_cut)]
         body = body.cut(_prism_xy(tri, -1.0, bt))
     hole_d = float(p["stack_hole_d"])
     for x, y in p["stack_holes"]:
