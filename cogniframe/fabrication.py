@@ -33,7 +33,8 @@ def write_fabrication(spec, check, built, out: Path, console: Console) -> None:
     (out / "assembly.md").write_text(assembly_steps.to_markdown(steps), encoding="utf-8")
     console.print("rendering", markup=False)
     world = renders.world_meshes(d.parts, meshes, {b.name: b.print_from_local for b in built})
-    views = renders.render_assembly(world, renders.rod_segments(d.frame), out / "renders", title=spec.name)
+    views = renders.render_assembly(world, renders.rod_segments(d.frame), out / "renders", title=spec.name,
+                                    vitamins=renders.vitamin_meshes(spec, d.frame))
     part_pngs = renders.render_parts({b.name: (b.material, meshes[b.name]) for b in built}, out / "renders" / "parts")
     images = {f"assembly {v}": p for v, p in views.items()} | {f"part {n}": p for n, p in part_pngs.items()}
     write_report(check, out, images, lines, steps, plates, sliced)

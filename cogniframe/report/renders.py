@@ -160,12 +160,31 @@ def _group_by_material(meshes: Iterable[SceneMesh]) -> dict[str, list["trimesh.T
     return dict(sorted(out.items()))
 
 
+@dataclass(frozen=True, eq=False)
+class VitaminMesh:
+    """A bought part in world coordinates, its colour (r, g, b in 0-1) and opacity."""
+
+    name: str
+    colour: tuple[float, float, float]
+    mesh: "trimesh.Trimesh"
+    opacity: float = 1.0
+
+
+def vitamin_meshes(spec, frame) -> list[VitaminMesh]:
+    """The aircraft's vitamins (cogniframe.vitamins) as meshes; propeller discs see-through."""
+    from ..vitamins import to_trimesh, vitamins
+
+    return [VitaminMesh(v.name, v.colour, to_trimesh(v), 0.35 if v.disc else 1.0) for v in vitamins(spec, frame)]
+
+
 def render_assembly(meshes: Sequence[SceneMesh], rods: Sequence[RodSegment], out_dir: Path | str,
                     size: tuple[int, int] = SIZE, views: Sequence[str] = ("iso", "top", "front"),
-                    prefix: str = "assembly", title: str | None = None) -> dict[str, Path]:
+                    prefix: str = "assembly", title: str | None = None,
+                    vitamins: Sequence[VitaminMesh] = ()) -> dict[str, Path]:
     """Render the assembled frame from each view into `<out_dir>/<prefix>_<view>.png`.
 
-    Returns {view: path}. Printed parts coloured by material, rods black."""
+    Returns {view: path}. Printed parts coloured by material, rods black, vitamins in their own
+    colours (propeller discs translucent)."""
     import trimesh
 
     out_dir = Path(out_dir)
@@ -177,6 +196,9 @@ def render_assembly(meshes: Sequence[SceneMesh], rods: Sequence[RodSegment], out
         merged = trimesh.util.concatenate(group)
         p.add_mesh(_pv(merged), color=material_colour(material), smooth_shading=False)
         pts.append(merged.bounds)
+    for v in vitamins:
+        p.add_mesh(_pv(v.mesh), color=tuple(float(c) for c in v.colour), opacity=v.opacity, smooth_shading=False)
+        pts.append(v.mesh.bounds)
     tube = _rods_polydata(rods)
     if tube is not None:
         p.add_mesh(tube, color=ROD_COLOUR, smooth_shading=True)
