@@ -52,7 +52,10 @@ class BomLine:
 
 def _screw_size(item: str) -> str:
     m = _SIZE.search(item)
-    return f"{m.group(1)} x {m.group(2)}" if m else ""
+    if m:
+        return f"{m.group(1)} x {m.group(2)}"
+    m = re.search(r"(\d+(?:\.\d+)?)(?: mm)? x (\d+(?:\.\d+)?) mm", item)  # straps, zip ties: width x length
+    return f"{m.group(1)} x {m.group(2)} mm" if m else ""
 
 
 def build_bom(spec: "Spec", design: "Design", budget: "MassBudget",
