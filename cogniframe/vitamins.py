@@ -307,7 +307,12 @@ def to_cq(v: Vitamin):
             solids.append(apply(s, m))
         else:
             solids.append(cq.Solid.makeCylinder(p.radius, p.length, cq.Vector(*p.centre), cq.Vector(*p.axis)))
-    return cq.Compound.makeCompound(solids)
+    if len(solids) == 1:
+        return solids[0]
+    # one fused solid: a compound's colour does not survive the STEP round trip
+    fused = solids[0].fuse(*solids[1:]).clean()
+    parts = fused.Solids()
+    return parts[0] if len(parts) == 1 else cq.Compound.makeCompound(parts)
 
 
 def _frame_z(z: np.ndarray) -> np.ndarray:
