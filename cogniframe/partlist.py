@@ -431,7 +431,12 @@ def _battery_holder(spec: Spec, frame: Frame) -> PartSpec:
     est = Estimate(vol, area_h, area_v, (w, height, length))
     params = (("inner", (b.width, il, b.height + 1.0)), ("wall", t), ("holes", holes), ("hole_d", screw.clearance_d),
               ("outer", (w, length, height)), *sorted(f.items()))
-    hw = (HardwareLine(f"hook-and-loop battery strap {c.strap_width:g} mm x 200 mm", 1, round(0.1 * c.strap_width / 10 * 20, 2)),)
+    # The strap runs across the mouth and round the holder's outside, closing on itself: the
+    # holder's cross-section perimeter + 40 mm of overlap, rounded up to 10 mm; about 1 g per
+    # 100 mm of 10 mm hook-and-loop.
+    strap_len = math.ceil((2 * (w + height) + 40.0) / 10.0) * 10.0
+    hw = (HardwareLine(f"hook-and-loop battery strap {c.strap_width:g} mm x {strap_len:g} mm", 1,
+                       round(0.01 * strap_len * c.strap_width / 10.0, 2)),)
     return PartSpec("battery_holder", "battery_holder", "core", c.material, c.infill,
                     (Placement("core", 0.0, _t(h.centre)),), (), t, est, params, hw)
 
@@ -559,7 +564,8 @@ def _camera_mount(spec: Spec, frame: Frame) -> PartSpec:
     origin = (0.0, 0.0, frame.core.plate.hi[2])
     params = tuple((k, v) for k, v in g.items())
     hw = (HardwareLine("M2 x 6 screw + nut (camera to mount)", 4, SCREWS["M2"].mass_g + 0.1),)
-    return PartSpec("camera_mount", "camera_mount", "core", c.material, c.infill,
+    # not "camera_...": trimesh 5.2's 3MF export drops every scene node whose name starts with "camera"
+    return PartSpec("front_camera_mount", "camera_mount", "core", c.material, c.infill,
                     (Placement("core", 0.0, _t(origin)),), (), g["wall"], est, params, hw)
 
 

@@ -181,7 +181,7 @@ def test_camera_and_sensor_mounts_are_printed_flat_watertight_and_on_the_plates(
     from cogniframe.export.mesh import flat_contact_ratio, overhangs
 
     d = built_preset("carbon")
-    for name in ("camera_mount", "sensor_mount"):
+    for name in ("front_camera_mount", "sensor_mount"):
         m = d.meshes[name]
         assert m.is_watertight and m.is_volume and m.body_count == 1, name
         assert m.bounds[0, 2] == pytest.approx(0.0, abs=1e-6) and flat_contact_ratio(m) > 0.3, name
@@ -189,7 +189,15 @@ def test_camera_and_sensor_mounts_are_printed_flat_watertight_and_on_the_plates(
     items = [plates_mod.PlateItem(b.name, b.material, b.qty, d.meshes[b.name]) for b in d.built.values()]
     plates = plates_mod.pack_plates(items, d.spec.printer.bed, d.spec.printer.margin)
     on_plates = {c.part for pl in plates for c in pl.copies}
-    assert {"camera_mount", "sensor_mount", "core_link_mirrored"} <= on_plates
+    assert {"front_camera_mount", "sensor_mount", "core_link_mirrored"} <= on_plates
+    # every copy is a build item of its plate's 3MF (trimesh drops scene nodes named "camera...")
+    import io
+    import zipfile
+
+    for pl in plates:
+        model = zipfile.ZipFile(io.BytesIO(plates_mod.plate_3mf_bytes(pl))).read("3D/3dmodel.model").decode()
+        for c in pl.copies:
+            assert f'partnumber="{c.name}"' in model, c.name
 
 
 def test_camera_tilt_turns_the_camera_and_its_upright():

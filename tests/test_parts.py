@@ -25,7 +25,7 @@ PRESETS = ("carbon", "bamboo")
 FAMILIES = ("joint", "motor_mount", "core_plate", "battery_holder", "sensor_mount", "camera_mount", "computer_mount")
 PART_NAMES = {
     "carbon": ("corner_top", "corner_bottom", "knee", "core_link", "core_link_mirrored", "motor_mount", "core_plate",
-               "battery_holder", "sensor_mount", "camera_mount", "computer_mount"),
+               "battery_holder", "sensor_mount", "front_camera_mount", "computer_mount"),
     "bamboo": ("corner_top", "corner_bottom", "knee", "core_link", "core_link_mirrored", "motor_mount", "core_plate",
                "battery_holder", "core_spacer"),
 }

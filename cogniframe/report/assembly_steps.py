@@ -143,9 +143,9 @@ def assembly_steps(design: "Design") -> tuple[Step, ...]:
         "Hold the core in the middle of the frame and push the free ends of both arm rods"
         + (" and the strut" if struts else "") + " of each corner into its core link. To remove the core later, pull "
         "the rods out of the links.")
-    if "camera_mount" in parts or spec.core.flow_sensor:
+    if "front_camera_mount" in parts or spec.core.flow_sensor:
         text = []
-        if "camera_mount" in parts:
+        if "front_camera_mount" in parts:
             text.append(f"Set the camera mount's base on the core plate, its holes over the stack screws, so the upright stands "
                         f"at the plate's front edge ({spec.core.camera.tilt_deg:g} deg tilt); the FC/ESC stack goes on top of the "
                         "base. Screw the Pi camera v2 to the upright with its lens forward (4 x M2) and run the ribbon up to the computer.")
@@ -153,7 +153,7 @@ def assembly_steps(design: "Design") -> tuple[Step, ...]:
             text.append("Zip-tie the Matek 3901-L0X under the sensor mount's rear pad, sensors facing the ground (the pad sits "
                         "behind the battery holder, so nothing is in their view), with the receiver on top of the pad in the same "
                         "two ties; tie the antenna leads through the two slots at the pad's rear edge.")
-        add("Camera and sensors", [n for n in ("camera_mount",) if n in parts], [], "none", " ".join(text), hw("camera_mount"))
+        add("Camera and sensors", [n for n in ("front_camera_mount",) if n in parts], [], "none", " ".join(text), hw("front_camera_mount"))
     rest = [n for n in parts if n not in used_parts]
     comps = ", ".join(f"{c.qty} x {c.name}" if c.qty > 1 else c.name for c in spec.components)
     add("Electronics", rest, [], "none",
