@@ -170,11 +170,14 @@ class FlightResult:
     source: str
 
     def summary(self) -> dict:
-        return {"thrust_to_weight": round(self.thrust_to_weight, 2), "hover_throttle": round(self.hover_throttle, 3),
-                "hover_current_a": round(self.hover_current_a, 2), "hover_time_min": round(self.hover_time_min, 1),
-                "max_thrust_g_per_motor": round(self.max_thrust_g_per_motor, 1), "hover_power_w": round(self.hover_power_w, 1),
-                "momentum_hover_power_w": round(self.momentum_hover_power_w, 1), "voltage_v": round(self.voltage_v, 2),
-                "usable_mah": round(self.usable_mah, 1), "avionics_w": round(self.avionics_w, 2), "table": self.table}
+        def r(x: float, n: int) -> float:
+            return round(float(x), n)
+
+        return {"thrust_to_weight": r(self.thrust_to_weight, 2), "hover_throttle": r(self.hover_throttle, 3),
+                "hover_current_a": r(self.hover_current_a, 2), "hover_time_min": r(self.hover_time_min, 1),
+                "max_thrust_g_per_motor": r(self.max_thrust_g_per_motor, 1), "hover_power_w": r(self.hover_power_w, 1),
+                "momentum_hover_power_w": r(self.momentum_hover_power_w, 1), "voltage_v": r(self.voltage_v, 2),
+                "usable_mah": r(self.usable_mah, 1), "avionics_w": r(self.avionics_w, 2), "table": self.table}
 
 
 def evaluate(spec: Spec, mass_g: float, rotors: int = 4) -> FlightResult | None:
