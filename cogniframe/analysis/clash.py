@@ -124,7 +124,7 @@ def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_mar
                 worst = (a.name, b.name, vol)
             if disc is not None:
                 other = b if disc is a else a
-                gap = 0.0 if vol > 0 else float(mans[i].min_gap(mans[k], prop_margin + 1.0))
+                gap = 0.0 if vol > 0 else float(mans[i].min_gap(mans[k], prop_margin + 20.0))
                 if disc.name not in gaps or gap < gaps[disc.name][1]:
                     gaps[disc.name] = (other.name, gap)
                 if gap < prop_margin:
