@@ -425,3 +425,39 @@ def test_a_build_with_a_clash_exits_1_naming_both_solids(run_cli, tmp_path, monk
     for link in ("core_link_fl", "core_link_fr", "core_link_rr", "core_link_rl"):
         assert pairs[frozenset((link, "battery_holder"))] == pytest.approx(4.5, abs=1.0)
     assert any("core_link_fr" in x and "battery_holder" in x and "mm^3" in x for x in check["problems"])
+
+
+def test_zip_tie_slots_strap_slots_and_lead_exit_go_through():
+    """Rays through the openings meet no material; rays beside them do (measured on the STLs)."""
+    from cogniframe.export.mesh import ray_first_hit
+
+    d = built_preset("carbon")
+    mount, part = d.meshes["sensor_mount"], d.parts["sensor_mount"]
+    slots = part.param("zip_slots")
+    assert len(slots) == 4  # receiver + flow board (a pair), antenna (a pair)
+    for x, y in slots:
+        assert math.isinf(ray_first_hit(mount, [[x, y, 10.0]], [[0, 0, -1.0]])[0]), (x, y)
+        assert ray_first_hit(mount, [[x, y + 3.0, 10.0]], [[0, 0, -1.0]])[0] == pytest.approx(10.0 - part.param("thickness"))
+    # battery holder, in its world placement: strap slots across the mouth, lead exit through the back stop
+    holder = next(b for b in _bodies(d) if b.name == "battery_holder")
+    hm = holder.mesh.copy()
+    hm.apply_transform(holder.transform)
+    h = d.frame.core.holder
+    ys, _, _, _ = d.parts["battery_holder"].param("strap_slot")
+    zc = d.frame.core.battery.centre[2] + 0.5  # cavity centre (1 mm slack above the pack)
+    y_slot = h.centre[1] + ys
+    far = h.size[0]
+    assert math.isinf(ray_first_hit(hm, [[-far, y_slot, zc]], [[1.0, 0, 0]])[0])  # through both walls and the mouth
+    assert ray_first_hit(hm, [[-far, y_slot - 8.0, zc + 2.0]], [[1.0, 0, 0]])[0] == pytest.approx(far - h.size[0] / 2, abs=0.01)
+    assert math.isinf(ray_first_hit(hm, [[0.0, h.lo[1] - 5.0, zc]], [[0, 1.0, 0]])[0])  # lead exit, out through the mouth
+
+
+def test_vitamin_bom_rows_name_their_budget_lines():
+    from cogniframe.vitamins import bom_rows
+
+    spec = spec_mod.load(ROOT / "params" / "carbon.yaml")
+    rows = {bom: (qty, line) for bom, qty, line in bom_rows(spec, frame_mod.build(spec))}
+    motor = next(k for k in rows if k.startswith("brushless motor 1104 6000KV"))
+    assert rows[motor] == (4, "motor 1104")
+    assert rows["Raspberry Pi camera module v2"] == (1, "Raspberry Pi camera v2 + ribbon")
+    assert any(k.startswith("LiPo 3S 650 mAh") and v == (1, "battery") for k, v in rows.items())
