@@ -378,7 +378,10 @@ def holder_features(spec: Spec, frame: Frame) -> dict:
 
     Every opening prints without support with the holder standing on its back stop (local +y up):
     the lightening windows in the side walls and floor have 45 deg pointed ends along y, the strap
-    slots run at 45 deg, and the lead exit is a hole in the bed layer (the back stop).
+    slots run at 45 deg, and the lead exit is a notch in the top wall from the pack's front face to
+    the mouth (open at the print's top). The lead leaves the pack's front, rises through the notch
+    above the strap to the stack, and its plug stays at the front, clear of the flow sensor's view
+    behind the holder; a swap unplugs it there.
     """
     c, b = spec.core, spec.core.battery
     h = frame.core.holder
@@ -397,7 +400,7 @@ def holder_features(spec: Spec, frame: Frame) -> dict:
     ext = (s_len + s_w) / math.sqrt(2)
     strap = (y_front_of_pack + 1.0 + ext / 2, 0.0, s_len, s_w) if ext <= ih else None
     conn = CONNECTORS[b.connector]
-    lead = (conn.width + 1.0, conn.height + 1.0)
+    lead = (conn.width + 1.0, round(y_front_of_pack, 4))  # notch width, where it starts (to the mouth)
     return {"side_window": side, "floor_window": floor, "strap_slot": strap, "lead_exit": lead}
 
 
@@ -420,14 +423,14 @@ def _battery_holder(spec: Spec, frame: Frame) -> PartSpec:
     cut_side = 2 * _hexagon_area(f["side_window"][1] - f["side_window"][0], f["side_window"][2]) if f["side_window"] else 0.0
     cut_floor = _hexagon_area(f["floor_window"][1] - f["floor_window"][0], f["floor_window"][2]) if f["floor_window"] else 0.0
     cut_strap = 2 * f["strap_slot"][2] * f["strap_slot"][3] if f["strap_slot"] else 0.0
-    cut_lead = f["lead_exit"][0] * f["lead_exit"][1]
+    cut_lead = f["lead_exit"][0] * (length / 2 - f["lead_exit"][1])  # notch in the top wall, over the mouth
     vol = (w * length * height - iw * il * ih - len(holes) * math.pi / 4 * screw.clearance_d**2 * skin
-           - (cut_side + cut_strap) * t - cut_floor * skin - cut_lead * t)
+           - (cut_side + cut_strap) * t - cut_floor * skin - cut_lead * skin)
     # Walls are vertical when printed on end: outside and cavity faces; horizontal: the back stop
     # and the rim of the open end.
     area_v = 2 * (w + height) * length + 2 * (iw + ih) * il - 2 * (cut_side + cut_strap + cut_floor)
     rim = w * height - iw * ih
-    area_h = w * height + rim - 2 * cut_lead
+    area_h = w * height + rim - f["lead_exit"][0] * skin
     est = Estimate(vol, area_h, area_v, (w, height, length))
     params = (("inner", (b.width, il, b.height + 1.0)), ("wall", t), ("holes", holes), ("hole_d", screw.clearance_d),
               ("outer", (w, length, height)), *sorted(f.items()))

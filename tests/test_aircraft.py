@@ -304,7 +304,8 @@ def test_holder_has_strap_slots_and_a_lead_exit_that_passes_the_connector():
     # the slot lies wholly in front of the pack (so a strap through it crosses the mouth)
     pack_front = -fr.core.holder.size[1] / 2 + spec.core.holder_wall + spec.core.battery.length
     assert ys - (s_len + s_w) / math.sqrt(8) > pack_front
-    assert f["lead_exit"][0] > 10.2 and f["lead_exit"][1] > 5.2  # XT30 housing 10.2 x 5.2 mm
+    assert f["lead_exit"][0] > 10.2  # XT30 housing 10.2 mm wide
+    assert f["lead_exit"][1] == pytest.approx(pack_front)  # the notch starts at the pack's front face
     data = spec.model_dump(mode="json")
     data["core"]["battery"]["connector"] = "XT60"
     s60 = spec_mod.from_dict(data)
@@ -438,7 +439,7 @@ def test_zip_tie_slots_strap_slots_and_lead_exit_go_through():
     for x, y in slots:
         assert math.isinf(ray_first_hit(mount, [[x, y, 10.0]], [[0, 0, -1.0]])[0]), (x, y)
         assert ray_first_hit(mount, [[x, y + 3.0, 10.0]], [[0, 0, -1.0]])[0] == pytest.approx(10.0 - part.param("thickness"))
-    # battery holder, in its world placement: strap slots across the mouth, lead exit through the back stop
+    # battery holder, in its world placement: strap slots across the mouth, lead notch over the mouth
     holder = next(b for b in _bodies(d) if b.name == "battery_holder")
     hm = holder.mesh.copy()
     hm.apply_transform(holder.transform)
@@ -449,7 +450,12 @@ def test_zip_tie_slots_strap_slots_and_lead_exit_go_through():
     far = h.size[0]
     assert math.isinf(ray_first_hit(hm, [[-far, y_slot, zc]], [[1.0, 0, 0]])[0])  # through both walls and the mouth
     assert ray_first_hit(hm, [[-far, y_slot - 8.0, zc + 2.0]], [[1.0, 0, 0]])[0] == pytest.approx(far - h.size[0] / 2, abs=0.01)
-    assert math.isinf(ray_first_hit(hm, [[0.0, h.lo[1] - 5.0, zc]], [[0, 1.0, 0]])[0])  # lead exit, out through the mouth
+    lw, y0 = d.parts["battery_holder"].param("lead_exit")
+    y_notch = h.centre[1] + (y0 + h.size[1] / 2) / 2  # half way from the pack's front to the mouth
+    skin = (h.size[2] - d.parts["battery_holder"].param("inner")[2]) / 2
+    # down through the notch: the first material is the floor's top face; beside it, the top wall
+    assert ray_first_hit(hm, [[0.0, y_notch, h.hi[2] + 5.0]], [[0, 0, -1.0]])[0] == pytest.approx(5.0 + h.size[2] - skin, abs=0.01)
+    assert ray_first_hit(hm, [[lw / 2 + 2.0, y_notch, h.hi[2] + 5.0]], [[0, 0, -1.0]])[0] == pytest.approx(5.0, abs=0.01)
 
 
 def test_vitamin_bom_rows_name_their_budget_lines():

@@ -138,8 +138,8 @@ def holder_cutters(part: PartSpec) -> list:
         c = np.array([ys, zc])
         pts = [c + su * u * s_len / 2 + sn * n * s_w / 2 for su, sn in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
         out.append(_prism_xz(pts, -w / 2 - 1.0, w / 2 + 1.0))
-    lw, lh = (float(v) for v in part.param("lead_exit"))
-    out.append(cq.Solid.makeBox(lw, back + 2.0, lh, cq.Vector(-lw / 2, -length / 2 - 1.0, zc - lh / 2)))
+    lw, y0 = (float(v) for v in part.param("lead_exit"))  # notch in the top wall, from y0 to the mouth
+    out.append(cq.Solid.makeBox(lw, length / 2 - y0 + 1.0, skin + 1.5, cq.Vector(-lw / 2, y0, h / 2 - skin - 0.5)))
     return out
 
 

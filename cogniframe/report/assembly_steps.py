@@ -161,9 +161,9 @@ def assembly_steps(design: "Design") -> tuple[Step, ...]:
         "so they do not touch the windings). Mount the flight controller / ESC stack on the core plate standoffs"
         + (f", the {spec.core.computer.name} on the computer mount" if spec.core.computer else "")
         + (f"; fit {comps}" if comps else "") + ". Solder the motors to the ESC, route wires along the arm rods, fit "
-        "the propellers (2 CW, 2 CCW) last. Battery: feed its "
-        f"{spec.core.battery.connector} lead through the exit in the holder's back stop, slide the pack in from the front, "
-        f"and close the {spec.core.strap_width:g} mm hook-and-loop strap across the mouth through the two 45 deg slots "
+        "the propellers (2 CW, 2 CCW) last. Battery: "
+        f"slide the pack in from the front, lead last, lay its {spec.core.battery.connector} lead up through the notch at the "
+        f"top of the holder's mouth, close the {spec.core.strap_width:g} mm hook-and-loop strap across the mouth through the two 45 deg slots "
         "(no tools: open the strap to swap the pack).",
         hw("motor_mount", *rest))
     leftover = [n for n in frame.rods if n not in used_rods]
