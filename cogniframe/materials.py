@@ -175,3 +175,28 @@ CONNECTORS: dict[str, Connector] = {
     "XT60": Connector("XT60", 15.8, 8.2, 16.0, "AMASS XT60 drawing: 15.8 x 8.2 mm housing"),
     "JST-PH": Connector("JST-PH", 6.0, 4.5, 8.0, "JST PH 2-pin housing, about 6 x 4.5 mm"),
 }
+
+
+@dataclass(frozen=True)
+class Propeller:
+    """A propeller: diameter and pitch (mm), blades, the height its blades sweep (the disc drawn in
+    the assembly and kept clear by requirements.prop_margin), catalogue mass (g)."""
+
+    name: str
+    bom: str
+    diameter_mm: float
+    pitch_mm: float
+    blades: int
+    swept_height_mm: float
+    mass_g: float
+    source: str
+
+
+PROPS: dict[str, Propeller] = {p.name: p for p in (
+    # The paper's carbon build: 3 x 2.5 in two-blade polycarbonate props on 1104 motors.
+    Propeller("3025", "3 x 2.5 in two-blade propeller (polycarbonate)", 76.2, 63.5, 2, 3.0, 1.5,
+              "the authors' BOM (3025 two-blade PC); swept height: a 2.5 in pitch blade at 75 % radius, ~8 mm chord"),
+    # The bamboo build's 4 in props.
+    Propeller("4024", "4 x 2.4 in two-blade propeller", 101.6, 61.0, 2, 3.0, 2.5,
+              "the bamboo build's 4 in props; 2.4 in pitch class"),
+)}

@@ -17,7 +17,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from .errors import UserError
-from .materials import BOARDS, CONNECTORS, MATERIALS, MOTOR_PRESETS, SCREWS, STACK_PATTERNS, VITAMIN_KINDS, Material, MotorPreset
+from .materials import BOARDS, CONNECTORS, MATERIALS, MOTOR_PRESETS, PROPS, SCREWS, STACK_PATTERNS, VITAMIN_KINDS, Material, MotorPreset
 
 Pos = Annotated[float, Field(gt=0)]
 Frac = Annotated[float, Field(ge=0, le=1)]
@@ -186,6 +186,8 @@ class Spec(_M):
                 raise _KeyProblem(path, f"unknown value {value!r}", f"use one of {', '.join(table)}")
         if self.core.battery.connector not in CONNECTORS:
             raise _KeyProblem("core.battery.connector", f"unknown connector {self.core.battery.connector!r}", f"use one of {', '.join(CONNECTORS)}")
+        if self.motors.prop is not None and self.motors.prop not in PROPS:
+            raise _KeyProblem("motors.prop", f"unknown propeller {self.motors.prop!r}", f"use one of {', '.join(PROPS)} (materials.PROPS), or null")
         for i, c in enumerate(self.components):
             if c.vitamin is not None and c.vitamin not in VITAMIN_KINDS:
                 raise _KeyProblem(f"components.{i}.vitamin", f"unknown vitamin {c.vitamin!r}", f"use one of {', '.join(VITAMIN_KINDS)}, or leave it out")

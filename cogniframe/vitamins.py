@@ -20,11 +20,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from .frame import Frame
-from .materials import BOARDS, CONNECTORS, STACK_PATTERNS, Board
+from .materials import BOARDS, CONNECTORS, PROPS, STACK_PATTERNS, Board
 from .spec import Spec
 
-# Propeller disc: the volume the blades sweep, from the top of the motor bell. A 2.5-3 in pitch
-# blade at 75 % radius stands about 2.5-3 mm tall; the hub sits inside this slab.
+# Propeller disc: the volume the blades sweep, from the top of the motor bell (materials.PROPS
+# gives each propeller's swept height; this is the fallback). A 2.5 in pitch blade at 75 % radius
+# stands about 3 mm tall; the hub sits inside this slab.
 PROP_DISC_T = 3.0  # mm
 PROP_GAP = 0.5  # bell top to the underside of the blade disc, mm
 SHAFT_D = {"1104": 1.5, "1404": 1.5}  # motor shaft diameter (mm); 1.5 mm for both classes
@@ -136,9 +137,12 @@ def motor_vitamins(spec: Spec, frame: Frame) -> list[Vitamin]:
                            f"motor {m.name}", prims, COLOURS["motor"]))
         r = spec.motors.prop_diameter / 2
         zc = mo.prop_z + PROP_GAP
-        out.append(Vitamin(f"propeller_{mo.corner}", "propeller", f"propeller {spec.motors.prop_diameter:g} mm ({_prop(spec)})",
-                           f"propeller {spec.motors.prop_diameter:g} mm", (cyl((x, y, zc), (0, 0, 1), r, PROP_DISC_T),),
-                           COLOURS["propeller"], disc=(_t((x, y, zc + PROP_DISC_T / 2)), r, PROP_DISC_T)))
+        prop = PROPS.get(_prop(spec))
+        t = prop.swept_height_mm if prop else PROP_DISC_T
+        bom = f"{prop.bom}, {spec.motors.prop_diameter:g} mm" if prop else f"propeller {spec.motors.prop_diameter:g} mm"
+        out.append(Vitamin(f"propeller_{mo.corner}", "propeller", bom,
+                           f"propeller {spec.motors.prop_diameter:g} mm", (cyl((x, y, zc), (0, 0, 1), r, t),),
+                           COLOURS["propeller"], disc=(_t((x, y, zc + t / 2)), r, t)))
     return out
 
 
@@ -147,7 +151,10 @@ def _kv(spec: Spec) -> str:
 
 
 def _prop(spec: Spec) -> str:
-    return spec.motors.prop or f"{spec.motors.prop_diameter / 25.4:.1f} in"
+    """motors.prop, or the table propeller nearest motors.prop_diameter (as analysis/flight.py)."""
+    if spec.motors.prop:
+        return spec.motors.prop
+    return min(PROPS.values(), key=lambda p: abs(p.diameter_mm - spec.motors.prop_diameter)).name
 
 
 def battery_vitamin(spec: Spec, frame: Frame) -> Vitamin:

@@ -70,7 +70,6 @@ TABLES: dict[tuple[str, int, str, int], PropulsionTable] = {(t.motor, t.kv, t.pr
 )}
 
 DEFAULT_KV = {"1104": 6000, "1404": 3000}
-PROPS_BY_DIAMETER = {76.2: "3025", 101.6: "4024"}
 
 
 def default_kv(motor: str) -> int:
@@ -79,10 +78,11 @@ def default_kv(motor: str) -> int:
 
 def prop_name(spec: Spec) -> str:
     """motors.prop, or the table propeller nearest motors.prop_diameter."""
+    from ..materials import PROPS
+
     if spec.motors.prop:
         return spec.motors.prop
-    d = min(PROPS_BY_DIAMETER, key=lambda x: abs(x - spec.motors.prop_diameter))
-    return PROPS_BY_DIAMETER[d]
+    return min(PROPS.values(), key=lambda p: abs(p.diameter_mm - spec.motors.prop_diameter)).name
 
 
 @dataclass(frozen=True)
