@@ -2,16 +2,14 @@
 
 Order: design (no CAD) -> part CAD + STL/STEP -> assembly -> mass with CAD volumes -> drop
 model -> text outputs and plots -> fabrication package (plates, slicer, BOM, renders, report)
--> manifest. Nothing appears in the output folder unless every step succeeded.
+-> manifest. Nothing appears in the output folder unless every step succeeded, and a folder
+cogniframe did not make is never touched (outdir.py: lock, ownership check, atomic swap).
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
-import os
-import shutil
-import tempfile
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
@@ -19,7 +17,7 @@ from pathlib import Path
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from . import __version__, cutlist, pipeline
+from . import __version__, cutlist, outdir, pipeline
 from .analysis.mass import PartGeometry
 from .cache import cache_dir
 from .spec import Spec
@@ -39,6 +37,8 @@ class BuildResult:
 def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None = None, use_cache: bool = True,
               console: Console | None = None) -> BuildResult:
     console = console or Console(stderr=True)
+    with spec.blamed():
+        pipeline.design(spec)  # a design that cannot exist is refused before any folder is touched
     final = pipeline.output_dir(spec, out)
     key = build_key(spec, params_path)
     if use_cache and _up_to_date(final, key):
@@ -46,14 +46,8 @@ def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None 
         console.print(f"{final} is up to date (same params, same cogniframe): nothing rebuilt", markup=False)
         files = len(json.loads((final / "manifest.json").read_text())["files"]) + 1
         return BuildResult(final, files, verdict, None, ())
-    final.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.building-", dir=final.parent))
-    try:
+    with outdir.writing(final) as tmp, spec.blamed():
         result = _build_into(spec, params_path, tmp, jobs, use_cache, console, key)
-        _replace_dir(tmp, final)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     return BuildResult(final, result[0], result[1].verdict, result[1], result[2])
 
 
@@ -162,8 +156,9 @@ def _versions() -> dict:
 
 
 def _write_manifest(spec: Spec, params_path: Path, out: Path, key: str) -> int:
-    files = sorted(p for p in out.rglob("*") if p.is_file())
+    files = sorted(p for p in out.rglob("*") if p.is_file() and p.name != outdir.TEMP_MARK)
     manifest = {
+        "generator": outdir.GENERATOR,
         "name": spec.name,
         "build_key": key,
         "params_file": Path(params_path).name,
@@ -174,15 +169,3 @@ def _write_manifest(spec: Spec, params_path: Path, out: Path, key: str) -> int:
     }
     _write(out / "manifest.json", json.dumps(manifest, indent=2) + "\n")
     return len(files) + 1
-
-
-def _replace_dir(new: Path, final: Path) -> None:
-    """Swap `new` into `final`, so readers see the old folder or the new one, never a mix."""
-    old = None
-    if final.exists():
-        old = final.with_name(f".{final.name}.old-{os.getpid()}")
-        shutil.rmtree(old, ignore_errors=True)
-        final.rename(old)
-    new.rename(final)
-    if old is not None:
-        shutil.rmtree(old, ignore_errors=True)

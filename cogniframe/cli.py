@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import json
+import os
+import signal
 import sys
+import threading
 from pathlib import Path
 from typing import Annotated, Optional
 
@@ -11,10 +14,12 @@ import typer
 from rich.console import Console
 
 from . import spec as spec_mod
-from .errors import UserError
+from .errors import UserError, bug_message
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
-                  help="CogniFly exoskeleton generator: params file in; parts, cut list, mass and crash margin out.")
+                  help="CogniFly exoskeleton generator: params file in; parts, cut list, mass and crash margin out. "
+                       "Exit codes: 0 PASS, 1 FAIL, 2 bad input, 3 a bug in cogniframe, 130 interrupted. "
+                       "--debug (or COGNIFRAME_DEBUG=1) prints the traceback of a bug.")
 
 ParamsArg = Annotated[Path, typer.Argument(help="params YAML file, e.g. params/bamboo.yaml", show_default=False)]
 
@@ -27,10 +32,14 @@ def check(params: ParamsArg,
     from . import pipeline
 
     spec = spec_mod.load(params)
-    result = pipeline.check(spec)
+    with spec.blamed():
+        result = pipeline.check(spec)
     if plots is not None and result.drop is not None:
+        from .outdir import claim_file
         from .report import drop_plots
 
+        for name in ("drop_response.png", "energy_split.png"):
+            claim_file(plots / name)  # both checked before either is written
         plots.mkdir(parents=True, exist_ok=True)
         drop_plots.plot_drop_response(result.drop, plots / "drop_response.png")
         drop_plots.plot_energy_split(result.drop, plots / "energy_split.png")
@@ -59,14 +68,16 @@ def build(params: ParamsArg,
 
 @app.command()
 def coupon(params: ParamsArg,
-           out: Annotated[Optional[Path], typer.Option("-o", "--out", help="STL path (default out/<name>/coupon.stl)")] = None) -> None:
+           out: Annotated[Optional[Path], typer.Option("-o", "--out", help="STL path (default out/<name>-coupon.stl)")] = None) -> None:
     """Write a socket-fit test print: a row of sockets stepping the fit clearance, each labelled."""
     from .export.coupon import write_coupon
+    from .outdir import claim_file
 
     spec = spec_mod.load(params)
-    path = out or Path("out") / spec.name / "coupon.stl"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    written, clearances = write_coupon(spec, path)
+    path = out or Path("out") / f"{spec.name}-coupon.stl"
+    claim_file(path)
+    with spec.blamed():
+        written, clearances = write_coupon(spec, path)
     Console().print(f"wrote {written}: sockets for clearances {', '.join(f'{c:+.2f}' for c in clearances)} mm. "
                     f"Print it in {spec.joints.material}, push a rod into each, and set "
                     f"joints.fit_clearance.{spec.joints.material} to the loosest hole that still grips.")
@@ -88,22 +99,62 @@ def _register_commands() -> None:
 _register_commands()
 
 
+BUG_EXIT = 3  # cogniframe itself failed (not the user's input)
+INTERRUPTED_EXIT = 130  # Ctrl-C, as shells report SIGINT
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point: runs the app and turns UserError into a one-paragraph message and exit code 2."""
+    """Entry point: runs the app and turns UserError into a one-paragraph message and exit code 2.
+
+    Ctrl-C is exit 130 (any temp folder removed, previous output untouched); any other exception
+    is a bug: one plain paragraph saying so, exit 3, the traceback only with --debug or
+    COGNIFRAME_DEBUG=1.
+    """
     err = Console(stderr=True, highlight=False, soft_wrap=True)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv or os.environ.get("COGNIFRAME_DEBUG", "") not in ("", "0")
+    argv = [a for a in argv if a != "--debug"]
+    sigint: list[int] = []
+
+    def on_sigint(signum, frame):
+        sigint.append(signum)
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGINT, on_sigint) if threading.current_thread() is threading.main_thread() else None
     try:
         rv = app(args=argv, standalone_mode=False)
     except UserError as e:
         err.print(f"error: {e}", markup=False)
         return e.exit_code
-    except typer.Exit as e:
-        return e.exit_code
+    except KeyboardInterrupt:
+        return _interrupted(err)
+    except typer.Exit as e:  # typer turns Ctrl-C into Exit(130)
+        return _interrupted(err) if e.exit_code == INTERRUPTED_EXIT or sigint else e.exit_code
     except typer.Abort:
-        return 1
+        return _interrupted(err) if sigint else 1
     except typer.TyperException as e:  # usage errors: unknown option, missing argument
         e.show()
         return getattr(e, "exit_code", 2)
+    except Exception as e:  # noqa: BLE001 -- a bug: say so plainly
+        if sigint:  # Ctrl-C inside C code (an import, OCC) can surface as any exception
+            return _interrupted(err)
+        if debug:
+            import traceback
+
+            traceback.print_exc()
+        err.print(bug_message(e, "cogniframe " + " ".join(argv)), markup=False)
+        return BUG_EXIT
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
+    if sigint or rv == INTERRUPTED_EXIT:  # non-standalone typer returns Ctrl-C as the value 130
+        return _interrupted(err)
     return rv if isinstance(rv, int) else 0
+
+
+def _interrupted(err: Console) -> int:
+    err.print("interrupted: nothing was written; any previous output is as it was.", markup=False)
+    return INTERRUPTED_EXIT
 
 
 def entry() -> None:

@@ -98,7 +98,8 @@ def plan_stock(rows: tuple[CutRow, ...], stock_length: float, kerf: float) -> St
         if length + kerf > stock_length:
             raise UserError(
                 f"a {role} rod of {length:g} mm (+ {kerf:g} mm kerf) is longer than the {stock_length:g} mm stock. "
-                f"Fix: set rods.stock_length to at least {math.ceil(length + kerf)} mm, or make the frame smaller.")
+                f"Fix: set rods.stock_length to at least {math.ceil(length + kerf)} mm, or make the frame smaller.",
+                key="rods.stock_length")
     bins: list[list[tuple[str, float]]] = []
     used: list[float] = []
     for role, length in pieces:

@@ -22,7 +22,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import UserError
 from .materials import SCREWS, STACK_PATTERNS
 from .spec import Spec
 
@@ -237,10 +236,14 @@ def build(spec: Spec) -> Frame:
 
     for r in rods.values():
         if r.length < 2 * j.socket_depth + 5:
-            raise UserError(
-                f"{spec.name}: {r.name} would be only {r.length:.1f} mm long, too short to sit in two "
-                f"{j.socket_depth} mm sockets. Fix: enlarge frame.width/frame.height or reduce frame.knee_inset "
-                f"or joints.socket_depth.")
+            deepest = (r.length - 5) / 2
+            has = f"would be only {r.length:.1f} mm long" if r.length > 0 else "has no room at all between its joints"
+            fix = (f"make joints.socket_depth at most {deepest:.1f}, or enlarge frame.width/frame.depth/frame.height"
+                   if deepest >= 2 * spec.rods.diameter else
+                   "enlarge frame.width/frame.depth/frame.height or reduce frame.knee_inset: this frame is too small "
+                   f"for {spec.rods.diameter:g} mm rods in sockets at least two diameters deep")
+            raise spec.error("joints.socket_depth", f"the {r.name} rod {has}, too short to sit in two "
+                             f"{j.socket_depth:g} mm sockets", fix)
 
     motors = tuple(_motor(k, rods, spec) for k in CORNERS)
     frame = Frame(nodes, rods, motors, core, ground_z=0.0)
@@ -248,15 +251,17 @@ def build(spec: Spec) -> Frame:
     frame = Frame(nodes, rods, motors, core, 0.0, clear)
     worst = min(clear, key=lambda p: min(p.to_cage_mm, p.to_core_mm, p.to_neighbour_mm))
     if frame.min_prop_margin < 0:
-        raise UserError(
-            f"{spec.name}: the {spec.motors.prop_diameter:g} mm propeller of {worst.motor} hits the frame "
+        raise spec.error(
+            "motors.prop_diameter",
+            f"the {spec.motors.prop_diameter:g} mm propeller of {worst.motor} hits the frame "
             f"(margin to cage {worst.to_cage_mm:.1f} mm, to core {worst.to_core_mm:.1f} mm, to the next propeller "
-            f"{worst.to_neighbour_mm:.1f} mm). Fix: change motors.radius, use a smaller motors.prop_diameter, "
-            f"or make frame.width/frame.depth larger.")
+            f"{worst.to_neighbour_mm:.1f} mm)", "use a smaller motors.prop_diameter, change motors.radius, "
+            "or make frame.width/frame.depth larger")
     if core.stack.hi[2] >= z_top - inset or (core.computer and core.computer.hi[2] >= z_top - inset):
-        raise UserError(
-            f"{spec.name}: the electronics on the core reach z = {max(b.hi[2] for b in core.boxes):.0f} mm, above the "
-            f"top ring at {z_top:.0f} mm. Fix: increase frame.height or lower core.battery_clearance.")
+        raise spec.error(
+            "frame.height",
+            f"the electronics on the core reach z = {max(b.hi[2] for b in core.boxes):.0f} mm, above the "
+            f"top ring at {z_top:.0f} mm", "increase frame.height or lower core.battery_clearance")
     return frame
 
 
@@ -346,9 +351,10 @@ def _motor(k: str, rods: dict[str, Rod], spec: Spec) -> Motor:
     ra, rb = np.hypot(*pa[:2]), np.hypot(*pb[:2])
     t = (ra - spec.motors.radius) / (ra - rb)
     if not 0.0 < t < 1.0:
-        raise UserError(
-            f"{spec.name}: motors.radius = {spec.motors.radius:g} mm puts the motors off their arms, which run from "
-            f"{rb:.0f} to {ra:.0f} mm from the centre. Fix: set motors.radius between {rb + 10:.0f} and {ra - 10:.0f}.")
+        raise spec.error(
+            "motors.radius",
+            f"{spec.motors.radius:g} mm puts the motors off their arms, which run from "
+            f"{rb:.0f} to {ra:.0f} mm from the centre", f"set motors.radius between {rb + 10:.0f} and {ra - 10:.0f}")
     axis = pa + t * (pb - pa)
     slope = math.degrees(math.atan2(pa[2] - pb[2], ra - rb))
     # The motor screws come up through the seat from below: leave room for their heads

@@ -52,16 +52,15 @@ def design(spec: Spec) -> Design:
 
 def _check_printer_fit(spec: Spec, parts) -> None:
     """Every printed part's print-orientation envelope must fit the bed (it may turn on the bed)."""
-    from .errors import UserError
-
     bx, by, bz = spec.printer.bed
     for p in parts:
         ex, ey, ez = p.estimate.envelope
         if max(ex, ey) > max(bx, by) or min(ex, ey) > min(bx, by) or ez > bz:
-            raise UserError(
-                f"{spec.name}: the {p.name} ({ex:.0f} x {ey:.0f} x {ez:.0f} mm as printed) does not fit the "
-                f"{bx:g} x {by:g} x {bz:g} mm printer.bed. Fix: set printer.bed to your printer's build volume, "
-                f"or shrink the part (for the battery holder: core.battery; for the core plate: core.plate_size).")
+            raise spec.error(
+                "printer.bed",
+                f"the {p.name} ({ex:.0f} x {ey:.0f} x {ez:.0f} mm as printed) does not fit the "
+                f"{bx:g} x {by:g} x {bz:g} mm bed", "set printer.bed to your printer's build volume, "
+                "or shrink the part (for the battery holder: core.battery; for the core plate: core.plate_size)")
 
 
 def check(spec: Spec, geometry: dict | None = None, clash=None) -> CheckResult:

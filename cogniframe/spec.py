@@ -10,11 +10,13 @@ from __future__ import annotations
 import difflib
 import hashlib
 import json
+import re
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated, Any
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 
 from .errors import UserError
 from .materials import BOARDS, CONNECTORS, MATERIALS, MOTOR_PRESETS, PROPS, SCREWS, STACK_PATTERNS, VITAMIN_KINDS, Material, MotorPreset
@@ -155,7 +157,8 @@ class ModelSection(_M):
 class Spec(_M):
     """The whole design. Load with `load(path)`; derived lookups are methods."""
 
-    name: str = Field("frame", description="design name; the output folder is out/<name>")
+    name: str = Field("frame", description="design name, a file-name-safe slug (letters, digits, '-', '_', '.', "
+                                            "not starting with '.', at most 64 characters); the output folder is out/<name>")
     materials: dict[str, MaterialDef] = Field(default_factory=dict, description="extra or overriding materials")
     frame: FrameSection = FrameSection()
     rods: RodsSection = RodsSection()
@@ -166,6 +169,17 @@ class Spec(_M):
     printer: PrinterSection = PrinterSection()
     requirements: RequirementsSection = RequirementsSection()
     model: ModelSection = ModelSection()
+
+    _source: tuple[str, str | None] = PrivateAttr(default=("<params>", None))  # (file, its text): for error lines
+
+    @field_validator("name")
+    @classmethod
+    def _name_is_a_slug(cls, v: str) -> str:
+        if not NAME_RE.fullmatch(v):
+            raise _KeyProblem("name", f"{v!r} is not a safe folder name (it becomes out/<name>/)",
+                              f"use letters, digits, '-', '_' and '.', not starting with '.', at most 64 characters, "
+                              f"for example `name: {slug(v)}`")
+        return v
 
     @model_validator(mode="after")
     def _names_resolve(self) -> "Spec":
@@ -211,6 +225,25 @@ class Spec(_M):
         if self.joints.wall < 0.4 * self.rods.diameter - 1e-9:
             raise _KeyProblem("joints.wall", f"{self.joints.wall} mm of TPU around a {self.rods.diameter} mm rod splits on impact (needs 40 % of the rod diameter)",
                               f"set joints.wall to at least {0.4 * self.rods.diameter:.2f}")
+        pr = self.printer
+        if pr.layer_height > 0.8 * pr.nozzle + 1e-9:
+            raise _KeyProblem("printer.layer_height", f"{pr.layer_height} mm layers are more than 80 % of the {pr.nozzle} mm nozzle; "
+                              "slicers refuse or under-extrude them", f"set printer.layer_height to at most {0.8 * pr.nozzle:.2f}")
+        if pr.layer_height < 0.15 * pr.nozzle - 1e-9:
+            raise _KeyProblem("printer.layer_height", f"{pr.layer_height} mm layers are under 15 % of the {pr.nozzle} mm nozzle; "
+                              "the slicer cannot extrude that little", f"set printer.layer_height to at least {0.15 * pr.nozzle:.2f}")
+        if self.joints.hinge_thickness < 2 * pr.layer_height - 1e-9:
+            raise _KeyProblem("joints.hinge_thickness", f"{self.joints.hinge_thickness} mm is less than two "
+                              f"{pr.layer_height} mm layers: the living hinge would print as a single layer and tear",
+                              f"set joints.hinge_thickness to at least {2 * pr.layer_height:g} or lower printer.layer_height")
+        if self.core.holder_wall < 2 * pr.nozzle - 1e-9:
+            raise _KeyProblem("core.holder_wall", f"{self.core.holder_wall} mm is thinner than two extrusion lines of the "
+                              f"{pr.nozzle} mm nozzle", f"set core.holder_wall to at least {2 * pr.nozzle:g}")
+        if pr.perimeters * pr.nozzle > 2 * self.joints.wall + 1e-9:
+            raise _KeyProblem("printer.perimeters", f"{pr.perimeters} perimeters of the {pr.nozzle} mm nozzle are "
+                              f"{pr.perimeters * pr.nozzle:.2f} mm thick, more than twice the {self.joints.wall} mm socket wall: the "
+                              "slicer cannot place them and would print something other than what the mass model assumes",
+                              f"set printer.perimeters to at most {max(1, int(2 * self.joints.wall / pr.nozzle + 1e-9))} or thicken joints.wall")
         if self.material(self.rods.material).printed:
             raise _KeyProblem("rods.material", f"{self.rods.material!r} is a printed filament; rods are never printed", "use carbon_rod or bamboo")
         core_half = self.core.plate_size / 2
@@ -243,6 +276,36 @@ class Spec(_M):
         return MotorPreset(p.name, self.motors.bolt_spacing or p.bolt_spacing, self.motors.screw or p.screw,
                            p.bell_d, p.height, self.motors.mass or p.mass_g, p.shaft_boss_d)
 
+    @property
+    def source(self) -> str:
+        """The params file this spec was loaded from (or what `from_dict` was told)."""
+        return self._source[0]
+
+    def key_line(self, key: str) -> int | None:
+        """Line of a dotted key path in the params file, or None (not written there: a default)."""
+        return _line_no(self._source[1], tuple(key.split(".")))
+
+    def error(self, key: str, problem: str, fix: str) -> UserError:
+        """A UserError for a problem found after validation: names the file, the key with its line, the fix."""
+        return UserError(f"{self.source}: {key}{_where(self, key)}: {problem}. Fix: {fix}.", key=key, located=True)
+
+    def located(self, err: UserError) -> UserError:
+        """`err` prefixed with the params file and, when it names one, its key and line (once)."""
+        if err.located:
+            return err
+        key = f"{err.key}{_where(self, err.key)}: " if err.key else ""
+        return UserError(f"{self.source}: {key}{err}", key=err.key, located=True)
+
+    @contextmanager
+    def blamed(self):
+        """Inside it, a UserError that names a params key (from any later stage) gains the file and line."""
+        try:
+            yield self
+        except UserError as e:
+            if e.key is None or e.located:
+                raise
+            raise self.located(e) from None
+
     def digest(self, *sections: str) -> str:
         """sha256 of the named sections (all when none): a cache key for what a part uses."""
         data = self.model_dump(mode="json")
@@ -259,6 +322,20 @@ class _KeyProblem(ValueError):
         self.path, self.problem, self.fix = path, problem, fix
 
 
+NAME_RE = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9._-]{0,63}")
+
+
+def slug(text: str) -> str:
+    """A safe design name made from any text: 'My Frame v2/..' -> 'My-Frame-v2'."""
+    s = re.sub(r"[^A-Za-z0-9._-]+", "-", text).strip("-.")[:64].strip("-.")
+    return s or "frame"
+
+
+def _where(spec: "Spec", key: str) -> str:
+    line = spec.key_line(key)
+    return f" (line {line})" if line else " (not set in the file: its default applies)"
+
+
 # -- loading and error messages ------------------------------------------------------------
 
 def load(path: str | Path) -> Spec:
@@ -266,27 +343,75 @@ def load(path: str | Path) -> Spec:
     path = Path(path)
     if not path.is_file():
         raise UserError(f"{path}: no such params file. Give the path of a YAML file such as params/bamboo.yaml.")
-    text = path.read_text(encoding="utf-8")
+    text = decode(path.read_bytes(), path)
+    data = parse_yaml(text, path)
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise UserError(f"{path}: the file must be a mapping of sections (frame:, rods:, joints: ...), not a "
+                        f"{type(data).__name__}. Fix: start from a preset such as params/carbon.yaml (`cogniframe schema` lists every key).")
+    data.setdefault("name", slug(path.stem))
+    return from_dict(data, source=str(path), text=text)
+
+
+def decode(raw: bytes, path: Path | str) -> str:
+    """UTF-8 text of a file (a UTF-8 byte-order mark is fine); anything else is a UserError naming line and byte."""
     try:
-        data = yaml.safe_load(text)
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        line = raw.count(b"\n", 0, e.start) + 1
+        col = e.start - (raw.rfind(b"\n", 0, e.start) + 1) + 1
+        raise UserError(f"{path}: line {line}, column {col}: byte 0x{raw[e.start]:02x} is not UTF-8 (the file was probably "
+                        f"saved as Latin-1 or Windows-1252). Fix: save the file as UTF-8 in your editor "
+                        f"(or run `iconv -f latin1 -t utf-8`).") from None
+
+
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """SafeLoader that refuses a key written twice in one mapping (PyYAML silently keeps the last)."""
+
+    def construct_mapping(self, node, deep=False):
+        if isinstance(node, yaml.MappingNode):
+            seen: dict[object, int] = {}
+            for k, _ in node.value:
+                if k.tag == "tag:yaml.org,2002:merge":
+                    continue
+                key = self.construct_object(k, deep=True)
+                line = k.start_mark.line + 1
+                try:
+                    first = seen.setdefault(key, line)
+                except TypeError:  # unhashable key: let the normal constructor say so
+                    continue
+                if first != line:
+                    raise _DuplicateKey(key, first, line)
+        return super().construct_mapping(node, deep)
+
+
+class _DuplicateKey(Exception):
+    def __init__(self, key, first: int, second: int):
+        self.key, self.first, self.second = key, first, second
+
+
+def parse_yaml(text: str, path: Path | str):
+    """YAML -> Python, with plain UserErrors for syntax errors and duplicate keys."""
+    try:
+        return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
+    except _DuplicateKey as e:
+        raise UserError(f"{path}: key '{e.key}' is written twice in the same section, on line {e.first} and line {e.second}; "
+                        f"only one value can count. Fix: delete one of the two lines.") from None
     except yaml.YAMLError as e:
         mark = getattr(e, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
         raise UserError(f"{path}: not valid YAML{where} ({getattr(e, 'problem', e)}). Fix the indentation or quoting there.") from None
-    if data is None:
-        data = {}
-    if not isinstance(data, dict):
-        raise UserError(f"{path}: the file must be a mapping of sections (frame:, rods:, joints: ...), not a {type(data).__name__}.")
-    data.setdefault("name", path.stem)
-    return from_dict(data, source=str(path), text=text)
 
 
 def from_dict(data: dict[str, Any], source: str = "<params>", text: str | None = None) -> Spec:
     """Validate a params mapping; errors name `source` and the key path."""
     try:
-        return Spec.model_validate(data)
+        spec = Spec.model_validate(data)
     except ValidationError as e:
-        raise UserError(_explain(e, source, text)) from None
+        raise UserError(_explain(e, source, text), located=True) from None
+    spec._source = (source, text)
+    return spec
 
 
 def _explain(err: ValidationError, source: str, text: str | None) -> str:
@@ -353,12 +478,19 @@ def _fix_hint(loc: tuple[str, ...]) -> str:
 
 def _line(text: str | None, loc: tuple[str, ...]) -> str:
     """' (line N)' for a key path in the YAML source, when it can be found."""
+    line = _line_no(text, loc, partial=True)
+    return f" (line {line})" if line else ""
+
+
+def _line_no(text: str | None, loc: tuple[str, ...], partial: bool = False) -> int | None:
+    """Line of the key path `loc` in the YAML source; None if it is not written there (with `partial`,
+    the line of the deepest part of the path that is)."""
     if not text:
-        return ""
+        return None
     try:
         node = yaml.compose(text)
     except yaml.YAMLError:
-        return ""
+        return None
     line = None
     for part in loc:
         if isinstance(node, yaml.MappingNode):
@@ -367,13 +499,13 @@ def _line(text: str | None, loc: tuple[str, ...]) -> str:
                     line, node = k.start_mark.line + 1, v
                     break
             else:
-                break
+                return line if partial else None
         elif isinstance(node, yaml.SequenceNode) and part.isdigit() and int(part) < len(node.value):
             node = node.value[int(part)]
             line = node.start_mark.line + 1
         else:
-            break
-    return f" (line {line})" if line else ""
+            return line if partial else None
+    return line
 
 
 def json_schema() -> dict:

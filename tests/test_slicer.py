@@ -193,8 +193,15 @@ def test_slice_command_table(run_cli, tmp_path):
     spec = spec_mod.load(params)
     _plates(tmp_path / "plates", spec)
     (tmp_path / "check.json").write_text(json.dumps({"name": "carbon", "mass": {"by_material": {"tpu_95a": 5.0, "abs": 0.5}}}))
+    code, _, err = run_cli("slice", params, "-o", tmp_path)
+    assert code == 2 and "not a cogniframe build folder" in err  # slice writes only into a build's folder
+    files = sorted(p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*") if p.is_file())
+    (tmp_path / "manifest.json").write_text(json.dumps({"generator": "cogniframe", "files": [{"path": f} for f in files]}))
     code, out, err = run_cli("slice", params, "-o", tmp_path)
     assert code == 0, err
+    listed = {f["path"] for f in json.loads((tmp_path / "manifest.json").read_text())["files"]}
+    on_disk = {p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*") if p.is_file()} - {"manifest.json"}
+    assert "plates/slice.json" in listed and listed == on_disk  # what slice wrote stays cogniframe's
     assert "tpu_95a_1" in out and "abs_1" in out and "total" in out
     assert "check.json" in out  # compared with the build's own mass budget
     data = json.loads((tmp_path / "plates" / "slice.json").read_text())

@@ -14,6 +14,7 @@ from typing import Annotated, Optional
 
 import typer
 
+from cogniframe import outdir
 from cogniframe.errors import UserError
 
 
@@ -22,9 +23,6 @@ def slice_cmd(
     out: Annotated[Optional[Path], typer.Option("-o", "--out", help="build folder (default out/<name>)")] = None,
 ) -> None:
     """Slice the print plates of a build folder with PrusaSlicer: grams and print time per plate."""
-    from rich.console import Console
-    from rich.table import Table
-
     from cogniframe import pipeline
     from cogniframe import spec as spec_mod
     from cogniframe.analysis import mass as mass_mod
@@ -37,6 +35,18 @@ def slice_cmd(
     if not plates:
         raise UserError(f"{plate_dir}: no print plates (*.3mf) there. Fix: run `cogniframe build {params}"
                         + (f" -o {out}" if out is not None else "") + "` first, then `cogniframe slice` again.")
+    if outdir.manifest_files(folder) is None:
+        raise UserError(f"{folder} is not a cogniframe build folder (no manifest.json written by cogniframe), so "
+                        f"`slice` will not write into it. Fix: run `cogniframe build {params}"
+                        + (f" -o {out}" if out is not None else "") + "` to make one.")
+    with outdir.lock(folder):
+        _slice_locked(params, spec, folder, plate_dir, plates, slicer, pipeline, mass_mod)
+
+
+def _slice_locked(params, spec, folder: Path, plate_dir: Path, plates, slicer, pipeline, mass_mod) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
     exe = slicer.find_slicer()
     if exe is None:
         raise UserError(f"{slicer.SLICER} is not on PATH, so the plates cannot be sliced. Fix: install PrusaSlicer "
@@ -70,6 +80,8 @@ def slice_cmd(
     for w in report.warnings:
         con.print(f"[yellow]warning:[/] {w}")
     (plate_dir / "slice.json").write_text(json.dumps(report.to_dict(), indent=2) + "\n", encoding="utf-8")
+    # What slice wrote becomes part of the build folder's manifest: still cogniframe's files.
+    outdir.record(folder, sorted(p for p in plate_dir.rglob("*") if p.is_file()))
     con.print(f"wrote G-code and profiles to {plate_dir}")
 
 

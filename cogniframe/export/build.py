@@ -164,7 +164,8 @@ def build_part_files(part: PartSpec, bed, out_dir: str) -> dict:
         raise UserError(
             f"{part.name}: {size[0]:.1f} x {size[1]:.1f} x {size[2]:.1f} mm in print orientation does not fit the "
             f"{bed[0]:g} x {bed[1]:g} x {bed[2]:g} mm printer bed. Fix: set printer.bed to at least "
-            f"{np.ceil(size[0]):.0f} x {np.ceil(size[1]):.0f} x {np.ceil(size[2]):.0f}, or make the part smaller ({key}).")
+            f"{np.ceil(size[0]):.0f} x {np.ceil(size[1]):.0f} x {np.ceil(size[2]):.0f}, or make the part smaller ({key}).",
+            key="printer.bed")
     stl_rel, step_rel = stl_relpath(part), step_relpath(part)
     mesh = mesh_mod.write_stl(shape, Path(out_dir) / stl_rel, LINEAR_TOL, ANGULAR_TOL, name=part.name)
     write_step(shape, Path(out_dir) / step_rel, part.name)

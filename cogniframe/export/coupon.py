@@ -20,5 +20,5 @@ def write_coupon(spec: Spec, path: str | Path) -> tuple[Path, tuple[float, ...]]
         from ..errors import UserError
 
         raise UserError(f"coupon: {mesh.extents[0]:.0f} x {mesh.extents[1]:.0f} x {mesh.extents[2]:.0f} mm does not fit the "
-                        f"{bed[0]:g} x {bed[1]:g} x {bed[2]:g} mm bed. Fix: set printer.bed or reduce joints.socket_depth.")
+                        f"{bed[0]:g} x {bed[1]:g} x {bed[2]:g} mm bed. Fix: set printer.bed or reduce joints.socket_depth.", key="printer.bed")
     return path, coupon.CLEARANCES

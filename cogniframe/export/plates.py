@@ -186,7 +186,7 @@ def pack_plates(items: Sequence[PlateItem], bed: Sequence[float], margin: float)
                     f"part {item.name} ({w:.1f} x {d:.1f} x {h:.1f} mm in print orientation) does not fit the "
                     f"{bed3[0]:g} x {bed3[1]:g} x {bed3[2]:g} mm build volume (printer.bed) with {edge:g} mm kept "
                     f"from the bed edges (half of printer.margin). Fix: set printer.bed to your printer's real build "
-                    f"volume, lower printer.margin, or make the part smaller (e.g. frame or core sizes).")
+                    f"volume, lower printer.margin, or make the part smaller (e.g. frame or core sizes).", key="printer.bed")
             shapes[item.name] = (m, deg)
 
         packer = rectpack.newPacker(mode=rectpack.PackingMode.Offline, bin_algo=rectpack.PackingBin.Global,

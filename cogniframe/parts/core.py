@@ -72,7 +72,8 @@ def build_holder(part: PartSpec) -> Built:
     if skin < MIN_SKIN or (w - iw) / 2 < MIN_SKIN or back < MIN_SKIN:
         raise UserError(
             f"battery_holder: the {w:g} x {length:g} x {h:g} mm outline leaves {min(skin, (w - iw) / 2, back):.2f} mm walls around "
-            f"the {iw:g} x {il:g} x {ih:g} mm battery cavity (need {MIN_SKIN} mm). Fix: raise core.holder_wall or check core.battery.")
+            f"the {iw:g} x {il:g} x {ih:g} mm battery cavity (need {MIN_SKIN} mm). Fix: raise core.holder_wall or check core.battery.",
+            key="core.holder_wall")
     outer = cq.Solid.makeBox(w, length, h, cq.Vector(-w / 2, -length / 2, -h / 2))
     # Cavity: open at the front (+y), the back stop at the rear.
     cavity = cq.Solid.makeBox(iw, il + 1.0, ih, cq.Vector(-iw / 2, -length / 2 + back, -h / 2 + skin))

@@ -32,10 +32,13 @@ def _figure(width_in: float, height_in: float, nrows: int = 1, ncols: int = 1):
 
 
 def _save(fig, path: Path | str) -> Path:
+    from ..outdir import claim_file
+
     path = Path(path)
+    claim_file(path)  # never overwrite a file cogniframe did not write
     path.parent.mkdir(parents=True, exist_ok=True)
     # No bbox_inches="tight": the pixel size must be what the figure size says.
-    fig.savefig(path, format="png", dpi=DPI, metadata={"Software": None})
+    fig.savefig(path, format="png", dpi=DPI, metadata={"Software": "cogniframe"})
     return path
 
 

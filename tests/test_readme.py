@@ -1,0 +1,30 @@
+"""The README's worked example runs as written, on the data shipped in examples/ (no ../shared)."""
+
+from __future__ import annotations
+
+import json
+import re
+import shlex
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def readme_command(prefix: str) -> list[str]:
+    text = (ROOT / "README.md").read_text()
+    for block in re.findall(r"```bash\n(.*?)```", text, re.S):
+        cmd = block.replace("\\\n", " ").strip()
+        if cmd.startswith(prefix):
+            return shlex.split(cmd)[1:]
+    raise AssertionError(f"no `{prefix}` example in README.md")
+
+
+def test_readme_fit_example_gives_the_numbers_it_states(run_cli):
+    args = readme_command("cogniframe fit examples/")
+    code, out, err = run_cli(*args, "--json", cwd=ROOT)
+    assert code == 0, err
+    r = json.loads(out)
+    assert abs(r["c_n_s_per_m"] - 69.5) < 1.0 and abs(r["k_n_per_m"] - 4323) < 60
+    assert abs(r["static_k_n_per_m"] - 7040) < 5
+    text = (ROOT / "README.md").read_text()
+    assert "c = 69.5 N s/m" in text and "k = 4323 N/m" in text and "k = 7040 N/m" in text
