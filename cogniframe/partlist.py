@@ -557,7 +557,7 @@ def _camera_mount(spec: Spec, frame: Frame) -> PartSpec:
     corner = max(0.0, w / 2 - (g["corner_cut"] - (yf - wall))) ** 2 / 2  # each front corner cut off the base (behind the upright)
     bw, hy = min(w / 2 - 4.0, 6.0), min(5.0, (yf - yb) / 2 - 8.0)
     base_win = _hexagon_area(2 * bw, 2 * hy) if bw > 2.0 and hy > 1.0 and bw >= hy else 0.0
-    up_win = _hexagon_area(height - 12.0, 10.0) if height - 6.0 > 10.0 else 0.0
+    up_win = _hexagon_area(height - 12.0, 10.0) if height - 6.0 > 10.0 and abs(g["tilt_deg"]) <= 5.0 else 0.0
     base_a = w * (yf - yb) - 2 * corner - base_win - 4 * math.pi / 4 * screw.clearance_d**2
     up_a = w * height - up_win - 4 * math.pi / 4 * g["camera_hole_d"] ** 2
     vol = base_a * bt + up_a * wall

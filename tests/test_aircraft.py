@@ -467,3 +467,32 @@ def test_vitamin_bom_rows_name_their_budget_lines():
     assert rows[motor] == (4, "motor 1104")
     assert rows["Raspberry Pi camera module v2"] == (1, "Raspberry Pi camera v2 + ribbon")
     assert any(k.startswith("LiPo 3S 650 mAh") and v == (1, "battery") for k, v in rows.items())
+
+
+@pytest.mark.parametrize("tilt", [20.0, -15.0])
+def test_tilted_camera_mount_prints_without_support_and_carries_the_camera(tilt, tmp_path):
+    """Tilted uprights still print as they sit (lean < 45 deg) and the camera board stays on the
+    upright's front face: the board's back corners lie on the mount's surface (ray from behind)."""
+    from cogniframe.export.build import build_parts
+    from cogniframe.export.mesh import load_stl, overhangs
+    from cogniframe.vitamins import camera_vitamin, to_trimesh
+
+    data = spec_mod.load(ROOT / "params" / "carbon.yaml").model_dump(mode="json")
+    data["core"]["camera"]["tilt_deg"] = tilt
+    s = spec_mod.from_dict(data)
+    fr = frame_mod.build(s)
+    part = next(p for p in partlist.build(s, fr) if p.name == "front_camera_mount")
+    (b,) = build_parts(s, fr, [part], tmp_path, jobs=1)
+    m = load_stl(tmp_path / b.stl)
+    assert m.is_watertight and m.body_count == 1 and m.bounds[0, 2] == pytest.approx(0.0, abs=1e-6)
+    assert overhangs(m)["fraction"] < 0.01
+    # world placement of the mount vs the camera vitamin: touching, not overlapping
+    from cogniframe.export.mesh import intersection_volume
+
+    mw = m.copy()
+    mw.apply_transform(part.placements[0].matrix() @ np.linalg.inv(b.print_from_local))
+    cam = to_trimesh(camera_vitamin(s, fr))
+    assert intersection_volume(mw, cam) < 0.5
+    grown = cam.copy()
+    grown.apply_translation(-0.3 * np.asarray(camera_vitamin(s, fr).view[1]))  # 0.3 mm back into the upright
+    assert intersection_volume(mw, grown) > 10

@@ -208,13 +208,17 @@ def build_camera_mount(part: PartSpec) -> Built:
     for x, z in p["camera_holes"]:
         up = up.cut(cq.Solid.makeCylinder(hd / 2, wall + 2.0, cq.Vector(float(x), -wall - 1.0, float(z) - bt), cq.Vector(0, 1, 0)))
     win_half = 5.0
-    if height - 6.0 > 2 * win_half:  # window behind the board (its connector side), pointed along z
+    if height - 6.0 > 2 * win_half and abs(float(p["tilt_deg"])) <= 5.0:
+        # window behind the board (its connector side), pointed along z; a tilted upright would
+        # turn one of its 45 deg roofs into an overhang, so tilted uprights stay solid
         pts = [(a, z) for z, a in _pointed(3.0, height - 9.0, win_half)]
         up = up.cut(cq.Workplane("XZ", origin=(0, 1.0, 0)).polyline(pts).close().extrude(wall + 2.0).val())
     up = apply(up, camera_upright_matrix(p))
     body = base.fuse(up)
-    # cut everything below the base (a tilted upright's heel) and in front of the plate edge below the base top
+    # cut everything below the base (a tilted upright's heel) and, below the base top, in front of
+    # the plate edge (the heel of an upright leaning back would hang there)
     body = body.cut(cq.Solid.makeBox(4 * w, 4 * (yf - yb) + 4 * height, 4 * height, cq.Vector(-2 * w, -2 * (yf - yb) - height, -4 * height)))
+    body = body.cut(cq.Solid.makeBox(4 * w, 2 * height, bt + 1.0, cq.Vector(-2 * w, yf, -1.0)))
     cc = float(p["corner_cut"])
     for sx in (-1.0, 1.0):  # front corners of the base, clear of the core links' tabs
         y_cut = yf - wall  # behind the upright only, so the upright never overhangs the cut
