@@ -172,6 +172,10 @@ def test_vitamins_are_in_the_assembly_step_with_names_and_colours(tmp_path):
     box = d.frame.core.battery
     assert (bb.xlen, bb.ylen, bb.zlen) == pytest.approx(tuple(box.size), abs=0.01)
     assert glb.stat().st_size > 10_000
+    # and in the GLB: a scene node named after each vitamin
+    glb_nodes = set(trimesh.load(glb).graph.nodes)
+    for v in vits:
+        assert v.name in glb_nodes, v.name
 
 
 # -- the core that carries it ---------------------------------------------------------------------
