@@ -1,5 +1,12 @@
 """`python -m cogniframe` = the `cogniframe` command."""
 
-from .cli import entry
+import sys
 
-entry()
+from .check_cache import quick
+
+code = quick(sys.argv[1:])  # a repeated `check` answered from the cache without importing the CLI
+if code is None:
+    from .cli import main
+
+    code = main()
+sys.exit(code)

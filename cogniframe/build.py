@@ -1,15 +1,17 @@
 """`cogniframe build`: the whole fabrication folder, built in a temp dir and moved into place whole.
 
-Order: design (no CAD) -> part CAD + STL/STEP -> assembly -> mass with CAD volumes -> drop
-model -> text outputs and plots -> fabrication package (plates, slicer, BOM, renders, report)
--> manifest. Nothing appears in the output folder unless every step succeeded, and a folder
+The work is the graph of cached steps in steps.py (part CAD, check with CAD volumes, plates,
+slicer, assembly, plots, previews, renders, BOM, report; docs/build.md), then the manifest.
+Nothing appears in the output folder unless every step succeeded, and a folder
 cogniframe did not make is never touched (outdir.py: lock, ownership check, atomic swap).
 """
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
+import os
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
@@ -17,9 +19,7 @@ from pathlib import Path
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from . import __version__, cutlist, outdir, pipeline
-from .analysis.mass import PartGeometry
-from .cache import cache_dir
+from . import __version__, outdir, pipeline
 from .spec import Spec
 
 STACK = ("cadquery", "cadquery-ocp", "trimesh", "manifold3d", "numpy", "scipy", "pynitefea", "pyvista", "vtk", "matplotlib")
@@ -32,6 +32,7 @@ class BuildResult:
     verdict: str
     check: pipeline.CheckResult | None  # None when the folder was already up to date
     built: tuple
+    steps: tuple = ()  # (step, "ran" | "cached" | "always") in the order they finished; () when up to date
 
 
 def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None = None, use_cache: bool = True,
@@ -48,7 +49,7 @@ def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None 
         return BuildResult(final, files, verdict, None, ())
     with outdir.writing(final) as tmp, spec.blamed():
         result = _build_into(spec, params_path, tmp, jobs, use_cache, console, key)
-    return BuildResult(final, result[0], result[1].verdict, result[1], result[2])
+    return BuildResult(final, result[0], result[1].verdict, result[1], result[2], result[3])
 
 
 def build_key(spec: Spec, params_path: Path) -> str:
@@ -79,57 +80,67 @@ def _up_to_date(final: Path, key: str) -> bool:
 
 def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_cache: bool, console: Console,
                 key: str):
-    from .export.assembly import write_assembly
-    from .export.build import build_parts
+    """Run the build graph (steps.py) into `out`, then write the manifest.
+
+    Returns (files, check result, built parts, ((step, "ran" | "cached" | "always"), ...))."""
+    from . import graph, steps
 
     design = pipeline.design(spec)
-    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                  console=console, transient=True) as progress:
-        task = progress.add_task(f"building {spec.name} parts", total=len(design.parts))
-        built = build_parts(spec, design.frame, design.parts, out, jobs=jobs,
-                            cache_dir=cache_dir() if use_cache else None,
-                            progress=lambda name: progress.update(task, advance=1, description=f"built {name}"))
-    write_assembly(spec, design.frame, design.parts, built, out, cache_dir=cache_dir() if use_cache else None)
-    clash = _clash_check(spec, design, built, out, use_cache)
-
-    geometry = {b.name: PartGeometry(b.volume_mm3, b.area_h_mm2, b.area_v_mm2, "cad") for b in built}
-    check = pipeline.check(spec, geometry, clash=clash)
-    data = pipeline.check_dict(check)
-    _write(out / "check.json", json.dumps(data, indent=2) + "\n")
-    _write(out / "cutlist.csv", cutlist.to_csv(design.cut))
-    _write(out / "cutlist.md", cutlist.to_markdown(design.cut))
-    _write(out / "mass.md", _mass_markdown(check))
-    if check.drop is not None:
-        from .report import drop_plots
-
-        (out / "plots").mkdir(exist_ok=True)
-        drop_plots.plot_drop_response(check.drop, out / "plots" / "drop_response.png")
-        drop_plots.plot_energy_split(check.drop, out / "plots" / "energy_split.png")
-
-    from .fabrication import write_fabrication
-
-    write_fabrication(spec, check, built, out, console)
+    cad = steps.CadPool(jobs or os.cpu_count() or 1)
+    log = lambda m: console.print(m, markup=False, highlight=False)  # noqa: E731
+    ctx = steps.BuildContext(out, {"spec": spec, "design": design, "cad": cad, "slicer": steps.Slicer(log), "log": log},
+                              stack=steps.stack_fingerprint(), use_cache=use_cache)
+    tasks = graph.expand(steps.STEPS, steps.rows(design))
+    try:
+        with _StepProgress(console, len(tasks), spec.name) as progress:
+            records = graph.run(tasks, ctx, on_start=progress.start, on_done=progress.done)
+    finally:
+        cad.close()
     n = _write_manifest(spec, params_path, out, key)
-    return n, check, built
+    return n, ctx["check"], ctx.built_parts(), tuple((r.task, r.status) for r in records)
 
 
-def _clash_check(spec: Spec, design, built, out: Path, use_cache: bool):
-    """Issue 13: every pair of solids in the assembly (printed parts, rods, vitamins) and every
-    propeller's clearance; writes clash.json; its clashes become FAIL problems of the check."""
-    from .export.assembly import run_clash_check
+class _StepProgress:
+    """One line per step as it finishes (cached ones marked); on a terminal also a live bar."""
 
-    return run_clash_check(spec, design.frame, design.parts, built, out, cache_dir=cache_dir() if use_cache else None)
+    def __init__(self, console: Console, total: int, name: str):
+        self.console, self.total, self.name = console, total, name
+        self.n = 0
+        self.counts: dict[str, int] = {}
+        self.progress = None
 
+    def __enter__(self):
+        if self.console.is_terminal:
+            self.progress = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                                     TimeElapsedColumn(), console=self.console, transient=True)
+            self.progress.__enter__()
+            self.bar = self.progress.add_task(f"building {self.name}", total=self.total)
+        return self
 
-def _mass_markdown(check: pipeline.CheckResult) -> str:
-    m = check.mass
-    lines = [f"# Mass budget: {check.design.spec.name}", "", "| item | group | qty | g each | g | source |",
-             "|---|---|---:|---:|---:|---|"]
-    for i in m.items:
-        lines.append(f"| {i.name} | {i.group} | {i.qty} | {i.mass_g_each:.2f} | {i.mass_g:.1f} | {i.source} |")
-    lines += ["", "| group | g |", "|---|---:|"] + [f"| {g} | {v:.1f} |" for g, v in m.groups.items()]
-    lines += [f"| **all-up weight** | **{m.total_g:.1f}** |", f"| limit | {m.limit_g:g} |", f"| margin | {m.margin_g:+.1f} |"]
-    return "\n".join(lines) + "\n"
+    def start(self, task: str) -> None:
+        if self.progress is not None:
+            self.progress.update(self.bar, description=f"building {self.name}: {task}")
+
+    def done(self, rec) -> None:
+        self.n += 1
+        self.counts[rec.status] = self.counts.get(rec.status, 0) + 1
+        took = "cached" if rec.status == "cached" else f"{rec.seconds:.1f} s"
+        text = f"[{self.n:>{len(str(self.total))}}/{self.total}] {rec.task:<28} {took}"
+        if self.progress is not None:
+            self.progress.console.print(text, style="dim" if rec.status == "cached" else None, markup=False,
+                                        highlight=False)
+            self.progress.update(self.bar, advance=1)
+        else:
+            self.console.print(text, markup=False, highlight=False, soft_wrap=True)
+
+    def __exit__(self, *exc):
+        if self.progress is not None:
+            self.progress.__exit__(*exc)
+        if exc[0] is None:
+            ran = self.counts.get("ran", 0) + self.counts.get("always", 0)
+            self.console.print(f"{self.n} steps: {ran} ran, {self.counts.get('cached', 0)} cached", markup=False,
+                               highlight=False)
+        return False
 
 
 def _write(path: Path, text: str) -> None:
@@ -146,6 +157,12 @@ def _sha256(path: Path) -> str:
 
 
 def _versions() -> dict:
+    return dict(_installed_versions())
+
+
+@functools.cache
+def _installed_versions() -> dict:
+    """Looked up once per process (each metadata lookup scans sys.path)."""
     versions = {"cogniframe": __version__}
     for dist in STACK:
         try:

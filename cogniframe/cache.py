@@ -38,3 +38,112 @@ def store_json(kind: str, key: str, value: dict) -> None:
         tmp.replace(folder / f"{key}.json")
     except OSError:
         pass
+
+
+# -- file entries: a step's output files + its JSON value, verified on every read -------------
+
+def file_sha256(path: Path) -> str:
+    import hashlib
+
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def entry_dir(kind: str, key: str, root: Path | None = None) -> Path:
+    return Path(root if root is not None else cache_dir()) / kind / key
+
+
+def get_files(kind: str, key: str, dest: Path, root: Path | None = None):
+    """Copy a stored entry's files into `dest` (same relative paths) and return its value.
+
+    Returns None (a miss) when the entry is missing, its meta.json is unreadable, or any file's
+    sha256 differs from the one recorded when it was stored (a truncated or edited entry); a bad
+    entry is deleted so the step runs and stores it again."""
+    import shutil
+
+    entry = entry_dir(kind, key, root)
+    try:
+        meta = json.loads((entry / "meta.json").read_text())
+        files = meta["files"]
+        for rel, sha in files.items():
+            src = entry / "files" / rel
+            if file_sha256(src) != sha:
+                raise ValueError(f"{src}: sha256 differs from the one stored")
+        for rel in files:
+            dst = Path(dest) / rel
+            dst.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(entry / "files" / rel, dst)
+        return {"value": meta["value"]}
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        if entry.exists():  # half an entry (meta.json or a file missing, damaged): drop it, it is rebuilt
+            shutil.rmtree(entry, ignore_errors=True)
+        return None
+
+
+def put_files(kind: str, key: str, src: Path, files, value, root: Path | None = None) -> None:
+    """Store `files` (paths relative to `src`) and a JSON `value` atomically: the entry appears
+    whole (renamed into place after meta.json, which lists every file's sha256, is written) or
+    not at all. A cache that cannot be written is skipped, never an error."""
+    import shutil
+
+    entry = entry_dir(kind, key, root)
+    tmp = entry.with_name(f".{entry.name}.{os.getpid()}.{id(files)}.tmp")
+    try:
+        tmp.mkdir(parents=True)
+        meta = {"files": {}, "value": value}
+        for rel in sorted(files):
+            dst = tmp / "files" / rel
+            dst.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(Path(src) / rel, dst)
+            meta["files"][rel] = file_sha256(dst)
+        (tmp / "meta.json").write_text(json.dumps(meta, sort_keys=True))
+        try:
+            tmp.rename(entry)
+        except OSError:  # stored meanwhile by another build (same key, same content): keep that one
+            pass
+    except OSError:
+        pass
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+_CODE: dict[tuple[str, ...], str] = {}
+
+
+def code_hash(*patterns: str) -> str:
+    """sha256 of cogniframe's source files matching `patterns` (globs relative to the package,
+    e.g. "parts/*.py"): part of a cache key, so editing the code that makes a result invalidates it."""
+    if patterns not in _CODE:
+        import hashlib
+
+        pkg = Path(__file__).resolve().parent
+        h = hashlib.sha256()
+        for pat in patterns:
+            found = sorted(pkg.glob(pat))
+            if not found:
+                raise FileNotFoundError(f"cache.code_hash: no cogniframe source matches {pat!r}")
+            for src in found:
+                h.update(src.relative_to(pkg).as_posix().encode() + b"\0" + src.read_bytes())
+        _CODE[patterns] = h.hexdigest()[:16]
+    return _CODE[patterns]
+
+
+def fingerprint(obj) -> str:
+    """Deterministic JSON of plain data, dataclasses and numpy values (for keys)."""
+    import dataclasses
+
+    def default(o):
+        if dataclasses.is_dataclass(o) and not isinstance(o, type):
+            return {f.name: getattr(o, f.name) for f in dataclasses.fields(o)}
+        if hasattr(o, "tolist"):
+            return o.tolist()
+        if isinstance(o, Path):
+            return o.as_posix()
+        if isinstance(o, (set, frozenset)):
+            return sorted(o)
+        raise TypeError(f"cannot fingerprint {type(o).__name__}")
+
+    return json.dumps(obj, sort_keys=True, default=default, separators=(",", ":"))

@@ -13,7 +13,6 @@ from typing import Annotated, Optional
 import typer
 from rich.console import Console
 
-from . import spec as spec_mod
 from .errors import UserError, bug_message
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
@@ -29,7 +28,16 @@ def check(params: ParamsArg,
           json_out: Annotated[bool, typer.Option("--json", help="print one JSON object instead of tables")] = False,
           plots: Annotated[Optional[Path], typer.Option(help="also write the drop-model plots into this folder")] = None) -> None:
     """Mass budget, cut list, crash margin and PASS/FAIL in well under a second (no CAD)."""
+    from . import check_cache
+
+    console = Console()
+    key = None if plots is not None else check_cache.key(params, check_cache.variant(json_out, console))
+    hit = check_cache.load(key)
+    if hit is not None:  # same params, same code: the stored answer (imports neither pydantic nor numpy)
+        sys.stdout.write(hit[0])
+        raise typer.Exit(hit[1])
     from . import pipeline
+    from . import spec as spec_mod
 
     spec = spec_mod.load(params)
     with spec.blamed():
@@ -44,12 +52,17 @@ def check(params: ParamsArg,
         drop_plots.plot_drop_response(result.drop, plots / "drop_response.png")
         drop_plots.plot_energy_split(result.drop, plots / "energy_split.png")
     if json_out:
-        sys.stdout.write(json.dumps(pipeline.check_dict(result), indent=2) + "\n")
+        text = json.dumps(pipeline.check_dict(result), indent=2) + "\n"
     else:
         from .report.console import print_check
 
-        print_check(result, Console())
-    raise typer.Exit(0 if result.verdict == "PASS" else 1)
+        with console.capture() as captured:
+            print_check(result, console)
+        text = captured.get()
+    sys.stdout.write(text)
+    code = 0 if result.verdict == "PASS" else 1
+    check_cache.store(key, text, code)
+    raise typer.Exit(code)
 
 
 @app.command()
@@ -59,6 +72,7 @@ def build(params: ParamsArg,
           no_cache: Annotated[bool, typer.Option("--no-cache", help="rebuild every part from scratch")] = False) -> None:
     """Build every printable part (STL, STEP), the assembly, cut list, mass budget and manifest."""
     from .build import run_build
+    from . import spec as spec_mod
 
     spec = spec_mod.load(params)
     result = run_build(spec, params, out, jobs=jobs, use_cache=not no_cache, console=Console(stderr=True))
@@ -71,6 +85,7 @@ def coupon(params: ParamsArg,
            out: Annotated[Optional[Path], typer.Option("-o", "--out", help="STL path (default out/<name>-coupon.stl)")] = None) -> None:
     """Write a socket-fit test print: a row of sockets stepping the fit clearance, each labelled."""
     from .export.coupon import write_coupon
+    from . import spec as spec_mod
     from .outdir import claim_file
 
     spec = spec_mod.load(params)
@@ -86,6 +101,8 @@ def coupon(params: ParamsArg,
 @app.command()
 def schema() -> None:
     """Print the JSON Schema of a params file (for editor autocompletion)."""
+    from . import spec as spec_mod
+
     sys.stdout.write(json.dumps(spec_mod.json_schema(), indent=2) + "\n")
 
 
@@ -158,4 +175,7 @@ def _interrupted(err: Console) -> int:
 
 
 def entry() -> None:
-    sys.exit(main())
+    from .check_cache import quick
+
+    code = quick(sys.argv[1:])  # a repeated `check` answered from the cache, before typer parses anything
+    sys.exit(main() if code is None else code)

@@ -1,40 +1,191 @@
-"""Fabrication package step of `build` (issue 6): print plates, slicer check, BOM, assembly
-steps, renders and the report, from the built part meshes and the check result."""
+"""Fabrication steps of `build` (issue 6): print plates, slicer check, previews, renders, BOM,
+assembly steps and the report, from the built part files and the check result.
+
+Each function here is one step of the build graph (the list is in steps.py): `make_*(ctx, ...)`
+writes files under ctx.out and returns graph.Made; `*_key(ctx, ...)` returns exactly what that
+step reads, so it reruns only when that changes. Add a fabrication output as a new step here
+and one line in steps.STEPS.
+"""
 
 from __future__ import annotations
 
+import os
+import shutil
+import tempfile
 from pathlib import Path
 
-from rich.console import Console
+from .cache import file_sha256
+from .graph import Made
 
 
-def write_fabrication(spec, check, built, out: Path, console: Console) -> None:
-    import trimesh
+def plates_key(ctx, material: str):
+    return [[[p.name, p.qty, ctx.part_value(p.name)["stl_sha256"]] for p in ctx.parts_of(material)],
+            ctx.bed, float(ctx.spec.printer.margin)]
 
-    from .export import plates as plates_mod
+
+def make_plates(ctx, material: str) -> Made:
+    from .export import plates as pl
+
+    items = [pl.PlateItem(p.name, p.material, p.qty, ctx.mesh(p.name)) for p in ctx.parts_of(material)]
+    folder = ctx.out / "plates"
+    folder.mkdir(parents=True, exist_ok=True)
+    value = []
+    for plate in pl.pack_plates(items, ctx.spec.printer.bed, ctx.spec.printer.margin):
+        f3 = folder / f"{plate.name}.3mf"
+        f3.write_bytes(pl.plate_3mf_bytes(plate))
+        value.append({"name": plate.name, "material": plate.material, "threemf": f"plates/{f3.name}",
+                      "preview": f"plates/{plate.name}.png", "copies": [c.name for c in plate.copies],
+                      "volume_mm3": plate.volume_mm3, "sha256": file_sha256(f3)})
+    return Made(tuple(v["threemf"] for v in value), value)
+
+
+def previews_key(ctx, material: str):
+    return [[v["name"], v["sha256"]] for v in ctx[f"plates:{material}"]] + [ctx.bed, float(ctx.spec.printer.margin)]
+
+
+def make_previews(ctx, material: str) -> Made:
+    from .export import plates as pl
+
+    files = []
+    for v in ctx[f"plates:{material}"]:
+        plate = pl.read_plate(ctx.out / v["threemf"], ctx.spec.printer.bed, ctx.spec.printer.margin)
+        pl.plot_plate(plate, ctx.out / v["preview"])
+        files.append(v["preview"])
+    return Made(tuple(files))
+
+
+def _profile(ctx, material: str) -> str:
     from .export import slicer
-    from .report import assembly_steps, bom, renders
-    from .report.html import write_report
 
-    d = check.design
-    meshes = {b.name: trimesh.load(out / b.stl, force="mesh") for b in built}
-    items = [plates_mod.PlateItem(b.name, b.material, b.qty, meshes[b.name]) for b in built]
-    plates = plates_mod.write_plates(plates_mod.pack_plates(items, spec.printer.bed, spec.printer.margin), out / "plates")
-    infill: dict[str, float] = {}
-    for p in d.parts:
+    infill = {}
+    for p in ctx.design.parts:
         infill[p.material] = max(infill.get(p.material, 0.0), p.infill)
-    console.print(f"slicing {len(plates)} plates", markup=False)
-    # G-code is not byte-stable (timestamp, threaded path order): keep its numbers, not the file.
-    sliced = slicer.slice_plates([p.threemf for p in plates], spec, check.mass.by_material, infill=infill,
-                                 log=lambda m: console.print(m, markup=False), keep_gcode=False)
-    lines = bom.build_bom(spec, d, check.mass, sliced, sizes={b.name: b.bbox_mm for b in built})
-    bom.write_bom(lines, out)
-    steps = assembly_steps.assembly_steps(d)
-    (out / "assembly.md").write_text(assembly_steps.to_markdown(steps), encoding="utf-8")
-    console.print("rendering", markup=False)
-    world = renders.world_meshes(d.parts, meshes, {b.name: b.print_from_local for b in built})
-    views = renders.render_assembly(world, renders.rod_segments(d.frame), out / "renders", title=spec.name,
-                                    vitamins=renders.vitamin_meshes(spec, d.frame))
-    part_pngs = renders.render_parts({b.name: (b.material, meshes[b.name]) for b in built}, out / "renders" / "parts")
-    images = {f"assembly {v}": p for v, p in views.items()} | {f"part {n}": p for n, p in part_pngs.items()}
-    write_report(check, out, images, lines, steps, plates, sliced)
+    return slicer.profile_ini(ctx.spec, material, infill.get(material, ctx.spec.core.infill))
+
+
+def slice_key(ctx, material: str):
+    found = ctx.slicer.get()
+    if not found:
+        return None  # no PrusaSlicer: nothing to slice or store
+    return [found[1], [v["sha256"] for v in ctx[f"plates:{material}"]], _profile(ctx, material), ctx.bed]
+
+
+def make_slice(ctx, material: str) -> Made:
+    """Slice this material's plates (G-code in a temp folder: it is not byte-stable; keep the numbers)."""
+    from .export import slicer
+
+    found = ctx.slicer.get()
+    if not found:
+        return Made()
+    exe, version = found
+    ini = ctx.out / "plates" / f"{material}.ini"
+    ini.write_text(_profile(ctx, material), encoding="utf-8")
+    plates = []
+    with tempfile.TemporaryDirectory(prefix="cogniframe-gcode-") as tmp:
+        for v in ctx[f"plates:{material}"]:
+            r = slicer.slice_plate(ctx.out / v["threemf"], ini, ctx.spec.printer.bed, exe,
+                                   gcode=Path(tmp) / f"{v['name']}.gcode")
+            plates.append({"plate": r.plate, "material": r.material, "grams": r.grams, "time_s": r.time_s,
+                           "objects": [list(o) for o in r.objects]})
+    return Made((f"plates/{material}.ini",), {"slicer": version, "plates": plates})
+
+
+def figures_key(ctx):
+    from .pipeline import check_dict
+
+    cd = check_dict(ctx["check"])
+    return [cd["mass"], cd.get("drop")]
+
+
+def make_figures(ctx) -> Made:
+    from .pipeline import check_dict
+    from .report import html
+
+    cd = check_dict(ctx["check"])
+    files = ctx.out / html.FILES_DIR
+    html.plot_mass_groups(cd["mass"], files / "mass_by_group.png")
+    made = [f"{html.FILES_DIR}/mass_by_group.png"]
+    if "drop" in cd:
+        html.plot_stiffness(cd["drop"], files / "stiffness.png")
+        made.append(f"{html.FILES_DIR}/stiffness.png")
+    return Made(tuple(made))
+
+
+def render_part_key(ctx, part: str):
+    p = ctx.part(part)
+    return [p.name, p.material, ctx.part_value(part)["stl_sha256"]]
+
+
+def make_render_part(ctx, part: str) -> Made:
+    from .report import renders
+
+    p = ctx.part(part)
+    renders.render_parts({p.name: (p.material, ctx.mesh(p.name))}, ctx.out / "renders" / "parts")
+    return Made((f"renders/parts/{p.name}.png",))
+
+
+def renders_key(ctx):
+    from .report import renders
+
+    from .export.assembly import _vitamin_key
+
+    return [[[p.name, p.material, p.placements, ctx.part_value(p.name)["stl_sha256"],
+              ctx.part_value(p.name)["print_from_local"]] for p in ctx.design.parts],
+            renders.rod_segments(ctx.design.frame), ctx.spec.name, _vitamin_key(ctx.spec, ctx.design.frame)]
+
+
+def make_renders(ctx) -> Made:
+    from .report import renders
+
+    d = ctx.design
+    meshes = {p.name: ctx.mesh(p.name) for p in d.parts}
+    pfl = {p.name: ctx.part_value(p.name)["print_from_local"] for p in d.parts}
+    views = renders.render_assembly(renders.world_meshes(d.parts, meshes, pfl), renders.rod_segments(d.frame),
+                                    ctx.out / "renders", title=ctx.spec.name,
+                                    vitamins=renders.vitamin_meshes(ctx.spec, d.frame))  # issue 13: the bought parts
+    return Made(tuple(p.relative_to(ctx.out).as_posix() for p in views.values()), list(views))
+
+
+def _slice_report(ctx):
+    from .export import slicer
+
+    found = [v for v in ctx.each("slice:*").values() if v]
+    if not found:
+        return None
+    results = [slicer.PlateSlice(p["plate"], p["material"], ctx.out / "plates" / f"{p['plate']}.3mf",
+                                 Path(os.devnull), p["grams"], p["time_s"], tuple((n, v) for n, v in p["objects"]), 0.0)
+               for v in found for p in v["plates"]]
+    return slicer.summarize(found[0]["slicer"], results, ctx["check"].mass.by_material)
+
+
+def bom(ctx) -> Made:
+    from .report import assembly_steps, bom as bom_mod
+
+    sliced = _slice_report(ctx)
+    lines = bom_mod.build_bom(ctx.spec, ctx.design, ctx["check"].mass, sliced,
+                              sizes={b.name: b.bbox_mm for b in ctx.built_parts()})
+    bom_mod.write_bom(lines, ctx.out)
+    steps = assembly_steps.assembly_steps(ctx.design)
+    (ctx.out / "assembly.md").write_text(assembly_steps.to_markdown(steps), encoding="utf-8")
+    return Made(("bom.csv", "bom.md", "assembly.md"), (lines, steps, sliced))
+
+
+def report(ctx) -> Made:
+    from .export.plates import PlateFile
+    from .report import html
+
+    lines, steps, sliced = ctx["bom"]
+    files = ctx.out / html.FILES_DIR
+    figures = {"mass": [("mass by group", files / "mass_by_group.png")]}
+    if ctx["check"].drop is not None:
+        for name in ("drop_response.png", "energy_split.png"):  # the same figures as plots/: copy, do not redraw
+            shutil.copyfile(ctx.out / "plots" / name, files / name)
+        figures["drop"] = [("stiffness", files / "stiffness.png"), ("drop response", files / "drop_response.png"),
+                           ("energy split", files / "energy_split.png")]
+    plates = [PlateFile(v["name"], v["material"], ctx.out / v["threemf"], ctx.out / v["preview"], tuple(v["copies"]),
+                        v["volume_mm3"]) for vs in ctx.each("plates:*").values() for v in vs]
+    plates.sort(key=lambda p: (p.material, p.name))
+    images = {f"assembly {v}": ctx.out / "renders" / f"assembly_{v}.png" for v in ctx["renders"]}
+    images |= {f"part {p}": ctx.out / "renders" / "parts" / f"{p}.png" for p in sorted(x.name for x in ctx.design.parts)}
+    html.write_report(ctx["check"], ctx.out, images, lines, steps, plates, sliced, figures=figures)
+    return Made(("report.html", "report.md"))

@@ -11,8 +11,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import shutil
 from pathlib import Path
 from typing import Sequence
 
@@ -109,39 +107,6 @@ def own_motor_pairs(frame) -> frozenset:
     return frozenset(frozenset((f"propeller_{m.corner}", f"motor_{m.corner}")) for m in frame.motors)
 
 
-CLASH_VERSION = "clash-1"
-
-
-def run_clash_check(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path,
-                    cache_dir: str | Path | None = None):
-    """The build step: check_clashes, cached under the assembly key (the same solids give the same
-    answer), written to out_dir/clash.json. Returns the ClashResult."""
-    from ..analysis import clash
-
-    out_dir = Path(out_dir)
-    key = hashlib.sha256(json.dumps([CLASH_VERSION, assembly_key(spec, frame, parts, built), spec.requirements.prop_margin,
-                                     clash.TOLERANCE_MM3]).encode()).hexdigest()[:24]
-    entry = Path(cache_dir) / "clash" / f"{key}.json" if cache_dir is not None else None
-    result = None
-    if entry is not None and entry.is_file():
-        try:
-            result = clash.from_dict(json.loads(entry.read_text()))
-        except (OSError, ValueError, KeyError):
-            result = None
-    if result is None:
-        result = check_clashes(spec, frame, parts, built, out_dir)
-        if entry is not None:
-            try:
-                entry.parent.mkdir(parents=True, exist_ok=True)
-                tmp = entry.with_name(f".{entry.name}.{os.getpid()}.tmp")
-                tmp.write_text(json.dumps(result.to_dict(), sort_keys=True))
-                tmp.replace(entry)
-            except OSError:
-                pass
-    (out_dir / "clash.json").write_text(json.dumps(result.to_dict(), indent=2) + "\n", encoding="utf-8")
-    return result
-
-
 def check_clashes(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path):
     """The build's clash check (one call after the assembly is written): part meshes read back from
     their STL files; returns analysis.clash.ClashResult (its clashes are FAIL problems)."""
@@ -179,32 +144,22 @@ def write_assembly(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir:
                    cache_dir: str | Path | None = None) -> tuple[Path, Path]:
     """Write out_dir/assembly.step (deterministic) and out_dir/assembly.glb.
 
-    With `cache_dir`, identical inputs copy the files from the cache (no CadQuery import).
+    With `cache_dir`, identical inputs copy the files from a verified cache entry (no CadQuery import).
     """
     out_dir = Path(out_dir)
     step, glb = out_dir / "assembly.step", out_dir / "assembly.glb"
-    entry = Path(cache_dir) / "assembly" / assembly_key(spec, frame, parts, built) if cache_dir is not None else None
-    if entry is not None and (entry / "assembly.step").is_file() and (entry / "assembly.glb").is_file():
-        out_dir.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(entry / "assembly.step", step)
-        shutil.copyfile(entry / "assembly.glb", glb)
-        return step, glb
+    key = assembly_key(spec, frame, parts, built) if cache_dir is not None else None
+    if key is not None:
+        from .. import cache
+
+        if cache.get_files("assembly", key, out_dir, root=Path(cache_dir)) is not None:
+            return step, glb
     from .step import normalize_file
 
     assy = build_assembly(spec, frame, parts, built, out_dir)
     assy.export(str(step))
     normalize_file(step, spec.name)
     assy.export(str(glb))
-    if entry is not None:
-        tmp = entry.with_name(f".{entry.name}.{os.getpid()}.tmp")
-        try:
-            tmp.mkdir(parents=True, exist_ok=True)
-            shutil.copyfile(step, tmp / "assembly.step")
-            shutil.copyfile(glb, tmp / "assembly.glb")
-            if not entry.exists():
-                tmp.rename(entry)
-        except OSError:
-            pass
-        finally:
-            shutil.rmtree(tmp, ignore_errors=True)
+    if key is not None:
+        cache.put_files("assembly", key, out_dir, ["assembly.step", "assembly.glb"], None, root=Path(cache_dir))
     return step, glb

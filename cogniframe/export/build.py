@@ -4,8 +4,9 @@
 `stl/<material>/<part>.stl` and `step/<part>.step` under `out_dir` and returns one `BuiltPart` per
 part, in the order given.
 
-* Cache: each part's STL, STEP and metrics are stored under `cache_dir/parts/<CAD_VERSION>/<key>/`,
-  keyed by `part.digest` (everything the CAD reads), CAD_VERSION, the mesh tolerances and the bed.
+* Cache: each part's STL, STEP and metrics are stored under `cache_dir/parts/<key>/` (cache.put_files:
+  each file's sha256 is kept and checked on every read), keyed by `geometry_digest(part)` (every part
+  field the CAD reads), the source of the CAD code (PART_CODE), the mesh tolerances and the bed.
   A rebuild with nothing changed only copies files and never imports CadQuery.
 * Parallel: jobs > 1 uses a process pool started with `forkserver` (CadQuery preloaded in the
   server, so workers start warm) or `spawn` where forkserver is missing. Never `fork`: a fork after
@@ -22,7 +23,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import shutil
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
@@ -75,8 +75,30 @@ def step_relpath(part: PartSpec) -> str:
 LINEAR_TOL, ANGULAR_TOL = 0.02, 0.15
 
 
+# Everything the part CAD and its files are made by: editing any of these invalidates the part cache.
+PART_CODE = ("parts/*.py", "export/build.py", "export/mesh.py", "export/step.py", "partlist.py")  # joint.py reads PARALLEL_TOL
+
+
+# PartSpec fields the CAD does not read (where copies go, the mass model's inputs, the BOM): a change
+# to them must not rebuild the part. Every other field, including any added later, is in the key.
+NOT_CAD = ("placements", "estimate", "hardware", "group", "infill", "digest")
+
+
+def geometry_digest(part: PartSpec) -> str:
+    """Hash of every PartSpec field the part's CAD and file names can depend on."""
+    import dataclasses
+
+    from ..cache import fingerprint
+
+    data = {f.name: getattr(part, f.name) for f in dataclasses.fields(part) if f.name not in NOT_CAD}
+    return hashlib.sha256(fingerprint(data).encode()).hexdigest()[:24]
+
+
 def cache_key(part: PartSpec, bed) -> str:
-    payload = json.dumps([part.digest, CAD_VERSION, LINEAR_TOL, ANGULAR_TOL, [float(b) for b in bed]])
+    from ..cache import code_hash
+
+    payload = json.dumps([geometry_digest(part), CAD_VERSION, code_hash(*PART_CODE), LINEAR_TOL, ANGULAR_TOL,
+                          [float(b) for b in bed]])
     return hashlib.sha256(payload.encode()).hexdigest()[:24]
 
 
@@ -102,7 +124,7 @@ def build_parts(spec: Spec, frame, parts: Sequence[PartSpec], out_dir: str | Pat
             if progress:
                 progress(p.name)
     elif todo:
-        with ProcessPoolExecutor(max_workers=n_jobs, mp_context=_context()) as pool:
+        with make_pool(n_jobs) as pool:
             futures = {pool.submit(build_part_files, p, bed, str(out_dir)): p for p in todo}
             for fut in as_completed(futures):
                 p = futures[fut]
@@ -121,6 +143,31 @@ def _jobs(jobs: int | None, n: int) -> int:
         # Measured on 2 cores (8 parts): serial 4.4 s, 2 workers 5.1 s. Pool only for many parts.
         return 1 if n <= AUTO_SERIAL_MAX else max(1, min(os.cpu_count() or 1, n))
     return max(1, min(int(jobs), n))
+
+
+def make_pool(workers: int) -> ProcessPoolExecutor:
+    """A process pool for CadQuery work: forkserver with CadQuery preloaded (workers start warm), or
+    spawn where forkserver is missing; never fork (a fork after any OCC operation can deadlock).
+    Workers die with the build: a killed build leaves no worker writing into its temp folder."""
+    return ProcessPoolExecutor(max_workers=max(1, int(workers)), mp_context=_context(), initializer=_die_with_parent)
+
+
+def _die_with_parent() -> None:
+    """Linux: have the kernel SIGKILL this worker when its parent (the forkserver, which exits when the
+    build does) dies. Elsewhere a no-op; build_part_files still never recreates a vanished folder."""
+    import signal
+    import sys
+
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGKILL))  # 1 = PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return
+    if os.getppid() == 1:  # the parent died before prctl: nobody will read our results
+        os._exit(1)
 
 
 def _context():
@@ -167,6 +214,8 @@ def build_part_files(part: PartSpec, bed, out_dir: str) -> dict:
             f"{np.ceil(size[0]):.0f} x {np.ceil(size[1]):.0f} x {np.ceil(size[2]):.0f}, or make the part smaller ({key}).",
             key="printer.bed")
     stl_rel, step_rel = stl_relpath(part), step_relpath(part)
+    if not Path(out_dir).is_dir():  # the build was stopped and its temp folder removed: never recreate it
+        raise FileNotFoundError(f"{out_dir}: the build folder is gone")
     mesh = mesh_mod.write_stl(shape, Path(out_dir) / stl_rel, LINEAR_TOL, ANGULAR_TOL, name=part.name)
     write_step(shape, Path(out_dir) / step_rel, part.name)
     ah, av = mesh_mod.area_split(mesh)
@@ -182,39 +231,20 @@ def fits(size, bed, tol: float = 1e-6) -> bool:
 
 # -- cache -----------------------------------------------------------------------------------
 
-def _entry(cache_dir, part: PartSpec, bed) -> Path:
-    return Path(cache_dir) / "parts" / CAD_VERSION / cache_key(part, bed)
-
-
 def _cache_get(part: PartSpec, bed, out_dir: Path, cache_dir) -> dict | None:
+    """The part's files copied from a verified cache entry into out_dir, and its metrics; None on a miss."""
     if cache_dir is None:
         return None
-    entry = _entry(cache_dir, part, bed)
-    try:
-        meta = json.loads((entry / "meta.json").read_text())
-        for rel, src in ((meta["stl"], entry / "part.stl"), (meta["step"], entry / "part.step")):
-            dst = out_dir / rel
-            dst.parent.mkdir(parents=True, exist_ok=True)
-            shutil.copyfile(src, dst)
-        return meta
-    except (OSError, ValueError, KeyError):
-        return None
+    from .. import cache
+
+    hit = cache.get_files("parts", cache_key(part, bed), out_dir, root=Path(cache_dir))
+    return None if hit is None else hit["value"]
 
 
 def _cache_put(part: PartSpec, bed, out_dir: Path, cache_dir, meta: dict) -> None:
-    """Store atomically; a cache that cannot be written is skipped, never an error."""
+    """Store atomically with every file's sha256; a cache that cannot be written is skipped."""
     if cache_dir is None:
         return
-    entry = _entry(cache_dir, part, bed)
-    tmp = entry.with_name(f".{entry.name}.{os.getpid()}.tmp")
-    try:
-        shutil.rmtree(tmp, ignore_errors=True)
-        tmp.mkdir(parents=True)
-        shutil.copyfile(out_dir / meta["stl"], tmp / "part.stl")
-        shutil.copyfile(out_dir / meta["step"], tmp / "part.step")
-        (tmp / "meta.json").write_text(json.dumps(meta, sort_keys=True))
-        if entry.exists():
-            shutil.rmtree(entry, ignore_errors=True)
-        tmp.rename(entry)
-    except OSError:
-        shutil.rmtree(tmp, ignore_errors=True)
+    from .. import cache
+
+    cache.put_files("parts", cache_key(part, bed), out_dir, [meta["stl"], meta["step"]], meta, root=Path(cache_dir))

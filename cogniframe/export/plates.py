@@ -338,6 +338,27 @@ def write_plates(plates: Sequence[Plate], out_dir: Path | str) -> tuple[PlateFil
     return tuple(written)
 
 
+def read_plate(path: Path | str, bed: Sequence[float], margin: float) -> Plate:
+    """A plate read back from its 3MF (what `plot_plate` needs: copies in bed coordinates, by name).
+
+    The build draws each preview from the 3MF it wrote, so a preview is a function of the plate
+    file alone and can be cached by the file's hash."""
+    path = Path(path)
+    material, index = parse_plate_name(path.stem)
+    scene = trimesh.load(path, force="scene")
+    copies = []
+    for node in scene.graph.nodes_geometry:
+        tf, geom = scene.graph[node]
+        mesh = scene.geometry[geom].copy()
+        mesh.apply_transform(tf)
+        lo, ext = mesh.bounds[0], mesh.extents
+        copies.append(PlacedCopy(str(node), part_of(str(node)), float(lo[0]), float(lo[1]),
+                                 (float(ext[0]), float(ext[1]), float(ext[2])), 0.0, mesh))
+    copies.sort(key=lambda c: (c.part, int(c.name.rsplit("_", 1)[1]) if c.name.rsplit("_", 1)[-1].isdigit() else 0))
+    bed3 = (float(bed[0]), float(bed[1]), float(bed[2]))
+    return Plate(material, index, bed3, float(margin), tuple(copies))
+
+
 def parse_plate_name(stem: str) -> tuple[str, int]:
     """'tpu_95a_2' -> ('tpu_95a', 2). Raises ValueError for other names."""
     material, _, idx = stem.rpartition("_")

@@ -129,6 +129,22 @@ def plot_stiffness(drop: Mapping, path: Path) -> Path:
     return _save(fig, path)
 
 
+def draw_figures(result: "CheckResult", files: Path) -> dict[str, list[tuple[str, Path]]]:
+    """Draw the report's charts into `files` (FIGURES: section -> (caption, file name))."""
+    from ..pipeline import check_dict
+
+    cd = check_dict(result)
+    files = Path(files)
+    figs: dict[str, list[tuple[str, Path]]] = {"mass": [("mass by group", plot_mass_groups(cd["mass"], files / "mass_by_group.png"))]}
+    if result.drop is not None:
+        from .drop_plots import plot_drop_response, plot_energy_split
+
+        figs["drop"] = [("stiffness", plot_stiffness(cd["drop"], files / "stiffness.png")),
+                        ("drop response", plot_drop_response(result.drop, files / "drop_response.png")),
+                        ("energy split", plot_energy_split(result.drop, files / "energy_split.png"))]
+    return figs
+
+
 # -- content ---------------------------------------------------------------------------------
 
 def _verdicts(result: "CheckResult", cd: Mapping, plates, slice_report) -> list[Verdict]:
@@ -292,8 +308,12 @@ def _img_md(path: Path, caption: str, base: Path) -> str:
 
 def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str, Path] | None = None,
                  bom: Sequence["BomLine"] = (), steps: Sequence["Step"] = (), plates: Sequence["PlateFile"] = (),
-                 slice_report: "SliceReport | None" = None) -> tuple[Path, Path]:
+                 slice_report: "SliceReport | None" = None,
+                 figures: Mapping[str, Sequence[tuple[str, Path]]] | None = None) -> tuple[Path, Path]:
     """Write `report.html` and `report.md` into out_dir (charts go to out_dir/report_files/).
+
+    `figures`: {"mass": [(caption, png)], "drop": [...]} already drawn (the build draws and caches
+    them as steps); None draws them here with `draw_figures`.
 
     `images`: caption -> PNG (renders of the assembly and parts), shown in the given order.
     `plates`: what `write_plates` returned (their preview PNGs are shown). Returns (html, md)."""
@@ -304,13 +324,7 @@ def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str
     files.mkdir(parents=True, exist_ok=True)
     cd = check_dict(result)
     name = cd["name"]
-    figs: dict[str, list[tuple[str, Path]]] = {"mass": [("mass by group", plot_mass_groups(cd["mass"], files / "mass_by_group.png"))]}
-    if result.drop is not None:
-        from .drop_plots import plot_drop_response, plot_energy_split
-
-        figs["drop"] = [("stiffness", plot_stiffness(cd["drop"], files / "stiffness.png")),
-                        ("drop response", plot_drop_response(result.drop, files / "drop_response.png")),
-                        ("energy split", plot_energy_split(result.drop, files / "energy_split.png"))]
+    figs = dict(figures) if figures is not None else draw_figures(result, files)
     verdicts = _verdicts(result, cd, plates, slice_report)
     tables = _tables(result, cd, bom, steps, plates, slice_report)
     warnings = list(slice_report.warnings) if slice_report is not None else []

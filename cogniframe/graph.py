@@ -1,0 +1,228 @@
+"""A small build graph: steps that run only when the hash of what they read changes.
+
+A `Step` names its target, the steps it needs, how to make it and (when it is worth caching)
+what it reads. Names hold `{vars}` that expand over rows given by the caller: with rows
+`{"material": "tpu_95a", "part": "knee"}, ...`, `part:{material}/{part}` is one task per part and
+`plates:{material}` one task per material. `needs` may use the task's own `{vars}` and `*`:
+`part:{material}/*` is every part of that task's material.
+
+A step with a `key` is cached. Its key is the sha256 of the step, its vars, what `key(ctx, **vars)`
+returns (the inputs it reads: hashes of upstream files, numbers, settings), the source of the
+modules in `code` and the `stack` fingerprint (library versions). On a hit its files are copied
+from the cache entry, each checked against the sha256 stored with it (cache.get_files), and its
+JSON value is read back; on a miss it runs and its files and value are stored atomically
+(cache.put_files). A corrupt entry is a miss, never an error. The value a step returns is passed
+through JSON even when it ran, so downstream steps see the same thing either way. A step
+without a key is cheap and in memory only (a check, a text file): it always runs.
+
+Where a step runs: `where="main"` steps run one at a time on the calling thread, in list order
+(Python work: matplotlib, VTK, trimesh); `where="wait"` steps each get a thread, because they
+mostly wait for another process (the CAD process pool, PrusaSlicer), so they overlap with the
+main ones and with each other. `after` orders without being an input (not in the key): e.g.
+renders start after the plates are laid out, so a long render never delays the slicer.
+
+Why not a library: doit tracks whether targets are up to date *in place* (a dbm of file
+checksums per task) while a build here fills a fresh temporary folder from a content-addressed
+store; dask runs in-memory task graphs with no persistent keyed cache and would put matplotlib and
+VTK on worker threads. What is needed here (content keys, a verified file store, a fan-out over
+parts and materials, main thread vs waiting threads) is the ~200 lines below.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import hashlib
+import json
+import string
+import time
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Iterable, Mapping, Sequence
+
+from . import cache
+from .cache import fingerprint
+
+
+@dataclass(frozen=True)
+class Made:
+    """What a step made: files (relative to the build folder) and a JSON-able value."""
+
+    files: tuple[str, ...] = ()
+    value: Any = None
+
+
+@dataclass(frozen=True)
+class Step:
+    name: str  # target, may hold {vars}
+    needs: tuple[str, ...]  # step names or patterns, may hold {vars} and *
+    run: Callable[..., Made]  # run(ctx, **vars) -> Made (writes its files under ctx.out)
+    key: Callable[..., Any] | None = None  # key(ctx, **vars) -> JSON-able inputs; None: always run
+    code: tuple[str, ...] = ()  # cogniframe sources (globs) the step's output depends on
+    where: str = "main"  # "main" or "wait"
+    after: tuple[str, ...] = ()  # order only, not inputs: start after these (patterns like needs)
+
+
+@dataclass(frozen=True)
+class Task:
+    name: str
+    step: Step
+    vars: Mapping[str, str]
+    needs: tuple[str, ...]  # task names
+    after: tuple[str, ...] = ()  # task names that must finish first (scheduling only, not in the key)
+
+
+@dataclass
+class Context:
+    """What steps read: the build folder, the caller's inputs, and the values of finished steps."""
+
+    out: Path
+    inputs: Mapping[str, Any]
+    stack: str = ""  # fingerprint of library versions, part of every key
+    use_cache: bool = True
+    values: dict[str, Any] = field(default_factory=dict)
+
+    def __getitem__(self, name: str):
+        return self.values[name]
+
+    def __getattr__(self, name: str):
+        try:
+            return self.__dict__["inputs"][name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+    def each(self, pattern: str) -> dict[str, Any]:
+        """Values of the finished tasks matching `pattern`, by task name, in name order."""
+        done = dict(self.values)  # a copy: "wait" steps read while the main thread adds values
+        return {n: v for n, v in sorted(done.items()) if fnmatch.fnmatchcase(n, pattern)}
+
+
+@dataclass(frozen=True)
+class Record:
+    task: str
+    status: str  # "ran" | "cached" | "always" (not cached: cheap, in memory, or nothing to store)
+    seconds: float
+
+
+def expand(steps: Sequence[Step], rows: Iterable[Mapping[str, str]]) -> list[Task]:
+    """One task per distinct binding of each step's {vars}; needs resolved to task names."""
+    rows = list(rows)
+    named: list[tuple[str, Step, dict]] = []
+    for step in steps:
+        fields = [f for _, f, _, _ in string.Formatter().parse(step.name) if f]
+        seen = []
+        for row in (rows if fields else [{}]):
+            binding = {f: row[f] for f in fields}
+            if binding not in seen:
+                seen.append(binding)
+                named.append((step.name.format(**binding), step, binding))
+    names = [n for n, _, _ in named]
+    if len(set(names)) != len(names):
+        raise ValueError(f"duplicate task names: {sorted(n for n in names if names.count(n) > 1)}")
+    tasks = []
+    for i, (name, step, binding) in enumerate(named):
+        resolved = []
+        for patterns in (step.needs, step.after):
+            found: list[str] = []
+            for pat in patterns:
+                pat = pat.format(**binding)
+                hits = [n for n in names[:i] if fnmatch.fnmatchcase(n, pat)]  # only earlier steps: no cycles
+                if not hits and "*" not in pat:
+                    raise ValueError(f"{name} needs {pat!r}, which no earlier step makes")
+                found += [h for h in hits if h not in found]
+            resolved.append(tuple(found))
+        tasks.append(Task(name, step, binding, resolved[0], resolved[1]))
+    return tasks
+
+
+def task_key(task: Task, ctx: Context) -> str | None:
+    """The task's cache key, or None when it is not cached (no key function, caching off, or the key
+    function returned None: nothing worth storing this time, e.g. no slicer installed)."""
+    if task.step.key is None or not ctx.use_cache:
+        return None
+    inputs = task.step.key(ctx, **task.vars)
+    if inputs is None:
+        return None
+    payload = [task.step.name, dict(task.vars), inputs, cache.code_hash(*task.step.code) if task.step.code else "",
+               ctx.stack]
+    return hashlib.sha256(fingerprint(payload).encode()).hexdigest()[:32]
+
+
+def _kind(task: Task) -> str:
+    """Cache folder of a step: steps/<name before ':' or '{'>."""
+    return "steps/" + (task.step.name.split(":", 1)[0].split("{", 1)[0].strip("/") or "step")
+
+
+def _do(task: Task, ctx: Context) -> tuple[Any, str]:
+    """Run one task (or take it from the cache); returns (value, status)."""
+    key = task_key(task, ctx)
+    if key is not None:
+        hit = cache.get_files(_kind(task), key, ctx.out)
+        if hit is not None:
+            return hit["value"], "cached"
+    made = task.step.run(ctx, **task.vars)
+    if not isinstance(made, Made):
+        raise TypeError(f"step {task.name} returned {type(made).__name__}, not Made")
+    value = made.value
+    if task.step.key is not None:  # the same plain JSON whether it ran or came from the cache
+        value = json.loads(json.dumps(value))
+    if key is not None:
+        cache.put_files(_kind(task), key, ctx.out, made.files, value)
+    return value, ("ran" if key is not None or (task.step.key is not None and not ctx.use_cache) else "always")
+
+
+def run(tasks: Sequence[Task], ctx: Context, threads: int = 16,
+        on_start: Callable[[str], None] | None = None,
+        on_done: Callable[[Record], None] | None = None) -> list[Record]:
+    """Run every task once its needs are done. Main-thread tasks run in list order, one at a time;
+    "wait" tasks run in threads. The first error stops new tasks, waits for running ones, and is
+    raised. Returns one Record per task, in the order they finished."""
+    pending = list(tasks)
+    done: set[str] = set()
+    records: list[Record] = []
+    error: BaseException | None = None
+
+    def finish(task: Task, value, status: str, t0: float) -> None:
+        ctx.values[task.name] = value
+        done.add(task.name)
+        rec = Record(task.name, status, time.perf_counter() - t0)
+        records.append(rec)
+        if on_done:
+            on_done(rec)
+
+    def ready(t: Task) -> bool:
+        return all(n in done for n in t.needs) and all(n in done for n in t.after)
+
+    with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="step") as pool:
+        running: dict = {}
+        try:
+            while pending or running:
+                for t in [t for t in pending if t.step.where == "wait" and ready(t)]:
+                    pending.remove(t)
+                    if on_start:
+                        on_start(t.name)
+                    running[pool.submit(_do, t, ctx)] = (t, time.perf_counter())
+                main = next((t for t in pending if t.step.where == "main" and ready(t)), None)
+                if main is not None:
+                    pending.remove(main)
+                    if on_start:
+                        on_start(main.name)
+                    t0 = time.perf_counter()
+                    value, status = _do(main, ctx)
+                    finish(main, value, status, t0)
+                elif running:
+                    finished, _ = wait(list(running), return_when=FIRST_COMPLETED)
+                else:
+                    raise RuntimeError(f"build graph stuck: {[t.name for t in pending]} wait for steps that never run")
+                for fut in [f for f in running if f.done()]:
+                    t, t0 = running.pop(fut)
+                    value, status = fut.result()
+                    finish(t, value, status, t0)
+        except BaseException as e:
+            error = e
+            for fut in running:
+                fut.cancel()
+            wait(list(running))
+    if error is not None:
+        raise error
+    return records

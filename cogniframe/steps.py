@@ -1,0 +1,251 @@
+"""The build, as a Makefile: each step's target, what it needs, how it is made and what it reads.
+
+    target                    needs                                    reads (its cache key)
+    estimate                  -                                        (always: the check without CAD; warms the stiffness cache)
+    part:{material}/{part}    -                                        part digest, bed, mesh tolerances, CAD code
+    clash                     part:*                                   part digests, placements, rods, vitamins, prop margin (issue 13)
+    check                     estimate part:* clash                    (always: mass with CAD volumes, drop model, flight, text files)
+    plates:{material}         part:{material}/*                        each part's STL hash and qty, bed, margin
+    slice:{material}          plates:{material}                        plate files, profile, PrusaSlicer version
+    assembly                  part:*                                   part digests, placements, rods
+    plots                     check                                    the drop model's numbers
+    figures                   check                                    the mass budget's and drop model's numbers
+    previews:{material}       plates:{material}                        plate files
+    render:{part}             part:*/{part}                            the part's STL hash, material
+    renders                   part:*                                   STL hashes, placements, rods
+    bom                       check slice:*                            (always: BOM, assembly steps)
+    report                    everything above                         (always: HTML and Markdown from the files above)
+
+A step with a key runs only when its key changes; otherwise its files come from the cache
+(graph.py). `part`, `slice` and `assembly` run in threads that wait for another process (CAD
+pool, PrusaSlicer), so slicing a plate starts as soon as its parts exist while the main thread
+draws plots, previews and renders. Heavy imports (cadquery, trimesh, pyvista, matplotlib) happen
+only inside steps that run.
+"""
+
+from __future__ import annotations
+
+import json
+import threading
+
+from . import graph
+from .cache import file_sha256
+from .fabrication import (bom, figures_key, make_figures, make_plates, make_previews, make_render_part, make_renders,
+                          make_slice, plates_key, previews_key, render_part_key, renders_key, report, slice_key)
+from .graph import Made, Step
+
+
+
+# Libraries whose versions are in every step's key, besides build.STACK (which the manifest lists).
+EXTRA_STACK = ("rectpack", "pillow", "lxml", "networkx", "rich")
+
+
+def stack_fingerprint() -> str:
+    """Versions of everything that shapes the output bytes: part of every cache key."""
+    from importlib import metadata
+
+    from .build import _versions
+
+    versions = _versions()
+    for dist in EXTRA_STACK:
+        try:
+            versions[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            versions[dist] = None
+    return json.dumps(versions, sort_keys=True)
+
+
+class BuildContext(graph.Context):
+    """graph.Context plus what many steps look up: parts by name, their step values and meshes."""
+
+    @property
+    def bed(self) -> tuple[float, float, float]:
+        return tuple(float(b) for b in self.spec.printer.bed)
+
+    def part(self, name: str):
+        return next(p for p in self.design.parts if p.name == name)
+
+    def parts_of(self, material: str):
+        return [p for p in self.design.parts if p.material == material]
+
+    def part_value(self, name: str) -> dict:
+        (value,) = self.each(f"part:*/{name}").values()
+        return value
+
+    def built_parts(self):
+        """BuiltPart per part, in the design's order, from the part steps' values."""
+        from .export.build import _built
+
+        return tuple(_built(p, self.part_value(p.name)) for p in self.design.parts)
+
+    def mesh(self, name: str):
+        import trimesh
+
+        return trimesh.load(self.out / self.part_value(name)["stl"], force="mesh")
+
+
+class CadPool:
+    """The CAD process pool, started by the first step that needs it (never on a cached build)."""
+
+    def __init__(self, workers: int):
+        self.workers = workers
+        self._pool = None
+        self._lock = threading.Lock()
+
+    def run(self, fn, *args):
+        with self._lock:
+            if self._pool is None:
+                from .export.build import make_pool
+
+                self._pool = make_pool(self.workers)
+        return self._pool.submit(fn, *args).result()
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
+
+
+class Slicer:
+    """PrusaSlicer's path and version, looked up once per build (None when it is not installed)."""
+
+    def __init__(self, log):
+        self.log = log
+        self._found = None
+        self._lock = threading.Lock()
+
+    def get(self) -> tuple[str, str] | None:
+        with self._lock:
+            if self._found is None:
+                from .export import slicer
+
+                exe = slicer.find_slicer()
+                self._found = (exe, slicer.known_version(exe)) if exe else ()
+                if not exe:
+                    self.log(f"{slicer.SLICER} not found on PATH: skipping the slicer check "
+                             f"(install it with `apt-get install prusa-slicer` to get grams and print times).")
+            return self._found or None
+
+
+# -- steps -----------------------------------------------------------------------------------
+
+def estimate(ctx) -> Made:
+    from . import pipeline
+
+    pipeline.check(ctx.spec)  # solves (or reads) the frame stiffness while the CAD pool works
+    return Made()
+
+
+def part_key(ctx, material: str, part: str):
+    from .export.build import cache_key
+
+    return cache_key(ctx.part(part), ctx.bed)  # the part's CAD inputs (not its infill or placements), bed, code
+
+
+def make_part(ctx, material: str, part: str) -> Made:
+    from .export.build import build_part_files
+
+    meta = ctx.cad.run(build_part_files, ctx.part(part), ctx.bed, str(ctx.out))
+    meta["stl_sha256"] = file_sha256(ctx.out / meta["stl"])
+    return Made((meta["stl"], meta["step"]), meta)
+
+
+def check(ctx) -> Made:
+    import json
+
+    from . import cutlist, pipeline
+    from .analysis.mass import PartGeometry
+
+    from .analysis import clash
+
+    geometry = {b.name: PartGeometry(b.volume_mm3, b.area_h_mm2, b.area_v_mm2, "cad") for b in ctx.built_parts()}
+    result = pipeline.check(ctx.spec, geometry, clash=clash.from_dict(ctx["clash"]))
+    out = ctx.out
+    files = {"check.json": json.dumps(pipeline.check_dict(result), indent=2) + "\n",
+             "cutlist.csv": cutlist.to_csv(ctx.design.cut), "cutlist.md": cutlist.to_markdown(ctx.design.cut),
+             "mass.md": mass_markdown(result)}
+    for rel, text in files.items():
+        (out / rel).write_text(text, encoding="utf-8")
+    return Made(tuple(files), result)
+
+
+def mass_markdown(check) -> str:
+    m = check.mass
+    lines = [f"# Mass budget: {check.design.spec.name}", "", "| item | group | qty | g each | g | source |",
+             "|---|---|---:|---:|---:|---|"]
+    for i in m.items:
+        lines.append(f"| {i.name} | {i.group} | {i.qty} | {i.mass_g_each:.2f} | {i.mass_g:.1f} | {i.source} |")
+    lines += ["", "| group | g |", "|---|---:|"] + [f"| {g} | {v:.1f} |" for g, v in m.groups.items()]
+    lines += [f"| **all-up weight** | **{m.total_g:.1f}** |", f"| limit | {m.limit_g:g} |", f"| margin | {m.margin_g:+.1f} |"]
+    return "\n".join(lines) + "\n"
+
+
+def assembly_key(ctx):
+    from .export.assembly import assembly_key as key
+
+    return key(ctx.spec, ctx.design.frame, ctx.design.parts, ctx.built_parts())
+
+
+def make_assembly(ctx) -> Made:
+    from .export.assembly import write_assembly
+
+    ctx.cad.run(write_assembly, ctx.spec, ctx.design.frame, ctx.design.parts, ctx.built_parts(), str(ctx.out))
+    return Made(("assembly.step", "assembly.glb"))
+
+
+def clash_key(ctx):
+    from .analysis.clash import TOLERANCE_MM3
+    from .export.assembly import assembly_key as key
+
+    return [key(ctx.spec, ctx.design.frame, ctx.design.parts, ctx.built_parts()), ctx.spec.requirements.prop_margin,
+            TOLERANCE_MM3]
+
+
+def make_clash(ctx) -> Made:
+    """Issue 13: every pair of solids of the aircraft (printed part copies, rods, vitamins) and every
+    propeller's clearance (analysis/clash.py); clash.json; its clashes are FAIL problems of `check`."""
+    from .export.assembly import check_clashes
+
+    result = check_clashes(ctx.spec, ctx.design.frame, ctx.design.parts, ctx.built_parts(), ctx.out)
+    (ctx.out / "clash.json").write_text(json.dumps(result.to_dict(), indent=2) + "\n", encoding="utf-8")
+    return Made(("clash.json",), result.to_dict())
+
+
+def plots_key(ctx):
+    return ctx["check"].drop
+
+
+def make_plots(ctx) -> Made:
+    drop = ctx["check"].drop
+    if drop is None:
+        return Made()
+    from .report import drop_plots
+
+    drop_plots.plot_drop_response(drop, ctx.out / "plots" / "drop_response.png")
+    drop_plots.plot_energy_split(drop, ctx.out / "plots" / "energy_split.png")
+    return Made(("plots/drop_response.png", "plots/energy_split.png"))
+
+
+STEPS = (
+    #    target                    needs                                  make           key               code / where
+    Step("estimate",               (),                                    estimate),
+    Step("part:{material}/{part}", (),                                    make_part,     part_key,         (),        "wait"),
+    Step("clash",                  ("part:*",),                           make_clash,    clash_key,        ("analysis/clash.py", "export/assembly.py", "export/mesh.py", "vitamins.py", "materials.py", "partlist.py"), "wait"),
+    Step("check",                  ("estimate", "part:*", "clash"),       check),
+    Step("plates:{material}",      ("part:{material}/*",),                make_plates,   plates_key,       ("export/plates.py",)),
+    Step("slice:{material}",       ("plates:{material}",),                make_slice,    slice_key,        ("export/slicer.py",), "wait"),
+    Step("assembly",               ("part:*",),                           make_assembly, assembly_key,     ("export/assembly.py", "export/step.py", "vitamins.py"), "wait"),
+    Step("plots",                  ("check",),                            make_plots,    plots_key,        ("report/drop_plots.py", "analysis/impact.py")),
+    Step("figures",                ("check",),                            make_figures,  figures_key,      ("report/html.py", "report/drop_plots.py")),
+    Step("previews:{material}",    ("plates:{material}",),                make_previews, previews_key,     ("export/plates.py",)),
+    Step("render:{part}",          ("part:*/{part}",),                    make_render_part, render_part_key, ("report/renders.py", "export/plates.py"),
+         after=("plates:*",)),  # a render never holds up the slicer
+    Step("renders",                ("part:*",),                           make_renders,  renders_key,      ("report/renders.py", "export/plates.py", "report/assembly_steps.py", "vitamins.py")),
+    Step("bom",                    ("check", "slice:*"),                  bom),
+    Step("report",                 ("check", "bom", "plots", "figures", "previews:*", "render:*", "renders"), report),
+)
+
+
+def rows(design) -> list[dict]:
+    """What the {vars} of STEPS range over: one row per printed part."""
+    return [{"material": p.material, "part": p.name} for p in design.parts]

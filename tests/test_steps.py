@@ -1,0 +1,210 @@
+"""The build graph engine (graph.py) on small made-up steps, and the verified cache entries (no CAD).
+
+What is checked: a step reruns exactly when what it reads changes (not when an upstream step
+merely reran), an unchanged graph reruns nothing and gives the same bytes, a truncated or
+edited cache entry is detected and rebuilt, waiting steps overlap with main-thread steps, and
+an error stops the graph.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import threading
+from pathlib import Path
+
+import pytest
+
+from cogniframe import cache, graph
+from cogniframe.graph import Made, Step
+
+
+@pytest.fixture
+def private_cache(tmp_path, monkeypatch):
+    root = tmp_path / "cache"
+    monkeypatch.setenv("COGNIFRAME_CACHE", str(root))
+    return root
+
+
+def _sha(p: Path) -> str:
+    return hashlib.sha256(p.read_bytes()).hexdigest()
+
+
+def _word_steps(ran: list):
+    """word:{w} writes the word's text; letters counts the letters of all words; shout:{w} upper-cases one."""
+
+    def word(ctx, w):
+        ran.append(f"word:{w}")
+        (ctx.out / f"{w}.txt").write_text(ctx.text[w])
+        return Made((f"{w}.txt",), {"letters": len(ctx.text[w])})
+
+    def letters(ctx):
+        ran.append("letters")
+        total = sum(v["letters"] for v in ctx.each("word:*").values())
+        (ctx.out / "letters.txt").write_text(f"{total}\n")
+        return Made(("letters.txt",), total)
+
+    def shout(ctx, w):
+        ran.append(f"shout:{w}")
+        (ctx.out / f"{w}.upper.txt").write_text((ctx.out / f"{w}.txt").read_text().upper())
+        return Made((f"{w}.upper.txt",))
+
+    return (
+        Step("word:{w}", (), word, key=lambda ctx, w: ctx.text[w]),
+        Step("letters", ("word:*",), letters, key=lambda ctx: [v["letters"] for v in ctx.each("word:*").values()]),
+        Step("shout:{w}", ("word:{w}",), shout, key=lambda ctx, w: _sha(ctx.out / f"{w}.txt")),
+        Step("summary", ("letters", "shout:*"), lambda ctx: Made((), f"{ctx['letters']} letters")),
+    )
+
+
+def _run(tmp_path: Path, name: str, text: dict, ran: list):
+    out = tmp_path / name
+    out.mkdir()
+    ctx = graph.Context(out, {"text": text})
+    records = graph.run(graph.expand(_word_steps(ran), [{"w": w} for w in text]), ctx)
+    return out, {r.task: r.status for r in records}, ctx
+
+
+def test_expand_binds_vars_and_resolves_patterns():
+    tasks = {t.name: t for t in graph.expand(_word_steps([]), [{"w": "a"}, {"w": "b"}, {"w": "a"}])}
+    assert list(tasks) == ["word:a", "word:b", "letters", "shout:a", "shout:b", "summary"]
+    assert tasks["letters"].needs == ("word:a", "word:b")
+    assert tasks["shout:b"].needs == ("word:b",)
+    assert tasks["summary"].needs == ("letters", "shout:a", "shout:b")
+
+
+def test_a_need_that_no_earlier_step_makes_is_an_error():
+    with pytest.raises(ValueError, match="needs 'later'"):
+        graph.expand((Step("first", ("later",), lambda ctx: Made()), Step("later", (), lambda ctx: Made())), [{}])
+
+
+def test_unchanged_inputs_rerun_nothing_and_give_the_same_bytes(tmp_path, private_cache):
+    ran = []
+    a, status, _ = _run(tmp_path, "a", {"x": "abc", "y": "hello"}, ran)
+    assert set(ran) == {"word:x", "word:y", "letters", "shout:x", "shout:y"}
+    assert set(status.values()) == {"ran", "always"} and status["summary"] == "always"
+    ran.clear()
+    b, status, ctx = _run(tmp_path, "b", {"x": "abc", "y": "hello"}, ran)
+    assert ran == []
+    assert {s for t, s in status.items() if t != "summary"} == {"cached"}
+    assert ctx["summary"] == "8 letters"
+    assert sorted(p.name for p in b.iterdir()) == sorted(p.name for p in a.iterdir())
+    assert all(_sha(a / p.name) == _sha(b / p.name) for p in a.iterdir())
+
+
+def test_a_change_reruns_exactly_what_reads_it(tmp_path, private_cache):
+    ran = []
+    _run(tmp_path, "a", {"x": "abc", "y": "hello"}, ran)
+    ran.clear()
+    # same length: word:x and shout:x read the text and rerun; letters reads only the counts and does not
+    out, _, ctx = _run(tmp_path, "b", {"x": "xyz", "y": "hello"}, ran)
+    assert sorted(ran) == ["shout:x", "word:x"]
+    assert (out / "x.upper.txt").read_text() == "XYZ" and (out / "letters.txt").read_text() == "8\n"
+    ran.clear()
+    _, _, ctx = _run(tmp_path, "c", {"x": "abcd", "y": "hello"}, ran)
+    assert sorted(ran) == ["letters", "shout:x", "word:x"]
+    assert ctx["summary"] == "9 letters"
+
+
+@pytest.mark.parametrize("damage", ["truncate", "edit", "drop_meta", "bad_meta"])
+def test_a_damaged_cache_entry_is_rebuilt_not_used(tmp_path, private_cache, damage):
+    ran = []
+    a, _, _ = _run(tmp_path, "a", {"x": "abc" * 1000, "y": "hello"}, ran)
+    (entry,) = [p.parent.parent for p in (private_cache / "steps" / "word").glob("*/files/x.txt")]
+    if damage == "truncate":
+        f = entry / "files" / "x.txt"
+        f.write_bytes(f.read_bytes()[:100])
+    elif damage == "edit":
+        (entry / "files" / "x.txt").write_text("ABC" * 1000)  # same size, other bytes
+    elif damage == "drop_meta":
+        (entry / "meta.json").unlink()
+    else:
+        (entry / "meta.json").write_text('{"files": {"x.txt": ')  # truncated JSON
+    ran.clear()
+    b, status, _ = _run(tmp_path, "b", {"x": "abc" * 1000, "y": "hello"}, ran)
+    assert ran == ["word:x"] and status["word:x"] == "ran" and status["word:y"] == "cached"
+    assert _sha(b / "x.txt") == _sha(a / "x.txt")
+    ran.clear()
+    _run(tmp_path, "c", {"x": "abc" * 1000, "y": "hello"}, ran)  # stored again, whole
+    assert ran == []
+
+
+def test_put_files_is_whole_or_nothing(tmp_path, private_cache):
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "a.bin").write_bytes(b"x" * 5000)
+    cache.put_files("demo", "k1", src, ["a.bin", "missing.bin"], {"v": 1})  # a file vanished: nothing stored
+    assert not (private_cache / "demo" / "k1").exists()
+    assert [p.name for p in (private_cache / "demo").iterdir()] == []  # no temp folder left behind
+    cache.put_files("demo", "k2", src, ["a.bin"], {"v": 2})
+    meta = json.loads((private_cache / "demo" / "k2" / "meta.json").read_text())
+    assert meta == {"files": {"a.bin": _sha(src / "a.bin")}, "value": {"v": 2}}
+    dest = tmp_path / "dest"
+    assert cache.get_files("demo", "k2", dest) == {"value": {"v": 2}} and _sha(dest / "a.bin") == _sha(src / "a.bin")
+
+
+def test_waiting_steps_overlap_with_main_thread_steps(tmp_path):
+    """A 'wait' step (stand-in for PrusaSlicer) blocks until a later main-thread step has run:
+    this finishes only if the two really run at the same time."""
+    go = threading.Event()
+    threads = {}
+
+    def slicer(ctx):
+        threads["slicer"] = threading.current_thread().name
+        assert go.wait(timeout=20), "the main-thread step never ran while the waiting step was running"
+        return Made()
+
+    def render(ctx):
+        threads["render"] = threading.current_thread().name
+        go.set()
+        return Made()
+
+    steps = (Step("slice", (), slicer, where="wait"), Step("render", (), render))
+    records = graph.run(graph.expand(steps, [{}]), graph.Context(tmp_path, {}))
+    assert [r.task for r in records] == ["render", "slice"]
+    assert threads["render"] == threading.main_thread().name and threads["slicer"] != threads["render"]
+
+
+def test_an_error_stops_the_graph_and_is_raised(tmp_path):
+    ran = []
+
+    def bad(ctx):
+        raise ValueError("boom")
+
+    steps = (Step("bad", (), bad, where="wait"), Step("after", ("bad",), lambda ctx: ran.append("after") or Made()))
+    with pytest.raises(ValueError, match="boom"):
+        graph.run(graph.expand(steps, [{}]), graph.Context(tmp_path, {}))
+    assert ran == []
+
+
+def test_code_changes_are_part_of_the_key(tmp_path, private_cache, monkeypatch):
+    ran = []
+    steps = (Step("s", (), lambda ctx: ran.append(1) or Made(), key=lambda ctx: 1, code=("graph.py",)),)
+    for _ in range(2):
+        graph.run(graph.expand(steps, [{}]), graph.Context(tmp_path, {}))
+    assert ran == [1]
+    monkeypatch.setitem(cache._CODE, ("graph.py",), "edited")  # as if graph.py had been edited
+    graph.run(graph.expand(steps, [{}]), graph.Context(tmp_path, {}))
+    assert ran == [1, 1]
+
+
+def test_after_orders_without_being_an_input(tmp_path, private_cache):
+    """`after` only orders: the step waits for it but its key does not read it."""
+    order = []
+    seen = {"slow": 0}
+
+    def steps():
+        return (Step("render", (), lambda ctx: order.append("render") or Made(), key=lambda ctx: "same", after=("plates",)),
+                Step("plates", (), lambda ctx: order.append("plates") or Made(), key=lambda ctx: seen["slow"]))
+
+    with pytest.raises(ValueError, match="needs 'plates'"):  # like needs: only earlier steps
+        graph.expand(steps(), [{}])
+    good = (Step("plates", (), lambda ctx: order.append("plates") or Made(), key=lambda ctx: seen["slow"]),
+            Step("render", (), lambda ctx: order.append("render") or Made(), key=lambda ctx: "same", after=("plates",)))
+    (plates, render) = graph.expand(good, [{}])
+    assert render.after == ("plates",) and render.needs == ()
+    graph.run([render, plates], graph.Context(tmp_path, {}))  # listed first, still runs second
+    assert order == ["plates", "render"]
+    seen["slow"] = 1  # plates reruns; render's key does not read it, so it stays cached
+    records = graph.run([render, plates], graph.Context(tmp_path, {}))
+    assert {r.task: r.status for r in records} == {"plates": "ran", "render": "cached"}

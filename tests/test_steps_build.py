@@ -1,0 +1,159 @@
+"""The real build graph (steps.py): which steps a params change reruns, and that an incremental
+build gives the same bytes as a cold one.
+
+One cold build of the carbon preset warms a cache shared by this module. Each single-value change
+is then built twice: incrementally on the shared cache (the steps that ran are asserted: exactly
+the ones that read the changed value), and cold (no cache at all); the two manifests must list
+the same files with the same sha256. PrusaSlicer only runs for the changes that touch what it
+reads (and is skipped where it is not installed); elsewhere it is switched off in both builds.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+import yaml
+
+from cogniframe import spec as spec_mod
+from cogniframe.build import run_build
+from cogniframe.export import slicer as slicer_mod
+
+pytestmark = pytest.mark.slow
+
+ROOT = Path(__file__).resolve().parents[1]
+HAVE_SLICER = slicer_mod.find_slicer() is not None
+TPU, ABS = "tpu_95a", "abs"
+TPU_PARTS = ("corner_top", "corner_bottom", "knee", "core_link", "motor_mount")
+ABS_PARTS = ("core_plate", "battery_holder", "computer_mount")
+
+
+def _params(folder: Path, change: tuple[str, object] | None = None) -> Path:
+    data = yaml.safe_load((ROOT / "params" / "carbon.yaml").read_text())
+    if change is not None:
+        *path, last = change[0].split(".")
+        node = data
+        for k in path:
+            node = node[k]
+        node[last] = change[1]
+    folder.mkdir(parents=True, exist_ok=True)
+    p = folder / "carbon.yaml"
+    p.write_text(yaml.safe_dump(data, sort_keys=False))
+    return p
+
+
+def _build(params: Path, out: Path, slicer: bool, use_cache: bool = True, console=None):
+    with pytest.MonkeyPatch.context() as mp:
+        if not slicer:
+            mp.setattr(slicer_mod, "find_slicer", lambda: None)
+        return run_build(spec_mod.load(params), params, out, jobs=2, use_cache=use_cache, console=console)
+
+
+def _ran(result) -> set[str]:
+    return {task for task, status in result.steps if status == "ran"}
+
+
+def _files(out: Path) -> list:
+    return json.loads((out / "manifest.json").read_text())["files"]
+
+
+@pytest.fixture(scope="module")
+def warm(tmp_path_factory):
+    root = tmp_path_factory.mktemp("steps")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("COGNIFRAME_CACHE", str(root / "cache"))
+        params = _params(root / "base")
+        first = _build(params, root / "out-base", slicer=True)
+        yield root, params, first
+
+
+def test_cold_build_runs_every_step_once(warm):
+    _, _, first = warm
+    names = [t for t, _ in first.steps]
+    assert len(names) == len(set(names))
+    assert {f"part:{TPU}/{p}" for p in TPU_PARTS} | {f"part:{ABS}/{p}" for p in ABS_PARTS} <= _ran(first)
+    assert {"assembly", "plots", "figures", "renders", f"plates:{TPU}", f"previews:{ABS}", "render:knee"} <= _ran(first)
+    assert not any(s == "cached" for _, s in first.steps)
+    assert (f"slice:{TPU}" in _ran(first)) == HAVE_SLICER
+
+
+def test_unchanged_build_reruns_nothing_and_gives_the_same_bytes(warm, tmp_path):
+    import io
+
+    from rich.console import Console
+
+    root, params, first = warm
+    log = io.StringIO()
+    again = _build(params, tmp_path / "again", slicer=True, console=Console(file=log, width=100))
+    assert _ran(again) == set()
+    assert {t for t, s in again.steps if s == "cached"} == _ran(first)
+    assert _files(tmp_path / "again") == _files(first.out_dir)
+    # not a terminal: one plain line per step, cached ones marked, then a count
+    lines = log.getvalue().splitlines()
+    n = len(again.steps)
+    assert sum(line.startswith("[") for line in lines) == n
+    assert any(line.endswith("cached") and "part:tpu_95a/knee" in line for line in lines)
+    assert f"{n} steps: {n - len(_ran(first))} ran, {len(_ran(first))} cached" in lines
+    assert "\x1b[" not in log.getvalue()  # no colours or cursor moves in a log file
+
+
+def test_a_damaged_cache_entry_is_rebuilt_in_a_real_build(warm, tmp_path):
+    """A truncated cached render and a cached part STL with edited bytes: both rebuilt, same output."""
+    root, params, first = warm
+    cache = root / "cache"
+    (render,) = cache.glob("steps/render/*/files/renders/parts/knee.png")
+    render.write_bytes(render.read_bytes()[:500])
+    (stl,) = cache.glob("steps/part/*/files/stl/tpu_95a/core_link.stl")
+    data = bytearray(stl.read_bytes())
+    data[-10] ^= 0xFF
+    stl.write_bytes(bytes(data))
+    again = _build(params, tmp_path / "again", slicer=True)
+    assert _ran(again) == {"render:knee", f"part:{TPU}/core_link"}  # its STL is the same again: nothing downstream
+    assert _files(tmp_path / "again") == _files(first.out_dir)
+
+
+MASS = {"plots", "figures"}  # what a change of the mass budget or the drop model reruns
+
+
+def _part_change(*parts: str) -> set[str]:
+    """Steps that rerun when exactly these parts' geometry changes (their mass changes too)."""
+    out = set(MASS) | {"assembly", "renders"}
+    for p in parts:
+        m = TPU if p in TPU_PARTS else ABS
+        out |= {f"part:{m}/{p}", f"render:{p}", f"plates:{m}", f"previews:{m}"}
+    return out
+
+
+CHANGES = [
+    # (key, new value, slice?, steps that must rerun (slice:* only listed when sliced))
+    ("core.battery.mass", 61, False, MASS),
+    ("requirements.design_drop_height_cm", 80, False, set()),  # the verdict and report only
+    ("rods.kerf", 1.5, False, set()),  # the stock plan only
+    ("model.damping_ratio", 0.6, False, MASS),
+    ("rods.material", "bamboo", False, MASS),  # same diameter: no part changes
+    ("motors.bolt_spacing", 9.5, False, _part_change("motor_mount")),
+    ("joints.wall", 1.4, False, _part_change(*TPU_PARTS)),
+    ("frame.height", 130, False, _part_change(*TPU_PARTS)),
+    ("core.plate_size", 44, False, _part_change("core_plate", "core_link", "corner_bottom", "knee", "motor_mount")),
+    ("printer.margin", 5, True, {f"plates:{TPU}", f"plates:{ABS}", f"previews:{TPU}", f"previews:{ABS}",
+                                 f"slice:{TPU}", f"slice:{ABS}"}),
+    ("core.infill", 0.15, True, MASS | {f"slice:{ABS}"}),  # a print setting: no part, no plate changes
+    ("printer.layer_height", 0.25, True, MASS | {f"slice:{TPU}", f"slice:{ABS}"}),
+]
+
+
+@pytest.mark.parametrize("key, value, sliced, expected", CHANGES, ids=[c[0] for c in CHANGES])
+def test_a_change_reruns_exactly_its_dependents_and_matches_a_cold_build(warm, tmp_path, key, value, sliced, expected):
+    root, _, _ = warm
+    sliced = sliced and HAVE_SLICER
+    if not HAVE_SLICER:
+        expected = {s for s in expected if not s.startswith("slice:")}
+    params = _params(tmp_path / "params", (key, value))
+    incremental = _build(params, tmp_path / "incremental", slicer=sliced)
+    assert _ran(incremental) == expected
+    cold = _build(params, tmp_path / "cold", slicer=sliced, use_cache=False)
+    assert not any(s == "cached" for _, s in cold.steps)
+    assert _files(tmp_path / "incremental") == _files(tmp_path / "cold")
+    shutil.rmtree(tmp_path / "cold")
