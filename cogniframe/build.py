@@ -36,19 +36,19 @@ class BuildResult:
 
 
 def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None = None, use_cache: bool = True,
-              console: Console | None = None) -> BuildResult:
+              console: Console | None = None, gcode: bool = False) -> BuildResult:
     console = console or Console(stderr=True)
     with spec.blamed():
         pipeline.design(spec)  # a design that cannot exist is refused before any folder is touched
     final = pipeline.output_dir(spec, out)
-    key = build_key(spec, params_path)
+    key = build_key(spec, params_path) + ("+gcode" if gcode else "")  # issue 14: a --gcode build differs
     if use_cache and _up_to_date(final, key):
         verdict = json.loads((final / "check.json").read_text())["verdict"]
         console.print(f"{final} is up to date (same params, same cogniframe): nothing rebuilt", markup=False)
         files = len(json.loads((final / "manifest.json").read_text())["files"]) + 1
         return BuildResult(final, files, verdict, None, ())
     with outdir.writing(final) as tmp, spec.blamed():
-        result = _build_into(spec, params_path, tmp, jobs, use_cache, console, key)
+        result = _build_into(spec, params_path, tmp, jobs, use_cache, console, key, gcode=gcode)
     return BuildResult(final, result[0], result[1].verdict, result[1], result[2], result[3])
 
 
@@ -79,8 +79,9 @@ def _up_to_date(final: Path, key: str) -> bool:
 
 
 def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_cache: bool, console: Console,
-                key: str):
-    """Run the build graph (steps.py) into `out`, then write the manifest.
+                key: str, gcode: bool = False):
+    """Run the build graph (steps.py) into `out`, then write the manifest. `gcode`: keep the
+    sliced G-code per plate (`build --gcode`, issue 14; read by fabrication.make_slice).
 
     Returns (files, check result, built parts, ((step, "ran" | "cached" | "always"), ...))."""
     from . import graph, steps
@@ -88,7 +89,8 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
     design = pipeline.design(spec)
     cad = steps.CadPool(jobs or os.cpu_count() or 1)
     log = lambda m: console.print(m, markup=False, highlight=False)  # noqa: E731
-    ctx = steps.BuildContext(out, {"spec": spec, "design": design, "cad": cad, "slicer": steps.Slicer(log), "log": log},
+    ctx = steps.BuildContext(out, {"spec": spec, "design": design, "cad": cad, "slicer": steps.Slicer(log), "log": log,
+                                    "gcode": gcode},
                               stack=steps.stack_fingerprint(), use_cache=use_cache)
     tasks = graph.expand(steps.STEPS, steps.rows(design))
     try:
@@ -183,6 +185,8 @@ def _write_manifest(spec: Spec, params_path: Path, out: Path, key: str) -> int:
         "spec_sha256": spec.digest(),
         "versions": _versions(),
         "files": [{"path": p.relative_to(out).as_posix(), "size": p.stat().st_size, "sha256": _sha256(p)} for p in files],
+        # outside the identical-rebuild promise (issue 14): `build --gcode`'s G-code has a timestamp and threaded path order
+        "not_reproducible": [p.relative_to(out).as_posix() for p in files if p.suffix == ".gcode"],
     }
     _write(out / "manifest.json", json.dumps(manifest, indent=2) + "\n")
     return len(files) + 1

@@ -20,7 +20,14 @@ from .graph import Made
 
 def plates_key(ctx, material: str):
     return [[[p.name, p.qty, ctx.part_value(p.name)["stl_sha256"]] for p in ctx.parts_of(material)],
-            ctx.bed, float(ctx.spec.printer.margin)]
+            ctx.bed, float(ctx.spec.printer.margin), _config(ctx, material)]
+
+
+def _config(ctx, material: str) -> str:
+    """PrusaSlicer settings embedded in this material's plates (issue 14): the .ini's values."""
+    from .export import slicer
+
+    return slicer.project_config(ctx.spec, material, _infill(ctx, material))
 
 
 def make_plates(ctx, material: str) -> Made:
@@ -32,15 +39,17 @@ def make_plates(ctx, material: str) -> Made:
     value = []
     for plate in pl.pack_plates(items, ctx.spec.printer.bed, ctx.spec.printer.margin):
         f3 = folder / f"{plate.name}.3mf"
-        f3.write_bytes(pl.plate_3mf_bytes(plate))
+        data = pl.plate_3mf_bytes(plate, _config(ctx, material))
+        f3.write_bytes(data)
         value.append({"name": plate.name, "material": plate.material, "threemf": f"plates/{f3.name}",
                       "preview": f"plates/{plate.name}.png", "copies": [c.name for c in plate.copies],
-                      "volume_mm3": plate.volume_mm3, "sha256": file_sha256(f3)})
+                      "volume_mm3": plate.volume_mm3, "sha256": file_sha256(f3), "model_sha256": pl.model_sha256(data)})
     return Made(tuple(v["threemf"] for v in value), value)
 
 
 def previews_key(ctx, material: str):
-    return [[v["name"], v["sha256"]] for v in ctx[f"plates:{material}"]] + [ctx.bed, float(ctx.spec.printer.margin)]
+    # the layout only (3D/3dmodel.model): a print setting inside the 3MF does not change the picture
+    return [[v["name"], v["model_sha256"]] for v in ctx[f"plates:{material}"]] + [ctx.bed, float(ctx.spec.printer.margin)]
 
 
 def make_previews(ctx, material: str) -> Made:
@@ -54,24 +63,35 @@ def make_previews(ctx, material: str) -> Made:
     return Made(tuple(files))
 
 
-def _profile(ctx, material: str) -> str:
-    from .export import slicer
-
+def _infill(ctx, material: str) -> float:
     infill = {}
     for p in ctx.design.parts:
         infill[p.material] = max(infill.get(p.material, 0.0), p.infill)
-    return slicer.profile_ini(ctx.spec, material, infill.get(material, ctx.spec.core.infill))
+    return infill.get(material, ctx.spec.core.infill)
+
+
+def _profile(ctx, material: str) -> str:
+    from .export import slicer
+
+    return slicer.profile_ini(ctx.spec, material, _infill(ctx, material))
+
+
+def _keep_gcode(ctx) -> bool:
+    """`build --gcode` (issue 14): keep each plate's G-code beside it (not byte-stable; the manifest says so)."""
+    return bool(getattr(ctx, "gcode", False))
 
 
 def slice_key(ctx, material: str):
     found = ctx.slicer.get()
     if not found:
         return None  # no PrusaSlicer: nothing to slice or store
-    return [found[1], [v["sha256"] for v in ctx[f"plates:{material}"]], _profile(ctx, material), ctx.bed]
+    return [found[1], [v["sha256"] for v in ctx[f"plates:{material}"]], _profile(ctx, material), ctx.bed] + (
+        ["gcode"] if _keep_gcode(ctx) else [])
 
 
 def make_slice(ctx, material: str) -> Made:
-    """Slice this material's plates (G-code in a temp folder: it is not byte-stable; keep the numbers)."""
+    """Slice this material's plates (G-code in a temp folder: it is not byte-stable; keep the numbers,
+    and with `build --gcode` the G-code too, as plates/<plate>.gcode)."""
     from .export import slicer
 
     found = ctx.slicer.get()
@@ -81,13 +101,17 @@ def make_slice(ctx, material: str) -> Made:
     ini = ctx.out / "plates" / f"{material}.ini"
     ini.write_text(_profile(ctx, material), encoding="utf-8")
     plates = []
+    kept = []
     with tempfile.TemporaryDirectory(prefix="cogniframe-gcode-") as tmp:
         for v in ctx[f"plates:{material}"]:
+            where = ctx.out / "plates" if _keep_gcode(ctx) else Path(tmp)
             r = slicer.slice_plate(ctx.out / v["threemf"], ini, ctx.spec.printer.bed, exe,
-                                   gcode=Path(tmp) / f"{v['name']}.gcode")
+                                   gcode=where / f"{v['name']}.gcode")
             plates.append({"plate": r.plate, "material": r.material, "grams": r.grams, "time_s": r.time_s,
                            "objects": [list(o) for o in r.objects]})
-    return Made((f"plates/{material}.ini",), {"slicer": version, "plates": plates})
+            if _keep_gcode(ctx):
+                kept.append(f"plates/{v['name']}.gcode")
+    return Made((f"plates/{material}.ini", *kept), {"slicer": version, "plates": plates})
 
 
 def figures_key(ctx):
@@ -187,5 +211,10 @@ def report(ctx) -> Made:
     plates.sort(key=lambda p: (p.material, p.name))
     images = {f"assembly {v}": ctx.out / "renders" / f"assembly_{v}.png" for v in ctx["renders"]}
     images |= {f"part {p}": ctx.out / "renders" / "parts" / f"{p}.png" for p in sorted(x.name for x in ctx.design.parts)}
-    html.write_report(ctx["check"], ctx.out, images, lines, steps, plates, sliced, figures=figures)
+    from .report.viewer import design_items
+
+    d = ctx.design
+    items = design_items(d, {p.name: ctx.mesh(p.name) for p in d.parts},
+                         {p.name: ctx.part_value(p.name)["print_from_local"] for p in d.parts}, ctx["check"].mass, plates)
+    html.write_report(ctx["check"], ctx.out, images, lines, steps, plates, sliced, figures=figures, viewer_items=items)
     return Made(("report.html", "report.md"))

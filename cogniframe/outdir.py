@@ -250,6 +250,8 @@ def record(folder: Path, added: list[Path]) -> None:
         rel = p.relative_to(folder).as_posix()
         entries[rel] = {"path": rel, "size": p.stat().st_size, "sha256": hashlib.sha256(p.read_bytes()).hexdigest()}
     m["files"] = [entries[k] for k in sorted(entries)]
+    # G-code is outside the identical-rebuild promise (issue 14): say so, as `build --gcode` does
+    m["not_reproducible"] = sorted(set(m.get("not_reproducible", [])) | {k for k in entries if k.endswith(".gcode")})
     tmp = path.with_name(f".{MANIFEST}.{os.getpid()}.tmp")
     tmp.write_text(json.dumps(m, indent=2) + "\n", encoding="utf-8")
     tmp.replace(path)

@@ -13,13 +13,14 @@ import json
 import re
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 
 from .errors import UserError
 from .materials import BOARDS, CONNECTORS, MATERIALS, MOTOR_PRESETS, PROPS, SCREWS, STACK_PATTERNS, VITAMIN_KINDS, Material, MotorPreset
+from .printers import PRINTERS
 
 Pos = Annotated[float, Field(gt=0)]
 Frac = Annotated[float, Field(ge=0, le=1)]
@@ -131,12 +132,30 @@ class Component(_M):
 
 
 class PrinterSection(_M):
+    preset: Literal[tuple(PRINTERS)] | None = Field(  # type: ignore[valid-type]
+        None, description="printer preset, sets bed and nozzle (keys given here override it): "
+        + ", ".join(f"{k} ({p.name}, {p.bed[0]:g} x {p.bed[1]:g} x {p.bed[2]:g} mm)" for k, p in PRINTERS.items()))
     bed: tuple[Pos, Pos, Pos] = Field((120.0, 120.0, 120.0), description="build volume x, y, z, mm")
     nozzle: Annotated[float, Field(ge=0.1, le=1.2)] = 0.4
     layer_height: Annotated[float, Field(ge=0.05, le=0.6)] = 0.2
     perimeters: Annotated[int, Field(ge=1, le=10)] = 2
     top_bottom_layers: Annotated[int, Field(ge=1, le=20)] = 4
     margin: Annotated[float, Field(ge=0, le=20, description="gap between parts on a plate, mm")] = 4
+
+    @model_validator(mode="before")
+    @classmethod
+    def _apply_preset(cls, data: Any) -> Any:
+        """`preset: NAME` fills bed and nozzle from `printers.yaml`; keys written beside it win."""
+        if not isinstance(data, dict) or data.get("preset") is None:
+            return data
+        name = data["preset"]
+        if not isinstance(name, str) or name not in PRINTERS:
+            guess = difflib.get_close_matches(str(name), list(PRINTERS), n=1, cutoff=0.4)
+            hint = f"did you mean {guess[0]!r}? " if guess else ""
+            raise _KeyProblem("printer.preset", f"unknown printer preset {name!r}",
+                              f"{hint}use one of {', '.join(PRINTERS)} (`cogniframe printers` lists them), or remove "
+                              f"`preset:` and give printer.bed and printer.nozzle yourself")
+        return {**PRINTERS[name].fields(), **data}
 
 
 class RequirementsSection(_M):

@@ -193,3 +193,27 @@ def test_same_bytes_in_another_process(tmp_path):
     assert here == sorted(p.name for p in (tmp_path / "there").iterdir())
     for name in here:
         assert (tmp_path / "here" / name).read_bytes() == (tmp_path / "there" / name).read_bytes(), name
+
+
+def test_3mf_carries_prusaslicer_settings_and_stays_byte_stable(tmp_path):
+    configs = {"tpu_95a": "; generated\n; fill_density = 100%\n", "abs": "; generated\n; fill_density = 10%\n"}
+    a = write_plates(pack_plates(_items(), BED, MARGIN), tmp_path / "a", configs=configs)
+    b = write_plates(pack_plates(_items(), BED, MARGIN), tmp_path / "b", configs=configs)
+    plain = write_plates(pack_plates(_items(), BED, MARGIN), tmp_path / "c")
+    for fa, fb, fc in zip(a, b, plain):
+        assert fa.threemf.read_bytes() == fb.threemf.read_bytes()
+        with zipfile.ZipFile(fa.threemf) as z, zipfile.ZipFile(fc.threemf) as zc:
+            assert z.read("Metadata/Slic3r_PE.config").decode() == configs[fa.material]
+            assert z.getinfo("Metadata/Slic3r_PE.config").date_time == (1980, 1, 1, 0, 0, 0)
+            assert "Metadata/Slic3r_PE.config" not in zc.namelist()
+            assert z.read("3D/3dmodel.model") == zc.read("3D/3dmodel.model")  # geometry untouched
+
+
+def test_model_sha256_ignores_the_settings_beside_the_geometry():
+    from cogniframe.export.plates import model_sha256
+
+    plate = pack_plates(_items(), BED, MARGIN)[1]
+    a, b, c = plate_3mf_bytes(plate), plate_3mf_bytes(plate, "; fill_density = 100%\n"), plate_3mf_bytes(plate, "; x = 1\n")
+    assert len({a, b, c}) == 3 and len({model_sha256(a), model_sha256(b), model_sha256(c)}) == 1
+    moved = pack_plates(_items(), (130.0, 120.0, 120.0), MARGIN)[1]  # centred on a wider bed: other coordinates
+    assert model_sha256(plate_3mf_bytes(moved)) != model_sha256(a)

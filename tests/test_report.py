@@ -207,3 +207,103 @@ def test_opens_in_headless_chromium(written, tmp_path):
     subprocess.run(["chromium", "--headless", "--no-sandbox", "--disable-gpu", f"--screenshot={shot}",
                     "--window-size=1200,2000", html_path.resolve().as_uri()], check=True, capture_output=True, timeout=120)
     assert shot.is_file() and shot.stat().st_size > 10_000
+
+
+def _text_outside(fig) -> list[str]:
+    """Titles, axis labels, legend and annotation texts of a drawn figure that reach past its edges
+    (clipped in the PNG). Tick labels are left out: matplotlib skips those outside the view."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    w, h = fig.bbox.width, fig.bbox.height
+    texts = [fig._suptitle] if fig._suptitle is not None else []
+    for ax in fig.axes:
+        texts += [ax.title, ax._left_title, ax._right_title, ax.xaxis.label, ax.yaxis.label, *ax.texts]
+        if ax.get_legend() is not None:
+            texts += ax.get_legend().get_texts()
+    out = []
+    for t in texts:
+        if not t.get_visible() or not t.get_text().strip():
+            continue
+        bb = t.get_window_extent(renderer)
+        if bb.x0 < -0.5 or bb.y0 < -0.5 or bb.x1 > w + 0.5 or bb.y1 > h + 0.5:
+            out.append(f"{t.get_text()!r} spans x {bb.x0:.0f}..{bb.x1:.0f}, y {bb.y0:.0f}..{bb.y1:.0f} of {w:.0f} x {h:.0f}")
+    return out
+
+
+@pytest.mark.parametrize("preset", ["carbon", "bamboo"])
+def test_no_figure_clips_its_title(preset, monkeypatch, tmp_path):
+    from cogniframe.report import drop_plots
+
+    result = pipeline.check(spec_mod.load(ROOT / "params" / f"{preset}.yaml"))
+    cd = pipeline.check_dict(result)
+    figs = []
+    real_save = drop_plots._save
+    monkeypatch.setattr(drop_plots, "_save", lambda fig, path: (figs.append(fig), real_save(fig, path))[1])
+    drop_plots.plot_drop_response(result.drop, tmp_path / "a.png")
+    drop_plots.plot_energy_split(result.drop, tmp_path / "b.png")
+    report.plot_mass_groups(cd["mass"], tmp_path / "c.png")
+    report.plot_stiffness(cd["drop"], tmp_path / "d.png")
+    assert len(figs) == 4
+    for fig in figs:
+        assert not _text_outside(fig)
+    title = figs[0].axes[0].get_title()
+    assert f"max safe height {result.drop.max_safe_height_cm:.1f} cm" in title  # still says everything
+
+
+def test_viewer_geometry_round_trips_within_the_quantisation_step():
+    from cogniframe.report.viewer import ViewerItem, pack
+
+    box = _box(40, 20, 3)
+    cyl = trimesh.creation.cylinder(radius=7.5, height=12, sections=40)
+    m = trimesh.transformations.translation_matrix([10, -5, 2]) @ trimesh.transformations.rotation_matrix(0.3, [0, 0, 1])
+    items = [ViewerItem("plate_1", "part", "abs", 3.58, 1, "abs_1", "#404040", box),
+             ViewerItem("plate_2", "part", "abs", 3.58, 1, "abs_1", "#404040", box.copy(), m),
+             ViewerItem("motor", "vitamin", "motor 1104", 6.0, 4, "", "#888888", cyl)]
+    meta, buf = pack(items)
+    assert len(meta["geometries"]) == 2  # the two identical boxes share one geometry
+    assert [o["geometry"] for o in meta["objects"]] == [0, 0, 1]
+    for g, mesh in zip(meta["geometries"], (box, cyl)):
+        q = np.frombuffer(buf, "<u2", g["n_vertices"] * 3, g["positions"]).reshape(-1, 3)
+        v = np.asarray(g["min"]) + q * np.asarray(g["step"])
+        assert np.abs(v - mesh.vertices).max() <= max(g["step"]) / 2 + 1e-6
+        assert max(g["step"]) < 1e-3  # sub-micrometre steps for parts this size
+        idx = np.frombuffer(buf, "<u2" if g["index_bytes"] == 2 else "<u4", g["n_triangles"] * 3, g["indices"])
+        assert np.array_equal(idx.reshape(-1, 3), mesh.faces)
+        rebuilt = trimesh.Trimesh(v, idx.reshape(-1, 3), process=False)
+        assert rebuilt.volume == pytest.approx(mesh.volume, rel=1e-4)
+    # column-major matrices, as three.js's Matrix4.fromArray reads them
+    assert np.allclose(np.asarray(meta["objects"][1]["matrix"]).reshape(4, 4).T, m, atol=1e-6)
+    assert meta["objects"][2] | {"matrix": None} == {"name": "motor", "kind": "vitamin", "material": "motor 1104", "mass_g": 6.0,
+                                                     "qty": 4, "plate": "", "colour": "#888888", "note": "", "geometry": 1,
+                                                     "matrix": None}
+    with pytest.raises(ValueError, match="kind"):
+        pack([ViewerItem("x", "screw", "steel", 1.0, 1, "", "#000000", box)])
+
+
+def test_viewer_section_under_the_verdicts(tmp_path):
+    from cogniframe.report.viewer import design_items
+
+    spec = spec_mod.load(ROOT / "params" / "carbon.yaml")
+    result = pipeline.check(spec)
+    d = result.design
+    meshes = {p.name: _box(*(min(v, 60.0) for v in p.estimate.envelope)) for p in d.parts}
+    plates = write_plates(pack_plates([PlateItem(p.name, p.material, p.qty, meshes[p.name]) for p in d.parts],
+                                      spec.printer.bed, spec.printer.margin), tmp_path / "plates")
+    items = design_items(d, meshes, {}, result.mass, plates)
+    rods = [i for i in items if i.kind == "rod"]
+    assert len(rods) == len(d.frame.rods)
+    rod = rods[0]
+    frame_rod = d.frame.rods[rod.name]
+    length = float(np.linalg.norm(np.subtract(frame_rod.end, frame_rod.start)))
+    tube = rod.mesh.copy()
+    tube.apply_transform(rod.matrix)
+    assert tube.volume == pytest.approx(np.pi * (frame_rod.diameter / 2) ** 2 * length, rel=0.03)  # 16-sided tube
+    html_path, md_path = report.write_report(result, tmp_path, plates=plates, viewer_items=items)
+    text = html_path.read_text(encoding="utf-8")
+    assert text.index('id="verdicts"') < text.index('id="viewer-section"') < text.index('<section id="mass"')
+    assert '<li><a href="#viewer-section">3D view</a></li>' in text
+    md = md_path.read_text(encoding="utf-8")
+    assert "cf-viewer" not in md and md.index("3D view of the assembly is in report.html") < md.index("## Mass budget")
+    knee = next(i for i in items if i.name == "knee_fl")
+    assert knee.plate == "tpu_95a_1" and knee.qty == 4 and knee.mass_g == pytest.approx(
+        next(m.mass_g_each for m in result.mass.items if m.name == "knee"))

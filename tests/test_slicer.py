@@ -202,8 +202,91 @@ def test_slice_command_table(run_cli, tmp_path):
     listed = {f["path"] for f in json.loads((tmp_path / "manifest.json").read_text())["files"]}
     on_disk = {p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*") if p.is_file()} - {"manifest.json"}
     assert "plates/slice.json" in listed and listed == on_disk  # what slice wrote stays cogniframe's
+    manifest = json.loads((tmp_path / "manifest.json").read_text())
+    assert manifest["not_reproducible"] == ["plates/abs_1.gcode", "plates/tpu_95a_1.gcode"]  # issue 14
     assert "tpu_95a_1" in out and "abs_1" in out and "total" in out
     assert "check.json" in out  # compared with the build's own mass budget
     data = json.loads((tmp_path / "plates" / "slice.json").read_text())
     assert [p["plate"] for p in data["plates"]] == ["abs_1", "tpu_95a_1"]
     assert all(p["grams"] > 0 and p["time_s"] > 0 for p in data["plates"])
+
+
+def _gcode_settings(path) -> dict[str, str]:
+    """The `; key = value` settings block PrusaSlicer appends to its G-code."""
+    out = {}
+    with open(path, encoding="utf-8", errors="replace") as f:
+        for line in f:
+            if line.startswith("; ") and " = " in line:
+                k, v = line[2:].rstrip("\n").split(" = ", 1)
+                out[k] = v
+    return out
+
+
+def test_project_config_is_the_profile_as_prusaslicer_3mf_comments(spec):
+    ini = {k: v for k, v in _ini(slicer.profile_ini(spec, "tpu_95a", 1.0)).items() if not k.startswith("#")}
+    cfg = slicer.project_config(spec, "tpu_95a", 1.0)
+    lines = cfg.splitlines()
+    assert all(ln.startswith("; ") for ln in lines)
+    assert dict(ln[2:].split(" = ", 1) for ln in lines[1:]) == {"printer_technology": "FFF", **ini}
+    custom = spec_mod.from_dict({"core": {"infill": 0.25}})
+    assert slicer.project_configs(custom) == {"abs": slicer.project_config(custom, "abs", 0.25),
+                                              "tpu_95a": slicer.project_config(custom, "tpu_95a", 1.0)}
+
+
+@needs_slicer
+def test_3mf_slices_with_its_own_settings_and_no_profile(tmp_path):
+    """The acceptance line: a plate's 3MF sliced with no --load gives TPU 100 % rectilinear at the
+    TPU temperature and speed, and the core at core.infill (25 % here, not PrusaSlicer's 20 % default)."""
+    import subprocess
+
+    spec = spec_mod.from_dict({"name": "t", "core": {"infill": 0.25}, "printer": {"preset": "prusa_mini"}})
+    items = [PlateItem("cube", "tpu_95a", 2, _box(10, 10, 6)), PlateItem("plate", "abs", 1, _box(20, 20, 4))]
+    files = write_plates(pack_plates(items, spec.printer.bed, spec.printer.margin), tmp_path,
+                         configs=slicer.project_configs(spec))
+    got = {}
+    for f in files:
+        gcode = tmp_path / f"{f.name}.gcode"
+        proc = subprocess.run([shutil.which("prusa-slicer"), "--loglevel", "1", "--export-gcode", "--dont-arrange",
+                               str(f.threemf), "-o", str(gcode)], capture_output=True, text=True, timeout=300)
+        assert proc.returncode == 0, proc.stdout + proc.stderr
+        got[f.material] = _gcode_settings(gcode)
+    tpu, abs_ = got["tpu_95a"], got["abs"]
+    assert tpu["fill_density"] == "100%" and tpu["fill_pattern"] == "rectilinear"
+    assert tpu["temperature"] == "228" and tpu["filament_type"] == "FLEX"
+    assert tpu["perimeter_speed"] == "30" and tpu["infill_speed"] == "30"
+    assert tpu["bed_shape"] == "0x0,180x0,180x180,0x180" and tpu["nozzle_diameter"] == "0.4"
+    assert abs_["fill_density"] == "25%" and abs_["temperature"] == "240" and abs_["filament_type"] == "ABS"
+    # and PrusaSlicer's own defaults differ, so the settings really came from the 3MF
+    bare = write_plates(pack_plates(items[:1], spec.printer.bed, spec.printer.margin), tmp_path / "bare")
+    gcode = tmp_path / "bare.gcode"
+    subprocess.run([shutil.which("prusa-slicer"), "--loglevel", "1", "--export-gcode", "--dont-arrange",
+                    str(bare[0].threemf), "-o", str(gcode)], capture_output=True, text=True, timeout=300, check=True)
+    assert _gcode_settings(gcode)["fill_density"] != "100%"
+
+
+@needs_slicer
+@pytest.mark.slow
+def test_build_gcode_keeps_gcode_per_plate_outside_the_promise(run_cli, tmp_path):
+    import json
+    from pathlib import Path
+
+    PARAMS = Path(__file__).resolve().parents[1] / "params"
+    out = tmp_path / "carbon"
+    code, _, err = run_cli("build", PARAMS / "carbon.yaml", "-o", out, "--gcode")
+    assert code == 0, err
+    plates = sorted(p.stem for p in (out / "plates").glob("*.3mf"))
+    gcodes = sorted(p.stem for p in (out / "plates").glob("*.gcode"))
+    assert gcodes == plates and plates == ["abs_1", "tpu_95a_1"]
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["not_reproducible"] == [f"plates/{n}.gcode" for n in gcodes]
+    assert set(manifest["not_reproducible"]) <= {f["path"] for f in manifest["files"]}
+    tpu = _gcode_settings(out / "plates" / "tpu_95a_1.gcode")
+    core = _gcode_settings(out / "plates" / "abs_1.gcode")
+    assert tpu["fill_density"] == "100%" and core["fill_density"] == "10%"
+    # the report's numbers come from these very files
+    check = json.loads((out / "check.json").read_text())
+    assert check["verdict"] == "PASS"
+    grams, _ = slicer.read_gcode_stats(out / "plates" / "tpu_95a_1.gcode")
+    assert grams > 30
+    code, _, err = run_cli("build", PARAMS / "carbon.yaml", "-o", out, "--gcode")
+    assert code == 0 and "nothing rebuilt" in err  # a --gcode build is kept by the next --gcode build

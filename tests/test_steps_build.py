@@ -140,8 +140,9 @@ CHANGES = [
                                                 "motor_mount", "sensor_mount", "front_camera_mount")),
     ("printer.margin", 5, True, {f"plates:{TPU}", f"plates:{ABS}", f"previews:{TPU}", f"previews:{ABS}",
                                  f"slice:{TPU}", f"slice:{ABS}"}),
-    ("core.infill", 0.15, True, MASS | {f"slice:{ABS}"}),  # a print setting: no part, no plate changes
-    ("printer.layer_height", 0.25, True, MASS | {f"slice:{TPU}", f"slice:{ABS}"}),
+    # print settings: no part changes; the plates carry them in the 3MF (issue 14), the previews stay
+    ("core.infill", 0.15, True, MASS | {f"plates:{ABS}", f"slice:{ABS}"}),
+    ("printer.layer_height", 0.25, True, MASS | {f"plates:{TPU}", f"plates:{ABS}", f"slice:{TPU}", f"slice:{ABS}"}),
 ]
 
 
@@ -158,3 +159,23 @@ def test_a_change_reruns_exactly_its_dependents_and_matches_a_cold_build(warm, t
     assert not any(s == "cached" for _, s in cold.steps)
     assert _files(tmp_path / "incremental") == _files(tmp_path / "cold")
     shutil.rmtree(tmp_path / "cold")
+
+
+def test_a_no_geometry_change_imports_no_cad_mesh_or_render_library(warm, tmp_path):
+    """The battery's mass moves no part: a fresh `cogniframe build` process on the warm cache reruns
+    only plots and figures, and never imports CadQuery, OCP, trimesh, pyvista or vtk."""
+    import os
+    import subprocess
+    import sys
+
+    root, _, _ = warm
+    params = _params(tmp_path / "params", ("core.battery.mass", 59))
+    env = {**os.environ, "COGNIFRAME_CACHE": str(root / "cache"), "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run([sys.executable, "-X", "importtime", "-m", "cogniframe", "build", str(params), "-o",
+                           str(tmp_path / "out")], capture_output=True, text=True, env=env, cwd=tmp_path, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    imported = {line.rsplit("|", 1)[-1].strip() for line in proc.stderr.splitlines() if line.startswith("import time:")}
+    assert not imported & {"cadquery", "OCP", "trimesh", "pyvista", "vtk", "rectpack"}
+    ran = {line.split("]", 1)[1].split()[0] for line in proc.stderr.splitlines()
+           if line.startswith("[") and not line.endswith("cached")}
+    assert ran == {"estimate", "check", "plots", "figures", "bom", "report"} | ({"slice:tpu_95a", "slice:abs"} if not HAVE_SLICER else set())

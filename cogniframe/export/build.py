@@ -105,6 +105,7 @@ def cache_key(part: PartSpec, bed) -> str:
 def build_parts(spec: Spec, frame, parts: Sequence[PartSpec], out_dir: str | Path, jobs: int | None = None,
                 cache_dir: str | Path | None = None, progress: Callable[[str], None] | None = None) -> tuple[BuiltPart, ...]:
     out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)  # here, not in the workers (they never recreate a removed folder)
     bed = tuple(float(b) for b in spec.printer.bed)
     results: dict[str, dict] = {}
     todo: list[PartSpec] = []

@@ -12,7 +12,9 @@ keep `margin` mm from each other and `margin / 2` mm from the bed edges, and the
 is centred on the bed.
 
 Files (`write_plates`): `<material>_<n>.3mf` (one named object per copy, `knee_1` ...,
-PrusaSlicer opens it directly and keeps the layout with `--dont-arrange`) and
+PrusaSlicer opens it directly and keeps the layout with `--dont-arrange`; with `configs`, the
+material's print settings ride along as PrusaSlicer's `Metadata/Slic3r_PE.config`, so the plate
+slices with them and no .ini) and
 `<material>_<n>.png` (top view, parts filled and labelled). Both are byte-stable: the 3MF's
 random UUIDs are replaced by name-based ones and its zip entries get a fixed date; the PNG has
 no Software/date metadata.
@@ -27,12 +29,14 @@ import uuid
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence
+from typing import TYPE_CHECKING, Mapping, Sequence
 
 import numpy as np
-import trimesh
 
 from ..errors import UserError
+
+if TYPE_CHECKING:  # trimesh is imported where it is used: reading a plate's names needs none of it
+    import trimesh
 
 SCALE = 100  # packing units per mm (rectpack works best with integers)
 TURN_GAIN = 0.10  # turn a part to its min-area footprint only if that saves this much bed area
@@ -116,11 +120,15 @@ class PlateFile:
 # -- layout ----------------------------------------------------------------------------------
 
 def _rot_z(deg: float) -> np.ndarray:
+    import trimesh
+
     return trimesh.transformations.rotation_matrix(math.radians(deg), [0, 0, 1])
 
 
 def _footprint_turn(mesh: trimesh.Trimesh) -> float:
     """Degrees to turn about z so the footprint's bounding rectangle is smallest (0 if not worth it)."""
+    import trimesh
+
     pts = np.asarray(mesh.vertices)[:, :2]
     ext = np.ptp(pts, axis=0)
     area = float(ext[0] * ext[1])
@@ -248,17 +256,35 @@ def pack_plates(items: Sequence[PlateItem], bed: Sequence[float], margin: float)
 _UUID_RE = re.compile(rb'p:UUID="[0-9a-fA-F-]{36}"')
 
 
-def plate_3mf_bytes(plate: Plate) -> bytes:
-    """The plate as a 3MF (trimesh scene export, one named object per copy), byte-stable."""
+PRUSA_CONFIG = "Metadata/Slic3r_PE.config"  # PrusaSlicer's project (print + filament + printer) settings
+
+
+def plate_3mf_bytes(plate: Plate, config: str | None = None) -> bytes:
+    """The plate as a 3MF (trimesh scene export, one named object per copy), byte-stable.
+
+    `config`: PrusaSlicer project settings (`slicer.project_config`), stored as
+    `Metadata/Slic3r_PE.config` so PrusaSlicer slices the plate with them and no .ini."""
+    import trimesh
+
     scene = trimesh.Scene()
     for c in plate.copies:
         scene.add_geometry(c.mesh, geom_name=c.name, node_name=c.name)
     raw = scene.export(file_type="3mf")
-    return _stable_zip(raw, plate.name)
+    extra = {PRUSA_CONFIG: config.encode("utf-8")} if config else {}
+    return _stable_zip(raw, plate.name, extra)
 
 
-def _stable_zip(raw: bytes, seed: str) -> bytes:
-    """Rewrite a 3MF zip: UUIDs derived from `seed` and their position, fixed entry dates."""
+def model_sha256(threemf: bytes) -> str:
+    """sha256 of a 3MF's geometry and layout (`3D/3dmodel.model`), not of the settings beside it."""
+    import hashlib
+
+    with zipfile.ZipFile(io.BytesIO(threemf)) as z:
+        return hashlib.sha256(z.read("3D/3dmodel.model")).hexdigest()
+
+
+def _stable_zip(raw: bytes, seed: str, extra: Mapping[str, bytes] | None = None) -> bytes:
+    """Rewrite a 3MF zip: UUIDs derived from `seed` and their position, fixed entry dates; `extra`
+    entries (name -> bytes) are appended in name order."""
     src = zipfile.ZipFile(io.BytesIO(raw))
     out = io.BytesIO()
     with zipfile.ZipFile(out, "w", compression=zipfile.ZIP_DEFLATED, compresslevel=6) as dst:
@@ -271,6 +297,11 @@ def _stable_zip(raw: bytes, seed: str) -> bytes:
             zi.compress_type = zipfile.ZIP_DEFLATED
             zi.external_attr = 0o644 << 16
             dst.writestr(zi, data)
+        for name in sorted(extra or {}):
+            zi = zipfile.ZipInfo(name, date_time=ZIP_DATE)
+            zi.compress_type = zipfile.ZIP_DEFLATED
+            zi.external_attr = 0o644 << 16
+            dst.writestr(zi, extra[name])
     return out.getvalue()
 
 
@@ -316,8 +347,12 @@ def plot_plate(plate: Plate, path: Path | str, size_in: float = 6.0, dpi: int = 
     return path
 
 
-def write_plates(plates: Sequence[Plate], out_dir: Path | str) -> tuple[PlateFile, ...]:
+def write_plates(plates: Sequence[Plate], out_dir: Path | str,
+                 configs: Mapping[str, str] | None = None) -> tuple[PlateFile, ...]:
     """Write `<name>.3mf` and `<name>.png` for each plate into `out_dir` (created).
+
+    `configs`: material -> PrusaSlicer project settings embedded in that material's plates
+    (`slicer.project_configs(spec, infill)`), so each 3MF opens ready to print.
 
     Stale plate files from an earlier build with more plates are removed, so the folder holds
     exactly these plates (the `slice` command slices every *.3mf in it)."""
@@ -332,7 +367,7 @@ def write_plates(plates: Sequence[Plate], out_dir: Path | str) -> tuple[PlateFil
     written = []
     for p in plates:
         f3 = out_dir / f"{p.name}.3mf"
-        f3.write_bytes(plate_3mf_bytes(p))
+        f3.write_bytes(plate_3mf_bytes(p, (configs or {}).get(p.material)))
         png = plot_plate(p, out_dir / f"{p.name}.png")
         written.append(PlateFile(p.name, p.material, f3, png, tuple(c.name for c in p.copies), p.volume_mm3))
     return tuple(written)
@@ -343,6 +378,8 @@ def read_plate(path: Path | str, bed: Sequence[float], margin: float) -> Plate:
 
     The build draws each preview from the 3MF it wrote, so a preview is a function of the plate
     file alone and can be cached by the file's hash."""
+    import trimesh
+
     path = Path(path)
     material, index = parse_plate_name(path.stem)
     scene = trimesh.load(path, force="scene")

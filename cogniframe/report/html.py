@@ -3,7 +3,7 @@
 Every number about the design comes from `pipeline.check_dict(result)`, the same dict that
 `cogniframe check --json` prints, formatted with fixed rounding (see `FORMATS`); key figures
 carry a `data-key` attribute (`mass.total_g`, `drop.k_n_per_m` ...) so tests and scripts can
-read them back. Sections: verdicts, mass budget (+ chart), stiffness and drop model (+ plots),
+read them back. Sections: verdicts, the interactive 3D view (`report/viewer/`), mass budget (+ chart), stiffness and drop model (+ plots),
 cut list and stock plan, BOM, print plates and slicer check, assembly steps, renders.
 No timestamps: the same inputs give the same files.
 """
@@ -24,6 +24,7 @@ if TYPE_CHECKING:
     from ..pipeline import CheckResult
     from .assembly_steps import Step
     from .bom import BomLine
+    from .viewer import ViewerItem
 
 # data-key -> format of the value taken from check_dict (dotted path)
 FORMATS: dict[str, str] = {
@@ -309,14 +310,17 @@ def _img_md(path: Path, caption: str, base: Path) -> str:
 def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str, Path] | None = None,
                  bom: Sequence["BomLine"] = (), steps: Sequence["Step"] = (), plates: Sequence["PlateFile"] = (),
                  slice_report: "SliceReport | None" = None,
-                 figures: Mapping[str, Sequence[tuple[str, Path]]] | None = None) -> tuple[Path, Path]:
+                 figures: Mapping[str, Sequence[tuple[str, Path]]] | None = None,
+                 viewer_items: Sequence["ViewerItem"] = ()) -> tuple[Path, Path]:
     """Write `report.html` and `report.md` into out_dir (charts go to out_dir/report_files/).
 
     `figures`: {"mass": [(caption, png)], "drop": [...]} already drawn (the build draws and caches
     them as steps); None draws them here with `draw_figures`.
 
     `images`: caption -> PNG (renders of the assembly and parts), shown in the given order.
-    `plates`: what `write_plates` returned (their preview PNGs are shown). Returns (html, md)."""
+    `plates`: what `write_plates` returned (their preview PNGs are shown).
+    `viewer_items`: the assembly as named meshes (`viewer.design_items` + any vitamins): an
+    interactive 3D view right under the verdicts (HTML only). Returns (html, md)."""
     from ..pipeline import check_dict
 
     out_dir = Path(out_dir)
@@ -358,13 +362,21 @@ def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str
     if images:
         sections.append(("renders", "Renders", [("img", c, p) for c, p in images.items()]))
 
+    viewer_html = ""
+    if viewer_items:
+        from .viewer import viewer_section
+
+        viewer_html = viewer_section(viewer_items)
     html_path, md_path = out_dir / "report.html", out_dir / "report.md"
-    html_path.write_text(_render_html(name, cd, verdicts, sections, warnings), encoding="utf-8")
-    md_path.write_text(_render_md(name, cd, verdicts, sections, warnings, out_dir), encoding="utf-8")
+    html_path.write_text(_render_html(name, cd, verdicts, sections, warnings, viewer_html), encoding="utf-8")
+    md = _render_md(name, cd, verdicts, sections, warnings, out_dir)
+    if viewer_html:  # the 3D view needs a browser: point there from the Markdown twin
+        md = md.replace("\n## ", "\nThe interactive 3D view of the assembly is in report.html (open it in a browser).\n\n## ", 1)
+    md_path.write_text(md, encoding="utf-8")
     return html_path, md_path
 
 
-def _render_html(name: str, cd: Mapping, verdicts: list[Verdict], sections, warnings: list[str]) -> str:
+def _render_html(name: str, cd: Mapping, verdicts: list[Verdict], sections, warnings: list[str], viewer_html: str = "") -> str:
     out = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
            f"<title>cogniframe report: {html.escape(name)}</title>", f"<style>{CSS}</style></head><body>",
            f"<h1>cogniframe report: {html.escape(name)}</h1>",
@@ -375,7 +387,10 @@ def _render_html(name: str, cd: Mapping, verdicts: list[Verdict], sections, warn
     out.append("</tbody></table>")
     for w in warnings:
         out.append(f'<p class="warn">warning: {html.escape(w)}</p>')
-    out.append("<nav><ul>" + "".join(f'<li><a href="#{sid}">{html.escape(title)}</a></li>' for sid, title, _ in sections) + "</ul></nav>")
+    if viewer_html:
+        out.append(viewer_html)
+    nav = ([("viewer-section", "3D view")] if viewer_html else []) + [(sid, title) for sid, title, _ in sections]
+    out.append("<nav><ul>" + "".join(f'<li><a href="#{sid}">{html.escape(title)}</a></li>' for sid, title in nav) + "</ul></nav>")
     for sid, title, blocks in sections:
         out.append(f'<section id="{sid}"><h2>{html.escape(title)}</h2>')
         for b in blocks:
