@@ -216,5 +216,8 @@ def report(ctx) -> Made:
     d = ctx.design
     items = design_items(d, {p.name: ctx.mesh(p.name) for p in d.parts},
                          {p.name: ctx.part_value(p.name)["print_from_local"] for p in d.parts}, ctx["check"].mass, plates)
+    from .report.renders import vitamin_viewer_items
+
+    items += vitamin_viewer_items(ctx.spec, d.frame, ctx["check"].mass)  # issue 13: the bought parts
     html.write_report(ctx["check"], ctx.out, images, lines, steps, plates, sliced, figures=figures, viewer_items=items)
     return Made(("report.html", "report.md"))

@@ -501,3 +501,19 @@ def test_tilted_camera_mount_prints_without_support_and_carries_the_camera(tilt,
     grown = cam.copy()
     grown.apply_translation(-0.3 * np.asarray(camera_vitamin(s, fr).view[1]))  # 0.3 mm back into the upright
     assert intersection_volume(mw, grown) > 10
+
+
+def test_vitamins_are_items_of_the_report_3d_view():
+    """Each vitamin is a `vitamin` item of the report's 3D view with its budget line's mass."""
+    from cogniframe.report.renders import vitamin_viewer_items
+    from cogniframe.vitamins import vitamins
+
+    spec = spec_mod.load(ROOT / "params" / "carbon.yaml")
+    res = pipeline.check(spec)
+    items = vitamin_viewer_items(spec, res.design.frame, res.mass)
+    vits = vitamins(spec, res.design.frame)
+    assert [i.name for i in items] == [v.name for v in vits] and {i.kind for i in items} == {"vitamin"}
+    by = {i.name: i for i in items}
+    assert by["motor_fl"].mass_g == spec.motor.mass_g and by["motor_fl"].qty == 4
+    assert by["battery"].mass_g == spec.core.battery.mass and by["battery"].colour == "#f2c71a"
+    assert by["camera"].mesh.is_volume

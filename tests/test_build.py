@@ -144,3 +144,10 @@ def test_build_runs_the_clash_check_and_reports_flight(built):
     assert clash["ok"] and check["clash"] == clash and check["verdict"] == "PASS"
     assert clash["bodies"] > 60 and 0 < clash["pairs_tested"] < clash["pairs_total"]
     assert check["flight"]["thrust_to_weight"] > 2.0
+    # the report's 3D view lists the vitamins too
+    from cogniframe import frame as frame_mod
+    from cogniframe.vitamins import vitamins
+
+    spec = spec_mod.load(ROOT / "params" / f"{name}.yaml")
+    n = len(vitamins(spec, frame_mod.build(spec)))
+    assert f"{n} vitamins" in (out / "report.html").read_text(encoding="utf-8")

@@ -177,6 +177,22 @@ def vitamin_meshes(spec, frame) -> list[VitaminMesh]:
     return [VitaminMesh(v.name, v.colour, to_trimesh(v), 0.35 if v.disc else 1.0) for v in vitamins(spec, frame)]
 
 
+def vitamin_viewer_items(spec, frame, mass=None) -> list:
+    """The vitamins as items of the report's 3D view (kind "vitamin"): their mesh in world
+    coordinates, colour, each one's mass from its budget line and what to buy."""
+    from ..vitamins import to_trimesh, vitamins
+    from .viewer import ViewerItem
+
+    grams = {i.name: i.mass_g_each for i in mass.items} if mass is not None else {}
+    vits = vitamins(spec, frame)
+    count: dict[str, int] = {}
+    for v in vits:
+        count[v.bom] = count.get(v.bom, 0) + 1
+    return [ViewerItem(v.name, "vitamin", "", grams.get(v.budget_line), count[v.bom], "",
+                       "#" + "".join(f"{int(round(c * 255)):02x}" for c in v.colour), to_trimesh(v), None,
+                       note=f"{v.bom}; its mass is the budget line '{v.budget_line}'") for v in vits]
+
+
 def render_assembly(meshes: Sequence[SceneMesh], rods: Sequence[RodSegment], out_dir: Path | str,
                     size: tuple[int, int] = SIZE, views: Sequence[str] = ("iso", "top", "front"),
                     prefix: str = "assembly", title: str | None = None,
