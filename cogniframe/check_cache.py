@@ -44,7 +44,8 @@ def variant(json_out: bool, console=None) -> dict:
         from rich.console import Console
 
         console = Console()
-    return {"width": console.width, "colour": console.color_system}
+    return {"width": console.width, "colour": console.color_system, "no_colour": console.no_color,
+            "terminal": console.is_terminal}
 
 
 def quick(argv: list[str]) -> int | None:

@@ -195,7 +195,6 @@ def bom(ctx) -> Made:
 
 
 def report(ctx) -> Made:
-    from .export.plates import PlateFile
     from .report import html
 
     lines, steps, sliced = ctx["bom"]
@@ -206,18 +205,45 @@ def report(ctx) -> Made:
             shutil.copyfile(ctx.out / "plots" / name, files / name)
         figures["drop"] = [("stiffness", files / "stiffness.png"), ("drop response", files / "drop_response.png"),
                            ("energy split", files / "energy_split.png")]
-    plates = [PlateFile(v["name"], v["material"], ctx.out / v["threemf"], ctx.out / v["preview"], tuple(v["copies"]),
-                        v["volume_mm3"]) for vs in ctx.each("plates:*").values() for v in vs]
-    plates.sort(key=lambda p: (p.material, p.name))
+    plates = _plate_files(ctx)
     images = {f"assembly {v}": ctx.out / "renders" / f"assembly_{v}.png" for v in ctx["renders"]}
     images |= {f"part {p}": ctx.out / "renders" / "parts" / f"{p}.png" for p in sorted(x.name for x in ctx.design.parts)}
-    from .report.viewer import design_items
+    html.write_report(ctx["check"], ctx.out, images, lines, steps, plates, sliced, figures=figures,
+                      viewer_html=ctx["viewer"])
+    return Made(("report.html", "report.md"))
+
+
+def _plate_files(ctx):
+    from .export.plates import PlateFile
+
+    plates = [PlateFile(v["name"], v["material"], ctx.out / v["threemf"], ctx.out / v["preview"], tuple(v["copies"]),
+                        v["volume_mm3"]) for vs in ctx.each("plates:*").values() for v in vs]
+    return sorted(plates, key=lambda p: (p.material, p.name))
+
+
+def viewer_key(ctx):
+    """What the 3D view shows: each part's mesh (STL hash), copies, placement and grams each, the plates'
+    copies, the rods and the cut list."""
+    from .export.assembly import _vitamin_key
 
     d = ctx.design
-    items = design_items(d, {p.name: ctx.mesh(p.name) for p in d.parts},
-                         {p.name: ctx.part_value(p.name)["print_from_local"] for p in d.parts}, ctx["check"].mass, plates)
+    grams = {i.name: i.mass_g_each for i in ctx["check"].mass.items}
+    return [[[p.name, p.material, p.qty, p.placements, ctx.part_value(p.name)["stl_sha256"],
+              ctx.part_value(p.name)["print_from_local"], grams.get(p.name)] for p in d.parts],
+            [[p.name, p.copies] for p in _plate_files(ctx)], list(d.frame.rods.values()), d.cut.rows,
+            _vitamin_key(ctx.spec, d.frame)]  # issue 13: the vitamins' solids (their grams are not shown in the view)
+
+
+def make_viewer(ctx) -> Made:
+    """The report's interactive 3D view (issue 14) as one HTML section, kept as this step's value."""
+    from .report.viewer import design_items, read_stl, viewer_section
+
+    d = ctx.design
+    # numpy's STL reader, not trimesh: the 3D view never needs the mesh library
+    items = design_items(d, {p.name: read_stl(ctx.out / ctx.part_value(p.name)["stl"]) for p in d.parts},
+                         {p.name: ctx.part_value(p.name)["print_from_local"] for p in d.parts}, ctx["check"].mass,
+                         _plate_files(ctx))
     from .report.renders import vitamin_viewer_items
 
-    items += vitamin_viewer_items(ctx.spec, d.frame, ctx["check"].mass)  # issue 13: the bought parts
-    html.write_report(ctx["check"], ctx.out, images, lines, steps, plates, sliced, figures=figures, viewer_items=items)
-    return Made(("report.html", "report.md"))
+    items += vitamin_viewer_items(ctx.spec, d.frame)  # issue 13: the bought parts (geometry in viewer_key)
+    return Made((), viewer_section(items))

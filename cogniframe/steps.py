@@ -13,6 +13,7 @@
     previews:{material}       plates:{material}                        plate files
     render:{part}             part:*/{part}                            the part's STL hash, material
     renders                   part:*                                   STL hashes, placements, rods
+    viewer                    check plates:*                           STL hashes, placements, grams each, plates, rods, cut list
     bom                       check slice:*                            (always: BOM, assembly steps)
     report                    everything above                         (always: HTML and Markdown from the files above)
 
@@ -31,7 +32,8 @@ import threading
 from . import graph
 from .cache import file_sha256
 from .fabrication import (bom, figures_key, make_figures, make_plates, make_previews, make_render_part, make_renders,
-                          make_slice, plates_key, previews_key, render_part_key, renders_key, report, slice_key)
+                          make_slice, make_viewer, plates_key, previews_key, render_part_key, renders_key, report,
+                          slice_key, viewer_key)
 from .graph import Made, Step
 
 
@@ -241,8 +243,9 @@ STEPS = (
     Step("render:{part}",          ("part:*/{part}",),                    make_render_part, render_part_key, ("report/renders.py", "export/plates.py"),
          after=("plates:*",)),  # a render never holds up the slicer
     Step("renders",                ("part:*",),                           make_renders,  renders_key,      ("report/renders.py", "export/plates.py", "report/assembly_steps.py", "vitamins.py")),
+    Step("viewer",                 ("check", "plates:*"),                 make_viewer,   viewer_key,       ("report/viewer/*", "export/plates.py", "report/assembly_steps.py", "report/renders.py", "vitamins.py")),
     Step("bom",                    ("check", "slice:*"),                  bom),
-    Step("report",                 ("check", "bom", "plots", "figures", "previews:*", "render:*", "renders"), report),
+    Step("report",                 ("check", "bom", "plots", "figures", "previews:*", "render:*", "renders", "viewer"), report),
 )
 
 

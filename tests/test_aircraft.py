@@ -516,4 +516,5 @@ def test_vitamins_are_items_of_the_report_3d_view():
     by = {i.name: i for i in items}
     assert by["motor_fl"].mass_g == spec.motor.mass_g and by["motor_fl"].qty == 4
     assert by["battery"].mass_g == spec.core.battery.mass and by["battery"].colour == "#f2c71a"
-    assert by["camera"].mesh.is_volume
+    cam = trimesh.Trimesh(by["camera"].mesh.vertices, by["camera"].mesh.faces)
+    assert cam.is_volume and cam.volume == pytest.approx(25 * 24 * 1.0 + 8.5 * 5.0 * 8.5, rel=1e-6)  # board + lens

@@ -295,7 +295,8 @@ def test_viewer_section_under_the_verdicts(tmp_path):
     rod = rods[0]
     frame_rod = d.frame.rods[rod.name]
     length = float(np.linalg.norm(np.subtract(frame_rod.end, frame_rod.start)))
-    tube = rod.mesh.copy()
+    tube = trimesh.Trimesh(rod.mesh.vertices, rod.mesh.faces, process=False)
+    assert tube.is_watertight and tube.is_winding_consistent and tube.volume > 0  # closed, wound outwards
     tube.apply_transform(rod.matrix)
     assert tube.volume == pytest.approx(np.pi * (frame_rod.diameter / 2) ** 2 * length, rel=0.03)  # 16-sided tube
     html_path, md_path = report.write_report(result, tmp_path, plates=plates, viewer_items=items)
@@ -307,3 +308,15 @@ def test_viewer_section_under_the_verdicts(tmp_path):
     knee = next(i for i in items if i.name == "knee_fl")
     assert knee.plate == "tpu_95a_1" and knee.qty == 4 and knee.mass_g == pytest.approx(
         next(m.mass_g_each for m in result.mass.items if m.name == "knee"))
+
+
+def test_read_stl_matches_trimesh(tmp_path):
+    from cogniframe.report.viewer import read_stl
+
+    m = trimesh.creation.icosphere(subdivisions=2, radius=7.0)
+    m.export(tmp_path / "s.stl")
+    got = read_stl(tmp_path / "s.stl")
+    ref = trimesh.load(tmp_path / "s.stl", force="mesh")
+    assert len(got.vertices) == len(ref.vertices) == len(m.vertices) and len(got.faces) == len(m.faces)
+    mine = trimesh.Trimesh(got.vertices, got.faces, process=False)
+    assert mine.is_watertight and mine.volume == pytest.approx(ref.volume, rel=1e-6)

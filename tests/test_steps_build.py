@@ -115,11 +115,12 @@ def test_a_damaged_cache_entry_is_rebuilt_in_a_real_build(warm, tmp_path):
 
 
 MASS = {"plots", "figures"}  # what a change of the mass budget or the drop model reruns
+VIEW = {"viewer"}  # the report's 3D view: it shows each part's and rod's grams and material
 
 
 def _part_change(*parts: str) -> set[str]:
     """Steps that rerun when exactly these parts' geometry changes (their mass changes too)."""
-    out = set(MASS) | {"assembly", "renders", "clash"}  # clash: issue 13, keyed like the assembly
+    out = set(MASS) | {"assembly", "renders", "viewer", "clash"}  # clash: issue 13, keyed like the assembly
     for p in parts:
         m = TPU if p in TPU_PARTS else ABS
         out |= {f"part:{m}/{p}", f"render:{p}", f"plates:{m}", f"previews:{m}"}
@@ -132,7 +133,7 @@ CHANGES = [
     ("requirements.design_drop_height_cm", 80, False, set()),  # the verdict and report only
     ("rods.kerf", 1.5, False, set()),  # the stock plan only
     ("model.damping_ratio", 0.6, False, MASS),
-    ("rods.material", "bamboo", False, MASS),  # same diameter: no part changes
+    ("rods.material", "bamboo", False, MASS | VIEW),  # same diameter: no part changes
     ("motors.bolt_spacing", 9.5, False, _part_change("motor_mount")),
     ("joints.wall", 1.4, False, _part_change(*TPU_PARTS)),
     ("frame.height", 130, False, _part_change(*TPU_PARTS)),
@@ -141,8 +142,8 @@ CHANGES = [
     ("printer.margin", 5, True, {f"plates:{TPU}", f"plates:{ABS}", f"previews:{TPU}", f"previews:{ABS}",
                                  f"slice:{TPU}", f"slice:{ABS}"}),
     # print settings: no part changes; the plates carry them in the 3MF (issue 14), the previews stay
-    ("core.infill", 0.15, True, MASS | {f"plates:{ABS}", f"slice:{ABS}"}),
-    ("printer.layer_height", 0.25, True, MASS | {f"plates:{TPU}", f"plates:{ABS}", f"slice:{TPU}", f"slice:{ABS}"}),
+    ("core.infill", 0.15, True, MASS | VIEW | {f"plates:{ABS}", f"slice:{ABS}"}),
+    ("printer.layer_height", 0.25, True, MASS | VIEW | {f"plates:{TPU}", f"plates:{ABS}", f"slice:{TPU}", f"slice:{ABS}"}),
 ]
 
 

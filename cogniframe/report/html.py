@@ -311,7 +311,7 @@ def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str
                  bom: Sequence["BomLine"] = (), steps: Sequence["Step"] = (), plates: Sequence["PlateFile"] = (),
                  slice_report: "SliceReport | None" = None,
                  figures: Mapping[str, Sequence[tuple[str, Path]]] | None = None,
-                 viewer_items: Sequence["ViewerItem"] = ()) -> tuple[Path, Path]:
+                 viewer_items: Sequence["ViewerItem"] = (), viewer_html: str | None = None) -> tuple[Path, Path]:
     """Write `report.html` and `report.md` into out_dir (charts go to out_dir/report_files/).
 
     `figures`: {"mass": [(caption, png)], "drop": [...]} already drawn (the build draws and caches
@@ -320,7 +320,9 @@ def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str
     `images`: caption -> PNG (renders of the assembly and parts), shown in the given order.
     `plates`: what `write_plates` returned (their preview PNGs are shown).
     `viewer_items`: the assembly as named meshes (`viewer.design_items` + any vitamins): an
-    interactive 3D view right under the verdicts (HTML only). Returns (html, md)."""
+    interactive 3D view right under the verdicts (HTML only). `viewer_html`: that section already
+    made (`viewer.viewer_section`; the build caches it as a step), instead of `viewer_items`.
+    Returns (html, md)."""
     from ..pipeline import check_dict
 
     out_dir = Path(out_dir)
@@ -362,11 +364,12 @@ def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str
     if images:
         sections.append(("renders", "Renders", [("img", c, p) for c, p in images.items()]))
 
-    viewer_html = ""
-    if viewer_items:
-        from .viewer import viewer_section
+    if viewer_html is None:
+        viewer_html = ""
+        if viewer_items:
+            from .viewer import viewer_section
 
-        viewer_html = viewer_section(viewer_items)
+            viewer_html = viewer_section(viewer_items)
     html_path, md_path = out_dir / "report.html", out_dir / "report.md"
     html_path.write_text(_render_html(name, cd, verdicts, sections, warnings, viewer_html), encoding="utf-8")
     md = _render_md(name, cd, verdicts, sections, warnings, out_dir)

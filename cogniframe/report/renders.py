@@ -179,9 +179,14 @@ def vitamin_meshes(spec, frame) -> list[VitaminMesh]:
 
 def vitamin_viewer_items(spec, frame, mass=None) -> list:
     """The vitamins as items of the report's 3D view (kind "vitamin"): their mesh in world
-    coordinates, colour, each one's mass from its budget line and what to buy."""
-    from ..vitamins import to_trimesh, vitamins
-    from .viewer import ViewerItem
+    coordinates (manifold3d, no mesh library), colour, what to buy and which budget line holds
+    their mass (the grams themselves only when `mass` is given)."""
+    from ..vitamins import to_manifold, vitamins
+    from .viewer import Mesh, ViewerItem
+
+    def mesh_of(v):
+        m = to_manifold(v).to_mesh()
+        return Mesh(np.asarray(m.vert_properties, float)[:, :3], np.asarray(m.tri_verts, np.int64))
 
     grams = {i.name: i.mass_g_each for i in mass.items} if mass is not None else {}
     vits = vitamins(spec, frame)
@@ -189,7 +194,7 @@ def vitamin_viewer_items(spec, frame, mass=None) -> list:
     for v in vits:
         count[v.bom] = count.get(v.bom, 0) + 1
     return [ViewerItem(v.name, "vitamin", "", grams.get(v.budget_line), count[v.bom], "",
-                       "#" + "".join(f"{int(round(c * 255)):02x}" for c in v.colour), to_trimesh(v), None,
+                       "#" + "".join(f"{int(round(c * 255)):02x}" for c in v.colour), mesh_of(v), None,
                        note=f"{v.bom}; its mass is the budget line '{v.budget_line}'") for v in vits]
 
 

@@ -48,22 +48,53 @@ class ViewerItem:
     qty: int  # how many the design needs of this item's part (or 1)
     plate: str  # print plate(s) holding it, e.g. "tpu_95a_1"; "" if not printed
     colour: str  # "#rrggbb"
-    mesh: "trimesh.Trimesh"
+    mesh: "Mesh | trimesh.Trimesh"
     matrix: np.ndarray | None = None
     note: str = ""
+
+
+@dataclass(frozen=True, eq=False)
+class Mesh:
+    """Vertices (n x 3, mm) and triangles (m x 3 indices): all the viewer needs of a mesh
+    (a trimesh.Trimesh works as well). Lets the report step run without importing trimesh."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+
+
+def read_stl(path) -> Mesh:
+    """A binary STL as an indexed mesh (identical corners merged), with numpy only."""
+    data = open(path, "rb").read()
+    n = int.from_bytes(data[80:84], "little") if len(data) >= 84 else -1
+    if n < 0 or len(data) != 84 + 50 * n:  # ASCII or odd: let trimesh read it
+        import trimesh
+
+        m = trimesh.load(path, force="mesh")
+        return Mesh(np.asarray(m.vertices, float), np.asarray(m.faces, np.int64))
+    rec = np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
+    corners = np.frombuffer(data, rec, n, 84)["v"].reshape(-1, 3)
+    verts, inverse = np.unique(corners, axis=0, return_inverse=True)
+    return Mesh(verts.astype(float), inverse.reshape(-1, 3).astype(np.int64))
 
 
 def _read(name: str) -> str:
     return resources.files(__package__).joinpath(name).read_text(encoding="utf-8")
 
 
-def _unit_cylinder(sections: int = 16):
-    """Radius 1, from z = 0 to z = 1: a rod is this scaled and turned onto its axis."""
-    import trimesh
-
-    m = trimesh.creation.cylinder(radius=1.0, height=1.0, sections=sections)
-    m.apply_translation([0.0, 0.0, 0.5])
-    return m
+def _unit_cylinder(sections: int = 16) -> Mesh:
+    """Radius 1, from z = 0 to z = 1, closed, triangles wound outwards: a rod is this scaled and
+    turned onto its axis."""
+    a = 2 * np.pi * np.arange(sections) / sections
+    ring = np.column_stack([np.cos(a), np.sin(a)])
+    verts = np.vstack([np.column_stack([ring, np.zeros(sections)]), np.column_stack([ring, np.ones(sections)]),
+                       [[0.0, 0.0, 0.0], [0.0, 0.0, 1.0]]])
+    i = np.arange(sections)
+    j = (i + 1) % sections
+    bottom, top = 2 * sections, 2 * sections + 1
+    faces = np.vstack([np.column_stack([i, j, j + sections]), np.column_stack([i, j + sections, i + sections]),
+                       np.column_stack([np.full(sections, bottom), j, i]),
+                       np.column_stack([np.full(sections, top), i + sections, j + sections])])
+    return Mesh(verts, faces.astype(np.int64))
 
 
 def _rod_matrix(start, end, diameter: float) -> np.ndarray:
@@ -80,7 +111,7 @@ def _rod_matrix(start, end, diameter: float) -> np.ndarray:
     return m
 
 
-def design_items(design, meshes: Mapping[str, "trimesh.Trimesh"], print_from_local: Mapping[str, np.ndarray],
+def design_items(design, meshes: Mapping[str, "Mesh | trimesh.Trimesh"], print_from_local: Mapping[str, np.ndarray],
                  mass=None, plates: Sequence = ()) -> list[ViewerItem]:
     """Items for every copy of every printed part (world placement as in the renders) and every rod.
 
