@@ -108,11 +108,12 @@ def schema() -> None:
 
 
 def _register_commands() -> None:
-    from .commands import fab, maker, physics
+    from .commands import explore, fab, maker, physics
 
     physics.register(app)
     fab.register(app)
     maker.register(app)
+    explore.register(app)
 
 
 _register_commands()
