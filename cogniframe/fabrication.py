@@ -151,9 +151,11 @@ def make_render_part(ctx, part: str) -> Made:
 def renders_key(ctx):
     from .report import renders
 
+    from .export.assembly import _vitamin_key
+
     return [[[p.name, p.material, p.placements, ctx.part_value(p.name)["stl_sha256"],
               ctx.part_value(p.name)["print_from_local"]] for p in ctx.design.parts],
-            renders.rod_segments(ctx.design.frame), ctx.spec.name]
+            renders.rod_segments(ctx.design.frame), ctx.spec.name, _vitamin_key(ctx.spec, ctx.design.frame)]
 
 
 def make_renders(ctx) -> Made:
@@ -163,7 +165,8 @@ def make_renders(ctx) -> Made:
     meshes = {p.name: ctx.mesh(p.name) for p in d.parts}
     pfl = {p.name: ctx.part_value(p.name)["print_from_local"] for p in d.parts}
     views = renders.render_assembly(renders.world_meshes(d.parts, meshes, pfl), renders.rod_segments(d.frame),
-                                    ctx.out / "renders", title=ctx.spec.name)
+                                    ctx.out / "renders", title=ctx.spec.name,
+                                    vitamins=renders.vitamin_meshes(ctx.spec, d.frame))  # issue 13: the bought parts
     return Made(tuple(p.relative_to(ctx.out).as_posix() for p in views.values()), list(views))
 
 
@@ -221,11 +224,14 @@ def _plate_files(ctx):
 def viewer_key(ctx):
     """What the 3D view shows: each part's mesh (STL hash), copies, placement and grams each, the plates'
     copies, the rods and the cut list."""
+    from .export.assembly import _vitamin_key
+
     d = ctx.design
     grams = {i.name: i.mass_g_each for i in ctx["check"].mass.items}
     return [[[p.name, p.material, p.qty, p.placements, ctx.part_value(p.name)["stl_sha256"],
               ctx.part_value(p.name)["print_from_local"], grams.get(p.name)] for p in d.parts],
-            [[p.name, p.copies] for p in _plate_files(ctx)], list(d.frame.rods.values()), d.cut.rows]
+            [[p.name, p.copies] for p in _plate_files(ctx)], list(d.frame.rods.values()), d.cut.rows,
+            _vitamin_key(ctx.spec, d.frame)]  # issue 13: the vitamins' solids (their grams are not shown in the view)
 
 
 def make_viewer(ctx) -> Made:
@@ -237,4 +243,7 @@ def make_viewer(ctx) -> Made:
     items = design_items(d, {p.name: read_stl(ctx.out / ctx.part_value(p.name)["stl"]) for p in d.parts},
                          {p.name: ctx.part_value(p.name)["print_from_local"] for p in d.parts}, ctx["check"].mass,
                          _plate_files(ctx))
+    from .report.renders import vitamin_viewer_items
+
+    items += vitamin_viewer_items(ctx.spec, d.frame)  # issue 13: the bought parts (geometry in viewer_key)
     return Made((), viewer_section(items))

@@ -137,10 +137,16 @@ class Core:
     battery: Box
     stack: Box  # flight controller + ESC stack volume
     computer: Box | None
+    spacer: Box | None = None  # sensor mount / spacer between holder and plate (the plate square only)
+    flow_sensor: Box | None = None  # downward optical-flow + ToF board (under the sensor mount's rear pad)
+    camera: Box | None = None  # camera board + lens, on the camera mount's upright (untilted envelope)
+    camera_base: Box | None = None  # the camera mount's base plate, under the FC stack
+    mouth: float = 0.0  # holder length in front of the pack (strap slots), mm
 
     @property
     def boxes(self) -> tuple[Box, ...]:
-        return tuple(b for b in (self.plate, self.holder, self.stack, self.computer) if b is not None)
+        return tuple(b for b in (self.plate, self.holder, self.stack, self.computer, self.spacer, self.flow_sensor,
+                                 self.camera) if b is not None)
 
 
 @dataclass(frozen=True)
@@ -283,24 +289,59 @@ def _node_seat(n: str, pos, edges, inc: list[int], spec: Spec) -> float:
     return round(need, 2)
 
 
+STACK_H = 16.0  # FC + 4-in-1 ESC on 8 mm standoffs, mm
+CAMERA_BASE_T = 2.0  # camera mount base plate under the stack, mm
+SENSOR_GAP = 3.0  # holder rear face to the flow board's edge, mm
+
+
+def strap_mouth(spec: Spec) -> float:
+    """Holder length in front of the pack (mm): 1 mm gap, the 45 deg strap slot, 1.5 mm end wall."""
+    return 1.0 + (spec.core.strap_width + 1.0 + 2.0) / math.sqrt(2) + 1.5
+
+
 def _core(spec: Spec) -> Core:
+    """The core stack, bottom up: battery holder (pack centred under the plate, open at the front,
+    strap slots at the mouth), spacer / sensor mount, core plate, camera-mount base, FC stack,
+    computer mount and computer. The flow board hangs under the sensor mount's rear pad, behind
+    the holder; the camera stands on the plate's front edge."""
+    from .materials import BOARDS
+
     c, b = spec.core, spec.core.battery
     floor = wall = c.holder_wall
     holder_h = b.height + 2 * wall + 1.0  # floor + top wall, and 1 mm slack so the pack slides in
     holder_bottom = c.battery_clearance
-    plate_z = holder_bottom + holder_h + c.plate_thickness / 2
-    holder = Box("battery_holder", (0.0, 0.0, holder_bottom + holder_h / 2), (b.width + 2 * wall, b.length + wall, holder_h))
-    battery = Box("battery", (0.0, wall / 2, holder_bottom + floor + b.height / 2), (b.width, b.length, b.height))
+    mouth = strap_mouth(spec)
+    y0, y1 = -(b.length / 2 + wall), b.length / 2 + mouth  # back stop at the rear, mouth at the front
+    holder = Box("battery_holder", (0.0, (y0 + y1) / 2, holder_bottom + holder_h / 2), (b.width + 2 * wall, y1 - y0, holder_h))
+    battery = Box("battery", (0.0, 0.0, holder_bottom + floor + b.height / 2), (b.width, b.length, b.height))
+    h_top = holder_bottom + holder_h
+    spacer = flow = None
+    if c.spacer_thickness > 0:
+        spacer = Box("sensor_mount" if c.flow_sensor else "core_spacer", (0.0, 0.0, h_top + c.spacer_thickness / 2),
+                     (c.plate_size, c.plate_size, c.spacer_thickness))
+    if c.flow_sensor:
+        fb = BOARDS[c.flow_sensor.model]
+        fz = fb.size[2] + fb.parts_block[2]
+        fy = y0 - SENSOR_GAP - fb.size[1] / 2
+        flow = Box("flow_sensor", (0.0, fy, h_top - fz / 2), (fb.size[0], fb.size[1], fz))
+    plate_z = h_top + c.spacer_thickness + c.plate_thickness / 2
     plate = Box("core_plate", (0.0, 0.0, plate_z), (c.plate_size, c.plate_size, c.plate_thickness))
     board = STACK_PATTERNS[c.stack_pattern][1]
-    stack_h = 16.0  # FC + 4-in-1 ESC on 8 mm standoffs
     top = plate_z + c.plate_thickness / 2
-    stack = Box("fc_stack", (0.0, 0.0, top + stack_h / 2), (board, board, stack_h))
+    camera = base = None
+    if c.camera:
+        cb = BOARDS[c.camera.model]
+        base = Box("camera_base", (0.0, 0.0, top + CAMERA_BASE_T / 2), (cb.size[0] + 2.0, c.plate_size, CAMERA_BASE_T))
+        depth = cb.size[2] + (cb.lens[1] if cb.lens else 0.0)
+        camera = Box("camera", (0.0, c.plate_size / 2 + depth / 2, top + CAMERA_BASE_T + 1.0 + cb.size[1] / 2),
+                     (cb.size[0], depth, cb.size[1]))
+        top += CAMERA_BASE_T
+    stack = Box("fc_stack", (0.0, 0.0, top + STACK_H / 2), (board, board, STACK_H))
     computer = None
     if c.computer:
         w, h = c.computer.hole_spacing
-        computer = Box("computer", (0.0, 0.0, top + stack_h + 6.0), (w + 7.0, h + 7.0, 5.0))
-    return Core(plate, holder, battery, stack, computer)
+        computer = Box("computer", (0.0, 0.0, top + STACK_H + 6.0), (w + 7.0, h + 7.0, 5.0))
+    return Core(plate, holder, battery, stack, computer, spacer, flow, camera, base, mouth)
 
 
 def _motor(k: str, rods: dict[str, Rod], spec: Spec) -> Motor:

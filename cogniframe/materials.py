@@ -107,3 +107,96 @@ def lookup(table: dict, name: str, what: str):
         raise ValueError(
             f"unknown {what} {name!r}; valid choices: {', '.join(sorted(table))}"
         ) from None
+
+
+# -- vitamins: the bought parts the aircraft carries (issue 13) ---------------------------------
+# NopSCADlib / cq_warehouse style: one table per family, each entry its own dimensions and BOM
+# line. Masses here are the catalogue figures shown in the BOM; the mass budget uses the params'
+# `components:` line that names the vitamin (`vitamin: pi_zero`), so nothing is counted twice.
+
+
+@dataclass(frozen=True)
+class Board:
+    """A bought circuit board: outline (x across, y along, thickness), the component block on
+    top (x, y, height), square-ish mounting-hole rectangle (mm), hole diameter, catalogue mass (g)."""
+
+    name: str
+    bom: str
+    size: tuple[float, float, float]
+    parts_block: tuple[float, float, float]
+    holes: tuple[float, float]
+    hole_d: float
+    mass_g: float
+    lens: tuple[float, float] | None = None  # camera: lens barrel diameter, height above the board (mm)
+    source: str = ""
+
+
+BOARDS: dict[str, Board] = {b.name: b for b in (
+    # Raspberry Pi Zero / Zero W mechanical drawing: 65 x 30 mm, 1.4 mm PCB, M2.5 holes on 58 x 23 mm.
+    Board("pi_zero", "Raspberry Pi Zero W", (65.0, 30.0, 1.4), (50.0, 24.0, 3.5), (58.0, 23.0), 2.75, 9.0,
+          source="Raspberry Pi Zero mechanical drawing (65 x 30 mm, holes 58 x 23 mm, 9 g)"),
+    # Raspberry Pi camera module v2: 25 x 24 x 1 mm board, M2 holes on 21 x 12.5 mm, 8.5 mm lens module ~5 mm tall.
+    Board("pi_camera_v2", "Raspberry Pi camera module v2", (25.0, 24.0, 1.0), (8.5, 8.5, 1.0), (21.0, 12.5), 2.2, 3.0,
+          lens=(8.5, 5.0), source="Raspberry Pi camera v2 mechanical drawing (25 x 24 mm, holes 21 x 12.5 mm, 3 g)"),
+    # Matek 3901-L0X: PMW3901 optical flow (42 deg FOV, > 80 mm) + VL53L0X ToF (27 deg, 20-2000 mm), 36 x 13 mm, 2 g.
+    Board("matek_3901_l0x", "Matek 3901-L0X optical flow + ToF", (36.0, 13.0, 1.0), (20.0, 9.0, 2.5), (0.0, 0.0), 0.0, 2.0,
+          source="Matek 3901-L0X product page: 36 x 13 mm, 2 g; PMW3901 FOV 42 deg, VL53L0X FOV 27 deg"),
+    # 20 x 20 mm stack boards (Kakute F7 Mini class FC, 4-in-1 ESC): 27 x 27 mm outline, M2 on 20 x 20 mm.
+    Board("fc_20x20", "flight controller (20 x 20 mm stack)", (27.0, 27.0, 1.6), (22.0, 22.0, 2.0), (20.0, 20.0), 2.2, 6.0,
+          source="Holybro Kakute F7 Mini outline: 27 x 27 mm board, 20 x 20 mm M2 holes"),
+    Board("esc_20x20", "4-in-1 ESC (20 x 20 mm stack)", (27.0, 27.0, 1.6), (22.0, 22.0, 3.0), (20.0, 20.0), 2.2, 8.0,
+          source="typical 20 x 20 4-in-1 ESC: 27 x 27 mm, 20 x 20 mm M2 holes"),
+    Board("fc_30x30", "flight controller (30.5 x 30.5 mm stack)", (36.0, 36.0, 1.6), (30.0, 30.0, 2.0), (30.5, 30.5), 3.2, 8.0,
+          source="typical 30.5 x 30.5 FC: 36 x 36 mm board"),
+    Board("esc_30x30", "4-in-1 ESC (30.5 x 30.5 mm stack)", (36.0, 36.0, 1.6), (30.0, 30.0, 3.5), (30.5, 30.5), 3.2, 12.0,
+          source="typical 30.5 x 30.5 4-in-1 ESC: 36 x 36 mm board"),
+)}
+
+# What a `components:` line may name as its vitamin, and the board(s) drawn for it.
+VITAMIN_KINDS: dict[str, tuple[str, ...]] = {
+    "pi_zero": ("pi_zero",), "pi_camera_v2": ("pi_camera_v2",), "matek_3901_l0x": ("matek_3901_l0x",),
+    "fc": ("fc",), "esc": ("esc",), "fc_esc_stack": ("fc", "esc"),
+}
+
+
+@dataclass(frozen=True)
+class Connector:
+    """Battery lead connector: housing width x height (mm) the lead exit must pass, mass (g)."""
+
+    name: str
+    width: float
+    height: float
+    length: float
+    source: str
+
+
+CONNECTORS: dict[str, Connector] = {
+    "XT30": Connector("XT30", 10.2, 5.2, 15.4, "AMASS XT30 drawing: 10.2 x 5.2 mm housing"),
+    "XT60": Connector("XT60", 15.8, 8.2, 16.0, "AMASS XT60 drawing: 15.8 x 8.2 mm housing"),
+    "JST-PH": Connector("JST-PH", 6.0, 4.5, 8.0, "JST PH 2-pin housing, about 6 x 4.5 mm"),
+}
+
+
+@dataclass(frozen=True)
+class Propeller:
+    """A propeller: diameter and pitch (mm), blades, the height its blades sweep (the disc drawn in
+    the assembly and kept clear by requirements.prop_margin), catalogue mass (g)."""
+
+    name: str
+    bom: str
+    diameter_mm: float
+    pitch_mm: float
+    blades: int
+    swept_height_mm: float
+    mass_g: float
+    source: str
+
+
+PROPS: dict[str, Propeller] = {p.name: p for p in (
+    # The paper's carbon build: 3 x 2.5 in two-blade polycarbonate props on 1104 motors.
+    Propeller("3025", "3 x 2.5 in two-blade propeller (polycarbonate)", 76.2, 63.5, 2, 3.0, 1.5,
+              "the authors' BOM (3025 two-blade PC); swept height: a 2.5 in pitch blade at 75 % radius, ~8 mm chord"),
+    # The bamboo build's 4 in props.
+    Propeller("4024", "4 x 2.4 in two-blade propeller", 101.6, 61.0, 2, 3.0, 2.5,
+              "the bamboo build's 4 in props; 2.4 in pitch class"),
+)}

@@ -18,8 +18,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .frame import CORNERS, Frame
-from .materials import SCREWS, STACK_PATTERNS
+from .frame import CAMERA_BASE_T, CORNER_SIGN, CORNERS, SENSOR_GAP, Frame, strap_mouth
+from .materials import BOARDS, CONNECTORS, SCREWS, STACK_PATTERNS
 from .spec import Spec
 
 Vec = tuple[float, float, float]
@@ -111,11 +111,19 @@ def build(spec: Spec, frame: Frame) -> tuple[PartSpec, ...]:
         _joint(spec, frame, "corner_top", "corner_top"),
         _joint(spec, frame, "corner_bottom", "corner_bottom"),
         _joint(spec, frame, "knee", "knee"),
-        _joint(spec, frame, "core_link", "core_link"),
+        # The core links are chiral (printed on their side, D-section sleeves standing on the bed),
+        # and the battery holder is a rectangle, not a square: a link rotated from fl to fr meets
+        # the holder differently. So fr and rl get the mirror image of the fl/rr link.
+        _joint(spec, frame, "core_link", "core_link", corners=("fl", "rr")),
+        _joint(spec, frame, "core_link_mirrored", "core_link", proto="fr", corners=("fr", "rl")),
         _motor_mount(spec, frame),
         _core_plate(spec, frame),
         _battery_holder(spec, frame),
     ]
+    if spec.core.spacer_thickness > 0:
+        parts.append(_sensor_mount(spec, frame))
+    if spec.core.camera:
+        parts.append(_camera_mount(spec, frame))
     if spec.core.computer:
         parts.append(_computer_mount(spec, frame))
     return tuple(_with_digest(p) for p in parts)
@@ -133,8 +141,11 @@ def _t(v) -> Vec:
     return (round(float(v[0]), 6), round(float(v[1]), 6), round(float(v[2]), 6))
 
 
-def _joint(spec: Spec, frame: Frame, name: str, kind: str) -> PartSpec:
-    proto = frame.nodes[f"{kind}_fl"]
+def _joint(spec: Spec, frame: Frame, name: str, kind: str, proto: str = "fl", corners: tuple[str, ...] = CORNERS) -> PartSpec:
+    """A joint part: the `proto` corner's node in its own axes, placed at `corners` by rotation about z.
+    A prototype other than fl is the mirror image of the fl part (its side normal is mirrored too)."""
+    corner = proto
+    proto = frame.nodes[f"{kind}_{corner}"]
     origin = np.asarray(proto.pos)
     sockets = []
     for rname in proto.rods:
@@ -142,18 +153,26 @@ def _joint(spec: Spec, frame: Frame, name: str, kind: str) -> PartSpec:
         end = rod.end_at(proto.name)
         sockets.append(Socket(rname, _t(np.asarray(end.port) - origin), _t(rod.socket_direction(proto.name)),
                               end.seat, end.depth, round(spec.bore, 4)))
-    placements = tuple(Placement(f"{kind}_{k}", CORNER_ROTATION[k], _t(frame.nodes[f"{kind}_{k}"].pos)) for k in CORNERS)
+    base = CORNER_ROTATION[corner]
+    placements = tuple(Placement(f"{kind}_{k}", (CORNER_ROTATION[k] - base + 180.0) % 360.0 - 180.0,
+                                 _t(frame.nodes[f"{kind}_{k}"].pos)) for k in corners)
     hardware: tuple[HardwareLine, ...] = ()
     params: list[tuple[str, object]] = [("hinge_thickness", spec.joints.hinge_thickness)]
+    if name != kind:
+        params += [("kind", kind), ("mirror", corner != "fl")]
     if kind == "core_link":
         # The link bolts onto the top of the core plate corner with one screw.
         screw = SCREWS[spec.core.stack_screw]
         hole = _link_hole(spec)
+        sx, sy = CORNER_SIGN[corner]
         params += [("screw", screw.name), ("screw_clearance", screw.clearance_d),
                    # plate-corner hole and plate top, in the link's local frame (its node is at plate mid-height)
-                   ("bolt_hole", _t(np.array([-hole, hole, 0.0]) - np.array([origin[0], origin[1], 0.0]))),
+                   ("bolt_hole", _t(np.array([sx * hole, sy * hole, 0.0]) - np.array([origin[0], origin[1], 0.0]))),
                    ("plate_top_z", round(spec.core.plate_thickness / 2, 4)), ("tab_thickness", spec.core.plate_thickness)]
-        hardware = (HardwareLine(f"{screw.name} x 8 socket-head screw + nut (core link to plate)", 1, screw.mass_g + 0.1),)
+        # tab + plate + spacer, nut in the spacer's nut trap: round up to a stock length
+        grip = 2 * spec.core.plate_thickness + spec.core.spacer_thickness
+        length = next((n for n in (8, 10, 12, 14, 16, 20) if n >= grip), 20)
+        hardware = (HardwareLine(f"{screw.name} x {length} socket-head screw + nut (core link to plate)", 1, screw.mass_g * length / 6 + 0.1),)
     if kind == "corner_bottom":
         params.append(("foot", True))  # the bottom corners are the feet: flat pad on the ground side
     return PartSpec(name, "joint", "exoskeleton", spec.joints.material, 1.0, placements, tuple(sockets),
@@ -212,8 +231,12 @@ def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict |
             a_h += 2.2 * math.pi * r**2
         ext = np.ptp(np.vstack([ports, ports + dirs * L[:, None]]), axis=0) + 2 * r
     else:
-        _, _, vt = np.linalg.svd(dirs)
+        _, sv, vt = np.linalg.svd(dirs)
         w = vt[-1]
+        if sv[1] < 1e-6 * sv[0]:  # parallel arm sockets only (no strut): the SVD's normal is arbitrary;
+            off = ports[1] - ports[0]  # use the one across the pair, as parts/joint.py prints it
+            w = np.cross(dirs[0], np.cross(dirs[0], off))
+            w /= np.linalg.norm(w)
         zc = ports @ w
         z = zc - zc.min() + r  # axis heights in print orientation
         par = [i for i in range(len(sockets)) if sum(dirs[i] @ dirs[k] > 1 - PARALLEL_TOL for k in range(len(sockets))) > 1]
@@ -345,6 +368,42 @@ def _core_plate(spec: Spec, frame: Frame) -> PartSpec:
                     (Placement("core", 0.0, _t(frame.core.plate.centre)),), (), c.plate_thickness, est, params, hw)
 
 
+def _hexagon_area(length: float, width: float) -> float:
+    """A window `length` long with 45 deg pointed ends across `width`: its area (mm^2)."""
+    return length * width - width * width / 2
+
+
+def holder_features(spec: Spec, frame: Frame) -> dict:
+    """Holder windows, strap slots and lead exit in the holder's local frame (centre of its box), mm.
+
+    Every opening prints without support with the holder standing on its back stop (local +y up):
+    the lightening windows in the side walls and floor have 45 deg pointed ends along y, the strap
+    slots run at 45 deg, and the lead exit is a notch in the top wall from the pack's front face to
+    the mouth (open at the print's top). The lead leaves the pack's front, rises through the notch
+    above the strap to the stack, and its plug stays at the front, clear of the flow sensor's view
+    behind the holder; a swap unplugs it there.
+    """
+    c, b = spec.core, spec.core.battery
+    h = frame.core.holder
+    w, length, height = h.size
+    t = c.holder_wall
+    iw, ih = b.width, b.height + 1.0
+    yb = -length / 2 + t  # cavity rear (inside face of the back stop)
+    y_front_of_pack = yb + b.length
+    ya, ye = yb + 4.0, y_front_of_pack - 4.0  # windows stay 4 mm clear of both ends of the pack
+    side_h = ih - 5.0
+    floor_w = iw - 8.0
+    side = (ya, ye, side_h) if side_h >= 4.0 and ye - ya > side_h else None
+    floor = (ya, ye, floor_w) if floor_w >= 4.0 and ye - ya > floor_w else None
+    # Strap slot: 45 deg in the side wall, the strap's width + 1 mm long, 2 mm wide, just past the pack.
+    s_len, s_w = c.strap_width + 1.0, 2.0
+    ext = (s_len + s_w) / math.sqrt(2)
+    strap = (y_front_of_pack + 1.0 + ext / 2, 0.0, s_len, s_w) if ext <= ih else None
+    conn = CONNECTORS[b.connector]
+    lead = (conn.width + 1.0, round(y_front_of_pack, 4))  # notch width, where it starts (to the mouth)
+    return {"side_window": side, "floor_window": floor, "strap_slot": strap, "lead_exit": lead}
+
+
 def _battery_holder(spec: Spec, frame: Frame) -> PartSpec:
     c, b = spec.core, spec.core.battery
     h = frame.core.holder
@@ -354,21 +413,163 @@ def _battery_holder(spec: Spec, frame: Frame) -> PartSpec:
     screw = SCREWS[c.stack_screw]
     # Open-ended sleeve (floor, top, two side walls) with a back stop, printed standing on the back
     # stop: the outer box minus the battery cavity (open at the front) minus the stack holes in the
-    # top, whose thickness is what the outer height leaves around the cavity (parts/core.py).
-    iw, il, ih = b.width, b.length, b.height + 1.0
+    # top, whose thickness is what the outer height leaves around the cavity (parts/core.py); minus
+    # the lightening windows, the strap slots and the lead exit (holder_features).
+    iw, il, ih = b.width, length - t, b.height + 1.0
     skin = (height - ih) / 2
-    holes = tuple((sx * pitch / 2, sy * pitch / 2) for sx in (-1, 1) for sy in (-1, 1))
-    vol = w * length * height - iw * il * ih - len(holes) * math.pi / 4 * screw.clearance_d**2 * skin
+    hy = h.centre[1]
+    holes = tuple((sx * pitch / 2, sy * pitch / 2 - hy) for sx in (-1, 1) for sy in (-1, 1))
+    f = holder_features(spec, frame)
+    cut_side = 2 * _hexagon_area(f["side_window"][1] - f["side_window"][0], f["side_window"][2]) if f["side_window"] else 0.0
+    cut_floor = _hexagon_area(f["floor_window"][1] - f["floor_window"][0], f["floor_window"][2]) if f["floor_window"] else 0.0
+    cut_strap = 2 * f["strap_slot"][2] * f["strap_slot"][3] if f["strap_slot"] else 0.0
+    cut_lead = f["lead_exit"][0] * (length / 2 - f["lead_exit"][1])  # notch in the top wall, over the mouth
+    vol = (w * length * height - iw * il * ih - len(holes) * math.pi / 4 * screw.clearance_d**2 * skin
+           - (cut_side + cut_strap) * t - cut_floor * skin - cut_lead * skin)
     # Walls are vertical when printed on end: outside and cavity faces; horizontal: the back stop
     # and the rim of the open end.
-    area_v = 2 * (w + height) * length + 2 * (iw + ih) * il
+    area_v = 2 * (w + height) * length + 2 * (iw + ih) * il - 2 * (cut_side + cut_strap + cut_floor)
     rim = w * height - iw * ih
-    area_h = w * height + rim
+    area_h = w * height + rim - f["lead_exit"][0] * skin
     est = Estimate(vol, area_h, area_v, (w, height, length))
-    params = (("inner", (b.width, b.length, b.height + 1.0)), ("wall", t), ("holes", holes), ("hole_d", screw.clearance_d),
-              ("outer", (w, length, height)))
+    params = (("inner", (b.width, il, b.height + 1.0)), ("wall", t), ("holes", holes), ("hole_d", screw.clearance_d),
+              ("outer", (w, length, height)), *sorted(f.items()))
+    # The strap runs across the mouth and round the holder's outside, closing on itself: the
+    # holder's cross-section perimeter + 40 mm of overlap, rounded up to 10 mm; about 1 g per
+    # 100 mm of 10 mm hook-and-loop.
+    strap_len = math.ceil((2 * (w + height) + 40.0) / 10.0) * 10.0
+    hw = (HardwareLine(f"hook-and-loop battery strap {c.strap_width:g} mm x {strap_len:g} mm", 1,
+                       round(0.01 * strap_len * c.strap_width / 10.0, 2)),)
     return PartSpec("battery_holder", "battery_holder", "core", c.material, c.infill,
-                    (Placement("core", 0.0, _t(h.centre)),), (), t, est, params)
+                    (Placement("core", 0.0, _t(h.centre)),), (), t, est, params, hw)
+
+
+ZIP_SLOT = (3.2, 1.8)  # zip-tie slot for 2.5 x 1.0 mm ties, mm
+
+
+SPACER_RAIL = 7.0  # width of the spacer's diagonal rails, mm (carry the stack and link holes)
+SPACER_NECK = 10.0  # width of the neck to the rear pad, mm
+
+
+def _rect(p0, p1, width: float) -> tuple:
+    d = np.subtract(p1, p0) / np.linalg.norm(np.subtract(p1, p0))
+    n = np.array([-d[1], d[0]]) * width / 2
+    return tuple(tuple(round(float(v), 4) for v in q) for q in (p0 - n, p1 - n, p1 + n, p0 + n))
+
+
+def sensor_mount_outline(spec: Spec, frame: Frame) -> dict:
+    """The sensor mount / spacer in its local frame (centre of the plate square, z = 0 its bottom): an X
+    of two diagonal rails under the plate (the stack holes and the link bolts with their nut traps
+    lie on the diagonals), a neck running back and a pad behind the holder (flow board underneath,
+    zip-tie slots for the receiver, the antenna and the board). Each piece is a polygon (x, y)."""
+    c = spec.core
+    hole = _link_hole(spec)
+    reach = hole + 3.5 / math.sqrt(2) + SPACER_RAIL / 2 / math.sqrt(2)
+    rails = (_rect(np.array([-reach, -reach]), np.array([reach, reach]), SPACER_RAIL),
+             _rect(np.array([reach, -reach]), np.array([-reach, reach]), SPACER_RAIL))
+    rear = frame.core.holder.lo[1]
+    flow = frame.core.flow_sensor
+    if flow is not None:
+        pad_half, pad_y0, pad_y1 = flow.size[0] / 2 + 3.0, rear - 1.5, flow.lo[1] - 2.0
+    else:
+        pad_half, pad_y0, pad_y1 = 10.0, rear - 1.5, rear - 12.0
+    h = SPACER_NECK / 2
+    neck = ((-h, pad_y0 - 1.0), (h, pad_y0 - 1.0), (h, 0.0), (-h, 0.0))
+    pad = ((-pad_half, pad_y1), (pad_half, pad_y1), (pad_half, pad_y0), (-pad_half, pad_y0))
+    pitch, _ = STACK_PATTERNS[c.stack_pattern]
+    stack = tuple((sx * pitch / 2, sy * pitch / 2) for sx in (-1, 1) for sy in (-1, 1))
+    links = tuple((sx * hole, sy * hole) for sx in (-1, 1) for sy in (-1, 1))
+    yc = (pad_y0 + pad_y1) / 2
+    sx_ = pad_half - 1.5 - ZIP_SLOT[1] / 2
+    zips = ((-sx_, yc), (sx_, yc), (-3.5, pad_y1 + 2.5), (3.5, pad_y1 + 2.5))  # receiver + flow board; antenna
+    pieces = tuple(tuple((round(float(x), 4), round(float(y), 4)) for x, y in poly) for poly in (*rails, neck, pad))
+    area = 2 * SPACER_RAIL * 2 * reach * math.sqrt(2) - SPACER_RAIL**2 + SPACER_NECK * (-pad_y0 - SPACER_RAIL) + 2 * pad_half * (pad_y0 - pad_y1)
+    return {"pieces": pieces, "stack_holes": stack, "link_holes": links,
+            "zip_slots": tuple((round(x, 4), round(y, 4)) for x, y in zips), "pad": (pad_half, pad_y0, pad_y1), "area": area,
+            "extent": (2 * max(reach + SPACER_RAIL / 2, pad_half), reach + SPACER_RAIL / 2 - pad_y1)}
+
+
+def _polygon_area(pts) -> float:
+    x = np.array([p[0] for p in pts])
+    y = np.array([p[1] for p in pts])
+    return float(abs(x @ np.roll(y, -1) - y @ np.roll(x, -1)) / 2)
+
+
+def _polygon_perimeter(pts) -> float:
+    p = np.asarray(pts, float)
+    return float(np.linalg.norm(p - np.roll(p, -1, axis=0), axis=1).sum())
+
+
+def _sensor_mount(spec: Spec, frame: Frame) -> PartSpec:
+    c = spec.core
+    o = sensor_mount_outline(spec, frame)
+    t = c.spacer_thickness
+    screw = SCREWS[c.stack_screw]
+    n_holes = len(o["stack_holes"]) + len(o["link_holes"])
+    hole_a = math.pi / 4 * screw.clearance_d**2
+    zip_a = ZIP_SLOT[0] * ZIP_SLOT[1]
+    nut_a = math.sqrt(3) / 2 * (screw.nut_af + 0.4) ** 2
+    area = o["area"] - n_holes * hole_a - len(o["zip_slots"]) * zip_a
+    nut_depth = round(min(screw.d * 0.8 + 0.2, t - 0.6), 4)
+    vol = area * t - len(o["link_holes"]) * (nut_a - hole_a) * nut_depth
+    per = sum(_polygon_perimeter(p) for p in o["pieces"]) * 0.8 + n_holes * math.pi * screw.clearance_d + len(o["zip_slots"]) * 2 * sum(ZIP_SLOT)
+    est = Estimate(vol, 2 * area, per * t, (o["extent"][0], o["extent"][1], t))
+    box = frame.core.spacer
+    name = "sensor_mount" if c.flow_sensor else "core_spacer"
+    params = (("pieces", o["pieces"]), ("thickness", t), ("stack_holes", o["stack_holes"]), ("link_holes", o["link_holes"]),
+              ("hole_d", screw.clearance_d), ("nut_af", screw.nut_af + 0.4), ("nut_depth", nut_depth),
+              ("zip_slots", o["zip_slots"]), ("zip_slot", ZIP_SLOT))
+    hw = (HardwareLine("zip tie 2.5 x 100 mm (receiver, antenna, flow board)", 2, 0.3),)
+    return PartSpec(name, "sensor_mount", "core", c.material, c.infill,
+                    (Placement("core", 0.0, _t((box.centre[0], box.centre[1], box.lo[2]))),), (), t, est, params, hw)
+
+
+CAMERA_WALL = 1.6  # camera mount upright thickness, mm
+
+
+def camera_mount_geometry(spec: Spec, frame: Frame) -> dict:
+    """The camera bracket in its local frame (origin: plate top centre, axes as the frame): an L of a
+    base plate under the FC stack and an upright at the plate's front edge, tilted back by tilt_deg
+    about its bottom front edge. Printed on its side (local x up), so the L profile lies on the bed."""
+    c = spec.core
+    cb = BOARDS[c.camera.model]
+    pitch, _ = STACK_PATTERNS[c.stack_pattern]
+    width = cb.size[0]
+    y_front = c.plate_size / 2
+    y_back = -(pitch / 2 + 3.5)
+    height = cb.size[1] + 2.0
+    hx, hz = cb.holes[0] / 2, cb.holes[1]
+    z_top = CAMERA_BASE_T + 1.0 + cb.size[1]  # camera board top edge (upright coordinates, untilted)
+    cam_holes = tuple((sx * hx, round(z_top - 2.0 - dz, 4)) for sx in (-1, 1) for dz in (0.0, hz))
+    stack = tuple((sx * pitch / 2, sy * pitch / 2) for sx in (-1, 1) for sy in (-1, 1))
+    return {"width": width, "y_front": y_front, "y_back": y_back, "base_t": CAMERA_BASE_T, "wall": CAMERA_WALL,
+            "height": height, "tilt_deg": c.camera.tilt_deg, "camera_holes": cam_holes, "camera_hole_d": cb.hole_d,
+            "stack_holes": stack, "stack_hole_d": SCREWS[c.stack_screw].clearance_d,
+            # the base's front corners are cut along |x| + y = corner_cut, clear of the core links' bolt tabs
+            "corner_cut": round(2 * _link_hole(spec) - 7.0, 4)}
+
+
+def _camera_mount(spec: Spec, frame: Frame) -> PartSpec:
+    c = spec.core
+    g = camera_mount_geometry(spec, frame)
+    screw = SCREWS[c.stack_screw]
+    w, yf, yb, bt, wall, height = g["width"], g["y_front"], g["y_back"], g["base_t"], g["wall"], g["height"]
+    corner = max(0.0, w / 2 - (g["corner_cut"] - (yf - wall))) ** 2 / 2  # each front corner cut off the base (behind the upright)
+    bw, hy = min(w / 2 - 4.0, 6.0), min(5.0, (yf - yb) / 2 - 8.0)
+    base_win = _hexagon_area(2 * bw, 2 * hy) if bw > 2.0 and hy > 1.0 and bw >= hy else 0.0
+    up_win = _hexagon_area(height - 12.0, 10.0) if height - 6.0 > 10.0 and abs(g["tilt_deg"]) <= 5.0 else 0.0
+    base_a = w * (yf - yb) - 2 * corner - base_win - 4 * math.pi / 4 * screw.clearance_d**2
+    up_a = w * height - up_win - 4 * math.pi / 4 * g["camera_hole_d"] ** 2
+    vol = base_a * bt + up_a * wall
+    # printed as it sits: the base's faces are horizontal, the upright's vertical
+    area_v = 2 * up_a + 2 * (w + yf - yb) * bt
+    est = Estimate(vol, 2 * base_a + w * wall, area_v, (w, yf - yb, height + bt))
+    origin = (0.0, 0.0, frame.core.plate.hi[2])
+    params = tuple((k, v) for k, v in g.items())
+    hw = (HardwareLine("M2 x 6 screw + nut (camera to mount)", 4, SCREWS["M2"].mass_g + 0.1),)
+    # not "camera_...": trimesh 5.2's 3MF export drops every scene node whose name starts with "camera"
+    return PartSpec("front_camera_mount", "camera_mount", "core", c.material, c.infill,
+                    (Placement("core", 0.0, _t(origin)),), (), g["wall"], est, params, hw)
 
 
 def _computer_mount(spec: Spec, frame: Frame) -> PartSpec:

@@ -36,6 +36,8 @@ class CheckResult:
     problems: tuple[str, ...]
     stiffness: dict | None = None  # analysis.drop.load_cases: wall, thrust, modes, buckling, strain
     peak: dict | None = None  # analysis.impact_nl.design_peaks: predicted peak G per drop height
+    flight: object | None = None  # analysis.flight.FlightResult (issue 13)
+    clash: object | None = None  # analysis.clash.ClashResult, from `build` only (issue 13)
 
     @property
     def verdict(self) -> str:
@@ -63,14 +65,31 @@ def _check_printer_fit(spec: Spec, parts) -> None:
                 "or shrink the part (for the battery holder: core.battery; for the core plate: core.plate_size)")
 
 
-def check(spec: Spec, geometry: dict | None = None) -> CheckResult:
-    """Mass budget, crash margin and requirements; `geometry` = CAD volumes when known."""
+def check(spec: Spec, geometry: dict | None = None, clash=None) -> CheckResult:
+    """Mass budget, crash margin, flight and requirements; `geometry` = CAD volumes when known,
+    `clash` = the build's clash check (analysis.clash.ClashResult) when known."""
     d = design(spec)
     budget = mass_mod.budget(spec, d.frame, d.cut, d.parts, geometry)
     drop = _drop(spec, d, budget)
     stiffness, peak = _physics(spec, d, budget, drop)
-    problems = _problems(spec, budget, drop) + _physics_problems(spec, stiffness, peak)
-    return CheckResult(d, budget, drop, tuple(problems), stiffness, peak)
+    from .analysis import flight as flight_mod
+
+    flight = flight_mod.evaluate(spec, budget.total_g)
+    problems = (_problems(spec, budget, drop) + _physics_problems(spec, stiffness, peak)
+                + _aircraft_problems(spec, flight, clash))
+    return CheckResult(d, budget, drop, tuple(problems), stiffness, peak, flight, clash)
+
+
+def _aircraft_problems(spec: Spec, flight, clash) -> list[str]:
+    """Issue 13: thrust-to-weight below requirements.min_thrust_to_weight; any clash."""
+    out = []
+    if flight is not None and flight.thrust_to_weight < spec.requirements.min_thrust_to_weight:
+        out.append(f"thrust-to-weight {flight.thrust_to_weight:.2f} is below {spec.requirements.min_thrust_to_weight:g} "
+                   f"(requirements.min_thrust_to_weight): {flight.max_thrust_g_per_motor:.0f} g per motor lifts "
+                   f"{flight.mass_g:.0f} g; choose stronger motors, bigger props, more cells or a lighter design")
+    if clash is not None:
+        out += clash.messages()
+    return out
 
 
 def _drop(spec: Spec, d: Design, budget: mass_mod.MassBudget):
@@ -150,6 +169,10 @@ def check_dict(result: CheckResult) -> dict:
         out["stiffness"] = result.stiffness
     if result.peak is not None:
         out["peak_g"] = result.peak
+    if result.flight is not None:
+        out["flight"] = result.flight.summary()
+    if result.clash is not None:
+        out["clash"] = result.clash.to_dict()
     return out
 
 

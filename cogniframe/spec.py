@@ -19,7 +19,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 
 from .errors import UserError
-from .materials import MATERIALS, MOTOR_PRESETS, SCREWS, STACK_PATTERNS, Material, MotorPreset
+from .materials import BOARDS, CONNECTORS, MATERIALS, MOTOR_PRESETS, PROPS, SCREWS, STACK_PATTERNS, VITAMIN_KINDS, Material, MotorPreset
 from .printers import PRINTERS
 
 Pos = Annotated[float, Field(gt=0)]
@@ -74,12 +74,25 @@ class BatterySection(_M):
     width: Annotated[float, Field(gt=10, le=100, description="mm")] = 35
     height: Annotated[float, Field(gt=3, le=60, description="mm")] = 15
     mass: Annotated[float, Field(gt=0, le=500, description="g")] = 58
+    cells: Annotated[int, Field(ge=1, le=12, description="LiPo cells in series (3 = 3S, 11.1 V nominal)")] = 3
+    capacity_mah: Annotated[float, Field(gt=0, le=100000, description="rated capacity, mAh")] = 650
+    usable_fraction: Annotated[float, Field(gt=0, le=1, description="share of the capacity a flight may use (0.8 keeps a LiPo healthy)")] = 0.8
+    connector: str = Field("XT30", description="battery lead connector; the holder leaves an exit for it: XT30, XT60 or JST-PH")
 
 
 class ComputerSection(_M):
     name: str = "Raspberry Pi Zero"
     hole_spacing: tuple[Pos, Pos] = Field((58.0, 23.0), description="mounting hole rectangle, mm")
     screw: str = "M2.5"
+
+
+class CameraSection(_M):
+    model: str = Field("pi_camera_v2", description="camera vitamin (see cogniframe/vitamins.py)")
+    tilt_deg: Annotated[float, Field(ge=-30, le=45, description="camera tilt above the horizon, degrees (0 = looking straight forward; the upright prints leaning, so at most 45)")] = 0.0
+
+
+class FlowSensorSection(_M):
+    model: str = Field("matek_3901_l0x", description="downward optical-flow + time-of-flight board (see cogniframe/vitamins.py)")
 
 
 class CoreSection(_M):
@@ -93,6 +106,10 @@ class CoreSection(_M):
     battery: BatterySection = BatterySection()
     battery_clearance: Annotated[float, Field(ge=3, le=80, description="height of the battery holder's underside above the ground when the frame stands, mm (the crash clearance)")] = 16
     computer: ComputerSection | None = ComputerSection()
+    spacer_thickness: Annotated[float, Field(ge=0, le=10, description="the sensor mount / spacer between the battery holder and the core plate, mm: lifts the plate and its TPU links clear of the holder")] = 2.0
+    strap_width: Annotated[float, Field(ge=5, le=30, description="hook-and-loop battery strap width, mm: sets the strap slots at the holder mouth")] = 10
+    camera: CameraSection | None = Field(None, description="camera bracket at the front of the core (needs a components line with vitamin: pi_camera_v2)")
+    flow_sensor: FlowSensorSection | None = Field(None, description="downward optical-flow + ToF board behind the holder (needs a components line with vitamin: matek_3901_l0x)")
 
 
 class MotorsSection(_M):
@@ -104,12 +121,15 @@ class MotorsSection(_M):
     prop_diameter: Annotated[float, Field(ge=25, le=260, description="propeller diameter, mm (3 in = 76.2)")] = 76.2
     prop_mass: Annotated[float, Field(ge=0, le=30, description="g each")] = 1.0
     max_thrust_g: Annotated[float, Field(gt=0, le=5000, description="static thrust of one motor at full throttle, g (thrust load case); null = the motor class's typical value (1104 on 3S with 3025 props: 190 g; 1404 on 2S with 4 in props: 200 g)")] | None = None
+    kv: Annotated[int, Field(ge=100, le=50000, description="motor KV (rpm per volt); null = the preset's")] | None = None
+    prop: str | None = Field(None, description="propeller for the flight tables, e.g. 3025 or 4024; null = the one matching prop_diameter")
 
 
 class Component(_M):
     name: str
     mass: Annotated[float, Field(ge=0, le=1000, description="g")]
     qty: Annotated[int, Field(ge=1, le=100)] = 1
+    vitamin: str | None = Field(None, description="the bought part this line is, drawn in the assembly with this line's mass (see cogniframe/vitamins.py)")
 
 
 class PrinterSection(_M):
@@ -146,6 +166,8 @@ class RequirementsSection(_M):
     drop_heights_cm: tuple[Annotated[float, Field(gt=0, le=2000)], ...] = (50, 100, 150, 262)
     wall_impact_speed_m_s: Annotated[float, Field(ge=0, le=50, description="side-on wall impact speed the frame must take with no propeller or core part reaching the wall, m/s (the paper flew into walls at up to 7 m/s; this conservative linear model gives the presets 3.0 and 4.1 m/s, see docs/stiffness-model.md)")] = 2.5
     max_peak_g: Annotated[float, Field(gt=0, le=10000, description="highest predicted peak deceleration allowed at the design drop, G (as the logger sees it); null = no limit")] | None = None
+    prop_margin: Annotated[float, Field(ge=0, le=100, description="every propeller disc clears every rod, part and vitamin by this, mm (the build's clash check)")] = 5.0
+    min_thrust_to_weight: Annotated[float, Field(gt=0, le=20, description="full-throttle thrust over weight below this is a FAIL")] = 2.0
 
 
 class ModelSection(_M):
@@ -199,6 +221,22 @@ class Spec(_M):
                                    ("core.computer.screw", self.core.computer.screw if self.core.computer else "M2", SCREWS)):
             if value not in table:
                 raise _KeyProblem(path, f"unknown value {value!r}", f"use one of {', '.join(table)}")
+        if self.core.battery.connector not in CONNECTORS:
+            raise _KeyProblem("core.battery.connector", f"unknown connector {self.core.battery.connector!r}", f"use one of {', '.join(CONNECTORS)}")
+        if self.motors.prop is not None and self.motors.prop not in PROPS:
+            raise _KeyProblem("motors.prop", f"unknown propeller {self.motors.prop!r}", f"use one of {', '.join(PROPS)} (materials.PROPS), or null")
+        for i, c in enumerate(self.components):
+            if c.vitamin is not None and c.vitamin not in VITAMIN_KINDS:
+                raise _KeyProblem(f"components.{i}.vitamin", f"unknown vitamin {c.vitamin!r}", f"use one of {', '.join(VITAMIN_KINDS)}, or leave it out")
+        named = {c.vitamin for c in self.components if c.vitamin}
+        for path, section in (("core.camera", self.core.camera), ("core.flow_sensor", self.core.flow_sensor)):
+            if section is None:
+                continue
+            if section.model not in BOARDS or section.model not in VITAMIN_KINDS:
+                raise _KeyProblem(f"{path}.model", f"unknown board {section.model!r}", "use pi_camera_v2 (camera) or matek_3901_l0x (flow sensor)")
+            if section.model not in named:
+                raise _KeyProblem(path, f"{section.model} is mounted on the core but no components line carries its mass",
+                                  f"add `- {{name: {BOARDS[section.model].bom}, mass: {BOARDS[section.model].mass_g:g}, vitamin: {section.model}}}` under components, or set {path}: null")
         # A socket wall thinner than two extrusion lines prints as a single fragile line.
         min_wall = 2 * self.printer.nozzle
         if self.joints.wall < min_wall - 1e-9:

@@ -3,7 +3,8 @@
     target                    needs                                    reads (its cache key)
     estimate                  -                                        (always: the check without CAD; warms the stiffness cache)
     part:{material}/{part}    -                                        part digest, bed, mesh tolerances, CAD code
-    check                     estimate part:*                          (always: mass with CAD volumes, drop model, text files)
+    clash                     part:*                                   part digests, placements, rods, vitamins, prop margin (issue 13)
+    check                     estimate part:* clash                    (always: mass with CAD volumes, drop model, flight, text files)
     plates:{material}         part:{material}/*                        each part's STL hash and qty, bed, margin
     slice:{material}          plates:{material}                        plate files, profile, PrusaSlicer version
     assembly                  part:*                                   part digests, placements, rods
@@ -157,8 +158,10 @@ def check(ctx) -> Made:
     from . import cutlist, pipeline
     from .analysis.mass import PartGeometry
 
+    from .analysis import clash
+
     geometry = {b.name: PartGeometry(b.volume_mm3, b.area_h_mm2, b.area_v_mm2, "cad") for b in ctx.built_parts()}
-    result = pipeline.check(ctx.spec, geometry)
+    result = pipeline.check(ctx.spec, geometry, clash=clash.from_dict(ctx["clash"]))
     out = ctx.out
     files = {"check.json": json.dumps(pipeline.check_dict(result), indent=2) + "\n",
              "cutlist.csv": cutlist.to_csv(ctx.design.cut), "cutlist.md": cutlist.to_markdown(ctx.design.cut),
@@ -192,6 +195,24 @@ def make_assembly(ctx) -> Made:
     return Made(("assembly.step", "assembly.glb"))
 
 
+def clash_key(ctx):
+    from .analysis.clash import TOLERANCE_MM3
+    from .export.assembly import assembly_key as key
+
+    return [key(ctx.spec, ctx.design.frame, ctx.design.parts, ctx.built_parts()), ctx.spec.requirements.prop_margin,
+            TOLERANCE_MM3]
+
+
+def make_clash(ctx) -> Made:
+    """Issue 13: every pair of solids of the aircraft (printed part copies, rods, vitamins) and every
+    propeller's clearance (analysis/clash.py); clash.json; its clashes are FAIL problems of `check`."""
+    from .export.assembly import check_clashes
+
+    result = check_clashes(ctx.spec, ctx.design.frame, ctx.design.parts, ctx.built_parts(), ctx.out)
+    (ctx.out / "clash.json").write_text(json.dumps(result.to_dict(), indent=2) + "\n", encoding="utf-8")
+    return Made(("clash.json",), result.to_dict())
+
+
 def plots_key(ctx):
     return ctx["check"].drop
 
@@ -211,17 +232,18 @@ STEPS = (
     #    target                    needs                                  make           key               code / where
     Step("estimate",               (),                                    estimate),
     Step("part:{material}/{part}", (),                                    make_part,     part_key,         (),        "wait"),
-    Step("check",                  ("estimate", "part:*"),                check),
+    Step("clash",                  ("part:*",),                           make_clash,    clash_key,        ("analysis/clash.py", "export/assembly.py", "export/mesh.py", "vitamins.py", "materials.py", "partlist.py"), "wait"),
+    Step("check",                  ("estimate", "part:*", "clash"),       check),
     Step("plates:{material}",      ("part:{material}/*",),                make_plates,   plates_key,       ("export/plates.py",)),
     Step("slice:{material}",       ("plates:{material}",),                make_slice,    slice_key,        ("export/slicer.py",), "wait"),
-    Step("assembly",               ("part:*",),                           make_assembly, assembly_key,     ("export/assembly.py", "export/step.py"), "wait"),
+    Step("assembly",               ("part:*",),                           make_assembly, assembly_key,     ("export/assembly.py", "export/step.py", "vitamins.py"), "wait"),
     Step("plots",                  ("check",),                            make_plots,    plots_key,        ("report/drop_plots.py", "analysis/impact.py")),
     Step("figures",                ("check",),                            make_figures,  figures_key,      ("report/html.py", "report/drop_plots.py")),
     Step("previews:{material}",    ("plates:{material}",),                make_previews, previews_key,     ("export/plates.py",)),
     Step("render:{part}",          ("part:*/{part}",),                    make_render_part, render_part_key, ("report/renders.py", "export/plates.py"),
          after=("plates:*",)),  # a render never holds up the slicer
-    Step("renders",                ("part:*",),                           make_renders,  renders_key,      ("report/renders.py", "export/plates.py", "report/assembly_steps.py")),
-    Step("viewer",                 ("check", "plates:*"),                 make_viewer,   viewer_key,       ("report/viewer/*", "export/plates.py", "report/assembly_steps.py")),
+    Step("renders",                ("part:*",),                           make_renders,  renders_key,      ("report/renders.py", "export/plates.py", "report/assembly_steps.py", "vitamins.py")),
+    Step("viewer",                 ("check", "plates:*"),                 make_viewer,   viewer_key,       ("report/viewer/*", "export/plates.py", "report/assembly_steps.py", "report/renders.py", "vitamins.py")),
     Step("bom",                    ("check", "slice:*"),                  bom),
     Step("report",                 ("check", "bom", "plots", "figures", "previews:*", "render:*", "renders", "viewer"), report),
 )

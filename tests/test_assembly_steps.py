@@ -46,7 +46,7 @@ def test_fold_as_you_assemble_order_and_lengths():
     steps = assembly_steps(d)
     titles = [s.title for s in steps]
     assert titles == ["Top ring", "Bottom ring", "Knees and upper legs", "Fold the sides", "Arms and motor mounts",
-                      "Struts", "Core", "Hang the core", "Electronics"]
+                      "Struts", "Core", "Hang the core", "Camera and sensors", "Electronics"]
     cut = {n: r.length_mm for r in d.cut.rows for n in r.rods}
     for s in steps:
         for rod, length in s.rods:
@@ -57,7 +57,9 @@ def test_fold_as_you_assemble_order_and_lengths():
     assert all("_top_" in r for r, _ in by["Top ring"].rods)
     assert {d.frame.rods[r].role for r, _ in by["Arms and motor mounts"].rods} == {"arm"}
     assert by["Arms and motor mounts"].parts == ("motor_mount_fl", "motor_mount_fr", "motor_mount_rr", "motor_mount_rl")
-    assert set(by["Core"].parts) >= {"core_plate", "battery_holder", "core_link_fl"}
+    assert set(by["Core"].parts) >= {"core_plate", "battery_holder", "core_link_fl", "core_link_mirrored_fr", "sensor_mount"}
+    assert by["Camera and sensors"].parts == ("front_camera_mount",)
+    assert any("hook-and-loop battery strap" in h for h in by["Core"].hardware)
     # glue: CA on the ring, never on the core links (the core stays removable)
     assert "CA" in by["Top ring"].glue and "CA" in by["Fold the sides"].glue
     assert by["Core"].glue.startswith("none") and by["Hang the core"].glue.startswith("none")

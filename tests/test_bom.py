@@ -48,7 +48,8 @@ def test_lines_cover_the_design(checked):
     hw = {ln.item: ln for ln in lines if ln.category == "hardware"}
     motor_screws = next(ln for ln in hw.values() if "motor to mount" in ln.item)
     assert motor_screws.qty == 16 and motor_screws.size == "M2 x 6"
-    assert all(ln.size.startswith("M") for ln in hw.values())
+    assert all(ln.size.startswith("M") for ln in hw.values() if "screw" in ln.item)
+    assert all(ln.size.endswith(" mm") for ln in hw.values() if "screw" not in ln.item)  # strap, zip ties
     (motor,) = [ln for ln in lines if ln.category == "motor"]
     assert motor.qty == 4 and motor.mass_g_each == spec.motor.mass_g
     (prop,) = [ln for ln in lines if ln.category == "propeller"]

@@ -133,3 +133,21 @@ def test_cad_masses_match_the_papers_table(built):
     else:  # the bamboo build: 34 g of TPU and 24 g of PLA
         assert m["by_material"]["tpu_95a"] == pytest.approx(34, rel=0.10)
         assert m["by_material"]["pla"] == pytest.approx(24, rel=0.10)
+
+
+def test_build_runs_the_clash_check_and_reports_flight(built):
+    """Issue 13: every build checks the assembly for clashes (clash.json, check.json) and the
+    check carries the flight numbers."""
+    name, out, result = built
+    clash = json.loads((out / "clash.json").read_text())
+    check = json.loads((out / "check.json").read_text())
+    assert clash["ok"] and check["clash"] == clash and check["verdict"] == "PASS"
+    assert clash["bodies"] > 60 and 0 < clash["pairs_tested"] < clash["pairs_total"]
+    assert check["flight"]["thrust_to_weight"] > 2.0
+    # the report's 3D view lists the vitamins too
+    from cogniframe import frame as frame_mod
+    from cogniframe.vitamins import vitamins
+
+    spec = spec_mod.load(ROOT / "params" / f"{name}.yaml")
+    n = len(vitamins(spec, frame_mod.build(spec)))
+    assert f"{n} vitamins" in (out / "report.html").read_text(encoding="utf-8")

@@ -129,7 +129,9 @@ def test_assembly_has_every_part_copy_and_rod_named_and_coloured(tmp_path):
     expected = {"knee_fl", "corner_top_rr", "core_link_rl", "motor_mount_fr", "core_plate", "battery_holder"}
     expected |= set(d.frame.rods)
     assert expected <= names
-    assert len(names) == sum(p.qty for p in d.parts.values()) + len(d.frame.rods)
+    from cogniframe.vitamins import vitamins
+
+    assert len(names) == sum(p.qty for p in d.parts.values()) + len(d.frame.rods) + len(vitamins(d.spec, d.frame))
     colour = {c.name: c.color.toTuple()[:3] for c in assy.children if c.color is not None}
     assert colour["knee_fl"][0] > 0.5 > colour["knee_fl"][1]  # TPU red
     assert max(colour["rod_arm_fl_1"]) < 0.1  # rods black

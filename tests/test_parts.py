@@ -22,10 +22,12 @@ from cogniframe.errors import UserError
 
 ROOT = Path(__file__).resolve().parents[1]
 PRESETS = ("carbon", "bamboo")
-FAMILIES = ("joint", "motor_mount", "core_plate", "battery_holder", "computer_mount")
+FAMILIES = ("joint", "motor_mount", "core_plate", "battery_holder", "sensor_mount", "camera_mount", "computer_mount")
 PART_NAMES = {
-    "carbon": ("corner_top", "corner_bottom", "knee", "core_link", "motor_mount", "core_plate", "battery_holder", "computer_mount"),
-    "bamboo": ("corner_top", "corner_bottom", "knee", "core_link", "motor_mount", "core_plate", "battery_holder"),
+    "carbon": ("corner_top", "corner_bottom", "knee", "core_link", "core_link_mirrored", "motor_mount", "core_plate",
+               "battery_holder", "sensor_mount", "front_camera_mount", "computer_mount"),
+    "bamboo": ("corner_top", "corner_bottom", "knee", "core_link", "core_link_mirrored", "motor_mount", "core_plate",
+               "battery_holder", "core_spacer"),
 }
 CASES = [(p, n) for p in PRESETS for n in PART_NAMES[p]]
 OVERHANG_MAX = 0.01  # unsupported fraction of the downward-facing area
@@ -102,15 +104,27 @@ def test_core_plate_volume_is_box_minus_holes(preset):
     assert d.built["core_plate"].volume_mm3 == pytest.approx(closed, rel=0.005)
 
 
-def test_battery_holder_volume_is_box_minus_cavity():
+def test_battery_holder_volume_is_box_minus_cavity_and_openings():
+    """Closed form: outer box - cavity - stack holes - two side windows and two strap slots through
+    the walls - the floor window - the lead notch in the top wall over the mouth (pointed windows:
+    L w - w^2/2)."""
     d = built_preset("carbon")
     p = d.parts["battery_holder"]
     (w, length, h), (iw, il, ih) = p.param("outer"), p.param("inner")
+    t = p.param("wall")
     skin = (h - ih) / 2
-    closed = w * length * h - iw * il * ih - 4 * math.pi / 4 * p.param("hole_d") ** 2 * skin
+    ya, ye, hz = p.param("side_window")
+    fa, fe, fw = p.param("floor_window")
+    _, _, s_len, s_w = p.param("strap_slot")
+    lw, y0 = p.param("lead_exit")
+    closed = (w * length * h - iw * il * ih - 4 * math.pi / 4 * p.param("hole_d") ** 2 * skin
+              - 2 * ((ye - ya) * hz - hz**2 / 2) * t - ((fe - fa) * fw - fw**2 / 2) * skin
+              - 2 * s_len * s_w * t - lw * (length / 2 - y0) * skin)
     assert d.built["battery_holder"].volume_mm3 == pytest.approx(closed, rel=0.005)
     # printed standing on its back stop: as tall as the holder is long
     assert d.built["battery_holder"].bbox_mm[2] == pytest.approx(length)
+    # the lead notch passes the connector (XT30: 10.2 mm wide)
+    assert lw > 10.2
 
 
 # -- the overhang measure itself ---------------------------------------------------------------
@@ -262,6 +276,6 @@ def test_frame_without_struts_builds_and_fails_the_drop_check(tmp_path):
     built = build_parts(s, r.design.frame, [link], tmp_path, jobs=1)
     mesh = load_stl(tmp_path / built[0].stl)
     assert mesh.is_watertight and mesh.volume == pytest.approx(built[0].volume_mm3, rel=1e-3)
-    # the estimate's hub/tab model is tuned for the three-socket link; arm-only is 23 % low
-    assert link.estimate.volume == pytest.approx(mesh.volume, rel=0.3)
+    # arm-only links: the estimate's print plane is the one across the arm pair (as the CAD's), ~8 % high
+    assert link.estimate.volume == pytest.approx(mesh.volume, rel=0.15)
     assert r.verdict == "FAIL" and r.drop.max_safe_height_cm < 10

@@ -26,8 +26,8 @@ pytestmark = pytest.mark.slow
 ROOT = Path(__file__).resolve().parents[1]
 HAVE_SLICER = slicer_mod.find_slicer() is not None
 TPU, ABS = "tpu_95a", "abs"
-TPU_PARTS = ("corner_top", "corner_bottom", "knee", "core_link", "motor_mount")
-ABS_PARTS = ("core_plate", "battery_holder", "computer_mount")
+TPU_PARTS = ("corner_top", "corner_bottom", "knee", "core_link", "core_link_mirrored", "motor_mount")
+ABS_PARTS = ("core_plate", "battery_holder", "sensor_mount", "front_camera_mount", "computer_mount")
 
 
 def _params(folder: Path, change: tuple[str, object] | None = None) -> Path:
@@ -120,7 +120,7 @@ VIEW = {"viewer"}  # the report's 3D view: it shows each part's and rod's grams 
 
 def _part_change(*parts: str) -> set[str]:
     """Steps that rerun when exactly these parts' geometry changes (their mass changes too)."""
-    out = set(MASS) | {"assembly", "renders", "viewer"}
+    out = set(MASS) | {"assembly", "renders", "viewer", "clash"}  # clash: issue 13, keyed like the assembly
     for p in parts:
         m = TPU if p in TPU_PARTS else ABS
         out |= {f"part:{m}/{p}", f"render:{p}", f"plates:{m}", f"previews:{m}"}
@@ -137,7 +137,8 @@ CHANGES = [
     ("motors.bolt_spacing", 9.5, False, _part_change("motor_mount")),
     ("joints.wall", 1.4, False, _part_change(*TPU_PARTS)),
     ("frame.height", 130, False, _part_change(*TPU_PARTS)),
-    ("core.plate_size", 44, False, _part_change("core_plate", "core_link", "corner_bottom", "knee", "motor_mount")),
+    ("core.plate_size", 44, False, _part_change("core_plate", "core_link", "core_link_mirrored", "corner_bottom", "knee",
+                                                "motor_mount", "sensor_mount", "front_camera_mount")),
     ("printer.margin", 5, True, {f"plates:{TPU}", f"plates:{ABS}", f"previews:{TPU}", f"previews:{ABS}",
                                  f"slice:{TPU}", f"slice:{ABS}"}),
     # print settings: no part changes; the plates carry them in the 3MF (issue 14), the previews stay

@@ -31,7 +31,7 @@ def colour_of(material: str) -> tuple[float, float, float]:
 def instance_name(part: PartSpec, instance: str) -> str:
     if part.qty == 1:
         return part.name
-    if instance.startswith(part.name):
+    if instance.startswith(part.name) or instance.startswith(str(dict(part.params).get("kind", part.name))):
         return instance
     return f"{part.name}_{instance.rsplit('_', 1)[-1]}"
 
@@ -67,7 +67,56 @@ def build_assembly(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir:
         axis = end - start
         cyl = cq.Solid.makeCylinder(rod.diameter / 2, float(np.linalg.norm(axis)), cq.Vector(*start), cq.Vector(*axis))
         assy.add(cyl, name=rod.name, color=cq.Color(*ROD_BLACK))
+    from ..vitamins import to_cq, vitamins
+
+    for v in vitamins(spec, frame):
+        assy.add(to_cq(v), name=v.name, color=cq.Color(*v.colour))
     return assy
+
+
+# -- issue 13: the clash check over everything in the assembly --------------------------------
+
+def rod_mesh(rod, sections: int = 48):
+    import trimesh
+
+    start, end = np.asarray(rod.start, float), np.asarray(rod.end, float)
+    return trimesh.creation.cylinder(radius=rod.diameter / 2, segment=np.vstack([start, end]), sections=sections)
+
+
+def bodies(spec: Spec, frame, parts: Sequence[PartSpec], built, meshes: dict) -> list:
+    """Every solid of the aircraft for the clash check: part copies (their print meshes with the
+    world <- print transform), rods, vitamins (propellers as discs)."""
+    from ..analysis.clash import Body
+    from ..vitamins import to_trimesh, vitamins
+
+    by_name = {b.name: b for b in built}
+    out = []
+    for p in parts:
+        for pl in p.placements:
+            out.append(Body(instance_name(p, pl.instance), "part", meshes[p.name],
+                            world_from_print(pl.matrix(), by_name[p.name].print_from_local)))
+    for rod in frame.rods.values():
+        out.append(Body(rod.name, "rod", rod_mesh(rod)))
+    for v in vitamins(spec, frame):
+        out.append(Body(v.name, "propeller" if v.disc else "vitamin", to_trimesh(v), None, v.disc is not None))
+    return out
+
+
+def own_motor_pairs(frame) -> frozenset:
+    """Each propeller sits on its own motor's shaft: that pair is not a clash."""
+    return frozenset(frozenset((f"propeller_{m.corner}", f"motor_{m.corner}")) for m in frame.motors)
+
+
+def check_clashes(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path):
+    """The build's clash check (one call after the assembly is written): part meshes read back from
+    their STL files; returns analysis.clash.ClashResult (its clashes are FAIL problems)."""
+    from ..analysis import clash
+    from .mesh import load_stl
+
+    out_dir = Path(out_dir)
+    meshes = {b.name: load_stl(out_dir / b.stl) for b in built}
+    return clash.check(bodies(spec, frame, parts, built, meshes), prop_margin=spec.requirements.prop_margin,
+                       ignore=own_motor_pairs(frame))
 
 
 def assembly_key(spec: Spec, frame, parts: Sequence[PartSpec], built) -> str:
@@ -79,8 +128,16 @@ def assembly_key(spec: Spec, frame, parts: Sequence[PartSpec], built) -> str:
     payload = [CAD_VERSION, spec.name,
                [[cache_key(p, bed), p.material, [(pl.instance, pl.rotation_deg, pl.origin) for pl in p.placements],
                  np.round(np.asarray(by_name[p.name].print_from_local, float), 9).tolist()] for p in parts],
-               [[r.name, np.round(r.start, 9).tolist(), np.round(r.end, 9).tolist(), r.diameter] for r in frame.rods.values()]]
+               [[r.name, np.round(r.start, 9).tolist(), np.round(r.end, 9).tolist(), r.diameter] for r in frame.rods.values()],
+               _vitamin_key(spec, frame)]
     return hashlib.sha256(json.dumps(payload, default=float).encode()).hexdigest()[:24]
+
+
+def _vitamin_key(spec: Spec, frame) -> list:
+    from ..vitamins import vitamins
+
+    return [[v.name, v.colour, [[p.kind, p.centre, p.size, p.rot, p.axis, p.radius, p.length] for p in v.prims]]
+            for v in vitamins(spec, frame)]
 
 
 def write_assembly(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path,

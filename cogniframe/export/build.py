@@ -35,7 +35,7 @@ from ..partlist import PartSpec
 from ..spec import Spec
 
 # Bump when any part's CAD changes shape: it is part of every cache key.
-CAD_VERSION = "cad-2025.1"
+CAD_VERSION = "cad-2025.3"  # issue 13: mirrored core links, new core parts, tilted camera mounts
 AUTO_SERIAL_MAX = 12  # jobs=None builds up to this many parts in-process
 
 

@@ -98,11 +98,11 @@ def print_from_local(part: PartSpec) -> np.ndarray:
     od = part.sockets[0].bore + 2 * part.wall
     r = od / 2
     dirs = np.array([s.direction for s in part.sockets], float)
-    if part.name in ("corner_top", "corner_bottom"):
+    if kind_of(part) in ("corner_top", "corner_bottom"):
         vertical = dirs[np.abs(dirs[:, 2]) > 1e-6, 2]
         rot = FLIP_X if vertical.sum() < 0 else np.eye(3)
         return transform(rot, (0.0, 0.0, r))
-    if part.name in ("knee", "core_link"):
+    if kind_of(part) in ("knee", "core_link"):
         w = _side_normal(part, dirs)
         x = _arm_direction(part)
         x = x - w * (x @ w)
@@ -113,6 +113,11 @@ def print_from_local(part: PartSpec) -> np.ndarray:
         low = float((ends @ w).min())
         return transform(rot, (0.0, 0.0, r - low))
     raise ValueError(f"unknown joint {part.name!r}; valid: {', '.join(JOINT_KINDS)}")
+
+
+def kind_of(part: PartSpec) -> str:
+    """The joint kind (a mirrored part such as core_link_mirrored names its kind in its params)."""
+    return str(dict(part.params).get("kind", part.name))
 
 
 def _side_normal(part: PartSpec, dirs: np.ndarray) -> np.ndarray:
@@ -129,7 +134,9 @@ def _side_normal(part: PartSpec, dirs: np.ndarray) -> np.ndarray:
         pair = [np.asarray(s.port, float) for s in part.sockets if np.asarray(s.direction) @ arm > 1 - PARALLEL_TOL]
         w = np.cross(arm, np.cross(arm, pair[1] - pair[0]))
     w /= np.linalg.norm(w)
-    ref = np.array([1.0, 1.0, 0.25])  # deterministic sign
+    # Deterministic sign; a mirrored prototype (fr) uses the mirrored reference, so its print is
+    # the exact mirror image of the fl part's.
+    ref = np.array([-1.0, 1.0, 0.25]) if dict(part.params).get("mirror") else np.array([1.0, 1.0, 0.25])
     return w if w @ ref >= 0 else -w
 
 
@@ -278,11 +285,12 @@ def build(part: PartSpec) -> Built:
     m = print_from_local(part)
     socks = map_sockets(part, m)
     r = (part.sockets[0].bore + 2 * part.wall) / 2
-    if part.name in ("corner_top", "corner_bottom"):
+    kind = kind_of(part)
+    if kind in ("corner_top", "corner_bottom"):
         shape = _corner(part, socks, r)
-    elif part.name == "knee":
+    elif kind == "knee":
         shape = _knee(part, socks, r)
-    elif part.name == "core_link":
+    elif kind == "core_link":
         shape = _core_link(part, socks, r, m)
     else:
         raise ValueError(f"unknown joint {part.name!r}; valid: {', '.join(JOINT_KINDS)}")

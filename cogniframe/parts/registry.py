@@ -34,6 +34,10 @@ FAMILIES: dict[str, Family] = {f.name: f for f in (
            "ABS/PLA core plate with stack and core-link holes"),
     Family("battery_holder", core.build_holder, core.holder_from_local, "core.battery",
            "ABS/PLA open-ended battery sleeve, printed on its back stop"),
+    Family("sensor_mount", core.build_sensor_mount, core.sensor_mount_from_local, "core.spacer_thickness",
+           "ABS/PLA X spacer between holder and plate, with the flow board pad and zip-tie slots, printed flat"),
+    Family("camera_mount", core.build_camera_mount, core.camera_mount_from_local, "core.camera",
+           "ABS/PLA camera bracket (base under the FC stack, tilted upright), printed on its side"),
     Family("computer_mount", core.build_computer_mount, core.plate_from_local, "core.computer.hole_spacing",
            "ABS/PLA plate for the companion computer over the stack"),
 )}

@@ -88,12 +88,13 @@ def assembly_steps(design: "Design") -> tuple[Step, ...]:
         return tuple(out)
 
     def hw(*names: str) -> tuple[str, ...]:
-        out = []
+        count: dict[str, int] = {}
         for n in names:
             p = parts.get(n)
             if p:
-                out += [f"{h.qty * p.qty} x {h.item}" for h in p.hardware]
-        return tuple(out)
+                for h in p.hardware:
+                    count[h.item] = count.get(h.item, 0) + h.qty * p.qty
+        return tuple(f"{q} x {item}" for item, q in count.items())
 
     def add(title: str, part_names: Sequence[str], rod_names: Sequence[str], glue: str, text: str,
             hardware: Sequence[str] = ()) -> None:
@@ -126,15 +127,33 @@ def assembly_steps(design: "Design") -> tuple[Step, ...]:
     if struts:
         add("Struts", [], struts, f"bottom-corner end of each strut: {GLUE_CA}",
             "Push a damping strut into the inward socket of each bottom corner; leave the inner end free.")
-    core_parts = [n for n in ("core_plate", "battery_holder", "core_link") if n in parts]
+    spacer = next((n for n in ("sensor_mount", "core_spacer") if n in parts), None)
+    core_parts = [n for n in ("core_plate", spacer, "battery_holder", "core_link", "core_link_mirrored") if n and n in parts]
+    mirrored = "core_link_mirrored" in parts
     add("Core", core_parts, [], "none: the core links are bolted, so the core stays removable",
-        "Bolt a TPU core link onto each corner of the core plate (screw from below, nut on top). Screw the battery "
-        "holder under the plate with the stack screws; its open end faces the front so the battery slides in.",
-        hw("core_link", "core_plate"))
+        "Bolt a TPU core link onto each corner of the core plate"
+        + (" (core_link at front-left and rear-right, its mirror image core_link_mirrored at front-right and rear-left)"
+           if mirrored else "")
+        + ": screw down through the link tab and the plate"
+        + (f", nut in the hex trap under the {spacer}" if spacer else ", nut underneath") + ". "
+        + (f"Lay the {spacer} on the battery holder and the plate on it; " if spacer else "Put the plate on the battery holder; ")
+        + "screw them together with the stack screws. The holder's open end faces the front so the battery slides in.",
+        hw("core_link", "core_link_mirrored", "core_plate", "battery_holder", *([spacer] if spacer else [])))
     add("Hang the core", [], [], "none: arm and strut ends are only pushed into the core links",
         "Hold the core in the middle of the frame and push the free ends of both arm rods"
         + (" and the strut" if struts else "") + " of each corner into its core link. To remove the core later, pull "
         "the rods out of the links.")
+    if "front_camera_mount" in parts or spec.core.flow_sensor:
+        text = []
+        if "front_camera_mount" in parts:
+            text.append(f"Set the camera mount's base on the core plate, its holes over the stack screws, so the upright stands "
+                        f"at the plate's front edge ({spec.core.camera.tilt_deg:g} deg tilt); the FC/ESC stack goes on top of the "
+                        "base. Screw the Pi camera v2 to the upright with its lens forward (4 x M2) and run the ribbon up to the computer.")
+        if spec.core.flow_sensor:
+            text.append("Zip-tie the Matek 3901-L0X under the sensor mount's rear pad, sensors facing the ground (the pad sits "
+                        "behind the battery holder, so nothing is in their view), with the receiver on top of the pad in the same "
+                        "two ties; tie the antenna leads through the two slots at the pad's rear edge.")
+        add("Camera and sensors", [n for n in ("front_camera_mount",) if n in parts], [], "none", " ".join(text), hw("front_camera_mount"))
     rest = [n for n in parts if n not in used_parts]
     comps = ", ".join(f"{c.qty} x {c.name}" if c.qty > 1 else c.name for c in spec.components)
     add("Electronics", rest, [], "none",
@@ -142,7 +161,10 @@ def assembly_steps(design: "Design") -> tuple[Step, ...]:
         "so they do not touch the windings). Mount the flight controller / ESC stack on the core plate standoffs"
         + (f", the {spec.core.computer.name} on the computer mount" if spec.core.computer else "")
         + (f"; fit {comps}" if comps else "") + ". Solder the motors to the ESC, route wires along the arm rods, fit "
-        "the propellers (2 CW, 2 CCW) last, and slide the battery into its holder.",
+        "the propellers (2 CW, 2 CCW) last. Battery: "
+        f"slide the pack in from the front, lead last, lay its {spec.core.battery.connector} lead up through the notch at the "
+        f"top of the holder's mouth, close the {spec.core.strap_width:g} mm hook-and-loop strap across the mouth through the two 45 deg slots "
+        "(no tools: open the strap to swap the pack).",
         hw("motor_mount", *rest))
     leftover = [n for n in frame.rods if n not in used_rods]
     if leftover:  # a rod role this module does not know yet: still tell the builder to fit it

@@ -52,7 +52,10 @@ class BomLine:
 
 def _screw_size(item: str) -> str:
     m = _SIZE.search(item)
-    return f"{m.group(1)} x {m.group(2)}" if m else ""
+    if m:
+        return f"{m.group(1)} x {m.group(2)}"
+    m = re.search(r"(\d+(?:\.\d+)?)(?: mm)? x (\d+(?:\.\d+)?) mm", item)  # straps, zip ties: width x length
+    return f"{m.group(1)} x {m.group(2)} mm" if m else ""
 
 
 def build_bom(spec: "Spec", design: "Design", budget: "MassBudget",
@@ -107,25 +110,40 @@ def build_bom(spec: "Spec", design: "Design", budget: "MassBudget",
     it = take(f"motor {motor.name}")
     if it is not None:
         lines.append(BomLine("motor", f"brushless motor {motor.name}", it.qty, f"{motor.bolt_spacing:g} mm {motor.screw} bolt square",
-                             "", it.mass_g_each, it.mass_g, notes=f"bell {motor.bell_d:g} mm"))
+                             "", it.mass_g_each, it.mass_g,
+                             notes=f"bell {motor.bell_d:g} mm" + (f"; {spec.motors.kv} KV" if spec.motors.kv else "")))
     it = take(f"propeller {spec.motors.prop_diameter:g} mm")
     if it is not None:
         lines.append(BomLine("propeller", "propeller", it.qty, f"{spec.motors.prop_diameter:g} mm ({spec.motors.prop_diameter / 25.4:.1f} in)",
                              "", it.mass_g_each, it.mass_g, notes="2 CW + 2 CCW"))
+    from ..materials import BOARDS, VITAMIN_KINDS
+
     for c in spec.components:
         it = take(c.name)
         if it is not None:
-            lines.append(BomLine("electronics", c.name, it.qty, "", "", it.mass_g_each, it.mass_g))
+            boards = [BOARDS[_board_key(k, spec)] for k in VITAMIN_KINDS.get(c.vitamin or "", ())]
+            size = "; ".join(f"{b.size[0]:g} x {b.size[1]:g} mm board" for b in boards)
+            notes = "; ".join(f"{b.bom}: {b.mass_g:g} g in the catalogue (budget uses this line)" for b in boards)
+            lines.append(BomLine("electronics", c.name, it.qty, size, "", it.mass_g_each, it.mass_g,
+                                 notes=(f"drawn as vitamin {c.vitamin}; " + notes) if c.vitamin else ""))
     it = take("battery")
     if it is not None:
         b = spec.core.battery
         lines.append(BomLine("battery", "battery (LiPo)", it.qty, f"{b.length:g} x {b.width:g} x {b.height:g} mm", "",
-                             it.mass_g_each, it.mass_g))
+                             it.mass_g_each, it.mass_g,
+                             notes=f"{b.cells}S {b.capacity_mah:g} mAh, {b.connector} lead; held by a {spec.core.strap_width:g} mm strap across the holder mouth"))
     for name, it in items.items():
         if name not in used:
             lines.append(BomLine("other", name, it.qty, "", it.material or "", it.mass_g_each, it.mass_g))
     order = {c: i for i, c in enumerate(CATEGORIES)}
     return tuple(sorted(lines, key=lambda ln: order[ln.category]))  # stable within a category
+
+
+def _board_key(kind: str, spec: "Spec") -> str:
+    """Vitamin kind -> BOARDS key (fc/esc follow the stack pattern)."""
+    if kind in ("fc", "esc"):
+        return f"{kind}_{'20x20' if spec.core.stack_pattern == '20x20' else '30x30'}"
+    return kind
 
 
 def total_g(lines: Sequence[BomLine]) -> float:

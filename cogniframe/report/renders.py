@@ -160,12 +160,52 @@ def _group_by_material(meshes: Iterable[SceneMesh]) -> dict[str, list["trimesh.T
     return dict(sorted(out.items()))
 
 
+@dataclass(frozen=True, eq=False)
+class VitaminMesh:
+    """A bought part in world coordinates, its colour (r, g, b in 0-1) and opacity."""
+
+    name: str
+    colour: tuple[float, float, float]
+    mesh: "trimesh.Trimesh"
+    opacity: float = 1.0
+
+
+def vitamin_meshes(spec, frame) -> list[VitaminMesh]:
+    """The aircraft's vitamins (cogniframe.vitamins) as meshes; propeller discs see-through."""
+    from ..vitamins import to_trimesh, vitamins
+
+    return [VitaminMesh(v.name, v.colour, to_trimesh(v), 0.35 if v.disc else 1.0) for v in vitamins(spec, frame)]
+
+
+def vitamin_viewer_items(spec, frame, mass=None) -> list:
+    """The vitamins as items of the report's 3D view (kind "vitamin"): their mesh in world
+    coordinates (manifold3d, no mesh library), colour, what to buy and which budget line holds
+    their mass (the grams themselves only when `mass` is given)."""
+    from ..vitamins import to_manifold, vitamins
+    from .viewer import Mesh, ViewerItem
+
+    def mesh_of(v):
+        m = to_manifold(v).to_mesh()
+        return Mesh(np.asarray(m.vert_properties, float)[:, :3], np.asarray(m.tri_verts, np.int64))
+
+    grams = {i.name: i.mass_g_each for i in mass.items} if mass is not None else {}
+    vits = vitamins(spec, frame)
+    count: dict[str, int] = {}
+    for v in vits:
+        count[v.bom] = count.get(v.bom, 0) + 1
+    return [ViewerItem(v.name, "vitamin", "", grams.get(v.budget_line), count[v.bom], "",
+                       "#" + "".join(f"{int(round(c * 255)):02x}" for c in v.colour), mesh_of(v), None,
+                       note=f"{v.bom}; its mass is the budget line '{v.budget_line}'") for v in vits]
+
+
 def render_assembly(meshes: Sequence[SceneMesh], rods: Sequence[RodSegment], out_dir: Path | str,
                     size: tuple[int, int] = SIZE, views: Sequence[str] = ("iso", "top", "front"),
-                    prefix: str = "assembly", title: str | None = None) -> dict[str, Path]:
+                    prefix: str = "assembly", title: str | None = None,
+                    vitamins: Sequence[VitaminMesh] = ()) -> dict[str, Path]:
     """Render the assembled frame from each view into `<out_dir>/<prefix>_<view>.png`.
 
-    Returns {view: path}. Printed parts coloured by material, rods black."""
+    Returns {view: path}. Printed parts coloured by material, rods black, vitamins in their own
+    colours (propeller discs translucent)."""
     import trimesh
 
     out_dir = Path(out_dir)
@@ -177,6 +217,9 @@ def render_assembly(meshes: Sequence[SceneMesh], rods: Sequence[RodSegment], out
         merged = trimesh.util.concatenate(group)
         p.add_mesh(_pv(merged), color=material_colour(material), smooth_shading=False)
         pts.append(merged.bounds)
+    for v in vitamins:
+        p.add_mesh(_pv(v.mesh), color=tuple(float(c) for c in v.colour), opacity=v.opacity, smooth_shading=False)
+        pts.append(v.mesh.bounds)
     tube = _rods_polydata(rods)
     if tube is not None:
         p.add_mesh(tube, color=ROD_COLOUR, smooth_shading=True)

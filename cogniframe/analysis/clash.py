@@ -1,0 +1,136 @@
+"""Clash check: does anything in the aircraft occupy the same space, or sit in a propeller's way?
+
+A pure function over named solids (trimesh meshes with a 4x4 world transform each):
+
+* every pair of solids may overlap by less than `tolerance_mm3` (0.5 mm^3: tessellation noise).
+  There is no exception for a rod in its socket: the socket's hole must clear the rod, so their
+  overlap is ~0 like any other pair;
+* every propeller disc (a body with `disc` set) must clear every other body by `prop_margin` mm,
+  except the bodies named in `ignore` (its own motor, on whose shaft it sits).
+
+Booleans and gaps are manifold3d's (`^` intersection volume, `min_gap`), after an axis-aligned
+bounding-box prefilter (grown by the margin for the discs), so only neighbours are tested.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+TOLERANCE_MM3 = 0.5
+
+
+@dataclass(frozen=True, eq=False)
+class Body:
+    name: str
+    kind: str  # part | rod | vitamin | propeller
+    mesh: object  # trimesh.Trimesh in its own frame
+    transform: np.ndarray | None = None  # 4x4 world <- mesh; None = identity
+    disc: bool = False  # a propeller disc: tested for clearance, not only overlap
+
+
+@dataclass(frozen=True)
+class Clash:
+    a: str
+    b: str
+    kind: str  # "overlap" | "prop_margin"
+    volume_mm3: float  # overlap volume (0 for a margin clash that does not touch)
+    gap_mm: float | None = None  # propeller clearance found (margin clashes)
+
+    def message(self, margin: float) -> str:
+        if self.kind == "overlap":
+            return f"clash: {self.a} and {self.b} overlap by {self.volume_mm3:.2f} mm^3"
+        return (f"clash: propeller {self.a} comes within {self.gap_mm:.1f} mm of {self.b} "
+                f"(needs {margin:g} mm, requirements.prop_margin); overlap {self.volume_mm3:.2f} mm^3")
+
+
+@dataclass(frozen=True)
+class ClashResult:
+    clashes: tuple[Clash, ...]
+    bodies: int
+    pairs_total: int
+    pairs_tested: int  # survived the bounding-box prefilter
+    tolerance_mm3: float
+    prop_margin_mm: float
+    max_overlap: tuple[str, str, float] = ("", "", 0.0)  # largest overlap seen (a clash or not)
+    prop_gaps: tuple[tuple[str, str, float], ...] = field(default=())  # each disc's nearest body and gap
+
+    @property
+    def ok(self) -> bool:
+        return not self.clashes
+
+    def messages(self) -> list[str]:
+        return [c.message(self.prop_margin_mm) for c in self.clashes]
+
+    def to_dict(self) -> dict:
+        return {"ok": self.ok, "bodies": self.bodies, "pairs_total": self.pairs_total, "pairs_tested": self.pairs_tested,
+                "tolerance_mm3": self.tolerance_mm3, "prop_margin_mm": self.prop_margin_mm,
+                "max_overlap": {"a": self.max_overlap[0], "b": self.max_overlap[1], "volume_mm3": round(self.max_overlap[2], 3)},
+                "prop_gaps": [{"propeller": p, "nearest": n, "gap_mm": round(g, 2)} for p, n, g in self.prop_gaps],
+                "clashes": [{"a": c.a, "b": c.b, "kind": c.kind, "volume_mm3": round(c.volume_mm3, 3),
+                             "gap_mm": None if c.gap_mm is None else round(c.gap_mm, 2)} for c in self.clashes]}
+
+
+def from_dict(d: dict) -> ClashResult:
+    """The inverse of ClashResult.to_dict (for the build cache)."""
+    mo = d["max_overlap"]
+    return ClashResult(tuple(Clash(c["a"], c["b"], c["kind"], c["volume_mm3"], c["gap_mm"]) for c in d["clashes"]), d["bodies"],
+                       d["pairs_total"], d["pairs_tested"], d["tolerance_mm3"], d["prop_margin_mm"],
+                       (mo["a"], mo["b"], mo["volume_mm3"]), tuple((g["propeller"], g["nearest"], g["gap_mm"]) for g in d["prop_gaps"]))
+
+
+def _manifold(body: Body):
+    import manifold3d as m3
+
+    mesh = body.mesh
+    man = m3.Manifold(m3.Mesh(np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.uint32)))
+    if body.transform is not None:
+        man = man.transform(np.asarray(body.transform, float)[:3, :4])
+    return man
+
+
+def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_margin: float = 5.0,
+          ignore: frozenset[frozenset[str]] = frozenset()) -> ClashResult:
+    """Test every pair of `bodies`; `ignore` holds name pairs not tested at all (a disc and its motor)."""
+    names = [b.name for b in bodies]
+    if len(set(names)) != len(names):
+        dup = sorted({n for n in names if names.count(n) > 1})
+        raise ValueError(f"clash check: duplicate body names {dup}")
+    mans = [_manifold(b) for b in bodies]
+    boxes = []
+    for m in mans:
+        bb = m.bounding_box()
+        boxes.append((np.array(bb[:3]), np.array(bb[3:])))
+    clashes: list[Clash] = []
+    tested = 0
+    worst = ("", "", 0.0)
+    gaps: dict[str, tuple[str, float]] = {}
+    n = len(bodies)
+    for i in range(n):
+        for k in range(i + 1, n):
+            a, b = bodies[i], bodies[k]
+            if frozenset((a.name, b.name)) in ignore:
+                continue
+            disc = a if a.disc else b if b.disc else None
+            grow = prop_margin if disc is not None else 0.0
+            (lo_a, hi_a), (lo_b, hi_b) = boxes[i], boxes[k]
+            if np.any(lo_a - grow > hi_b) or np.any(lo_b - grow > hi_a):
+                continue
+            tested += 1
+            vol = float((mans[i] ^ mans[k]).volume())
+            if vol > worst[2]:
+                worst = (a.name, b.name, vol)
+            if disc is not None:
+                other = b if disc is a else a
+                gap = 0.0 if vol > 0 else float(mans[i].min_gap(mans[k], prop_margin + 20.0))
+                if disc.name not in gaps or gap < gaps[disc.name][1]:
+                    gaps[disc.name] = (other.name, gap)
+                if gap < prop_margin:
+                    clashes.append(Clash(disc.name, other.name, "prop_margin", vol, gap))
+            elif vol >= tolerance_mm3:
+                clashes.append(Clash(a.name, b.name, "overlap", vol))
+    clashes.sort(key=lambda c: (-c.volume_mm3, c.a, c.b))
+    return ClashResult(tuple(clashes), n, n * (n - 1) // 2, tested, tolerance_mm3, prop_margin, worst,
+                       tuple((p, o, g) for p, (o, g) in sorted(gaps.items())))

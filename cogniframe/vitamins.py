@@ -1,0 +1,340 @@
+"""Vitamins (NopSCADlib's word for bought parts): what flies on the frame, as simple but
+dimensionally honest solids placed where they go.
+
+Pure numpy: each vitamin is a list of primitives (boxes and cylinders in world coordinates, mm)
+built from the data tables in `materials.py` (BOARDS, MOTOR_PRESETS, CONNECTORS) and the frame
+graph's core boxes. `export/assembly.py` turns them into named, coloured STEP/GLB solids;
+`analysis/clash.py` tests them against the printed parts and rods; `report/renders.py` draws them.
+
+Masses: every vitamin names its line of the mass budget (`budget_line`): the motor and propeller
+lines, the battery line, or the params' `components:` line whose `vitamin:` key names it. The
+vitamin's own mass is that line's, so nothing is counted twice; the table's catalogue mass is
+shown in the BOM only.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .frame import Frame
+from .materials import BOARDS, CONNECTORS, PROPS, STACK_PATTERNS, Board
+from .spec import Spec
+
+# Propeller disc: the volume the blades sweep, from the top of the motor bell (materials.PROPS
+# gives each propeller's swept height; this is the fallback). A 2.5 in pitch blade at 75 % radius
+# stands about 3 mm tall; the hub sits inside this slab.
+PROP_DISC_T = 3.0  # mm
+PROP_GAP = 0.5  # bell top to the underside of the blade disc, mm
+SHAFT_D = {"1104": 1.5, "1404": 1.5}  # motor shaft diameter (mm); 1.5 mm for both classes
+SHAFT_ABOVE = 2.5  # shaft length above the bell (into the prop hub), mm
+STACK_BOTTOM = 3.0  # soft-mount grommets / nylon nuts under the ESC, mm
+STACK_STANDOFF = 8.0  # between the ESC and the FC, mm
+STANDOFF_D = 4.0  # nylon M2 standoff across flats (drawn round), mm
+
+COLOURS = {
+    "motor": (0.62, 0.62, 0.66),
+    "propeller": (0.55, 0.75, 0.95),
+    "battery": (0.95, 0.78, 0.10),
+    "fc": (0.10, 0.15, 0.45),
+    "esc": (0.12, 0.12, 0.12),
+    "computer": (0.10, 0.45, 0.20),
+    "camera": (0.10, 0.55, 0.25),
+    "flow_sensor": (0.40, 0.10, 0.50),
+}
+
+
+@dataclass(frozen=True)
+class Prim:
+    """A box (`size` x, y, z about `centre`, turned by `rot`) or a cylinder (`centre` = base centre,
+    `axis` unit vector, `radius`, `length`). World coordinates, mm."""
+
+    kind: str  # "box" | "cyl"
+    centre: tuple[float, float, float]
+    size: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rot: tuple[tuple[float, float, float], ...] = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+    axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    radius: float = 0.0
+    length: float = 0.0
+
+
+@dataclass(frozen=True)
+class Vitamin:
+    name: str  # assembly name: motor_fl, propeller_fl, battery, flight_controller ...
+    family: str  # motor | propeller | battery | fc | esc | computer | camera | flow_sensor
+    bom: str  # the data table's description (what to buy)
+    budget_line: str  # the mass budget item this vitamin's mass is in
+    prims: tuple[Prim, ...]
+    colour: tuple[float, float, float]
+    disc: tuple[tuple[float, float, float], float, float] | None = None  # propeller: (centre, radius, thickness)
+    view: tuple[tuple[float, float, float], tuple[float, float, float], float] | None = None  # sensor: (apex, direction, half-angle deg)
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        pts = np.vstack([_prim_corners(p) for p in self.prims])
+        return pts.min(axis=0), pts.max(axis=0)
+
+
+def _t(v) -> tuple[float, float, float]:
+    return (round(float(v[0]), 6), round(float(v[1]), 6), round(float(v[2]), 6))
+
+
+def box(lo, hi) -> Prim:
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    return Prim("box", _t((lo + hi) / 2), _t(hi - lo))
+
+
+def cyl(base, axis, radius: float, length: float) -> Prim:
+    a = np.asarray(axis, float)
+    return Prim("cyl", _t(base), axis=_t(a / np.linalg.norm(a)), radius=float(radius), length=float(length))
+
+
+def _prim_corners(p: Prim) -> np.ndarray:
+    if p.kind == "box":
+        s = np.asarray(p.size) / 2
+        corners = np.array([[sx, sy, sz] for sx in (-s[0], s[0]) for sy in (-s[1], s[1]) for sz in (-s[2], s[2])])
+        return corners @ np.asarray(p.rot).T + np.asarray(p.centre)
+    a = np.asarray(p.axis)
+    ends = np.array([p.centre, np.asarray(p.centre) + a * p.length])
+    return np.vstack([ends - p.radius, ends + p.radius])
+
+
+def _transform_prims(prims, m: np.ndarray) -> tuple[Prim, ...]:
+    """Move primitives given in a local frame by the 4x4 world <- local `m`."""
+    r, t = m[:3, :3], m[:3, 3]
+    out = []
+    for p in prims:
+        if p.kind == "box":
+            rot = r @ np.asarray(p.rot)
+            out.append(Prim("box", _t(r @ np.asarray(p.centre) + t), p.size, tuple(_t(row) for row in rot)))
+        else:
+            out.append(Prim("cyl", _t(r @ np.asarray(p.centre) + t), axis=_t(r @ np.asarray(p.axis)), radius=p.radius, length=p.length))
+    return tuple(out)
+
+
+# -- the families ------------------------------------------------------------------------------
+
+def _budget_lines(spec: Spec) -> dict[str, str]:
+    """vitamin key -> the components line that carries its mass."""
+    return {c.vitamin: c.name for c in spec.components if c.vitamin}
+
+
+def motor_vitamins(spec: Spec, frame: Frame) -> list[Vitamin]:
+    """Each motor: stator base (the mounting foot), bell and shaft; its propeller disc above it."""
+    m = spec.motor
+    out = []
+    shaft = SHAFT_D.get(m.name, 1.5)
+    for mo in frame.motors:
+        x, y, _ = mo.axis
+        z0 = mo.seat_z
+        base_h = 2.0
+        prims = (cyl((x, y, z0), (0, 0, 1), m.bell_d * 0.4, base_h),  # stator base / mounting foot
+                 cyl((x, y, z0 + base_h), (0, 0, 1), m.bell_d / 2, m.height - base_h),  # bell over the stator
+                 cyl((x, y, z0 + m.height), (0, 0, 1), shaft / 2, PROP_GAP + SHAFT_ABOVE))
+        out.append(Vitamin(f"motor_{mo.corner}", "motor", f"brushless motor {m.name} {_kv(spec)}KV ({m.bolt_spacing:g} mm {m.screw} pattern)",
+                           f"motor {m.name}", prims, COLOURS["motor"]))
+        r = spec.motors.prop_diameter / 2
+        zc = mo.prop_z + PROP_GAP
+        prop = PROPS.get(_prop(spec))
+        t = prop.swept_height_mm if prop else PROP_DISC_T
+        bom = f"{prop.bom}, {spec.motors.prop_diameter:g} mm" if prop else f"propeller {spec.motors.prop_diameter:g} mm"
+        out.append(Vitamin(f"propeller_{mo.corner}", "propeller", bom,
+                           f"propeller {spec.motors.prop_diameter:g} mm", (cyl((x, y, zc), (0, 0, 1), r, t),),
+                           COLOURS["propeller"], disc=(_t((x, y, zc + t / 2)), r, t)))
+    return out
+
+
+def _kv(spec: Spec) -> str:
+    return f"{spec.motors.kv}" if spec.motors.kv else "?"
+
+
+def _prop(spec: Spec) -> str:
+    """motors.prop, or the table propeller nearest motors.prop_diameter (as analysis/flight.py)."""
+    if spec.motors.prop:
+        return spec.motors.prop
+    return min(PROPS.values(), key=lambda p: abs(p.diameter_mm - spec.motors.prop_diameter)).name
+
+
+def battery_vitamin(spec: Spec, frame: Frame) -> Vitamin:
+    b, box_ = spec.core.battery, frame.core.battery
+    conn = CONNECTORS[b.connector]
+    return Vitamin("battery", "battery", f"LiPo {b.cells}S {b.capacity_mah:g} mAh, {b.length:g} x {b.width:g} x {b.height:g} mm, {conn.name} lead",
+                   "battery", (box(box_.lo, box_.hi),), COLOURS["battery"])
+
+
+def _board_prims(board: Board, lo_z: float, centre_xy, parts_down: bool = False) -> list[Prim]:
+    """A board lying flat with its bottom at lo_z (or its top at lo_z when parts face down)."""
+    x, y = centre_xy
+    bx, by, bt = board.size
+    px, py, ph = board.parts_block
+    if parts_down:
+        return [box((x - bx / 2, y - by / 2, lo_z - bt), (x + bx / 2, y + by / 2, lo_z)),
+                box((x - px / 2, y - py / 2, lo_z - bt - ph), (x + px / 2, y + py / 2, lo_z - bt))]
+    return [box((x - bx / 2, y - by / 2, lo_z), (x + bx / 2, y + by / 2, lo_z + bt)),
+            box((x - px / 2, y - py / 2, lo_z + bt), (x + px / 2, y + py / 2, lo_z + bt + ph))]
+
+
+def stack_vitamins(spec: Spec, frame: Frame) -> list[Vitamin]:
+    """FC and 4-in-1 ESC on the stack pattern: grommets, ESC, standoffs, FC (bottom up)."""
+    lines = _budget_lines(spec)
+    pitch, _ = STACK_PATTERNS[spec.core.stack_pattern]
+    key = "20x20" if pitch < 25 else "30x30"
+    esc_b, fc_b = BOARDS[f"esc_{key}"], BOARDS[f"fc_{key}"]
+    z0 = float(frame.core.stack.lo[2])
+    holes = [(sx * pitch / 2, sy * pitch / 2) for sx in (-1, 1) for sy in (-1, 1)]
+    grommets = [cyl((x, y, z0), (0, 0, 1), STANDOFF_D / 2, STACK_BOTTOM) for x, y in holes]
+    z_esc = z0 + STACK_BOTTOM
+    esc = _board_prims(esc_b, z_esc, (0.0, 0.0))
+    z_st = z_esc + esc_b.size[2]
+    standoffs = [cyl((x, y, z_st), (0, 0, 1), STANDOFF_D / 2, STACK_STANDOFF) for x, y in holes]
+    fc = _board_prims(fc_b, z_st + STACK_STANDOFF, (0.0, 0.0))
+    if "fc_esc_stack" in lines:
+        return [Vitamin("fc_esc_stack", "fc", f"{fc_b.bom} + {esc_b.bom}", lines["fc_esc_stack"],
+                        tuple(grommets + esc + standoffs + fc), COLOURS["fc"])]
+    out = []
+    if "esc" in lines:
+        out.append(Vitamin("esc", "esc", esc_b.bom, lines["esc"], tuple(grommets + esc + standoffs), COLOURS["esc"]))
+    if "fc" in lines:
+        out.append(Vitamin("flight_controller", "fc", fc_b.bom, lines["fc"], tuple(fc), COLOURS["fc"]))
+    return out
+
+
+def computer_vitamin(spec: Spec, frame: Frame) -> Vitamin | None:
+    lines = _budget_lines(spec)
+    if frame.core.computer is None or "pi_zero" not in lines:
+        return None
+    b = BOARDS["pi_zero"]
+    c = frame.core.computer
+    return Vitamin("computer", "computer", b.bom, lines["pi_zero"], tuple(_board_prims(b, float(c.lo[2]), c.centre[:2])),
+                   COLOURS["computer"])
+
+
+def camera_vitamin(spec: Spec, frame: Frame) -> Vitamin | None:
+    """The camera board on the camera mount's upright, lens forward, tilted with the upright."""
+    from .partlist import camera_mount_geometry
+
+    if spec.core.camera is None:
+        return None
+    lines = _budget_lines(spec)
+    b = BOARDS[spec.core.camera.model]
+    g = camera_mount_geometry(spec, frame)
+    bx, by, bt = b.size
+    # upright frame: x across, y forward (lens), z up the upright from the base top
+    lens_d, lens_h = b.lens or (8.5, 5.0)
+    z_lens = 1.0 + by - 9.5  # lens centre 9.5 mm below the board's top edge
+    local = [box((-bx / 2, 0.0, 1.0), (bx / 2, bt, 1.0 + by)),
+             box((-lens_d / 2, bt, z_lens - lens_d / 2), (lens_d / 2, bt + lens_h, z_lens + lens_d / 2))]
+    m = _camera_world(spec, frame, g)
+    prims = _transform_prims(local, m)
+    axis = m[:3, :3] @ np.array([0.0, 1.0, 0.0])
+    apex = m[:3, :3] @ np.array([0.0, bt + lens_h, z_lens]) + m[:3, 3]
+    return Vitamin("camera", "camera", b.bom, lines[spec.core.camera.model], prims, COLOURS["camera"],
+                   view=(_t(apex), _t(axis), 31.0))  # Pi camera v2: 62.2 x 48.8 deg field of view
+
+
+def _camera_world(spec: Spec, frame: Frame, g: dict) -> np.ndarray:
+    """4x4 world <- camera-upright frame (shared with parts/core.camera_upright_matrix)."""
+    a = math.radians(float(g["tilt_deg"]))
+    m = np.eye(4)
+    m[:3, :3] = [[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]]
+    m[:3, 3] = (0.0, float(g["y_front"]), float(frame.core.plate.hi[2]) + float(g["base_t"]))
+    return m
+
+
+def flow_vitamin(spec: Spec, frame: Frame) -> Vitamin | None:
+    """The flow/ToF board under the sensor mount's rear pad, sensors facing the ground."""
+    if spec.core.flow_sensor is None or frame.core.flow_sensor is None:
+        return None
+    lines = _budget_lines(spec)
+    b = BOARDS[spec.core.flow_sensor.model]
+    box_ = frame.core.flow_sensor
+    top = float(box_.hi[2])
+    prims = tuple(_board_prims(b, top, box_.centre[:2], parts_down=True))
+    apex = (box_.centre[0], box_.centre[1], top - b.size[2] - b.parts_block[2])
+    return Vitamin("flow_sensor", "flow_sensor", b.bom, lines[spec.core.flow_sensor.model], prims, COLOURS["flow_sensor"],
+                   view=(_t(apex), (0.0, 0.0, -1.0), 21.0))  # PMW3901: 42 deg field of view
+
+
+def vitamins(spec: Spec, frame: Frame) -> tuple[Vitamin, ...]:
+    """Every bought part drawn in the assembly, in a stable order."""
+    out = motor_vitamins(spec, frame)
+    out.append(battery_vitamin(spec, frame))
+    out += stack_vitamins(spec, frame)
+    for v in (computer_vitamin(spec, frame), camera_vitamin(spec, frame), flow_vitamin(spec, frame)):
+        if v is not None:
+            out.append(v)
+    return tuple(out)
+
+
+# -- meshes and CAD ----------------------------------------------------------------------------
+
+def to_manifold(v: Vitamin, segments: int = 48):
+    """The vitamin as one manifold3d solid (union of its primitives)."""
+    import manifold3d as m3
+
+    parts = []
+    for p in v.prims:
+        if p.kind == "box":
+            s = m3.Manifold.cube(tuple(float(x) for x in p.size), True)
+            mat = np.zeros((3, 4))
+            mat[:, :3] = np.asarray(p.rot)
+            mat[:, 3] = p.centre
+            parts.append(s.transform(mat))
+        else:
+            s = m3.Manifold.cylinder(float(p.length), float(p.radius), float(p.radius), segments)
+            mat = np.zeros((3, 4))
+            mat[:, :3] = _frame_z(np.asarray(p.axis))
+            mat[:, 3] = p.centre
+            parts.append(s.transform(mat))
+    return m3.Manifold.batch_boolean(parts, m3.OpType.Add) if len(parts) > 1 else parts[0]
+
+
+def to_trimesh(v: Vitamin, segments: int = 48):
+    import trimesh
+
+    mesh = to_manifold(v, segments).to_mesh()
+    return trimesh.Trimesh(np.asarray(mesh.vert_properties)[:, :3], np.asarray(mesh.tri_verts), process=True)
+
+
+def to_cq(v: Vitamin):
+    """The vitamin as one CadQuery compound (its primitives), for the assembly STEP/GLB."""
+    import cadquery as cq
+
+    solids = []
+    for p in v.prims:
+        if p.kind == "box":
+            s = cq.Solid.makeBox(*p.size, cq.Vector(*(-np.asarray(p.size) / 2)))
+            m = np.eye(4)
+            m[:3, :3] = np.asarray(p.rot)
+            m[:3, 3] = p.centre
+            from .parts.joint import apply
+
+            solids.append(apply(s, m))
+        else:
+            solids.append(cq.Solid.makeCylinder(p.radius, p.length, cq.Vector(*p.centre), cq.Vector(*p.axis)))
+    if len(solids) == 1:
+        return solids[0]
+    # one fused solid: a compound's colour does not survive the STEP round trip
+    fused = solids[0].fuse(*solids[1:]).clean()
+    parts = fused.Solids()
+    return parts[0] if len(parts) == 1 else cq.Compound.makeCompound(parts)
+
+
+def _frame_z(z: np.ndarray) -> np.ndarray:
+    """A rotation whose third column is the unit vector z."""
+    z = z / np.linalg.norm(z)
+    a = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = np.cross(a, z)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    return np.column_stack([x, y, z])
+
+
+def bom_rows(spec: Spec, frame: Frame) -> list[tuple[str, int, str]]:
+    """(what to buy, qty, the budget line its mass is in), grouped by description."""
+    rows: dict[tuple[str, str], int] = {}
+    for v in vitamins(spec, frame):
+        rows[(v.bom, v.budget_line)] = rows.get((v.bom, v.budget_line), 0) + 1
+    return [(bom, qty, line) for (bom, line), qty in rows.items()]
