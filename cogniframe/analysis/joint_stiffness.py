@@ -244,8 +244,13 @@ def hinge_geometry(part) -> tuple[float, float, float]:
     return float(np.linalg.norm(h.end - h.start)), float(h.height), float(h.thickness)
 
 
+def joint_kind(part) -> str:
+    """What a joint part is, whatever it is called: `core_link_mirrored` is a `core_link`."""
+    return str(dict(part.params).get("kind", part.name))
+
+
 def _has_body(part) -> bool:
-    return part.name in ("corner_bottom", "core_link")
+    return joint_kind(part) in ("corner_bottom", "core_link")
 
 
 def analytic_joint(spec, part, factor: float | None = None) -> JointStiffness:
@@ -324,10 +329,10 @@ def fe_joint(spec, part, factor: float | None = None, mesh_mm: float | None = No
 
         ties.append(joint_fe.Tie(s.rod, sel, tuple(R @ mouth_l + o), itf.e / itf.h, itf.g / itf.h))
     labels = tuple(s.rod for s in part.sockets)
-    if part.name == "corner_bottom":
+    if joint_kind(part) == "corner_bottom":
         ties.append(joint_fe.Tie("body", lambda c, n: (c[2] < 1e-3) & (np.abs(n[2]) > 0.99), tuple(o),
                                  _TIE_STIFF * itf.e, _TIE_STIFF * itf.e))
-    elif part.name == "core_link":
+    elif joint_kind(part) == "core_link":
         bolt = R @ np.asarray(part.param("bolt_hole"), float) + o
         axis = R @ np.array([0.0, 0.0, 1.0])
         r_hole = float(part.param("screw_clearance")) / 2
