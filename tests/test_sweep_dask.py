@@ -35,6 +35,8 @@ samples: 10
 sampler: lhs
 seed: 5
 batch: 2
+set:
+  model.stiffness_model: analytic  # closed-form joints: a cold joint FE per new geometry (30-60 s) would hit timeout_s
 vary:
   rods.diameter: [2.6, 3.6]
   frame.height: [105, 140]
