@@ -56,6 +56,6 @@ def _private_cache(tmp_path_factory):
 # nightly run: `HYPOTHESIS_PROFILE=nightly python -m pytest tests/test_properties.py`.
 from hypothesis import settings  # noqa: E402
 
-settings.register_profile("ci", max_examples=40, deadline=None, derandomize=True, database=None)
+settings.register_profile("ci", max_examples=15, deadline=None, derandomize=True, database=None)
 settings.register_profile("nightly", max_examples=2000, deadline=None, database=None)
 settings.load_profile(__import__("os").environ.get("HYPOTHESIS_PROFILE", "ci"))
