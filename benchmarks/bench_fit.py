@@ -56,7 +56,7 @@ def _reference_loss(heights, mass_kg: float, c: float, k: float, w: float = 500.
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--data", default=str(ROOT.parent / "shared" / "data" / "droptests"))
+    ap.add_argument("--data", default=str(ROOT / "examples" / "droptests"))
     ap.add_argument("--repeat", type=int, default=10)
     args = ap.parse_args(argv)
 

@@ -16,8 +16,7 @@ from cogniframe.analysis.fit import model_accel_g
 from cogniframe.commands.physics import register
 from cogniframe.errors import UserError
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared"
-DROPS = SHARED / "data" / "droptests"
+DROPS = Path(__file__).resolve().parents[1] / "examples" / "droptests"  # shipped with the project
 
 
 @dataclass
@@ -42,9 +41,7 @@ def run(*args: str) -> Outcome:
 
 @pytest.fixture(scope="module")
 def drops() -> Path:
-    if not DROPS.is_dir():
-        pytest.fail(f"Shared drop-test data not found at {DROPS}: the repo must be cloned next "
-                    "to the 'shared' folder (as in CI).")
+    assert DROPS.is_dir(), f"example drop-test data missing from {DROPS}"
     return DROPS
 
 
@@ -104,7 +101,7 @@ def test_drop_plots_writes_two_pngs(tmp_path):
 
 def test_fit_shared_folders_heights_from_folder_names(drops, tmp_path):
     r = run("fit", drops / "SoftBottom_50cm", drops / "SoftBottom_100cm", "--mass", 0.241,
-            "--static", SHARED / "data" / "static_stiffness_carbon.csv", "--json",
+            "--static", DROPS.parent / "static_stiffness_carbon.csv", "--json",
             "--plot", tmp_path / "fit.png")
     assert r.exit_code == 0, r
     d = json.loads(r.stdout)
