@@ -20,6 +20,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from . import __version__, outdir, pipeline
+from .cache import file_sha256
 from .spec import Spec
 
 STACK = ("cadquery", "cadquery-ocp", "trimesh", "manifold3d", "numpy", "scipy", "pynitefea", "pyvista", "vtk", "matplotlib")
@@ -75,7 +76,7 @@ def _up_to_date(final: Path, key: str) -> bool:
         return False
     listed = {f["path"] for f in manifest["files"]}
     present = {p.relative_to(final).as_posix() for p in final.rglob("*") if p.is_file()} - {"manifest.json"}
-    return listed == present and all(_sha256(final / f["path"]) == f["sha256"] for f in manifest["files"])
+    return listed == present and all(file_sha256(final / f["path"]) == f["sha256"] for f in manifest["files"])
 
 
 def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_cache: bool, console: Console,
@@ -150,14 +151,6 @@ def _write(path: Path, text: str) -> None:
     path.write_text(text, encoding="utf-8")
 
 
-def _sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
-
-
 def _versions() -> dict:
     return dict(_installed_versions())
 
@@ -181,10 +174,10 @@ def _write_manifest(spec: Spec, params_path: Path, out: Path, key: str) -> int:
         "name": spec.name,
         "build_key": key,
         "params_file": Path(params_path).name,
-        "params_sha256": _sha256(Path(params_path)),
+        "params_sha256": file_sha256(Path(params_path)),
         "spec_sha256": spec.digest(),
         "versions": _versions(),
-        "files": [{"path": p.relative_to(out).as_posix(), "size": p.stat().st_size, "sha256": _sha256(p)} for p in files],
+        "files": [{"path": p.relative_to(out).as_posix(), "size": p.stat().st_size, "sha256": file_sha256(p)} for p in files],
         # outside the identical-rebuild promise (issue 14): `build --gcode`'s G-code has a timestamp and threaded path order
         "not_reproducible": [p.relative_to(out).as_posix() for p in files if p.suffix == ".gcode"],
     }

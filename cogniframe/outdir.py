@@ -241,14 +241,14 @@ def claim_file(path: Path) -> None:
 def record(folder: Path, added: list[Path]) -> None:
     """Add files a later command wrote into a cogniframe output folder (e.g. `slice`) to its manifest,
     so they stay cogniframe's: the next build may replace them, and nothing looks foreign."""
-    import hashlib
+    from .cache import file_sha256
 
     path = folder / MANIFEST
     m = json.loads(path.read_text(encoding="utf-8"))
     entries = {f["path"]: f for f in m["files"]}
     for p in added:
         rel = p.relative_to(folder).as_posix()
-        entries[rel] = {"path": rel, "size": p.stat().st_size, "sha256": hashlib.sha256(p.read_bytes()).hexdigest()}
+        entries[rel] = {"path": rel, "size": p.stat().st_size, "sha256": file_sha256(p)}
     m["files"] = [entries[k] for k in sorted(entries)]
     # G-code is outside the identical-rebuild promise (issue 14): say so, as `build --gcode` does
     m["not_reproducible"] = sorted(set(m.get("not_reproducible", [])) | {k for k in entries if k.endswith(".gcode")})
