@@ -40,6 +40,38 @@ def store_json(kind: str, key: str, value: dict) -> None:
         pass
 
 
+class Memo:
+    """A dict-like store of small JSON values under `cache_dir()/kind/`, one file per key, the
+    key salted (e.g. with the code and library versions that made the values). For results
+    worth keeping piece by piece, such as the clash check's pairs. `root`: the cache folder
+    (given explicitly to worker processes, which may not share this process's environment)."""
+
+    def __init__(self, kind: str, salt: str, root: str | Path | None = None):
+        self.kind, self.salt, self.root = kind, salt, Path(root) if root is not None else None
+
+    def _path(self, key: str) -> Path:
+        import hashlib
+
+        name = hashlib.sha256(f"{self.salt}/{key}".encode()).hexdigest()[:32]
+        return (self.root if self.root is not None else cache_dir()) / self.kind / f"{name}.json"
+
+    def get(self, key: str, default=None):
+        try:
+            return json.loads(self._path(key).read_text())["value"]
+        except (OSError, ValueError, KeyError, TypeError):
+            return default
+
+    def __setitem__(self, key: str, value) -> None:
+        path = self._path(key)
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+            tmp.write_text(json.dumps({"value": value}))
+            tmp.replace(path)
+        except OSError:
+            pass
+
+
 # -- file entries: a step's output files + its JSON value, verified on every read -------------
 
 def file_sha256(path: Path) -> str:

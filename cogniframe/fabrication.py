@@ -114,23 +114,25 @@ def make_slice(ctx, material: str) -> Made:
     return Made((f"plates/{material}.ini", *kept), {"slicer": version, "plates": plates})
 
 
-def figures_key(ctx):
-    from .pipeline import check_dict
+def _mass_and_drop(ctx) -> tuple[dict, dict | None]:
+    """The mass budget and drop model as check.json shows them (from the `budget` step)."""
+    b = ctx["budget"]
+    return b["mass"].as_dict(), None if b["drop"] is None else b["drop"].to_dict()
 
-    cd = check_dict(ctx["check"])
-    return [cd["mass"], cd.get("drop")]
+
+def figures_key(ctx):
+    return list(_mass_and_drop(ctx))
 
 
 def make_figures(ctx) -> Made:
-    from .pipeline import check_dict
     from .report import html
 
-    cd = check_dict(ctx["check"])
+    mass, drop = _mass_and_drop(ctx)
     files = ctx.out / html.FILES_DIR
-    html.plot_mass_groups(cd["mass"], files / "mass_by_group.png")
+    html.plot_mass_groups(mass, files / "mass_by_group.png")
     made = [f"{html.FILES_DIR}/mass_by_group.png"]
-    if "drop" in cd:
-        html.plot_stiffness(cd["drop"], files / "stiffness.png")
+    if drop is not None:
+        html.plot_stiffness(drop, files / "stiffness.png")
         made.append(f"{html.FILES_DIR}/stiffness.png")
     return Made(tuple(made))
 

@@ -34,8 +34,9 @@ import fnmatch
 import hashlib
 import json
 import string
+import threading
 import time
-from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
@@ -175,14 +176,21 @@ def run(tasks: Sequence[Task], ctx: Context, threads: int = 16,
         on_start: Callable[[str], None] | None = None,
         on_done: Callable[[Record], None] | None = None) -> list[Record]:
     """Run every task once its needs are done. Main-thread tasks run in list order, one at a time;
-    "wait" tasks run in threads. The first error stops new tasks, waits for running ones, and is
-    raised. Returns one Record per task, in the order they finished."""
+    "wait" tasks run in threads and are started the moment their needs are done, also while a
+    main-thread task is running (a finished wait task starts the ones that needed it from its own
+    thread: the slicer never waits for a render to end). The first error stops new tasks, waits
+    for running ones, and is raised. Returns one Record per task, in the order they finished."""
     pending = list(tasks)
     done: set[str] = set()
     records: list[Record] = []
-    error: BaseException | None = None
+    errors: list[BaseException] = []
+    running = [0]
+    lock = threading.Condition()
 
-    def finish(task: Task, value, status: str, t0: float) -> None:
+    def ready(t: Task) -> bool:
+        return all(n in done for n in t.needs) and all(n in done for n in t.after)
+
+    def finish(task: Task, value, status: str, t0: float) -> None:  # holding the lock
         ctx.values[task.name] = value
         done.add(task.name)
         rec = Record(task.name, status, time.perf_counter() - t0)
@@ -190,39 +198,55 @@ def run(tasks: Sequence[Task], ctx: Context, threads: int = 16,
         if on_done:
             on_done(rec)
 
-    def ready(t: Task) -> bool:
-        return all(n in done for n in t.needs) and all(n in done for n in t.after)
+    def in_thread(t: Task, t0: float) -> None:
+        try:
+            value, status = _do(t, ctx)
+        except BaseException as e:  # noqa: BLE001 - handed to the caller
+            with lock:
+                errors.append(e)
+                running[0] -= 1
+                lock.notify_all()
+            return
+        with lock:
+            finish(t, value, status, t0)
+            running[0] -= 1
+            start_waits()
+            lock.notify_all()
+
+    def start_waits() -> None:  # holding the lock
+        if errors:
+            return
+        for t in [t for t in pending if t.step.where == "wait" and ready(t)]:
+            pending.remove(t)
+            if on_start:
+                on_start(t.name)
+            running[0] += 1
+            pool.submit(in_thread, t, time.perf_counter())
 
     with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="step") as pool:
-        running: dict = {}
-        try:
-            while pending or running:
-                for t in [t for t in pending if t.step.where == "wait" and ready(t)]:
-                    pending.remove(t)
-                    if on_start:
-                        on_start(t.name)
-                    running[pool.submit(_do, t, ctx)] = (t, time.perf_counter())
-                main = next((t for t in pending if t.step.where == "main" and ready(t)), None)
-                if main is not None:
-                    pending.remove(main)
-                    if on_start:
-                        on_start(main.name)
-                    t0 = time.perf_counter()
-                    value, status = _do(main, ctx)
-                    finish(main, value, status, t0)
-                elif running:
-                    finished, _ = wait(list(running), return_when=FIRST_COMPLETED)
-                else:
+        while True:
+            with lock:
+                start_waits()
+                main = None if errors else next((t for t in pending if t.step.where == "main" and ready(t)), None)
+                if main is None:
+                    if running[0]:
+                        lock.wait()
+                        continue
+                    if errors or not pending:
+                        break
                     raise RuntimeError(f"build graph stuck: {[t.name for t in pending]} wait for steps that never run")
-                for fut in [f for f in running if f.done()]:
-                    t, t0 = running.pop(fut)
-                    value, status = fut.result()
-                    finish(t, value, status, t0)
-        except BaseException as e:
-            error = e
-            for fut in running:
-                fut.cancel()
-            wait(list(running))
-    if error is not None:
-        raise error
+                pending.remove(main)
+                if on_start:
+                    on_start(main.name)
+            t0 = time.perf_counter()
+            try:
+                value, status = _do(main, ctx)
+            except BaseException as e:  # noqa: BLE001 - raised below, once the running tasks have ended
+                with lock:
+                    errors.append(e)
+                continue
+            with lock:
+                finish(main, value, status, t0)
+    if errors:
+        raise errors[0]
     return records

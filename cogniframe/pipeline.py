@@ -68,9 +68,7 @@ def _check_printer_fit(spec: Spec, parts) -> None:
 def check(spec: Spec, geometry: dict | None = None, clash=None) -> CheckResult:
     """Mass budget, crash margin, flight and requirements; `geometry` = CAD volumes when known,
     `clash` = the build's clash check (analysis.clash.ClashResult) when known."""
-    d = design(spec)
-    budget = mass_mod.budget(spec, d.frame, d.cut, d.parts, geometry)
-    drop = _drop(spec, d, budget)
+    d, budget, drop = mass_and_drop(spec, geometry)
     stiffness, peak = _physics(spec, d, budget, drop)
     from .analysis import flight as flight_mod
 
@@ -78,6 +76,14 @@ def check(spec: Spec, geometry: dict | None = None, clash=None) -> CheckResult:
     problems = (_problems(spec, budget, drop) + _physics_problems(spec, stiffness, peak)
                 + _aircraft_problems(spec, flight, clash))
     return CheckResult(d, budget, drop, tuple(problems), stiffness, peak, flight, clash)
+
+
+def mass_and_drop(spec: Spec, geometry: dict | None = None) -> tuple[Design, mass_mod.MassBudget, object]:
+    """The first, cheap part of `check`: the design, its mass budget and drop model (what the
+    build's mass and drop figures draw while the load cases are still being solved)."""
+    d = design(spec)
+    budget = mass_mod.budget(spec, d.frame, d.cut, d.parts, geometry)
+    return d, budget, _drop(spec, d, budget)
 
 
 def _aircraft_problems(spec: Spec, flight, clash) -> list[str]:

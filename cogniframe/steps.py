@@ -102,6 +102,13 @@ class CadPool:
                 self._pool = make_pool(self.workers)
         return self._pool.submit(fn, *args).result()
 
+    def run_in_pool_if_started(self, fn, *args):
+        """`fn(*args)` in the pool when it is already running (its own process: Python work there
+        does not hold this process's GIL), else right here (starting the pool costs a CadQuery import)."""
+        with self._lock:
+            pool = self._pool
+        return fn(*args) if pool is None else pool.submit(fn, *args).result()
+
     def close(self) -> None:
         if self._pool is not None:
             self._pool.shutdown(wait=True, cancel_futures=True)
@@ -132,9 +139,18 @@ class Slicer:
 # -- steps -----------------------------------------------------------------------------------
 
 def estimate(ctx) -> Made:
-    from . import pipeline
+    """Solve what the physics needs and the mass does not change (the frame stiffness k and the
+    joint models, each cached on disk by its own inputs) while the CAD pool builds the parts; the
+    mass-dependent load cases wait for the CAD volumes (`physics`)."""
+    spec = ctx.spec
+    if spec.model.k_n_per_m is None:
+        from .analysis.drop import predicted_k_n_per_m
 
-    pipeline.check(ctx.spec)  # solves (or reads) the frame stiffness while the CAD pool works
+        predicted_k_n_per_m(spec, ctx.design.frame)
+    else:
+        from .analysis.stiffness import joint_models
+
+        joint_models(spec, ctx.design.parts, spec.model.stiffness_model)
     return Made()
 
 
@@ -152,16 +168,36 @@ def make_part(ctx, material: str, part: str) -> Made:
     return Made((meta["stl"], meta["step"]), meta)
 
 
+def _geometry(ctx) -> dict:
+    from .analysis.mass import PartGeometry
+
+    return {b.name: PartGeometry(b.volume_mm3, b.area_h_mm2, b.area_v_mm2, "cad") for b in ctx.built_parts()}
+
+
+def budget(ctx) -> Made:
+    """The mass budget with the CAD volumes and the drop model: milliseconds once k is known; what
+    the mass and drop figures draw, so they need not wait for the load cases."""
+    from . import pipeline
+
+    _, mass, drop = pipeline.mass_and_drop(ctx.spec, _geometry(ctx))
+    return Made((), {"mass": mass, "drop": drop})
+
+
+def physics(ctx) -> Made:
+    """The check's load cases and peak prediction for the CAD mass (cached on disk by the analysis
+    modules; numpy, so it runs beside the main thread's figures and renders)."""
+    from . import pipeline
+
+    return Made((), pipeline.check(ctx.spec, _geometry(ctx)))
+
+
 def check(ctx) -> Made:
     import json
 
     from . import cutlist, pipeline
-    from .analysis.mass import PartGeometry
-
     from .analysis import clash
 
-    geometry = {b.name: PartGeometry(b.volume_mm3, b.area_h_mm2, b.area_v_mm2, "cad") for b in ctx.built_parts()}
-    result = pipeline.check(ctx.spec, geometry, clash=clash.from_dict(ctx["clash"]))
+    result = pipeline.check(ctx.spec, _geometry(ctx), clash=clash.from_dict(ctx["clash"]))  # physics: from the cache
     out = ctx.out
     files = {"check.json": json.dumps(pipeline.check_dict(result), indent=2) + "\n",
              "cutlist.csv": cutlist.to_csv(ctx.design.cut), "cutlist.md": cutlist.to_markdown(ctx.design.cut),
@@ -206,19 +242,23 @@ def clash_key(ctx):
 def make_clash(ctx) -> Made:
     """Issue 13: every pair of solids of the aircraft (printed part copies, rods, vitamins) and every
     propeller's clearance (analysis/clash.py); clash.json; its clashes are FAIL problems of `check`."""
+    from . import cache
     from .export.assembly import check_clashes
 
-    result = check_clashes(ctx.spec, ctx.design.frame, ctx.design.parts, ctx.built_parts(), ctx.out)
+    memo = (str(cache.cache_dir()), f"{cache.code_hash(*CLASH_CODE)}/{ctx.stack}") if ctx.use_cache else None
+    # in the CAD pool when it is up (manifold3d holds the GIL: here it would stall the main thread)
+    result = ctx.cad.run_in_pool_if_started(check_clashes, ctx.spec, ctx.design.frame, ctx.design.parts,
+                                            ctx.built_parts(), str(ctx.out), memo)
     (ctx.out / "clash.json").write_text(json.dumps(result.to_dict(), indent=2) + "\n", encoding="utf-8")
     return Made(("clash.json",), result.to_dict())
 
 
 def plots_key(ctx):
-    return ctx["check"].drop
+    return ctx["budget"]["drop"]
 
 
 def make_plots(ctx) -> Made:
-    drop = ctx["check"].drop
+    drop = ctx["budget"]["drop"]
     if drop is None:
         return Made()
     from .report import drop_plots
@@ -228,17 +268,21 @@ def make_plots(ctx) -> Made:
     return Made(("plots/drop_response.png", "plots/energy_split.png"))
 
 
+CLASH_CODE = ("analysis/clash.py", "export/assembly.py", "export/mesh.py", "vitamins.py", "materials.py", "partlist.py")
+
 STEPS = (
     #    target                    needs                                  make           key               code / where
-    Step("estimate",               (),                                    estimate),
+    Step("estimate",               (),                                    estimate,      None,             (),        "wait"),
     Step("part:{material}/{part}", (),                                    make_part,     part_key,         (),        "wait"),
-    Step("clash",                  ("part:*",),                           make_clash,    clash_key,        ("analysis/clash.py", "export/assembly.py", "export/mesh.py", "vitamins.py", "materials.py", "partlist.py"), "wait"),
-    Step("check",                  ("estimate", "part:*", "clash"),       check),
+    Step("budget",                 ("estimate", "part:*"),                budget),
+    Step("physics",                ("budget",),                           physics,       None,             (),        "wait"),
+    Step("clash",                  ("part:*",),                           make_clash,    clash_key,        CLASH_CODE, "wait"),
     Step("plates:{material}",      ("part:{material}/*",),                make_plates,   plates_key,       ("export/plates.py",)),
     Step("slice:{material}",       ("plates:{material}",),                make_slice,    slice_key,        ("export/slicer.py",), "wait"),
     Step("assembly",               ("part:*",),                           make_assembly, assembly_key,     ("export/assembly.py", "export/step.py", "vitamins.py"), "wait"),
-    Step("plots",                  ("check",),                            make_plots,    plots_key,        ("report/drop_plots.py", "analysis/impact.py")),
-    Step("figures",                ("check",),                            make_figures,  figures_key,      ("report/html.py", "report/drop_plots.py")),
+    Step("check",                  ("budget", "physics", "clash"),        check),
+    Step("plots",                  ("budget",),                           make_plots,    plots_key,        ("report/drop_plots.py", "analysis/impact.py")),
+    Step("figures",                ("budget",),                           make_figures,  figures_key,      ("report/html.py", "report/drop_plots.py")),
     Step("previews:{material}",    ("plates:{material}",),                make_previews, previews_key,     ("export/plates.py",)),
     Step("render:{part}",          ("part:*/{part}",),                    make_render_part, render_part_key, ("report/renders.py", "export/plates.py"),
          after=("plates:*",)),  # a render never holds up the slicer

@@ -15,7 +15,7 @@ bounding-box prefilter (grown by the margin for the discs), so only neighbours a
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Sequence
+from typing import MutableMapping, Sequence
 
 import numpy as np
 
@@ -91,9 +91,40 @@ def _manifold(body: Body):
     return man
 
 
+def body_key(body: Body, mesh_hash: str | None = None) -> str:
+    """sha256 of what a pair test reads of a body: its mesh, transform and whether it is a disc
+    (`mesh_hash`: the mesh's hash when already known, as for the copies of one part)."""
+    import hashlib
+
+    h = hashlib.sha256((mesh_hash or _mesh_hash(body.mesh)).encode())
+    if body.transform is not None:
+        h.update(np.ascontiguousarray(body.transform, np.float64).tobytes())
+    h.update(b"disc" if body.disc else b"solid")
+    return h.hexdigest()
+
+
+def _mesh_hash(mesh) -> str:
+    import hashlib
+
+    h = hashlib.sha256(np.ascontiguousarray(mesh.vertices, np.float64).tobytes())
+    h.update(np.ascontiguousarray(mesh.faces, np.int64).tobytes())
+    return h.hexdigest()
+
+
+def _pair_key(ka: str, kb: str, margin: float | None) -> str:
+    import hashlib
+
+    return hashlib.sha256(f"{ka}/{kb}/{margin!r}".encode()).hexdigest()[:32]
+
+
 def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_margin: float = 5.0,
-          ignore: frozenset[frozenset[str]] = frozenset()) -> ClashResult:
-    """Test every pair of `bodies`; `ignore` holds name pairs not tested at all (a disc and its motor)."""
+          ignore: frozenset[frozenset[str]] = frozenset(), memo: MutableMapping[str, list] | None = None) -> ClashResult:
+    """Test every pair of `bodies`; `ignore` holds name pairs not tested at all (a disc and its motor).
+
+    `memo`: pair results from earlier checks (key -> [overlap mm^3, gap mm or None]), read and
+    filled here; the key is the hash of both bodies' meshes and transforms (`body_key`) and, for a
+    disc, the margin. A rebuild after one part changed only re-tests the pairs that hold a copy of
+    it; the result is the same as testing every pair again."""
     names = [b.name for b in bodies]
     if len(set(names)) != len(names):
         dup = sorted({n for n in names if names.count(n) > 1})
@@ -103,6 +134,13 @@ def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_mar
     for m in mans:
         bb = m.bounding_box()
         boxes.append((np.array(bb[:3]), np.array(bb[3:])))
+    keys: list[str | None] = [None] * len(bodies)
+    if memo is not None:
+        meshes: dict[int, str] = {}  # the copies of a part share one mesh: hash it once
+        for i, b in enumerate(bodies):
+            if id(b.mesh) not in meshes:
+                meshes[id(b.mesh)] = _mesh_hash(b.mesh)
+            keys[i] = body_key(b, meshes[id(b.mesh)])
     clashes: list[Clash] = []
     tested = 0
     worst = ("", "", 0.0)
@@ -119,12 +157,21 @@ def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_mar
             if np.any(lo_a - grow > hi_b) or np.any(lo_b - grow > hi_a):
                 continue
             tested += 1
-            vol = float((mans[i] ^ mans[k]).volume())
+            pk = None if memo is None else _pair_key(keys[i], keys[k], prop_margin if disc is not None else None)
+            known = memo.get(pk) if pk is not None else None
+            if known is not None:
+                vol, gap = float(known[0]), known[1]
+            else:
+                vol = float((mans[i] ^ mans[k]).volume())
+                gap = None
+                if disc is not None:
+                    gap = 0.0 if vol > 0 else float(mans[i].min_gap(mans[k], prop_margin + 20.0))
+                if pk is not None:
+                    memo[pk] = [vol, gap]
             if vol > worst[2]:
                 worst = (a.name, b.name, vol)
             if disc is not None:
                 other = b if disc is a else a
-                gap = 0.0 if vol > 0 else float(mans[i].min_gap(mans[k], prop_margin + 20.0))
                 if disc.name not in gaps or gap < gaps[disc.name][1]:
                     gaps[disc.name] = (other.name, gap)
                 if gap < prop_margin:

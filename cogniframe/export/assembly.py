@@ -107,16 +107,24 @@ def own_motor_pairs(frame) -> frozenset:
     return frozenset(frozenset((f"propeller_{m.corner}", f"motor_{m.corner}")) for m in frame.motors)
 
 
-def check_clashes(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path):
-    """The build's clash check (one call after the assembly is written): part meshes read back from
-    their STL files; returns analysis.clash.ClashResult (its clashes are FAIL problems)."""
+def check_clashes(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path,
+                  memo: tuple[str, str] | None = None):
+    """The build's clash check: part meshes read back from their STL files; returns
+    analysis.clash.ClashResult (its clashes are FAIL problems). `memo`: (cache folder, salt) of
+    the pair results kept between builds (cache.Memo), so only pairs with a changed solid are
+    tested again; None tests every pair."""
     from ..analysis import clash
     from .mesh import load_stl
 
     out_dir = Path(out_dir)
     meshes = {b.name: load_stl(out_dir / b.stl) for b in built}
+    store = None
+    if memo is not None:
+        from ..cache import Memo
+
+        store = Memo("clash-pairs", memo[1], memo[0])
     return clash.check(bodies(spec, frame, parts, built, meshes), prop_margin=spec.requirements.prop_margin,
-                       ignore=own_motor_pairs(frame))
+                       ignore=own_motor_pairs(frame), memo=store)
 
 
 def assembly_key(spec: Spec, frame, parts: Sequence[PartSpec], built) -> str:
