@@ -184,11 +184,24 @@ def budget(ctx) -> Made:
 
 
 def physics(ctx) -> Made:
-    """The check's load cases and peak prediction for the CAD mass (cached on disk by the analysis
-    modules; numpy, so it runs beside the main thread's figures and renders)."""
+    """The check's load cases and peak prediction for the CAD mass, solved into the analysis
+    modules' disk caches (`check` then reads them): in the CAD pool when it is up, so the main
+    thread's plates and figures keep this process's GIL, else in this thread."""
+    from . import cache
+
+    ctx.cad.run_in_pool_if_started(solve_physics, ctx.spec, _geometry(ctx), str(cache.cache_dir()))
+    return Made()
+
+
+def solve_physics(spec, geometry: dict, cache_root: str) -> None:
+    """pipeline.check without the clash (runs in a worker process: the cache folder is passed, a
+    worker may have been started with another environment)."""
+    import os
+
     from . import pipeline
 
-    return Made((), pipeline.check(ctx.spec, _geometry(ctx)))
+    os.environ["COGNIFRAME_CACHE"] = cache_root  # this worker's cache: the build's
+    pipeline.check(spec, geometry)
 
 
 def check(ctx) -> Made:
@@ -274,10 +287,10 @@ STEPS = (
     #    target                    needs                                  make           key               code / where
     Step("estimate",               (),                                    estimate,      None,             (),        "wait"),
     Step("part:{material}/{part}", (),                                    make_part,     part_key,         (),        "wait"),
+    Step("plates:{material}",      ("part:{material}/*",),                make_plates,   plates_key,       ("export/plates.py",)),
     Step("budget",                 ("estimate", "part:*"),                budget),
     Step("physics",                ("budget",),                           physics,       None,             (),        "wait"),
     Step("clash",                  ("part:*",),                           make_clash,    clash_key,        CLASH_CODE, "wait"),
-    Step("plates:{material}",      ("part:{material}/*",),                make_plates,   plates_key,       ("export/plates.py",)),
     Step("slice:{material}",       ("plates:{material}",),                make_slice,    slice_key,        ("export/slicer.py",), "wait"),
     Step("assembly",               ("part:*",),                           make_assembly, assembly_key,     ("export/assembly.py", "export/step.py", "vitamins.py"), "wait"),
     Step("check",                  ("budget", "physics", "clash"),        check),

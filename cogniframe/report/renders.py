@@ -130,7 +130,7 @@ def _set_view(p, view: str, bounds: np.ndarray, zoom: float = 1.0) -> None:
     dist = 3.0 * float(np.linalg.norm(hi - lo))
     p.camera.parallel_projection = parallel
     p.camera_position = [tuple(centre + d * dist), tuple(centre), up]
-    p.reset_camera(bounds=(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]))
+    p.reset_camera(render=False, bounds=(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]))
     if zoom != 1.0 and not parallel:
         p.camera.zoom(zoom)
     if parallel:  # fit the projected box (reset_camera fits the bounding sphere, which wastes space)
