@@ -325,7 +325,8 @@ def plot_plate(plate: Plate, path: Path | str, size_in: float = 6.0, dpi: int = 
     for c in plate.copies:
         tri = np.asarray(c.mesh.vertices)[np.asarray(c.mesh.faces)][:, :, :2]
         up = np.abs(np.asarray(c.mesh.face_normals)[:, 2]) > 1e-3  # walls project to lines: skip
-        ax.add_collection(PolyCollection(tri[up], facecolors=colour, edgecolors=colour, linewidths=0.3, alpha=0.85))
+        ax.add_collection(PolyCollection(tri[up], facecolors=colour, edgecolors=colour, linewidths=0.3, alpha=0.85),
+                          autolim=False)  # the limits are set below: no need to measure 50k triangles
         ax.add_patch(Rectangle((c.x, c.y), c.size[0], c.size[1], fill=False, edgecolor="#555555",
                                linewidth=0.6, linestyle="--"))
         base, _, k = c.name.rpartition("_")
