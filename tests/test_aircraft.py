@@ -416,7 +416,7 @@ def test_a_build_with_a_clash_exits_1_naming_both_solids(run_cli, tmp_path, monk
 
     from cogniframe import steps
 
-    keep = ("estimate", "part:{material}/{part}", "clash", "check")
+    keep = ("estimate", "part:{material}/{part}", "budget", "physics", "clash", "check")
     monkeypatch.setattr(steps, "STEPS", tuple(s for s in steps.STEPS if s.name in keep))
     data = yaml.safe_load((ROOT / "params" / "bamboo.yaml").read_text())
     data["core"]["spacer_thickness"] = 0

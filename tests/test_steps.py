@@ -208,3 +208,45 @@ def test_after_orders_without_being_an_input(tmp_path, private_cache):
     seen["slow"] = 1  # plates reruns; render's key does not read it, so it stays cached
     records = graph.run([render, plates], graph.Context(tmp_path, {}))
     assert {r.task: r.status for r in records} == {"plates": "ran", "render": "cached"}
+
+
+def test_a_wait_step_starts_as_soon_as_its_needs_finish_even_during_a_main_step(tmp_path):
+    """`slice` needs `plates` (a wait step); a long main step (a render) is running when `plates`
+    finishes. `slice` must start then, not after the render: here the render only ends once
+    `slice` has started, so the graph finishes only if that is so."""
+    sliced = threading.Event()
+
+    def render(ctx):
+        assert sliced.wait(timeout=20), "slice waited for the main-thread step to end"
+        return Made()
+
+    def plates(ctx):
+        return Made()
+
+    def slice_(ctx):
+        sliced.set()
+        return Made()
+
+    steps = (Step("render", (), render), Step("plates", (), plates, where="wait"),
+             Step("slice", ("plates",), slice_, where="wait"))
+    records = graph.run(graph.expand(steps, [{}]), graph.Context(tmp_path, {}))
+    assert [r.task for r in records] == ["plates", "slice", "render"]
+
+
+def test_a_main_step_error_waits_for_running_threads_and_starts_nothing_new(tmp_path):
+    started, release = [], threading.Event()
+
+    def slow(ctx):
+        started.append("slow")
+        assert release.wait(timeout=20)
+        return Made()
+
+    def bad(ctx):
+        release.set()
+        raise ValueError("main failed")
+
+    steps = (Step("slow", (), slow, where="wait"), Step("bad", (), bad),
+             Step("later", ("slow",), lambda ctx: started.append("later") or Made(), where="wait"))
+    with pytest.raises(ValueError, match="main failed"):
+        graph.run(graph.expand(steps, [{}]), graph.Context(tmp_path, {}))
+    assert started == ["slow"]

@@ -179,4 +179,5 @@ def test_a_no_geometry_change_imports_no_cad_mesh_or_render_library(warm, tmp_pa
     assert not imported & {"cadquery", "OCP", "trimesh", "pyvista", "vtk", "rectpack"}
     ran = {line.split("]", 1)[1].split()[0] for line in proc.stderr.splitlines()
            if line.startswith("[") and not line.endswith("cached")}
-    assert ran == {"estimate", "check", "plots", "figures", "bom", "report"} | ({"slice:tpu_95a", "slice:abs"} if not HAVE_SLICER else set())
+    assert ran == ({"estimate", "budget", "physics", "check", "plots", "figures", "bom", "report"}
+                   | ({"slice:tpu_95a", "slice:abs"} if not HAVE_SLICER else set()))
