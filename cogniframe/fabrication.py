@@ -105,8 +105,12 @@ def make_slice(ctx, material: str) -> Made:
     with tempfile.TemporaryDirectory(prefix="cogniframe-gcode-") as tmp:
         for v in ctx[f"plates:{material}"]:
             where = ctx.out / "plates" if _keep_gcode(ctx) else Path(tmp)
-            r = slicer.slice_plate(ctx.out / v["threemf"], ini, ctx.spec.printer.bed, exe,
-                                   gcode=where / f"{v['name']}.gcode")
+            if ctx.use_cache and not _keep_gcode(ctx):  # per plate: a plate whose bytes did not change is not sliced again
+                r = slicer._slice_cached(ctx.out / v["threemf"], ini, ctx.spec.printer.bed, exe, version,
+                                         where / f"{v['name']}.gcode")
+            else:
+                r = slicer.slice_plate(ctx.out / v["threemf"], ini, ctx.spec.printer.bed, exe,
+                                       gcode=where / f"{v['name']}.gcode")
             plates.append({"plate": r.plate, "material": r.material, "grams": r.grams, "time_s": r.time_s,
                            "objects": [list(o) for o in r.objects]})
             if _keep_gcode(ctx):
