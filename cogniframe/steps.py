@@ -221,10 +221,38 @@ def mass_markdown(check) -> str:
     return "\n".join(lines) + "\n"
 
 
-def assembly_key(ctx):
-    from .export.assembly import assembly_key as key
+def _copies(ctx, file_hash: str) -> list:
+    """What the assembly and the clash check read of the printed parts: each copy's name, colour
+    and placement, and its part's file (by hash: `stl` or `step`) and print <- local transform."""
+    import numpy as np
 
-    return key(ctx.spec, ctx.design.frame, ctx.design.parts, ctx.built_parts())
+    from .cache import file_sha256
+    from .export.assembly import instance_name
+
+    out = []
+    for p in ctx.design.parts:
+        v = ctx.part_value(p.name)
+        sha = v["stl_sha256"] if file_hash == "stl" else file_sha256(ctx.out / v[file_hash])
+        out.append([p.name, p.material, sha, np.round(np.asarray(v["print_from_local"], float), 9).tolist(),
+                    [[instance_name(p, pl.instance), pl.rotation_deg, list(pl.origin)] for pl in p.placements]])
+    return out
+
+
+def _rods_and_vitamins(ctx) -> list:
+    import numpy as np
+
+    from .export.assembly import _vitamin_key
+
+    rods = [[r.name, np.round(r.start, 9).tolist(), np.round(r.end, 9).tolist(), r.diameter]
+            for r in ctx.design.frame.rods.values()]
+    return [rods, _vitamin_key(ctx.spec, ctx.design.frame)]
+
+
+def assembly_key(ctx):
+    """The assembly reads each part's STEP file (by its bytes, not the CAD inputs: a code edit that
+    leaves a part's STEP as it was does not redo the assembly), the copies' names, colours and
+    placements, the rods, the vitamins and the design's name."""
+    return [ctx.spec.name, _copies(ctx, "step"), _rods_and_vitamins(ctx)]
 
 
 def make_assembly(ctx) -> Made:
@@ -235,11 +263,11 @@ def make_assembly(ctx) -> Made:
 
 
 def clash_key(ctx):
+    """The clash check reads each part's STL (by hash), the copies' names and placements, the rods,
+    the vitamins (propellers and their motors), the propeller margin and the tolerance."""
     from .analysis.clash import TOLERANCE_MM3
-    from .export.assembly import assembly_key as key
 
-    return [key(ctx.spec, ctx.design.frame, ctx.design.parts, ctx.built_parts()), ctx.spec.requirements.prop_margin,
-            TOLERANCE_MM3]
+    return [_copies(ctx, "stl"), _rods_and_vitamins(ctx), ctx.spec.requirements.prop_margin, TOLERANCE_MM3]
 
 
 def make_clash(ctx) -> Made:
