@@ -17,8 +17,10 @@ without a key is cheap and in memory only (a check, a text file): it always runs
 
 Where a step runs: `where="main"` steps run one at a time on the calling thread, in list order
 (Python work: matplotlib, VTK, trimesh); `where="wait"` steps each get a thread, because they
-mostly wait for another process (the CAD process pool, PrusaSlicer), so they overlap with the
-main ones and with each other. `after` orders without being an input (not in the key): e.g.
+mostly wait for another process (the CAD process pool, PrusaSlicer) or for LAPACK, so they overlap
+with the main ones and with each other. A wait step starts the moment its needs are done, from the
+thread of the step that finished last, even while a main step is running (a slicer never waits for
+a render to end). `after` orders without being an input (not in the key): e.g.
 renders start after the plates are laid out, so a long render never delays the slicer.
 
 Why not a library: doit tracks whether targets are up to date *in place* (a dbm of file

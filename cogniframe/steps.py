@@ -1,27 +1,30 @@
 """The build, as a Makefile: each step's target, what it needs, how it is made and what it reads.
 
-    target                    needs                                    reads (its cache key)
-    estimate                  -                                        (always: the check without CAD; warms the stiffness cache)
-    part:{material}/{part}    -                                        part digest, bed, mesh tolerances, CAD code
-    clash                     part:*                                   part digests, placements, rods, vitamins, prop margin (issue 13)
-    check                     estimate part:* clash                    (always: mass with CAD volumes, drop model, flight, text files)
-    plates:{material}         part:{material}/*                        each part's STL hash and qty, bed, margin
-    slice:{material}          plates:{material}                        plate files, profile, PrusaSlicer version
-    assembly                  part:*                                   part digests, placements, rods
-    plots                     check                                    the drop model's numbers
-    figures                   check                                    the mass budget's and drop model's numbers
-    previews:{material}       plates:{material}                        plate files
-    render:{part}             part:*/{part}                            the part's STL hash, material
-    renders                   part:*                                   STL hashes, placements, rods
-    viewer                    check plates:*                           STL hashes, placements, grams each, plates, rods, cut list
-    bom                       check slice:*                            (always: BOM, assembly steps)
-    report                    everything above                         (always: HTML and Markdown from the files above)
+    target                    needs                          reads (its cache key)
+    estimate                  -                              (always, thread: k and the joint models, mass-independent, cached on disk)
+    part:{material}/{part}    -                              part digest, bed, mesh tolerances, CAD code
+    plates:{material}         part:{material}/*              each part's STL hash and qty, bed, margin, print settings
+    budget                    estimate part:*                (always: mass with CAD volumes, drop model; milliseconds)
+    physics                   budget                         (always, thread: load cases and peaks for that mass, cached on disk)
+    clash                     part:*                         STL hashes, copies and placements, rods, vitamins, prop margin (issue 13)
+    slice:{material}          plates:{material}              plate files, profile, PrusaSlicer version (each plate on its own key)
+    assembly                  part:*                         STEP hashes, copies and placements, rods, vitamins
+    check                     budget physics clash           (always: check.json, cut list, mass.md from the cached physics)
+    plots                     budget                         the drop model's numbers
+    figures                   budget                         the mass budget's and drop model's numbers
+    previews:{material}       plates:{material}              plate layouts
+    render:{part}             part:*/{part}                  the part's STL hash, material
+    renders                   part:*                         STL hashes, placements, rods, vitamins
+    viewer                    check plates:*                 STL hashes, placements, grams each, plates, rods, cut list
+    bom                       check slice:*                  (always: BOM, assembly steps)
+    report                    everything above               (always: HTML and Markdown from the files above)
 
 A step with a key runs only when its key changes; otherwise its files come from the cache
-(graph.py). `part`, `slice` and `assembly` run in threads that wait for another process (CAD
-pool, PrusaSlicer), so slicing a plate starts as soon as its parts exist while the main thread
-draws plots, previews and renders. Heavy imports (cadquery, trimesh, pyvista, matplotlib) happen
-only inside steps that run.
+(graph.py). `part`, `slice`, `assembly` and `clash` run in threads that wait for another process
+(CAD pool, PrusaSlicer), `estimate` and `physics` in threads (numpy releases the GIL), and each
+starts the moment its needs are done: slicing a plate starts as soon as it is laid out while the
+main thread lays out the other plates and draws plots, previews and renders. Heavy imports
+(cadquery, trimesh, pyvista, matplotlib) happen only inside steps that run.
 """
 
 from __future__ import annotations
