@@ -12,6 +12,7 @@ import functools
 import hashlib
 import json
 import os
+import time
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
@@ -113,6 +114,7 @@ class _StepProgress:
         self.progress = None
 
     def __enter__(self):
+        self.t0 = time.perf_counter()
         if self.console.is_terminal:
             self.progress = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                                      TimeElapsedColumn(), console=self.console, transient=True)
@@ -127,7 +129,8 @@ class _StepProgress:
     def done(self, rec) -> None:
         self.n += 1
         self.counts[rec.status] = self.counts.get(rec.status, 0) + 1
-        took = "cached" if rec.status == "cached" else f"{rec.seconds:.1f} s"
+        # ran: how long it took and when it ended (seconds into the build), so a slow build shows its critical path
+        took = "cached" if rec.status == "cached" else f"{rec.seconds:5.1f} s, done at {time.perf_counter() - self.t0:.1f} s"
         text = f"[{self.n:>{len(str(self.total))}}/{self.total}] {rec.task:<28} {took}"
         if self.progress is not None:
             self.progress.console.print(text, style="dim" if rec.status == "cached" else None, markup=False,
