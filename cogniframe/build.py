@@ -95,8 +95,10 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
                                     "gcode": gcode},
                               stack=steps.stack_fingerprint(), use_cache=use_cache)
     tasks = graph.expand(steps.STEPS, steps.rows(design))
+    from .threads import one_blas_thread
+
     try:
-        with _StepProgress(console, len(tasks), spec.name) as progress:
+        with _StepProgress(console, len(tasks), spec.name) as progress, one_blas_thread():
             records = graph.run(tasks, ctx, on_start=progress.start, on_done=progress.done)
     finally:
         cad.close()

@@ -40,7 +40,9 @@ def check(params: ParamsArg,
     from . import spec as spec_mod
 
     spec = spec_mod.load(params)
-    with spec.blamed():
+    from .threads import one_blas_thread
+
+    with spec.blamed(), one_blas_thread():  # as `build` computes it: same numbers, no spinning BLAS threads
         result = pipeline.check(spec)
     if plots is not None and result.drop is not None:
         from .outdir import claim_file
