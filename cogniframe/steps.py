@@ -311,9 +311,11 @@ STEPS = (
     Step("plates:{material}",      ("part:{material}/*",),                make_plates,   plates_key,       ("export/plates.py",)),
     Step("budget",                 ("estimate", "part:*"),                budget),
     Step("physics",                ("budget",),                           physics,       None,             (),        "wait"),
-    Step("clash",                  ("part:*",),                           make_clash,    clash_key,        CLASH_CODE, "wait"),
+    Step("clash",                  ("part:*",),                           make_clash,    clash_key,        CLASH_CODE, "wait",
+         after=("plates:*",)),  # the plates (then the slicer) are the critical path: they get the CPU first
     Step("slice:{material}",       ("plates:{material}",),                make_slice,    slice_key,        ("export/slicer.py",), "wait"),
-    Step("assembly",               ("part:*",),                           make_assembly, assembly_key,     ("export/assembly.py", "export/step.py", "vitamins.py"), "wait"),
+    Step("assembly",               ("part:*",),                           make_assembly, assembly_key,     ("export/assembly.py", "export/step.py", "vitamins.py"), "wait",
+         after=("plates:*",)),
     Step("check",                  ("budget", "physics", "clash"),        check),
     Step("plots",                  ("budget",),                           make_plots,    plots_key,        ("report/drop_plots.py", "analysis/impact.py")),
     Step("figures",                ("budget",),                           make_figures,  figures_key,      ("report/html.py", "report/drop_plots.py")),
