@@ -225,7 +225,7 @@ def run(tasks: Sequence[Task], ctx: Context, threads: int = 16,
             running[0] += 1
             pool.submit(in_thread, t, time.perf_counter())
 
-    with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="step") as pool:
+    def main_loop() -> None:  # the calling thread: start ready wait tasks, run ready main tasks in list order
         while True:
             with lock:
                 start_waits()
@@ -235,20 +235,24 @@ def run(tasks: Sequence[Task], ctx: Context, threads: int = 16,
                         lock.wait()
                         continue
                     if errors or not pending:
-                        break
+                        return
                     raise RuntimeError(f"build graph stuck: {[t.name for t in pending]} wait for steps that never run")
                 pending.remove(main)
                 if on_start:
                     on_start(main.name)
             t0 = time.perf_counter()
-            try:
-                value, status = _do(main, ctx)
-            except BaseException as e:  # noqa: BLE001 - raised below, once the running tasks have ended
-                with lock:
-                    errors.append(e)
-                continue
+            value, status = _do(main, ctx)
             with lock:
                 finish(main, value, status, t0)
+
+    with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="step") as pool:
+        try:
+            main_loop()
+        except BaseException as e:  # noqa: BLE001 - a main task's error or Ctrl-C: start nothing new,
+            with lock:              # let the running tasks end (the executor waits for them), then raise
+                errors.insert(0, e)
+                while running[0]:
+                    lock.wait()
     if errors:
         raise errors[0]
     return records
