@@ -84,9 +84,16 @@ class BuildContext(graph.Context):
         return tuple(_built(p, self.part_value(p.name)) for p in self.design.parts)
 
     def mesh(self, name: str):
+        """The part's STL as a trimesh, read once per build (plates, part renders and assembly
+        renders all read it; they copy before they move it)."""
         import trimesh
 
-        return trimesh.load(self.out / self.part_value(name)["stl"], force="mesh")
+        v = self.part_value(name)
+        memo = self.__dict__.setdefault("_meshes", {})
+        key = (name, v["stl_sha256"])
+        if key not in memo:
+            memo[key] = trimesh.load(self.out / v["stl"], force="mesh")
+        return memo[key]
 
 
 class CadPool:

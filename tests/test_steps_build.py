@@ -172,11 +172,15 @@ def test_a_no_geometry_change_imports_no_cad_mesh_or_render_library(warm, tmp_pa
     root, _, _ = warm
     params = _params(tmp_path / "params", ("core.battery.mass", 59))
     env = {**os.environ, "COGNIFRAME_CACHE": str(root / "cache"), "PYTHONPATH": str(ROOT)}
+    solved = {kind: len(list((root / "cache" / kind).glob("*.json"))) for kind in ("cases", "peaks")}
     proc = subprocess.run([sys.executable, "-X", "importtime", "-m", "cogniframe", "build", str(params), "-o",
                            str(tmp_path / "out")], capture_output=True, text=True, env=env, cwd=tmp_path, timeout=600)
     assert proc.returncode == 0, proc.stderr[-3000:]
     imported = {line.rsplit("|", 1)[-1].strip() for line in proc.stderr.splitlines() if line.startswith("import time:")}
     assert not imported & {"cadquery", "OCP", "trimesh", "pyvista", "vtk", "rectpack"}
+    # the load cases and peaks are solved once, for the mass with the CAD volumes (`estimate` no
+    # longer solves them for the estimated mass too, only k and the joints, which the mass leaves alone)
+    assert {kind: len(list((root / "cache" / kind).glob("*.json"))) - n for kind, n in solved.items()} == {"cases": 1, "peaks": 1}
     ran = {line.split("]", 1)[1].split()[0] for line in proc.stderr.splitlines()
            if line.startswith("[") and not line.endswith("cached")}
     assert ran == ({"estimate", "budget", "physics", "check", "plots", "figures", "bom", "report"}
