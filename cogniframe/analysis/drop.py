@@ -10,6 +10,7 @@ a hash of exactly its inputs and of the source of the modules that compute it, s
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import json
 from pathlib import Path
@@ -43,28 +44,61 @@ def evaluate_design(spec: Spec, frame: Frame, total_mass_g: float) -> impact.Dro
 def predicted_k_n_per_m(spec: Spec, frame: Frame, total_mass_g: float | None = None) -> float:
     """Frame-model stiffness (the secant with the fit's play, `stiffness.secant_k`), cached by a
     hash of everything the model reads and of its source. It does not depend on the mass."""
+    return float(_secant(spec, frame)["k_n_per_m"])
+
+
+def _secant(spec: Spec, frame: Frame) -> dict:
+    """{"k_n_per_m", "play"}: the secant k and the play springs it was taken with (rod end node ->
+    6x6 as nested lists; JSON keeps every float's digits), cached. `load_cases` reuses the play
+    springs instead of iterating them again."""
     key = _stiffness_key(spec)
     hit = cache.load_json("stiffness", key)
-    if hit is not None:
-        return float(hit["k_n_per_m"])
+    if hit is not None and "play" in hit:
+        return hit
     from .. import partlist
-    from .stiffness import joint_models, secant_k
+    from .stiffness import joint_models, secant_k_and_play
 
     parts = partlist.build(spec, frame)
     joints = joint_models(spec, parts, spec.model.stiffness_model)
-    k = secant_k(spec, frame, parts, joints)
-    cache.store_json("stiffness", key, {"k_n_per_m": k})
-    return k
+    k, play = secant_k_and_play(spec, frame, parts, joints)
+    out = {"k_n_per_m": k, "play": {n: p.tolist() for n, p in play.items()}}
+    cache.store_json("stiffness", key, out)
+    return out
 
 
-def _stiffness_key(spec: Spec, *extra) -> str:
+# What of the params the frame model (k, and the play springs) reads: the geometry and the
+# materials. Left out: what only weighs (the battery's and the motors' masses; the core's
+# infill and material: the core is rigid in the model) or only flies (cells, capacity, kv, prop,
+# thrust). The load cases' key adds the mass and the drop; the peaks' key every number it uses.
+_NOT_READ_BY_K = {"core": ("infill", "material"), "core.battery": ("mass", "cells", "capacity_mah", "usable_fraction"),
+                  "motors": ("prop_mass", "kv", "prop", "max_thrust_g")}
+
+
+def _k_inputs(data: dict) -> dict:
+    inputs = {s: copy.deepcopy(data[s]) for s in ("materials", "frame", "rods", "joints", "core", "motors", "printer")}
+    for dotted, keys in _NOT_READ_BY_K.items():
+        node = inputs
+        for part in dotted.split("."):
+            node = node.get(part) if isinstance(node, dict) else None
+        if isinstance(node, dict):
+            for k in keys:
+                node.pop(k, None)
+    return inputs
+
+
+def _stiffness_key(spec: Spec, *extra, scope: str = "k") -> str:
+    """Cache key: a hash of the inputs and of the source of every module the model reads (library
+    moduli live in materials.py, the bore in spec.py). ``scope="k"``: only what the frame model
+    reads (`_k_inputs`); ``"all"``: every section the load cases and peaks may read."""
     from importlib.util import find_spec
 
     data = spec.model_dump(mode="json")
-    inputs = {s: data[s] for s in ("materials", "frame", "rods", "joints", "core", "motors", "printer")}
+    if scope == "k":
+        inputs = _k_inputs(data)
+    else:
+        inputs = {s: data[s] for s in ("materials", "frame", "rods", "joints", "core", "motors", "printer")}
     inputs["stiffness_model"] = data["model"].get("stiffness_model", "fe")
     h = hashlib.sha256(json.dumps([inputs, extra], sort_keys=True, default=str).encode())
-    # every module the model reads from: library moduli live in materials.py, bore in spec.py
     for mod in _MODULES:
         h.update(Path(find_spec(mod).origin).read_bytes())
     return h.hexdigest()[:24]
@@ -82,7 +116,7 @@ def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropR
     k_model = drop.k_n_per_m
     zeta = drop.damping_ratio
     key = _stiffness_key(spec, "cases", round(total_mass_g, 6), round(k_model, 6), round(x, 9), round(zeta, 9),
-                         spec.requirements.wall_impact_speed_m_s)
+                         spec.requirements.wall_impact_speed_m_s, scope="all")
     hit = cache.load_json("cases", key)
     if hit is not None:
         return hit
@@ -90,8 +124,13 @@ def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropR
     from .stiffness import load_cases as cases
 
     parts = partlist.build(spec, frame)
+    play = None
+    if spec.model.k_n_per_m is None:  # the predicted k's play springs (cached with it): not iterated again
+        import numpy as np
+
+        play = {n: np.asarray(p, float) for n, p in _secant(spec, frame)["play"].items()}
     lc = cases(spec, frame, parts, total_mass_g, joint_model=spec.model.stiffness_model, damping_ratio=zeta,
-               design_force_n=k_model * x / 1000.0)
+               design_force_n=k_model * x / 1000.0, play=play)
     out = lc.to_dict()
     out["design_drop_height_cm"] = h_design
     out["design_force_n"] = k_model * x / 1000.0
@@ -104,7 +143,8 @@ def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropR
 def peak_prediction(spec: Spec, total_mass_g: float, drop: impact.DropResult, exo_mass_g: float) -> dict:
     """Predicted peak |a| (G, as the logger sees it) per drop height, from the better-validated model."""
     heights = sorted({*spec.requirements.drop_heights_cm, spec.requirements.design_drop_height_cm})
-    key = _stiffness_key(spec, "peaks", total_mass_g, drop.k_n_per_m, drop.c_n_s_per_m, exo_mass_g, heights, drop.clearance_mm)
+    key = _stiffness_key(spec, "peaks", total_mass_g, drop.k_n_per_m, drop.c_n_s_per_m, exo_mass_g, heights, drop.clearance_mm,
+                         scope="all")
     hit = cache.load_json("peaks", key)
     if hit is not None:
         return hit
