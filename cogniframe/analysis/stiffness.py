@@ -752,7 +752,7 @@ def _wall_case(spec, frame, mdl: Model, K, masses, zeta: float) -> dict:
     # the first to reach the wall; symmetric motors tie (to round-off): the first by name, so
     # the answer does not hang on the solver's last digits
     t_min = min(x[0] for x in limits)
-    travel, what, gap = min((x for x in limits if x[0] <= t_min + 1e-9 * abs(t_min)), key=lambda x: x[1])
+    travel, what, gap = min((x for x in limits if x[0] <= t_min + _TIE * abs(t_min)), key=lambda x: x[1])
     w0 = math.sqrt(k_lat / (masses["total"] / 1000.0))
     v_max = travel / 1000.0 * w0 / _damped_peak_factor(zeta)
     return {"k_lateral_n_per_m": k_lat, "max_wall_speed_m_s": v_max, "limited_by": what, "payload_travel_mm": travel,
@@ -812,6 +812,7 @@ def _modes(spec, frame, parts, joints, masses, n: int = N_MODES, rod_segments: i
     return [round(x, 2) for x in elastic]
 
 
+_TIE = 1e-6  # relative: results this close are equal (symmetric members; the solver's round-off)
 MODES_EXTRA = 8  # eigsh asks for this many modes beyond those wanted (a degenerate pair at the edge)
 
 
@@ -829,15 +830,14 @@ def lowest_eigenvalues(K, M, count: int) -> np.ndarray:
     want = count + MODES_EXTRA
     if n <= max(200, 3 * want):
         return _dense_lowest(K, M, count)
-    from scipy.sparse.linalg import ArpackNoConvergence, eigsh
+    from scipy.sparse.linalg import ArpackNoConvergence, LinearOperator, eigsh
 
-    # The shift: below the rigid-body modes (0), so K - sigma M is positive definite, by a
-    # millionth of the typical diagonal ratio K_ii / M_ii. Much closer to 0 (sigma = -1 (rad/s)^2)
-    # the factorization is near-singular (condition ~1e15 with the rigid links) and modes go missing.
-    sigma = -1e-6 * float(np.median(K.diagonal() / M.diagonal()))
+    sigma = _shift(K, M)
+    lu = ff.sparse_lu(K - sigma * M)
+    op = LinearOperator(K.shape, matvec=lu.solve, dtype=float)
     v0 = np.random.default_rng(0).standard_normal(n)  # deterministic, and no symmetry of the frame
     try:
-        w = eigsh(K, k=want, M=M, sigma=sigma, which="LM", v0=v0, return_eigenvectors=False)
+        w = eigsh(K, k=want, M=M, sigma=sigma, OPinv=op, which="LM", v0=v0, return_eigenvectors=False)
     except ArpackNoConvergence:
         return _dense_lowest(K, M, count)
     w = np.sort(w)
@@ -849,6 +849,15 @@ def lowest_eigenvalues(K, M, count: int) -> np.ndarray:
     return w[:count]
 
 
+def _shift(K, M) -> float:
+    """The shift-invert shift: below the rigid-body modes (0), so that K - sigma M is positive
+    definite, by 1e-7 of the median diagonal ratio K_ii / M_ii (a single element's frequency
+    squared; the frame's first modes sit some 1e-7 below it). Much closer to 0 (sigma = -1
+    (rad/s)^2) the factors are near-singular (condition ~1e15 with the rigid links) and modes go
+    missing; much further, Lanczos needs more restarts."""
+    return -1e-7 * float(np.median(K.diagonal() / M.diagonal()))
+
+
 def _count_below(K, M, s: float) -> int:
     """How many eigenvalues of (K, M) lie below s: the negative pivots of an LDL^T of K - s M
     (SuperLU with symmetric, diagonal pivoting); -1 if the factorization did not keep symmetry."""
@@ -856,7 +865,7 @@ def _count_below(K, M, s: float) -> int:
 
     try:
         lu = splu((K - s * M).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                  options={"SymmetricMode": True})
+                  options={"SymmetricMode": True})  # pivots on the diagonal only: P A P^T = L D L^T
     except RuntimeError:  # an exactly singular pivot: s is an eigenvalue
         return -1
     if not np.array_equal(lu.perm_r, lu.perm_c):
@@ -873,7 +882,7 @@ def _dense_lowest(K, M, count: int) -> np.ndarray:
     K = K.toarray() if hasattr(K, "toarray") else np.asarray(K)
     M = M.toarray() if hasattr(M, "toarray") else np.asarray(M)
     n = K.shape[0]
-    sigma = -1e-6 * float(np.median(np.diag(K) / np.diag(M)))
+    sigma = _shift(K, M)
     nu = eigh(M, K - sigma * M, eigvals_only=True, subset_by_index=[n - count, n - 1])
     return np.sort(1.0 / nu + sigma)
 
@@ -897,7 +906,7 @@ def _strain(spec, frame, parts, joints, mdl: Model, u: np.ndarray, eps_break: fl
         th_arm = np.mean([u[6 * idx[n] + 3:6 * idx[n] + 6] for n in arms], axis=0)
         eps_h = max(eps_h, t_web / 2 * float(np.linalg.norm(th_leg - th_arm)) / l_web)
     # sockets: the super-element's force on each rod body, as bearing over the socket depth
-    eps_s, where = 0.0, None
+    at = []
     d = spec.rods.diameter
     for _, rn, end, axis, F, Mo in socket_loads(fe, frame, u):
         v = float(np.linalg.norm(F - axis * (F @ axis)))
@@ -905,8 +914,9 @@ def _strain(spec, frame, parts, joints, mdl: Model, u: np.ndarray, eps_break: fl
         L = end.depth
         # rigid rod on a linear (Winkler) bearing over L, loads at the mouth: peak line load
         q = v / L + 6 * (mm + v * L / 2) / L**2
-        eps = q / d / itf.e
-        if eps > eps_s:
-            eps_s, where = eps, f"{end.node}/{rn}"
+        at.append((q / d / itf.e, f"{end.node}/{rn}"))
+    eps_s = max((e for e, _ in at), default=0.0)
+    # symmetric sockets tie (to round-off): the first by name
+    where = min((w for e, w in at if e >= eps_s * (1 - _TIE) and e > 0), default=None)
     return {"hinge": round(eps_h, 4), "socket": round(eps_s, 4), "socket_at": where, "elongation_at_break": eps_break,
             "peak": round(max(eps_h, eps_s), 4), "ratio_to_break": round(max(eps_h, eps_s) / eps_break, 4)}
