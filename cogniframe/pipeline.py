@@ -95,7 +95,7 @@ def _aircraft_problems(spec: Spec, flight, clash) -> list[str]:
 def _drop(spec: Spec, d: Design, budget: mass_mod.MassBudget):
     from .analysis import drop as drop_mod
 
-    return drop_mod.evaluate_design(spec, d.frame, budget.total_g)
+    return drop_mod.evaluate_design(spec, d.frame, budget.total_g, parts=d.parts)
 
 
 def _physics(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop):
@@ -104,7 +104,7 @@ def _physics(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop):
 
     if drop is None:
         return None, None
-    cases = drop_mod.load_cases(spec, d.frame, budget.total_g, drop)
+    cases = drop_mod.load_cases(spec, d.frame, budget.total_g, drop, parts=d.parts)
     peak = drop_mod.peak_prediction(spec, budget.total_g, drop, budget.groups["exoskeleton"])
     return cases, peak
 

@@ -25,13 +25,14 @@ _MODULES = ("cogniframe.analysis.stiffness", "cogniframe.analysis.impact_nl", "c
             "cogniframe.materials", "cogniframe.spec")
 
 
-def evaluate_design(spec: Spec, frame: Frame, total_mass_g: float) -> impact.DropResult:
-    """Drop results over `requirements.drop_heights_cm` for this design (SI inside, see impact)."""
+def evaluate_design(spec: Spec, frame: Frame, total_mass_g: float, parts=None) -> impact.DropResult:
+    """Drop results over `requirements.drop_heights_cm` for this design (SI inside, see impact).
+    ``parts``: the design's part list when the caller has it (else built here if needed)."""
     m = total_mass_g / 1000.0
     if spec.model.k_n_per_m is not None:
         k, k_source = spec.model.k_n_per_m, "measured"
     else:
-        k, k_source = predicted_k_n_per_m(spec, frame, total_mass_g), "predicted"
+        k, k_source = predicted_k_n_per_m(spec, frame, total_mass_g, parts), "predicted"
     if spec.model.c_n_s_per_m is not None:
         c, c_source = spec.model.c_n_s_per_m, "measured"
     else:
@@ -41,13 +42,13 @@ def evaluate_design(spec: Spec, frame: Frame, total_mass_g: float) -> impact.Dro
                            k_source=k_source, c_source=c_source)
 
 
-def predicted_k_n_per_m(spec: Spec, frame: Frame, total_mass_g: float | None = None) -> float:
+def predicted_k_n_per_m(spec: Spec, frame: Frame, total_mass_g: float | None = None, parts=None) -> float:
     """Frame-model stiffness (the secant with the fit's play, `stiffness.secant_k`), cached by a
     hash of everything the model reads and of its source. It does not depend on the mass."""
-    return float(_secant(spec, frame)["k_n_per_m"])
+    return float(_secant(spec, frame, parts)["k_n_per_m"])
 
 
-def _secant(spec: Spec, frame: Frame) -> dict:
+def _secant(spec: Spec, frame: Frame, parts=None) -> dict:
     """{"k_n_per_m", "play"}: the secant k and the play springs it was taken with (rod end node ->
     6x6 as nested lists; JSON keeps every float's digits), cached. `load_cases` reuses the play
     springs instead of iterating them again."""
@@ -58,7 +59,7 @@ def _secant(spec: Spec, frame: Frame) -> dict:
     from .. import partlist
     from .stiffness import joint_models, secant_k_and_play
 
-    parts = partlist.build(spec, frame)
+    parts = parts if parts is not None else partlist.build(spec, frame)
     joints = joint_models(spec, parts, spec.model.stiffness_model)
     k, play = secant_k_and_play(spec, frame, parts, joints)
     out = {"k_n_per_m": k, "play": {n: p.tolist() for n, p in play.items()}}
@@ -104,7 +105,7 @@ def _stiffness_key(spec: Spec, *extra, scope: str = "k") -> str:
     return h.hexdigest()[:24]
 
 
-def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropResult) -> dict:
+def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropResult, parts=None) -> dict:
     """`check --json`'s `stiffness` section: every load case of `stiffness.load_cases`, cached.
 
     The design drop's force is the spring force at its maximum compression, k x_max (the
@@ -123,12 +124,12 @@ def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropR
     from .. import partlist
     from .stiffness import load_cases as cases
 
-    parts = partlist.build(spec, frame)
+    parts = parts if parts is not None else partlist.build(spec, frame)
     play = None
     if spec.model.k_n_per_m is None:  # the predicted k's play springs (cached with it): not iterated again
         import numpy as np
 
-        play = {n: np.asarray(p, float) for n, p in _secant(spec, frame)["play"].items()}
+        play = {n: np.asarray(p, float) for n, p in _secant(spec, frame, parts)["play"].items()}
     lc = cases(spec, frame, parts, total_mass_g, joint_model=spec.model.stiffness_model, damping_ratio=zeta,
                design_force_n=k_model * x / 1000.0, play=play)
     out = lc.to_dict()

@@ -190,15 +190,19 @@ class Frame3D:
         return (np.array([[b.e, b.g, b.a, b.i, b.j, b.rho] for b in beams], float).reshape(-1, 6)).T
 
     def _spring_coo(self, idx):
-        rows, cols, vals = [], [], []
+        """(rows, cols, values) of the springs, batched by their node count; within a batch in
+        the springs' order."""
+        six = np.arange(6)
+        groups: dict[int, tuple[list, list]] = {}
         for nodes, k in self.springs:
-            d = _dofs(idx, nodes)
-            rows.append(np.repeat(d, d.size))
-            cols.append(np.tile(d, d.size))
-            vals.append(k.ravel())
-        if not rows:
+            g = groups.setdefault(len(nodes), ([], []))
+            g[0].append([idx[n] for n in nodes])
+            g[1].append(k)
+        parts = [_block_coo((6 * np.asarray(nodes)[:, :, None] + six).reshape(len(nodes), -1), np.asarray(ks))
+                 for nodes, ks in groups.values()]
+        if not parts:
             return _EMPTY
-        return np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
+        return tuple(np.concatenate(x) for x in zip(*parts))
 
     def stiffness(self, sparse: bool = False):
         """Assembled K (dense ndarray; ``sparse=True``: scipy CSC), DOFs in node order x 6."""
@@ -281,8 +285,8 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _assemble(n: int, parts, sparse: bool):
-    """Sum (rows, cols, values) triplets into an n x n matrix, in the order given (dense: the same
-    sequence of additions per entry as adding the element matrices one by one)."""
+    """Sum (rows, cols, values) triplets into an n x n matrix (dense: np.bincount, which adds in
+    the order given; sparse: scipy COO -> CSC, duplicates summed)."""
     rows = np.concatenate([p[0] for p in parts]) if parts else np.zeros(0, int)
     cols = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0, int)
     vals = np.concatenate([p[2] for p in parts]) if parts else np.zeros(0)

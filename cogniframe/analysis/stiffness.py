@@ -82,10 +82,6 @@ def _rz(deg: float) -> np.ndarray:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-def _block(r: np.ndarray, n: int) -> np.ndarray:
-    return np.kron(np.eye(2 * n), r)
-
-
 def joint_parts(parts) -> list:
     return [p for p in parts if p.family == "joint"]
 
@@ -124,7 +120,8 @@ def _rod_ends(frame) -> dict[str, tuple[list[str], np.ndarray, np.ndarray]]:
 def _match_rod(ends, node_name: str, port_w: np.ndarray, dir_w: np.ndarray) -> str:
     """The rod of `node_name` whose socket port and direction match (ends: `_rod_ends`)."""
     rods, ports, dirs = ends[node_name]
-    e = np.linalg.norm(ports - port_w, axis=1) + np.linalg.norm(dirs - dir_w, axis=1)
+    dp, dd = ports - port_w, dirs - dir_w
+    e = np.sqrt(np.einsum("ij,ij->i", dp, dp)) + np.sqrt(np.einsum("ij,ij->i", dd, dd))
     i = int(np.argmin(e)) if len(rods) else -1
     if i < 0 or e[i] > 1e-3:
         err = e[i] if i >= 0 else math.inf
@@ -167,18 +164,19 @@ def build_model(spec, frame, parts, joints: dict, *, feet: str = "sliding", rod_
     rod_mat = spec.material(spec.rods.material)
     rho_rod = rod_mat.density_g_mm3 * 1e-6  # t/mm^3
 
+    mouths = {rn: (mouth(r, "a"), mouth(r, "b")) for rn, r in frame.rods.items()}
+
     # Motor stations on the arm rods (where the mount clips both rods).
     stations: dict[str, float] = {}
     for m in frame.motors:
         for rn in m.arm:
-            r = frame.rods[rn]
-            pa, pb = mouth(r, "a"), mouth(r, "b")
+            pa, pb = mouths[rn]
             d = pb - pa
             t = float(np.dot(np.asarray(m.axis) - pa, d) / np.dot(d, d))
             stations[rn] = min(max(t, 0.05), 0.95)
 
     for rn, r in rods.items():
-        pa, pb = mouth(r, "a"), mouth(r, "b")
+        pa, pb = mouths[rn]
         na, nb = fe.add_node(f"{rn}:a", pa), fe.add_node(f"{rn}:b", pb)
         mdl.rod_nodes[rn] = (na, nb)
         ts = sorted({i / rod_segments for i in range(1, rod_segments)} | ({stations[rn]} if rn in stations else set()))
@@ -220,9 +218,9 @@ def build_model(spec, frame, parts, joints: dict, *, feet: str = "sliding", rod_
                     r = frame.rods[rn]
                     tag = "a" if r.a.node == pl.instance else "b"
                     name = mdl.rod_nodes[rn][0 if tag == "a" else 1]
-                    if np.linalg.norm(fe.nodes[name] - ref_w) > 1e-3:
-                        raise RuntimeError(f"stiffness model: socket mouth of {rn} at {pl.instance} is off by "
-                                           f"{np.linalg.norm(fe.nodes[name] - ref_w):.3g} mm")
+                    off = math.dist(fe.nodes[name], ref_w)
+                    if off > 1e-3:
+                        raise RuntimeError(f"stiffness model: socket mouth of {rn} at {pl.instance} is off by {off:.3g} mm")
                     if play and name in play:  # the fit's play: a secant spring rod end <-> socket body
                         body = fe.add_node(f"{name}:sock", ref_w)
                         mdl.play_slots[name] = len(fe.springs)
@@ -232,8 +230,8 @@ def build_model(spec, frame, parts, joints: dict, *, feet: str = "sliding", rod_
                 keep.append(li)
             if only_roles is not None and not any(":free" not in n for n in node_names if n != pl.instance):
                 continue  # no rod of this joint is kept
-            Q = _block(R.T, len(js.labels))
-            Kw = Q.T @ K @ Q
+            nb = len(js.labels)  # Q^T K Q with Q = diag(R^T, ...): each 3x3 block R K_ab R^T
+            Kw = np.einsum("ij,ajbk,lk->aibl", R, K.reshape(2 * nb, 3, 2 * nb, 3), R).reshape(6 * nb, 6 * nb)
             fe.add_spring(tuple(node_names), Kw)
             mdl.joint_nodes[pl.instance] = dict(zip(js.labels, node_names))
             mdl.instance_part[pl.instance] = part.name
@@ -262,7 +260,10 @@ def build_model(spec, frame, parts, joints: dict, *, feet: str = "sliding", rod_
 
 def _play_block(p: np.ndarray) -> np.ndarray:
     """The 12x12 spring matrix of a 6x6 play stiffness between a rod end and its socket body."""
-    return np.block([[p, -p], [-p, p]])
+    b = np.empty((12, 12))
+    b[:6, :6] = b[6:, 6:] = p
+    b[:6, 6:] = b[6:, :6] = -p
+    return b
 
 
 def set_play(mdl: Model, play: dict) -> None:
