@@ -279,6 +279,13 @@ def _frame_axes_batch(p0: np.ndarray, p1: np.ndarray) -> tuple[np.ndarray, np.nd
     return length, np.stack([x, y, z], axis=1)
 
 
+def member_axes(direction: np.ndarray) -> np.ndarray:
+    """(n, 3, 3) rotations whose rows are local x (along each direction), y, z: the members' axes
+    convention (`_frame_axes_batch`) for directions instead of end points."""
+    d = np.asarray(direction, float).reshape(-1, 3)
+    return _frame_axes_batch(np.zeros_like(d), d)[1]
+
+
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
                      a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)

@@ -395,35 +395,33 @@ def play_springs(spec, frame, parts, joints, design_force_n: float, iterations: 
 def _play(spec, frame, parts, joints, design_force_n: float, iterations: int = 3) -> tuple[dict, Model | None]:
     """(`play_springs`, the frame model built with them), the model None without play. The first
     iteration solves the model without play; the later ones one model with play springs whose
-    matrices are replaced in place (`set_play`)."""
-    from .joint_stiffness import _socket_frame
-
+    matrices are replaced in place (`set_play`). All rod ends at once: T^T D T with T the socket
+    frame (x along the rod) and D = diag(stiff, k_lat, k_lat, stiff, k_rot, k_rot)."""
     g = max(spec.fit_clearance, 0.0) / 2
     if g <= 0 or design_force_n <= 0:
         return {}, None
     play: dict = {}
     mdl = None
-    rot: dict[str, np.ndarray] = {}  # socket frame per rod end: fixed by the geometry
+    T = None  # socket frames of the rod ends: fixed by the geometry
     for _ in range(iterations):
         if play and mdl is None:
             mdl = build_model(spec, frame, parts, joints, play=play)
         elif play:
             set_play(mdl, play)
         m, K, u = _solve_payload(spec, frame, parts, joints, load_n=design_force_n, play=play or None, mdl=mdl)
-        new = {}
-        for base, _, end, axis, F, M in socket_loads(m.fe, frame, u):
-            f_lat = max(float(np.linalg.norm(F - axis * (F @ axis))), PLAY_FRICTION_N)
-            m_lat = max(float(np.linalg.norm(M - axis * (M @ axis))), PLAY_FRICTION_N * end.depth / 2)
-            k_lat, k_rot = f_lat / g, m_lat / (2 * g / end.depth)
-            if base not in rot:
-                R = _socket_frame(axis)
-                T = np.zeros((6, 6))
-                T[:3, :3] = T[3:, 3:] = R
-                rot[base] = T
-            T = rot[base]
-            D = np.diag([_PLAY_BIG, k_lat, k_lat, _PLAY_BIG * 1e3, k_rot, k_rot])
-            new[base] = T.T @ D @ T
-        play = new
+        sl = socket_loads(m.fe, frame, u)
+        depth = np.array([e.depth for e in sl.ends])
+        f_lat = np.maximum(_across(sl.forces, sl.axes), PLAY_FRICTION_N)
+        m_lat = np.maximum(_across(sl.moments, sl.axes), PLAY_FRICTION_N * depth / 2)
+        k_lat, k_rot = f_lat / g, m_lat / (2 * g / depth)
+        if T is None:
+            R = ff.member_axes(sl.axes)
+            T = np.zeros((len(depth), 6, 6))
+            T[:, :3, :3] = T[:, 3:, 3:] = R
+        D = np.zeros((len(depth), 6, 6))
+        for i, v in enumerate((_PLAY_BIG, k_lat, k_lat, _PLAY_BIG * 1e3, k_rot, k_rot)):
+            D[:, i, i] = v
+        play = dict(zip(sl.nodes, np.matmul(np.matmul(T.transpose(0, 2, 1), D), T)))
     if play and mdl is None:
         mdl = build_model(spec, frame, parts, joints, play=play)
     elif play:
@@ -431,24 +429,52 @@ def _play(spec, frame, parts, joints, design_force_n: float, iterations: int = 3
     return play, mdl
 
 
-def socket_loads(fe: ff.Frame3D, frame, u: np.ndarray):
-    """The force F and moment M (N, N mm; world axes) every joint super-element puts on each rod
-    body in its sockets, for displacements u: yields (rod end node, rod, RodEnd, socket axis, F, M).
-    The play springs themselves are skipped; a rod end behind play is named by its rod node."""
+def _across(v: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    """|v - a (v . a)| row by row: the part of each vector across its (unit) axis."""
+    w = v - axes * np.einsum("ij,ij->i", v, axes)[:, None]
+    return np.sqrt(np.einsum("ij,ij->i", w, w))
+
+
+@dataclass(frozen=True)
+class SocketLoads:
+    """What every joint super-element puts on each rod body in its sockets (world axes)."""
+
+    nodes: tuple[str, ...]  # rod end node (a rod end behind play is named by its rod node)
+    rods: tuple[str, ...]
+    ends: tuple  # frame.RodEnd of each
+    axes: np.ndarray  # (n, 3) socket axis, out along the rod
+    forces: np.ndarray  # (n, 3) N
+    moments: np.ndarray  # (n, 3) N mm
+
+
+def socket_loads(fe: ff.Frame3D, frame, u: np.ndarray) -> SocketLoads:
+    """`SocketLoads` for displacements u (the play springs themselves are skipped)."""
     idx = fe.index()
-    for nodes, Ks in fe.springs:
-        if len(nodes) == 2 and nodes[1] == nodes[0] + ":sock":
+    axis: dict[str, np.ndarray] = {}
+    nodes, rods, ends, axes, loads = [], [], [], [], []
+    for names, Ks in fe.springs:
+        if len(names) == 2 and names[1] == names[0] + ":sock":
             continue  # a play spring
-        dofs = np.concatenate([np.arange(6 * idx[n], 6 * idx[n] + 6) for n in nodes])
-        f = Ks @ u[dofs]
-        for j, n in enumerate(nodes):
+        f = None
+        for j, n in enumerate(names):
             base = n[:-5] if n.endswith(":sock") else n
             if base.count(":") != 1 or base.endswith(":free"):
                 continue
+            if f is None:
+                dofs = (6 * np.array([idx[x] for x in names])[:, None] + np.arange(6)).ravel()
+                f = Ks @ u[dofs]
             rn, tag = base.split(":")
             r = frame.rods[rn]
             end = r.a if tag == "a" else r.b
-            yield base, rn, end, r.socket_direction(end.node), f[6 * j:6 * j + 3], f[6 * j + 3:6 * j + 6]
+            if rn not in axis:
+                axis[rn] = r.axis
+            nodes.append(base)
+            rods.append(rn)
+            ends.append(end)
+            axes.append(axis[rn] if tag == "a" else -axis[rn])  # Rod.socket_direction
+            loads.append(f[6 * j:6 * j + 6])
+    loads = np.array(loads, float).reshape(-1, 6)
+    return SocketLoads(tuple(nodes), tuple(rods), tuple(ends), np.array(axes, float).reshape(-1, 3), loads[:, :3], loads[:, 3:])
 
 
 def predict_stiffness(spec, frame, parts=None, *, joint_model: str = "fe", factor: float | None = None,
@@ -907,17 +933,14 @@ def _strain(spec, frame, parts, joints, mdl: Model, u: np.ndarray, eps_break: fl
         th_arm = np.mean([u[6 * idx[n] + 3:6 * idx[n] + 6] for n in arms], axis=0)
         eps_h = max(eps_h, t_web / 2 * float(np.linalg.norm(th_leg - th_arm)) / l_web)
     # sockets: the super-element's force on each rod body, as bearing over the socket depth
-    at = []
-    d = spec.rods.diameter
-    for _, rn, end, axis, F, Mo in socket_loads(fe, frame, u):
-        v = float(np.linalg.norm(F - axis * (F @ axis)))
-        mm = float(np.linalg.norm(Mo - axis * (Mo @ axis)))
-        L = end.depth
-        # rigid rod on a linear (Winkler) bearing over L, loads at the mouth: peak line load
-        q = v / L + 6 * (mm + v * L / 2) / L**2
-        at.append((q / d / itf.e, f"{end.node}/{rn}"))
-    eps_s = max((e for e, _ in at), default=0.0)
+    sl = socket_loads(fe, frame, u)
+    v, mm = _across(sl.forces, sl.axes), _across(sl.moments, sl.axes)
+    L = np.array([e.depth for e in sl.ends])
+    # rigid rod on a linear (Winkler) bearing over L, loads at the mouth: peak line load
+    q = v / L + 6 * (mm + v * L / 2) / L**2
+    eps = q / spec.rods.diameter / itf.e
+    eps_s = float(eps.max()) if eps.size else 0.0
     # symmetric sockets tie (to round-off): the first by name
-    where = min((w for e, w in at if e >= eps_s * (1 - _TIE) and e > 0), default=None)
+    where = min((f"{e.node}/{rn}" for x, e, rn in zip(eps, sl.ends, sl.rods) if x >= eps_s * (1 - _TIE) and x > 0), default=None)
     return {"hinge": round(eps_h, 4), "socket": round(eps_s, 4), "socket_at": where, "elongation_at_break": eps_break,
             "peak": round(max(eps_h, eps_s), 4), "ratio_to_break": round(max(eps_h, eps_s) / eps_break, 4)}
