@@ -70,8 +70,11 @@ def check(spec: Spec, geometry: dict | None = None, clash=None) -> CheckResult:
     `clash` = the build's clash check (analysis.clash.ClashResult) when known."""
     d = design(spec)
     budget = mass_mod.budget(spec, d.frame, d.cut, d.parts, geometry)
-    drop = _drop(spec, d, budget)
-    stiffness, peak = _physics(spec, d, budget, drop)
+    from .analysis import drop as drop_mod
+
+    session = drop_mod.Session(spec, d.frame, d.parts)  # the frame model, solved at most once per check
+    drop = _drop(spec, d, budget, session)
+    stiffness, peak = _physics(spec, d, budget, drop, session)
     from .analysis import flight as flight_mod
 
     flight = flight_mod.evaluate(spec, budget.total_g)
@@ -92,19 +95,19 @@ def _aircraft_problems(spec: Spec, flight, clash) -> list[str]:
     return out
 
 
-def _drop(spec: Spec, d: Design, budget: mass_mod.MassBudget):
+def _drop(spec: Spec, d: Design, budget: mass_mod.MassBudget, session=None):
     from .analysis import drop as drop_mod
 
-    return drop_mod.evaluate_design(spec, d.frame, budget.total_g, parts=d.parts)
+    return drop_mod.evaluate_design(spec, d.frame, budget.total_g, session)
 
 
-def _physics(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop):
+def _physics(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=None):
     """The frame's load cases and the predicted peak deceleration (both cached on disk)."""
     from .analysis import drop as drop_mod
 
     if drop is None:
         return None, None
-    cases = drop_mod.load_cases(spec, d.frame, budget.total_g, drop, parts=d.parts)
+    cases = drop_mod.load_cases(spec, d.frame, budget.total_g, drop, session)
     peak = drop_mod.peak_prediction(spec, budget.total_g, drop, budget.groups["exoskeleton"])
     return cases, peak
 

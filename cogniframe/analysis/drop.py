@@ -25,14 +25,49 @@ _MODULES = ("cogniframe.analysis.stiffness", "cogniframe.analysis.impact_nl", "c
             "cogniframe.materials", "cogniframe.spec")
 
 
-def evaluate_design(spec: Spec, frame: Frame, total_mass_g: float, parts=None) -> impact.DropResult:
-    """Drop results over `requirements.drop_heights_cm` for this design (SI inside, see impact).
-    ``parts``: the design's part list when the caller has it (else built here if needed)."""
+class Session:
+    """One design's frame model as one `check` uses it: the part list, the joint models and the
+    secant solution (k, play springs, the solved payload model), each computed at most once and
+    shared by the drop (k) and the load cases (which start from the same solved model). Made
+    per check by the caller and dropped with it: no state outlives the check. Stages called
+    without one make their own."""
+
+    def __init__(self, spec: Spec, frame: Frame, parts=None):
+        self.spec, self.frame, self._parts = spec, frame, parts
+        self._joints = None
+        self.solution = None  # stiffness.SecantSolution once solved in this check
+
+    @property
+    def parts(self):
+        if self._parts is None:
+            from .. import partlist
+
+            self._parts = partlist.build(self.spec, self.frame)
+        return self._parts
+
+    @property
+    def joints(self) -> dict:
+        if self._joints is None:
+            from .stiffness import joint_models
+
+            self._joints = joint_models(self.spec, self.parts, self.spec.model.stiffness_model)
+        return self._joints
+
+    def solve(self):
+        if self.solution is None:
+            from .stiffness import secant_solution
+
+            self.solution = secant_solution(self.spec, self.frame, self.parts, self.joints)
+        return self.solution
+
+
+def evaluate_design(spec: Spec, frame: Frame, total_mass_g: float, session: Session | None = None) -> impact.DropResult:
+    """Drop results over `requirements.drop_heights_cm` for this design (SI inside, see impact)."""
     m = total_mass_g / 1000.0
     if spec.model.k_n_per_m is not None:
         k, k_source = spec.model.k_n_per_m, "measured"
     else:
-        k, k_source = predicted_k_n_per_m(spec, frame, total_mass_g, parts), "predicted"
+        k, k_source = predicted_k_n_per_m(spec, frame, total_mass_g, session), "predicted"
     if spec.model.c_n_s_per_m is not None:
         c, c_source = spec.model.c_n_s_per_m, "measured"
     else:
@@ -42,13 +77,13 @@ def evaluate_design(spec: Spec, frame: Frame, total_mass_g: float, parts=None) -
                            k_source=k_source, c_source=c_source)
 
 
-def predicted_k_n_per_m(spec: Spec, frame: Frame, total_mass_g: float | None = None, parts=None) -> float:
+def predicted_k_n_per_m(spec: Spec, frame: Frame, total_mass_g: float | None = None, session: Session | None = None) -> float:
     """Frame-model stiffness (the secant with the fit's play, `stiffness.secant_k`), cached by a
     hash of everything the model reads and of its source. It does not depend on the mass."""
-    return float(_secant(spec, frame, parts)["k_n_per_m"])
+    return float(_secant(spec, frame, session)["k_n_per_m"])
 
 
-def _secant(spec: Spec, frame: Frame, parts=None) -> dict:
+def _secant(spec: Spec, frame: Frame, session: Session | None = None) -> dict:
     """{"k_n_per_m", "play"}: the secant k and the play springs it was taken with (rod end node ->
     6x6 as nested lists; JSON keeps every float's digits), cached. `load_cases` reuses the play
     springs instead of iterating them again."""
@@ -56,13 +91,8 @@ def _secant(spec: Spec, frame: Frame, parts=None) -> dict:
     hit = cache.load_json("stiffness", key)
     if hit is not None and "play" in hit:
         return hit
-    from .. import partlist
-    from .stiffness import joint_models, secant_k_and_play
-
-    parts = parts if parts is not None else partlist.build(spec, frame)
-    joints = joint_models(spec, parts, spec.model.stiffness_model)
-    k, play = secant_k_and_play(spec, frame, parts, joints)
-    out = {"k_n_per_m": k, "play": {n: p.tolist() for n, p in play.items()}}
+    sol = (session or Session(spec, frame)).solve()
+    out = {"k_n_per_m": sol.k_n_per_m, "play": {n: p.tolist() for n, p in sol.play.items()}}
     cache.store_json("stiffness", key, out)
     return out
 
@@ -105,7 +135,7 @@ def _stiffness_key(spec: Spec, *extra, scope: str = "k") -> str:
     return h.hexdigest()[:24]
 
 
-def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropResult, parts=None) -> dict:
+def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropResult, session: Session | None = None) -> dict:
     """`check --json`'s `stiffness` section: every load case of `stiffness.load_cases`, cached.
 
     The design drop's force is the spring force at its maximum compression, k x_max (the
@@ -121,17 +151,19 @@ def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropR
     hit = cache.load_json("cases", key)
     if hit is not None:
         return hit
-    from .. import partlist
     from .stiffness import load_cases as cases
 
-    parts = parts if parts is not None else partlist.build(spec, frame)
-    play = None
-    if spec.model.k_n_per_m is None:  # the predicted k's play springs (cached with it): not iterated again
-        import numpy as np
+    session = session or Session(spec, frame)
+    play, solved = None, None
+    if spec.model.k_n_per_m is None:  # the predicted k's play springs: not iterated again
+        if session.solution is not None:  # solved in this check: its model and payload solution too
+            play, solved = session.solution.play, session.solution
+        else:  # k came from the cache, with its play springs
+            import numpy as np
 
-        play = {n: np.asarray(p, float) for n, p in _secant(spec, frame, parts)["play"].items()}
-    lc = cases(spec, frame, parts, total_mass_g, joint_model=spec.model.stiffness_model, damping_ratio=zeta,
-               design_force_n=k_model * x / 1000.0, play=play)
+            play = {n: np.asarray(p, float) for n, p in _secant(spec, frame, session)["play"].items()}
+    lc = cases(spec, frame, session.parts, total_mass_g, joint_model=spec.model.stiffness_model, damping_ratio=zeta,
+               design_force_n=k_model * x / 1000.0, joints=session.joints, play=play, solved=solved)
     out = lc.to_dict()
     out["design_drop_height_cm"] = h_design
     out["design_force_n"] = k_model * x / 1000.0

@@ -536,12 +536,32 @@ def secant_k(spec, frame, parts, joints) -> float:
 def secant_k_and_play(spec, frame, parts, joints) -> tuple[float, dict]:
     """(`secant_k`, the play springs at PLAY_REFERENCE_N): `load_cases` takes the play springs
     (``play=``) instead of iterating them again."""
+    sol = secant_solution(spec, frame, parts, joints)
+    return sol.k_n_per_m, sol.play
+
+
+@dataclass(frozen=True)
+class SecantSolution:
+    """The secant k's solve: k, the play springs, the model with them, its assembled K (no
+    supports) and the payload displacements under DEFAULT_LOAD_N (what `load_cases` starts from)."""
+
+    k_n_per_m: float
+    play: dict
+    model: Model
+    K: object  # scipy sparse
+    u: np.ndarray
+
+
+def secant_solution(spec, frame, parts, joints) -> SecantSolution:
     play, mdl = _play(spec, frame, parts, joints, PLAY_REFERENCE_N)
-    mdl, _, u = _solve_payload(spec, frame, parts, joints, play=play or None, mdl=mdl)
+    if mdl is None:
+        mdl = build_model(spec, frame, parts, joints)
+    K0 = mdl.fe.stiffness(sparse=True)
+    mdl, _, u = _solve_payload(spec, frame, parts, joints, play=play or None, mdl=mdl, K0=K0)
     d = -u[_dof(mdl.fe, mdl.payload, 2)]
     if not (d > 0 and math.isfinite(d)):
         raise RuntimeError(f"stiffness model: payload deflection {d!r} mm is not a positive number")
-    return float(1000.0 * DEFAULT_LOAD_N / d), play
+    return SecantSolution(float(1000.0 * DEFAULT_LOAD_N / d), play, mdl, K0, u)
 
 
 def calibrate_tpu_factor(spec, frame, target_n_per_m: float = PAPER_K_N_PER_M,
@@ -657,11 +677,13 @@ class LoadCases:
 
 
 def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "fe", damping_ratio: float = 0.558,
-               design_force_n: float | None = None, joints: dict | None = None, play: dict | None = None) -> LoadCases:
+               design_force_n: float | None = None, joints: dict | None = None, play: dict | None = None,
+               solved: SecantSolution | None = None) -> LoadCases:
     """All load cases of the design (see the module docstring). ``design_force_n``: the spring
     force at the design drop's maximum compression (k x_max), for buckling and strain. ``play``:
     the play springs at PLAY_REFERENCE_N if already known (`secant_k_and_play`; {} = no play),
-    else iterated here.
+    else iterated here; ``solved``: the secant's solution with those springs (`secant_solution`),
+    whose payload case is this one's.
 
     The payload, wall and full-thrust cases share one model and one assembled K (they differ in
     supports and loads only); the arms-only thrust case and the modes (rods in 4 elements, with
@@ -677,15 +699,18 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
 
     # 1. payload vertical
     f_design = design_force_n if design_force_n is not None else 95.0
-    mdl = None
-    if play is None:
-        play, mdl = _play(spec, frame, parts, joints, PLAY_REFERENCE_N)
-    play = play or None
-    if mdl is None:
-        mdl = build_model(spec, frame, parts, joints, play=play)
+    if solved is not None:
+        play, mdl, K0, u = solved.play or None, solved.model, solved.K, solved.u
+    else:
+        mdl = None
+        if play is None:
+            play, mdl = _play(spec, frame, parts, joints, PLAY_REFERENCE_N)
+        play = play or None
+        if mdl is None:
+            mdl = build_model(spec, frame, parts, joints, play=play)
+        K0 = mdl.fe.stiffness(sparse=True)
+        mdl, _, u = _solve_payload(spec, frame, parts, joints, play=play, mdl=mdl, K0=K0)
     fe = mdl.fe
-    K0 = fe.stiffness(sparse=True)
-    mdl, K, u = _solve_payload(spec, frame, parts, joints, play=play, mdl=mdl, K0=K0)
     d_pay = -u[_dof(fe, mdl.payload, 2)]
     k = 1000.0 * DEFAULT_LOAD_N / d_pay
 
