@@ -187,3 +187,22 @@ def test_euler_loads_batch_equals_one_by_one():
         assert batch[i] == pytest.approx(st.euler_load(ls[i], ei, ka[i], kb[i]), rel=1e-12)
     # unequal end springs lie between the pinned-pinned and the fixed-fixed column
     assert all(math.pi**2 * ei / l**2 * 0.999 < p < 4 * math.pi**2 * ei / l**2 * 1.001 for l, p in zip(ls, batch))
+
+
+def test_negative_pivots_count_the_negative_eigenvalues_sylvester():
+    from scipy.sparse import csc_matrix
+
+    rng = np.random.default_rng(3)
+    a = rng.standard_normal((40, 40))
+    a = a + a.T + np.diag(np.linspace(-30, 30, 40))
+    assert ff.negative_pivots(csc_matrix(a)) == int(np.count_nonzero(np.linalg.eigvalsh(a) < 0))
+
+
+def test_factor_solves_a_matrix_without_an_ldlt_by_lu():
+    # a zero leading pivot: no LDL^T without pivoting, SuperLU takes over
+    from scipy.sparse import csc_matrix
+
+    a = np.array([[0.0, 2.0, 0.0], [2.0, 1.0, 1.0], [0.0, 1.0, 3.0]])
+    b = np.array([1.0, 2.0, 3.0])
+    assert ff.negative_pivots(csc_matrix(a)) in (-1, 1)
+    assert np.allclose(ff.factor(csc_matrix(a)).solve(b), np.linalg.solve(a, b), rtol=1e-12)

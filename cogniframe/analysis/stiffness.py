@@ -885,8 +885,8 @@ def lowest_eigenvalues(K, M, count: int) -> np.ndarray:
     from scipy.sparse.linalg import ArpackNoConvergence, LinearOperator, eigsh
 
     sigma = _shift(K, M)
-    lu = ff.sparse_lu(K - sigma * M)
-    op = LinearOperator(K.shape, matvec=lu.solve, dtype=float)
+    lu = ff.factor(K - sigma * M)
+    op = LinearOperator(K.shape, matvec=lambda x: lu.solve(np.ravel(x)), dtype=float)
     v0 = np.random.default_rng(0).standard_normal(n)  # deterministic, and no symmetry of the frame
     try:
         w = eigsh(K, k=want, M=M, sigma=sigma, OPinv=op, which="LM", v0=v0, return_eigenvectors=False)
@@ -912,17 +912,8 @@ def _shift(K, M) -> float:
 
 def _count_below(K, M, s: float) -> int:
     """How many eigenvalues of (K, M) lie below s: the negative pivots of an LDL^T of K - s M
-    (SuperLU with symmetric, diagonal pivoting); -1 if the factorization did not keep symmetry."""
-    from scipy.sparse.linalg import splu
-
-    try:
-        lu = splu((K - s * M).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                  options={"SymmetricMode": True})  # pivots on the diagonal only: P A P^T = L D L^T
-    except RuntimeError:  # an exactly singular pivot: s is an eigenvalue
-        return -1
-    if not np.array_equal(lu.perm_r, lu.perm_c):
-        return -1
-    return int(np.count_nonzero(lu.U.diagonal() < 0))
+    (Sylvester's law of inertia; M positive definite); -1 if it has no such factors."""
+    return ff.negative_pivots(K - s * M)
 
 
 def _dense_lowest(K, M, count: int) -> np.ndarray:
