@@ -40,6 +40,7 @@ def check(params: ParamsArg,
     from . import spec as spec_mod
 
     spec = spec_mod.load(params)
+    _progress_to_stderr()  # a new joint geometry's solid FE takes seconds: say what it is doing
     with spec.blamed():
         result = pipeline.check(spec)
     if plots is not None and result.drop is not None:
@@ -63,6 +64,19 @@ def check(params: ParamsArg,
     code = 0 if result.verdict == "PASS" else 1
     check_cache.store(key, text, code)
     raise typer.Exit(code)
+
+
+def _progress_to_stderr() -> None:
+    """Plain stderr lines for the `cogniframe.progress` log (the joint FE's), one per record."""
+    import logging
+
+    log = logging.getLogger("cogniframe.progress")
+    if not log.handlers:
+        handler = logging.StreamHandler(sys.stderr)
+        handler.setFormatter(logging.Formatter("%(message)s"))
+        log.addHandler(handler)
+        log.setLevel(logging.INFO)
+        log.propagate = False
 
 
 @app.command()

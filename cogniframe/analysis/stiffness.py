@@ -89,11 +89,15 @@ def joint_parts(parts) -> list:
 
 def joint_models(spec, parts, method: str = "fe", factor: float | None = None) -> dict:
     """The super-element of every distinct joint (cached FE, or closed forms)."""
-    from .joint_stiffness import joint_stiffness
+    from .joint_stiffness import joint_stiffness, solve_missing
 
     out = {}
+    # new geometries first, all at once (in parallel); then every joint comes from the cache
+    failed = solve_missing(spec, joint_parts(parts)) if method == "fe" else {}
     for p in joint_parts(parts):
         try:
+            if p.name in failed:
+                raise RuntimeError(failed[p.name])
             out[p.name] = joint_stiffness(spec, p, method, factor)
         except RuntimeError:
             # a solid the mesher cannot handle (reported by gmsh/joint_fe as RuntimeError, or a

@@ -193,7 +193,7 @@ def _context():
 
     try:
         ctx = mp.get_context("forkserver")
-        ctx.set_forkserver_preload(["cogniframe.parts.registry", "cadquery", "trimesh"])
+        ctx.set_forkserver_preload(["cogniframe.parts.registry", "cadquery", "trimesh", "gmsh", "skfem", "pymetis"])
         return ctx
     except ValueError:
         return mp.get_context("spawn")
