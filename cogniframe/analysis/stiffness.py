@@ -418,10 +418,12 @@ def play_springs(spec, frame, parts, joints, design_force_n: float, iterations: 
 
 
 def _play(spec, frame, parts, joints, design_force_n: float, iterations: int = 3) -> tuple[dict, Model | None]:
-    """(`play_springs`, the frame model built with them), the model None without play. The first
-    iteration solves the model without play, which `add_play` then turns into the model with
-    play; the later iterations replace the play matrices in place (`set_play`): one build. All rod ends at once: T^T D T with T the socket
-    frame (x along the rod) and D = diag(stiff, k_lat, k_lat, stiff, k_rot, k_rot)."""
+    """(`play_springs`, the frame model built with them), the model None without play.
+
+    One build: the first iteration solves the model without play, which `add_play` then turns
+    into the model with play; the later iterations replace the play matrices in place
+    (`set_play`). Every rod end at once: T^T D T with T the socket frame (x along the rod) and
+    D = diag(stiff, k_lat, k_lat, stiff, k_rot, k_rot)."""
     g = max(spec.fit_clearance, 0.0) / 2
     if g <= 0 or design_force_n <= 0:
         return {}, None
