@@ -882,7 +882,8 @@ def _modes(spec, frame, parts, joints, masses, n: int = N_MODES, rod_segments: i
     K = fe.stiffness(sparse=True)
     M = fe.mass(sparse=True)
     keep = np.abs(K.diagonal()) > 1e-12
-    K, M = K[keep][:, keep].tocsc(), M[keep][:, keep].tocsc()
+    if not keep.all():
+        K, M = K[keep][:, keep].tocsc(), M[keep][:, keep].tocsc()
     # massless DOFs (rigid-link ends) get a tiny inertia so M is positive definite
     M = (M + diags(np.where(M.diagonal() <= 0, 1e-12, 0.0))).tocsc()
     w2 = lowest_eigenvalues(K, M, 6 + n)
