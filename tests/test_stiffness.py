@@ -134,9 +134,11 @@ def test_fe_stiffer_and_thicker_rods_raise_k():
 @pytest.mark.parametrize("sections_lo, sections_hi", [
     ({"joints": {"socket_depth": 8}}, {"joints": {"socket_depth": 12}}),
     ({"joints": {"wall": 1.5}}, {"joints": {"wall": 1.8}}),
+    ({"joints": {"hinge_thickness": 1.2}}, {"joints": {"hinge_thickness": 1.8}}),
     ({"rods": {"material": "bamboo"}}, {"rods": {"material": "carbon_rod"}}),
+    ({"rods": {"diameter": 3.0}, "joints": {"wall": 1.6}}, {"rods": {"diameter": 3.5}, "joints": {"wall": 1.6}}),
 ])
-def test_fe_first_mode_rises_with_depth_wall_and_rod_stiffness(sections_lo, sections_hi):
+def test_fe_first_mode_rises_with_depth_wall_hinge_and_rod_stiffness(sections_lo, sections_hi):
     assert _first_mode(_variant(**sections_hi), "fe") > _first_mode(_variant(**sections_lo), "fe")
 
 

@@ -429,6 +429,21 @@ def _fe_unit(spec, part, mesh_mm: float) -> tuple[str, dict | None, str | None]:
         return part.name, None, str(exc)
 
 
+def _in_dask_worker() -> bool:
+    """True inside a Dask worker: its cores are the cluster's to schedule, one design per thread."""
+    import sys
+
+    if "distributed" not in sys.modules:
+        return False
+    try:
+        from distributed import get_worker
+
+        get_worker()
+        return True
+    except (ImportError, ValueError):
+        return False
+
+
 def solve_missing(spec, parts, mesh_mm: float | None = None, jobs: int | None = None) -> dict[str, str]:
     """Solve and cache the FE of every joint in ``parts`` whose geometry is not cached yet, in
     parallel worker processes when more than one is missing (one per core by default, ``jobs``
@@ -453,7 +468,7 @@ def solve_missing(spec, parts, mesh_mm: float | None = None, jobs: int | None = 
     if not todo:
         return {}
     if jobs is None:
-        jobs = int(os.environ.get("COGNIFRAME_JOBS") or 0) or (os.cpu_count() or 1)
+        jobs = int(os.environ.get("COGNIFRAME_JOBS") or 0) or (1 if _in_dask_worker() else (os.cpu_count() or 1))
     jobs = max(1, min(int(jobs), len(todo)))
     keys = {p.name: key for p, key in todo}
     t0 = time.perf_counter()

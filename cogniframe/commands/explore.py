@@ -44,6 +44,7 @@ def optimize(sweep_file: SweepArg,
              trials: Annotated[Optional[int], typer.Option("--trials", min=1, help="designs to try (default: the sweep file's samples)")] = None,
              out: OutOpt = None, scheduler: SchedulerOpt = None, workers: WorkersOpt = None,
              cad: Annotated[int, typer.Option("--cad", min=0, help="build and verify the CAD of the N best designs on the cluster")] = 0,
+             verify: Annotated[int, typer.Option("--verify", min=0, help="re-check the N best with the base file's joint model when the sweep screens with another (0: off)")] = 4,
              json_out: Annotated[bool, typer.Option("--json", help="print one JSON object with the best design and the run's numbers")] = False) -> None:
     """Optimise over the sweep file's vary box with optuna on Dask: trials.parquet and best.yaml (passes `check`)."""
     from cogniframe.sweep import optimize as opt
@@ -53,7 +54,7 @@ def optimize(sweep_file: SweepArg,
     objectives = opt.parse_objectives(minimize or [], maximize or [])
     constraints = [opt.parse_constraint(c) for c in constraint or []]
     result = opt.run_optimize(sw, objectives, constraints, out_dir=out, trials=trials, scheduler=scheduler,
-                              workers=workers, cad=cad, progress=run.progress_printer())
+                              workers=workers, cad=cad, verify=verify, progress=run.progress_printer())
     if json_out:
         sys.stdout.write(json.dumps(result.as_dict()) + "\n")
     else:

@@ -10,6 +10,14 @@ through `constraints_func`. INVALID, TIMEOUT and ERROR trials are told as failed
     DIR/best.yaml        the base params file with only the changed values edited (comments kept)
     DIR/optimize.md      objectives, constraints, the best design against the base, the Pareto set
     DIR/cad.json         with --cad N: the N best designs built and verified on the cluster
+
+Two fidelities. A sweep file may screen with the closed-form joints (`set: model.stiffness_model:
+analytic`, milliseconds per design) where its base file uses the solid FE of the joints (seconds
+per new joint geometry). The closed forms and the FE disagree by up to tens of per cent (docs/
+stiffness-model.md), so optimize then *verifies*: the `--verify N` best screened designs (default 4)
+are checked again on the cluster with the base file's own model, and the best design is the best
+of those that still pass under it. best.yaml keeps the base file's model, so `cogniframe check
+best.yaml` gives the verified numbers.
 """
 
 from __future__ import annotations
@@ -92,6 +100,8 @@ class OptimizeResult:
     workers: int
     cad: tuple[dict, ...] = field(default_factory=tuple)
     note: str = ""
+    verified: tuple[dict, ...] = field(default_factory=tuple)  # finalists re-checked with the base's model
+    fidelity: tuple[str, str] | None = None  # (screening, verifying) stiffness models, None: one model
 
     def as_dict(self) -> dict:
         def clean(r):
@@ -103,10 +113,16 @@ class OptimizeResult:
                 "objectives": [f"{o.direction} {o.name}" for o in self.objectives],
                 "constraints": [str(c) for c in self.constraints], "seconds": round(self.seconds, 3),
                 "scheduler": self.scheduler, "workers": self.workers, "cad": list(self.cad), "note": self.note,
+                "verified": [clean(r) for r in self.verified],
+                "fidelity": {"screening": self.fidelity[0], "verified_with": self.fidelity[1]} if self.fidelity else None,
                 "out_dir": str(self.out_dir)}
 
     def text(self) -> str:
         lines = [f"{self.trials} trials, {self.feasible} feasible, {self.seconds:.1f} s on {self.workers} workers"]
+        if self.fidelity:
+            ok = sum(1 for r in self.verified if r.get("feasible"))
+            lines.append(f"screened with {self.fidelity[0]} joints; {len(self.verified)} best re-checked with "
+                         f"{self.fidelity[1]} joints, {ok} still feasible")
         if self.best is None:
             lines.append(f"no feasible design. {self.note}")
         else:
@@ -174,16 +190,19 @@ def ranked(rows: list[dict], objectives, constraints) -> tuple[list[dict], list[
 
 def run_optimize(sweep: Sweep, objectives: list[Objective], constraints: list[Constraint], out_dir: Path | None = None,
                  trials: int | None = None, scheduler: str | None = None, workers: int | None = None, cad: int = 0,
+                 verify: int = 4,
                  progress: Callable | None = None, batch: int | None = None) -> OptimizeResult:
     from ..outdir import lock
 
     out_dir = Path(out_dir) if out_dir is not None else Path("out") / "sweeps" / f"{sweep.stem}-optimize"
     run_mod.claim_folder(out_dir, "optimize", sweep, write=False)
     with lock(out_dir):  # one optimize per folder at a time
-        return _run_optimize(sweep, objectives, constraints, out_dir, trials, scheduler, workers, cad, progress, batch)
+        return _run_optimize(sweep, objectives, constraints, out_dir, trials, scheduler, workers, cad, progress, batch,
+                             verify)
 
 
-def _run_optimize(sweep, objectives, constraints, out_dir: Path, trials, scheduler, workers, cad, progress, batch) -> OptimizeResult:
+def _run_optimize(sweep, objectives, constraints, out_dir: Path, trials, scheduler, workers, cad, progress, batch,
+                  verify: int = 4) -> OptimizeResult:
     import optuna
     from optuna.trial import TrialState
 
@@ -235,19 +254,87 @@ def _run_optimize(sweep, objectives, constraints, out_dir: Path, trials, schedul
             if progress:
                 progress(run_mod.BatchDone(tuple(got), got[0]["worker"] if got else "", done, n_trials, time.perf_counter() - tb, "round"))
         best_rows, pareto = ranked(rows, objectives, constraints)
+        fidelity = two_fidelities(sweep) if verify > 0 else None
+        verified: list[dict] = []
+        if fidelity:
+            finalists = near_feasible(rows, objectives, constraints, SCREEN_TOLERANCE)[:verify]
+        if fidelity and finalists:
+            verified = verify_rows(client, sweep, finalists, objectives, constraints, n_workers, fidelity[1])
+            (out_dir / "verified.json").write_text(json.dumps(verified, indent=2, default=_py) + "\n")
+            best_rows = sorted((r for r in verified if r["feasible"]), key=lambda r: _objective_key(r, objectives))
         cad_rows: tuple[dict, ...] = ()
         if cad and best_rows:
             cad_rows = build_cad(client, sweep, best_rows[:cad])
             (out_dir / "cad.json").write_text(json.dumps(list(cad_rows), indent=2) + "\n")
-    base = ev.evaluate_one(sweep.base_data, {}, sweep.settings.timeout_s, "client", sweep.base_text, sweep.base_label)
+    base_over = {"model.stiffness_model": fidelity[1]} if fidelity else {}
+    base = ev.evaluate_one(sweep.base_data, base_over, sweep.settings.timeout_s, "client", sweep.base_text, sweep.base_label)
     best = best_rows[0] if best_rows else None
-    note = "" if best is not None else why_none(rows, objectives, constraints)
+    note = ""
+    if best is None:
+        note = why_none(rows, objectives, constraints)
+        if fidelity and verified:
+            note += (f" The {len(verified)} best screened designs ({fidelity[0]} joints) all fail under the base file's "
+                     f"{fidelity[1]} joints: see verified.json.")
     if best is not None:
-        write_best_yaml(sweep, best, out_dir / "best.yaml")
+        write_best_yaml(sweep, best, out_dir / "best.yaml", keep_model=fidelity is not None)
     result = OptimizeResult(out_dir, tuple(objectives), tuple(constraints), len(rows), len(best_rows), best, tuple(pareto),
-                            base, time.perf_counter() - t0, scheduler_addr, n_workers, cad_rows, note)
+                            base, time.perf_counter() - t0, scheduler_addr, n_workers, cad_rows, note, tuple(verified),
+                            fidelity)
     _write_summary(sweep, result)
     return result
+
+
+FIDELITY_KEY = "model.stiffness_model"
+# How far a screened (closed-form joints) constraint value may miss and the design still be worth
+# re-checking with the FE: the two joint models' max_safe_drop_cm differ by up to ~20 % in either
+# direction on the carbon designs compared (docs/sweeps.md).
+SCREEN_TOLERANCE = 0.2
+
+
+def near_feasible(rows: list[dict], objectives, constraints, tolerance: float) -> list[dict]:
+    """Screened PASS rows whose every constraint holds within `tolerance` (relative to its bound),
+    best objective first: the candidates worth the full model."""
+    ok = []
+    for r in rows:
+        if r.get("verdict") != "PASS" or any(not isinstance(r.get(o.name), (int, float)) or not math.isfinite(r[o.name])
+                                             for o in objectives):
+            continue
+        if all(c.violation(r) <= tolerance * abs(c.value) for c in constraints):
+            ok.append(r)
+    return sorted(ok, key=lambda r: _objective_key(r, objectives))
+
+
+def two_fidelities(sweep: Sweep) -> tuple[str, str] | None:
+    """(screening, full) joint models when the sweep file's `set:` changes the base file's one."""
+    import yaml
+
+    if FIDELITY_KEY not in sweep.fixed:
+        return None
+    own = ((yaml.safe_load(sweep.base_text) or {}).get("model") or {}).get("stiffness_model", "fe")
+    screen = report_get(sweep.base_data, FIDELITY_KEY)
+    return (screen, own) if screen != own else None
+
+
+def _objective_key(row: dict, objectives) -> tuple:
+    return tuple(row[o.name] if o.direction == "minimize" else -row[o.name] for o in objectives)
+
+
+def verify_rows(client, sweep: Sweep, rows: list[dict], objectives, constraints, n_workers: int, model: str) -> list[dict]:
+    """Re-check the screened finalists on the cluster with the base file's joint model, one design
+    per task (each costs seconds of FE). A row gains `feasible` and `screened` (its screening values)."""
+    overrides = [{**{k.name: _py(r[k.name]) for k in sweep.keys}, FIDELITY_KEY: model} for r in rows]
+    timeout = max(sweep.settings.timeout_s, 600.0)  # a new joint geometry is seconds of FE per joint
+    got = run_mod.evaluate_all(client, sweep.base_data, overrides, timeout, 1, n_workers, text=sweep.base_text,
+                               base_name=sweep.base_label)
+    out = []
+    names = list(dict.fromkeys([o.name for o in objectives] + [c.name for c in constraints]))
+    for screened, row in zip(rows, got):
+        row = {k: v for k, v in row.items() if k != FIDELITY_KEY}
+        row["trial"] = screened.get("trial")
+        row["feasible"] = bool(_feasible(row, objectives, constraints))
+        row["screened"] = {n: screened.get(n) for n in names + ["verdict"]}
+        out.append(row)
+    return out
 
 
 def _write_trials(out_dir: Path, rows: list[dict]) -> None:
@@ -280,8 +367,10 @@ def why_none(rows: list[dict], objectives, constraints) -> str:
     return f"Of {len(rows)} trials: {parts}.{closest}"
 
 
-def write_best_yaml(sweep: Sweep, row: dict, path: Path) -> list[str]:
-    """The base file with the changed values edited in place (ruamel round trip: comments and order kept)."""
+def write_best_yaml(sweep: Sweep, row: dict, path: Path, keep_model: bool = False) -> list[str]:
+    """The base file with the changed values edited in place (ruamel round trip: comments and order kept).
+    keep_model: the sweep's screening joint model is not written (the design was verified with the
+    base file's own)."""
     import io
 
     from ruamel.yaml import YAML
@@ -295,7 +384,8 @@ def write_best_yaml(sweep: Sweep, row: dict, path: Path) -> list[str]:
     doc = yaml.load(sweep.base_text)
     if doc is None:
         doc = CommentedMap()
-    targets = {f: report_get(sweep.base_data, f) for f in sweep.fixed}  # the sweep file's set: values
+    targets = {f: report_get(sweep.base_data, f) for f in sweep.fixed  # the sweep file's set: values
+               if not (keep_model and f == FIDELITY_KEY)}
     for k in sweep.keys:
         v = _py(row[k.name])  # numpy scalar -> Python
         targets[k.name] = int(round(v)) if k.integer and isinstance(v, float) else v
@@ -343,11 +433,13 @@ def _py(v):
 
 def cad_check(params: dict, design_id: str) -> dict:
     """A Dask task: every printed part of one design built into a temporary folder and verified:
-    watertight single shells and a fit on printer.bed. (No clash check exists in cogniframe yet.)"""
+    watertight single shells, a fit on printer.bed, and the build's clash check (parts, rods,
+    vitamins, propeller margins: analysis/clash.py)."""
     import tempfile
 
     from .. import pipeline
     from .. import spec as spec_mod
+    from ..export.assembly import check_clashes
     from ..export.build import build_parts, fits
 
     t0 = time.perf_counter()
@@ -355,6 +447,7 @@ def cad_check(params: dict, design_id: str) -> dict:
     d = pipeline.design(spec)
     with tempfile.TemporaryDirectory(prefix="cogniframe-cad-") as tmp:
         built = build_parts(spec, d.frame, d.parts, tmp, jobs=1)
+        clash = check_clashes(spec, d.frame, d.parts, built, tmp)
     bed = tuple(float(b) for b in spec.printer.bed)
     failures = []
     for b in built:
@@ -364,8 +457,10 @@ def cad_check(params: dict, design_id: str) -> dict:
             failures.append(f"{b.name} has {b.shells} shells")
         if not fits(b.bbox_mm, bed):
             failures.append(f"{b.name} ({' x '.join(f'{v:.1f}' for v in b.bbox_mm)} mm) does not fit the bed")
+    failures += clash.messages()
     return {"design_id": design_id, "ok": not failures, "parts": len(built), "failures": failures,
-            "volume_mm3": round(sum(b.volume_mm3 * b.qty for b in built), 1), "clash_check": "not available",
+            "volume_mm3": round(sum(b.volume_mm3 * b.qty for b in built), 1),
+            "clash": {"ok": clash.ok, "bodies": clash.bodies, "pairs_tested": clash.pairs_tested},
             "worker": ev._worker_address(), "seconds": round(time.perf_counter() - t0, 3)}
 
 
@@ -379,6 +474,16 @@ def _write_summary(sweep: Sweep, result: OptimizeResult) -> None:
              "Objectives: " + ", ".join(f"{o.direction} `{o.name}`" for o in result.objectives) + "; constraints: "
              + (", ".join(f"`{c}`" for c in result.constraints) or "none") + " (and verdict PASS).", "",
              f"{result.trials} trials ({result.feasible} feasible) in {result.seconds:.1f} s on {result.workers} Dask workers.", ""]
+    if result.fidelity:
+        outs_v = list(dict.fromkeys([o.name for o in result.objectives] + [c.name for c in result.constraints]))
+        lines += [f"## Finalists re-checked with {result.fidelity[1]} joints", "",
+                  f"The trials were screened with {result.fidelity[0]} joints (the sweep file's set:); the "
+                  f"{len(result.verified)} best feasible were checked again with the base file's {result.fidelity[1]} "
+                  "joints, and the best design is the best of those still feasible.", "",
+                  *_md_table(["trial", *[f"{o} ({result.fidelity[0]})" for o in outs_v], *[f"{o} ({result.fidelity[1]})" for o in outs_v],
+                              "verdict", "feasible"],
+                             [[r.get("trial"), *[r["screened"].get(o) for o in outs_v], *[r.get(o) for o in outs_v],
+                               r.get("verdict"), r["feasible"]] for r in result.verified]), ""]
     if result.best is None:
         lines += ["No feasible design. " + result.note, ""]
     else:
@@ -393,5 +498,7 @@ def _write_summary(sweep: Sweep, result: OptimizeResult) -> None:
     if result.cad:
         lines += ["## CAD of the best designs", "", *_md_table(["design_id", "ok", "parts", "failures", "seconds"],
                                                               [[c["design_id"], c["ok"], c["parts"], "; ".join(c["failures"]) or "-", c["seconds"]]
-                                                               for c in result.cad]), "", "No clash check exists in cogniframe yet.", ""]
+                                                               for c in result.cad]), "",
+                  "Each design's parts are built, checked watertight and on the bed, and clash-checked with its rods, "
+                  "vitamins and propeller discs (`analysis/clash.py`, as in `cogniframe build`).", ""]
     (result.out_dir / "optimize.md").write_text("\n".join(lines))
