@@ -867,8 +867,10 @@ def _thrust_case(spec, frame, parts, joints, masses, play=None, full: tuple | No
             out["motor_tilt_deg"] = float(np.max(tilt))
             out["motor_deflection_mm"] = float(np.mean(dz))
         else:
+            # per newton only: at full thrust the linear model would tilt the bare arms by ~130 deg,
+            # far outside its small-rotation range (the arms alone are nearly a mechanism)
             out["arms_only_motor_deflection_mm_per_n"] = float(np.mean(dz)) / thrust_n
-            out["arms_only_motor_tilt_deg"] = float(np.max(tilt))
+            out["arms_only_motor_tilt_deg_per_n"] = float(np.max(tilt)) / thrust_n
     out["exoskeleton_stiffening"] = out["arms_only_motor_deflection_mm_per_n"] / out["motor_deflection_mm_per_n"]
     return out
 
