@@ -32,6 +32,8 @@ def sweep_text(n: int) -> str:
 samples: {n}
 sampler: lhs
 seed: 11
+set:
+  model.stiffness_model: analytic  # as the example sweeps: closed-form joints (the solid FE is 30-60 s per new joint)
 vary:
   rods.diameter: [2.5, 4.0]
   joints.wall: [1.6, 2.0]
@@ -54,27 +56,40 @@ def rate_of(run_sweep, sweep, out, workers):
 
 
 def breakdown(n: int = 12) -> dict[str, float]:
+    """Median CPU ms per stage of one new design's check (nothing cached: every design differs),
+    and of a whole `check` + row of another new design."""
     import yaml
 
     from cogniframe import cutlist, frame, partlist, pipeline
     from cogniframe import spec as spec_mod
-    from cogniframe.analysis import drop, mass
+    from cogniframe.analysis import drop, flight, mass
     from cogniframe.sweep import evaluate as ev
 
     base = yaml.safe_load((ROOT / "params" / "carbon.yaml").read_text())
     base["name"] = "carbon"
-    t: dict[str, list[float]] = {k: [] for k in ("validate", "frame", "parts+cut+mass", "FE stiffness", "impact model", "whole design (FE cached)")}
+    base.setdefault("model", {})["stiffness_model"] = "analytic"  # as the sweep above
+    names = ("validate", "frame (frame.build)", "parts + cut list + mass", "k: joints + play + secant solve",
+             "drop model (impact)", "load cases (wall, thrust, modes, buckling, strain)", "peaks + flight",
+             "whole design: check + row")
+    t: dict[str, list[float]] = {k: [] for k in names}
+    clock = time.thread_time
     for i in range(n + 1):
-        clock = time.thread_time
-        a = clock(); s = spec_mod.from_dict(ev.apply_overrides(base, {"frame.height": 105 + 2.31 * i})); b = clock()
-        fr = frame.build(s); c = clock()
-        parts = partlist.build(s, fr); cut = cutlist.build(s, fr); budget = mass.budget(s, fr, cut, parts, None); d = clock()
-        drop.predicted_k_n_per_m(s, fr); e = clock()
-        drop.evaluate_design(s, fr, budget.total_g); f = clock()
-        pipeline.check_dict(pipeline.check(s)); g = clock()
+        marks = [clock()]
+        s = spec_mod.from_dict(ev.apply_overrides(base, {"frame.height": 105 + 2.31 * i})); marks.append(clock())
+        fr = frame.build(s); marks.append(clock())
+        parts = partlist.build(s, fr); cut = cutlist.build(s, fr); budget = mass.budget(s, fr, cut, parts, None)
+        marks.append(clock())
+        session = drop.Session(s, fr, parts)
+        drop.predicted_k_n_per_m(s, fr, budget.total_g, session); marks.append(clock())
+        dr = drop.evaluate_design(s, fr, budget.total_g, session); marks.append(clock())
+        drop.load_cases(s, fr, budget.total_g, dr, session); marks.append(clock())
+        drop.peak_prediction(s, budget.total_g, dr, budget.groups["exoskeleton"]); flight.evaluate(s, budget.total_g)
+        marks.append(clock())
+        other = ev.apply_overrides(base, {"frame.height": 106 + 2.31 * i})
+        ev.outputs(pipeline.check_dict(pipeline.check(spec_mod.from_dict(other)))); marks.append(clock())
         if i:  # the first pays imports
-            for k, v in zip(t, (b - a, c - b, d - c, e - d, f - e, g - f)):
-                t[k].append(v)
+            for k, a, b in zip(names, marks, marks[1:]):
+                t[k].append(b - a)
     return {k: statistics.median(v) * 1000 for k, v in t.items()}
 
 
@@ -122,7 +137,7 @@ def main() -> None:
     print(f"  cluster start + warm-up + reports overhead per run: {med(startup):.1f} s")
     print(f"  resume, everything done:          {med(resume_all):6.2f} s (no cluster started)")
     print(f"  resume, half the batches lost:    {med(resume_half):6.2f} s ({res.evaluated} designs re-run, cached FE)")
-    print("per design, serial, single-threaded BLAS (median CPU ms of this thread):")
+    print("per new design, serial, single-threaded BLAS (median CPU ms of this thread):")
     for k, v in breakdown().items():  # CPU time of this thread: independent of other load
         print(f"  {k:28s} {v:7.1f}")
 

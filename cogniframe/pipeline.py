@@ -68,8 +68,8 @@ def _check_printer_fit(spec: Spec, parts) -> None:
 def check(spec: Spec, geometry: dict | None = None, clash=None) -> CheckResult:
     """Mass budget, crash margin, flight and requirements; `geometry` = CAD volumes when known,
     `clash` = the build's clash check (analysis.clash.ClashResult) when known."""
-    d, budget, drop = mass_and_drop(spec, geometry)
-    stiffness, peak = _physics(spec, d, budget, drop)
+    d, budget, drop, session = _mass_and_drop(spec, geometry)
+    stiffness, peak = _physics(spec, d, budget, drop, session)
     from .analysis import flight as flight_mod
 
     flight = flight_mod.evaluate(spec, budget.total_g)
@@ -81,9 +81,17 @@ def check(spec: Spec, geometry: dict | None = None, clash=None) -> CheckResult:
 def mass_and_drop(spec: Spec, geometry: dict | None = None) -> tuple[Design, mass_mod.MassBudget, object]:
     """The first, cheap part of `check`: the design, its mass budget and drop model (what the
     build's mass and drop figures draw while the load cases are still being solved)."""
+    d, budget, drop, _ = _mass_and_drop(spec, geometry)
+    return d, budget, drop
+
+
+def _mass_and_drop(spec: Spec, geometry: dict | None = None):
     d = design(spec)
     budget = mass_mod.budget(spec, d.frame, d.cut, d.parts, geometry)
-    return d, budget, _drop(spec, d, budget)
+    from .analysis import drop as drop_mod
+
+    session = drop_mod.Session(spec, d.frame, d.parts)  # the frame model, solved at most once per check
+    return d, budget, _drop(spec, d, budget, session), session
 
 
 def _aircraft_problems(spec: Spec, flight, clash) -> list[str]:
@@ -98,19 +106,19 @@ def _aircraft_problems(spec: Spec, flight, clash) -> list[str]:
     return out
 
 
-def _drop(spec: Spec, d: Design, budget: mass_mod.MassBudget):
+def _drop(spec: Spec, d: Design, budget: mass_mod.MassBudget, session=None):
     from .analysis import drop as drop_mod
 
-    return drop_mod.evaluate_design(spec, d.frame, budget.total_g)
+    return drop_mod.evaluate_design(spec, d.frame, budget.total_g, session)
 
 
-def _physics(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop):
+def _physics(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=None):
     """The frame's load cases and the predicted peak deceleration (both cached on disk)."""
     from .analysis import drop as drop_mod
 
     if drop is None:
         return None, None
-    cases = drop_mod.load_cases(spec, d.frame, budget.total_g, drop)
+    cases = drop_mod.load_cases(spec, d.frame, budget.total_g, drop, session)
     peak = drop_mod.peak_prediction(spec, budget.total_g, drop, budget.groups["exoskeleton"])
     return cases, peak
 

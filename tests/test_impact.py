@@ -196,6 +196,20 @@ def test_lowpass_matches_lsim():
     np.testing.assert_allclose(lowpass_first_order(u, 1e-3, 500.0), y_ref, rtol=1e-9, atol=1e-9)
 
 
+@pytest.mark.parametrize("w, n", [(500.0, 300), (500.0, 2500), (40000.0, 700)])
+def test_numpy_lowpass_matches_lsim_over_many_chunks(w, n):
+    # the check's filter (no scipy.signal import): chunked closed form of the same recurrence;
+    # 2500 samples at w dt = 0.5 and 700 at w dt = 40 span several chunks
+    from cogniframe.analysis.impact import lowpass_first_order_np
+
+    rng = np.random.default_rng(2)
+    u = np.abs(rng.normal(0, 50, n))
+    t = np.arange(n) / 1000
+    _, y_ref, _ = lsim(([w], [1.0, w]), u, t)
+    np.testing.assert_allclose(lowpass_first_order_np(u, 1e-3, w), y_ref, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(lowpass_first_order_np(u, 1e-3, w), lowpass_first_order(u, 1e-3, w), rtol=1e-12, atol=1e-12)
+
+
 def test_trajectory_samples_the_model_and_filters_on_request():
     t, x, v, a = trajectory(M, C, K, 100, n=500)
     r = simulate_height(M, C, K, 100)

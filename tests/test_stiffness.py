@@ -292,3 +292,97 @@ def test_a_joint_the_mesher_cannot_handle_falls_back_to_closed_forms(monkeypatch
     joints = st.joint_models(s, p, "fe")
     assert {js.method for js in joints.values()} == {"analytic"}
     assert st.predict_stiffness(s, f, p, joints=joints).k_n_per_m > 0
+
+
+def _data(**dotted) -> dict:
+    data = copy.deepcopy(yaml.safe_load(CARBON.read_text(encoding="utf-8")))
+    data.setdefault("model", {})["stiffness_model"] = "analytic"
+    for key, v in dotted.items():
+        node = data
+        *path, last = key.split("__")
+        for p in path:
+            node = node.setdefault(p, {})
+        node[last] = v
+    return data
+
+
+def test_k_key_ignores_what_only_weighs_and_follows_the_geometry():
+    from cogniframe.analysis import drop
+
+    key = drop._stiffness_key(spec_mod.from_dict(_data()))
+    for weighs in ({"core__battery__mass": 90}, {"core__battery__capacity_mah": 1000}, {"motors__prop_mass": 3.0},
+                   {"core__infill": 0.3}):
+        assert drop._stiffness_key(spec_mod.from_dict(_data(**weighs))) == key, weighs
+    for shapes in ({"joints__socket_depth": 11}, {"core__plate_size": 44}, {"core__battery__width": 38},
+                   {"rods__diameter": 2.8}, {"motors__radius": 86}):
+        assert drop._stiffness_key(spec_mod.from_dict(_data(**shapes))) != key, shapes
+    # the load cases' key does follow the mass (through the whole params and the total mass)
+    heavy = spec_mod.from_dict(_data(core__battery__mass=90))
+    assert drop._stiffness_key(heavy, "cases", scope="all") != drop._stiffness_key(spec_mod.from_dict(_data()), "cases", scope="all")
+
+
+def test_a_battery_mass_change_reuses_the_cached_k(tmp_path, monkeypatch):
+    # issue 11: a heavier battery re-runs the drop and the load cases, not the frame's k
+    from cogniframe import pipeline
+
+    monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path))
+    light = pipeline.check(spec_mod.from_dict(_data()))
+
+    def no_resolve(*a, **k):
+        raise AssertionError("k solved again for a mass-only change")
+
+    monkeypatch.setattr(st, "secant_k_and_play", no_resolve)
+    heavy = pipeline.check(spec_mod.from_dict(_data(core__battery__mass=90)))
+    assert heavy.drop.k_n_per_m == light.drop.k_n_per_m
+    assert heavy.mass.total_g == pytest.approx(light.mass.total_g + 32, abs=1e-6)
+    # more mass on the same K: no mode rises (Rayleigh's monotonicity; modes are rounded to
+    # 0.01 Hz), and the payload's own modes fall
+    hm, lm = heavy.stiffness["modes_hz"], light.stiffness["modes_hz"]
+    assert all(h <= l for h, l in zip(hm, lm)) and sum(h < l - 0.1 for h, l in zip(hm, lm)) >= 2
+
+
+def _assert_close(a, b, path=""):
+    if isinstance(a, dict):
+        assert a.keys() == b.keys(), path
+        for k in a:
+            _assert_close(a[k], b[k], f"{path}.{k}")
+    elif isinstance(a, list):
+        assert len(a) == len(b), path
+        for i, (x, y) in enumerate(zip(a, b)):
+            _assert_close(x, y, f"{path}[{i}]")
+    elif isinstance(a, float) and isinstance(b, float):
+        # round-off; an output rounded to d decimals may differ by one unit in its last place
+        unit = max(next((10.0**-d for d in range(5) if round(x, d) == x), 0.0) for x in (a, b))
+        assert abs(a - b) <= max(2e-6 * abs(b), 1.01 * unit), path
+    elif a != b and not path.endswith(".rod"):  # symmetric rods with equal margins may swap places
+        raise AssertionError(f"{path}: {a!r} != {b!r}")
+
+
+def test_load_cases_take_the_secant_play_springs_and_agree_with_k():
+    s, f, p = _design(spec_mod.from_dict(_data()))
+    joints = st.joint_models(s, p, "analytic")
+    k, play = st.secant_k_and_play(s, f, p, joints)
+    assert k == st.secant_k(s, f, p, joints) == st.predict_stiffness(s, f, p, joints=joints, design_force_n=st.PLAY_REFERENCE_N).k_n_per_m
+    own = st.load_cases(s, f, p, 241.0, joints=joints, design_force_n=95.0)
+    given = st.load_cases(s, f, p, 241.0, joints=joints, design_force_n=95.0, play=play)
+    _assert_close(given.to_dict(), own.to_dict())  # the same model, nodes in another order
+    assert own.k_n_per_m == pytest.approx(k, rel=1e-12)
+    # play={} means "no play" (an interference fit), not "compute it"
+    none = st.load_cases(s, f, p, 241.0, joints=joints, design_force_n=95.0, play={})
+    assert none.k_n_per_m > own.k_n_per_m
+
+
+def test_adding_play_to_a_built_model_equals_building_it_with_play():
+    # the play iteration turns its no-play model into the play model in place (add_play)
+    s, f, p = _design(spec_mod.from_dict(_data()))
+    joints = st.joint_models(s, p, "analytic")
+    play = st.play_springs(s, f, p, joints, st.PLAY_REFERENCE_N)
+    built = st.build_model(s, f, p, joints, play=play)
+    added = st.build_model(s, f, p, joints)
+    st.add_play(added, play)
+    assert set(added.fe.nodes) == set(built.fe.nodes) and added.joint_nodes == built.joint_nodes
+    assert len(added.fe.springs) == len(built.fe.springs)
+    ua, ub = (st._solve_payload(s, f, p, joints, mdl=m)[2] for m in (added, built))
+    ia, ib = added.fe.index(), built.fe.index()
+    for n in built.fe.nodes:
+        assert np.allclose(ua[6 * ia[n]:6 * ia[n] + 6], ub[6 * ib[n]:6 * ib[n] + 6], rtol=1e-7, atol=1e-9 * np.abs(ub).max())

@@ -36,7 +36,7 @@ sampler: lhs
 seed: 5
 batch: 2
 set:
-  model.stiffness_model: analytic  # closed-form joints: a cold joint FE per new geometry (30-60 s) would hit timeout_s
+  model.stiffness_model: analytic  # closed-form joints: milliseconds per design (the FE: seconds per new joint geometry)
 vary:
   rods.diameter: [2.6, 3.6]
   frame.height: [105, 140]
@@ -146,6 +146,7 @@ def test_tcp_cluster_equals_serial_both_workers_work_and_rerun_skips(tcp_cluster
     assert len(list((out / "results").glob("*.parquet"))) == 5  # one file per batch of 2
     for f in ("pareto.png", "sensitivity.png", "summary.md"):
         assert (out / f).stat().st_size > 1000, f
+    assert "Joints from the closed forms" in (out / "summary.md").read_text()  # the fidelity is stated
 
     t0 = time.perf_counter()
     again = run_mod.run_sweep(sweep, out, scheduler=tcp_cluster, reports=False)

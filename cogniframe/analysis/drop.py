@@ -10,6 +10,7 @@ a hash of exactly its inputs and of the source of the modules that compute it, s
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import json
 from pathlib import Path
@@ -24,13 +25,49 @@ _MODULES = ("cogniframe.analysis.stiffness", "cogniframe.analysis.impact_nl", "c
             "cogniframe.materials", "cogniframe.spec")
 
 
-def evaluate_design(spec: Spec, frame: Frame, total_mass_g: float) -> impact.DropResult:
+class Session:
+    """One design's frame model as one `check` uses it: the part list, the joint models and the
+    secant solution (k, play springs, the solved payload model), each computed at most once and
+    shared by the drop (k) and the load cases (which start from the same solved model). Made
+    per check by the caller and dropped with it: no state outlives the check. Stages called
+    without one make their own."""
+
+    def __init__(self, spec: Spec, frame: Frame, parts=None):
+        self.spec, self.frame, self._parts = spec, frame, parts
+        self._joints = None
+        self.solution = None  # stiffness.SecantSolution once solved in this check
+
+    @property
+    def parts(self):
+        if self._parts is None:
+            from .. import partlist
+
+            self._parts = partlist.build(self.spec, self.frame)
+        return self._parts
+
+    @property
+    def joints(self) -> dict:
+        if self._joints is None:
+            from .stiffness import joint_models
+
+            self._joints = joint_models(self.spec, self.parts, self.spec.model.stiffness_model)
+        return self._joints
+
+    def solve(self):
+        if self.solution is None:
+            from .stiffness import secant_solution
+
+            self.solution = secant_solution(self.spec, self.frame, self.parts, self.joints)
+        return self.solution
+
+
+def evaluate_design(spec: Spec, frame: Frame, total_mass_g: float, session: Session | None = None) -> impact.DropResult:
     """Drop results over `requirements.drop_heights_cm` for this design (SI inside, see impact)."""
     m = total_mass_g / 1000.0
     if spec.model.k_n_per_m is not None:
         k, k_source = spec.model.k_n_per_m, "measured"
     else:
-        k, k_source = predicted_k_n_per_m(spec, frame, total_mass_g), "predicted"
+        k, k_source = predicted_k_n_per_m(spec, frame, total_mass_g, session), "predicted"
     if spec.model.c_n_s_per_m is not None:
         c, c_source = spec.model.c_n_s_per_m, "measured"
     else:
@@ -40,37 +77,65 @@ def evaluate_design(spec: Spec, frame: Frame, total_mass_g: float) -> impact.Dro
                            k_source=k_source, c_source=c_source)
 
 
-def predicted_k_n_per_m(spec: Spec, frame: Frame, total_mass_g: float | None = None) -> float:
+def predicted_k_n_per_m(spec: Spec, frame: Frame, total_mass_g: float | None = None, session: Session | None = None) -> float:
     """Frame-model stiffness (the secant with the fit's play, `stiffness.secant_k`), cached by a
     hash of everything the model reads and of its source. It does not depend on the mass."""
+    return float(_secant(spec, frame, session)["k_n_per_m"])
+
+
+def _secant(spec: Spec, frame: Frame, session: Session | None = None) -> dict:
+    """{"k_n_per_m", "play"}: the secant k and the play springs it was taken with (rod end node ->
+    6x6 as nested lists; JSON keeps every float's digits), cached. `load_cases` reuses the play
+    springs instead of iterating them again."""
     key = _stiffness_key(spec)
     hit = cache.load_json("stiffness", key)
-    if hit is not None:
-        return float(hit["k_n_per_m"])
-    from .. import partlist
-    from .stiffness import joint_models, secant_k
-
-    parts = partlist.build(spec, frame)
-    joints = joint_models(spec, parts, spec.model.stiffness_model)
-    k = secant_k(spec, frame, parts, joints)
-    cache.store_json("stiffness", key, {"k_n_per_m": k})
-    return k
+    if hit is not None and "play" in hit:
+        return hit
+    sol = (session or Session(spec, frame)).solve()
+    out = {"k_n_per_m": sol.k_n_per_m, "play": {n: p.tolist() for n, p in sol.play.items()}}
+    cache.store_json("stiffness", key, out)
+    return out
 
 
-def _stiffness_key(spec: Spec, *extra) -> str:
+# What of the params the frame model (k, and the play springs) reads: the geometry and the
+# materials. Left out: what only weighs (the battery's and the motors' masses; the core's
+# infill and material: the core is rigid in the model) or only flies (cells, capacity, kv, prop,
+# thrust). The load cases' key adds the mass and the drop; the peaks' key every number it uses.
+_NOT_READ_BY_K = {"core": ("infill", "material"), "core.battery": ("mass", "cells", "capacity_mah", "usable_fraction"),
+                  "motors": ("prop_mass", "kv", "prop", "max_thrust_g")}
+
+
+def _k_inputs(data: dict) -> dict:
+    inputs = {s: copy.deepcopy(data[s]) for s in ("materials", "frame", "rods", "joints", "core", "motors", "printer")}
+    for dotted, keys in _NOT_READ_BY_K.items():
+        node = inputs
+        for part in dotted.split("."):
+            node = node.get(part) if isinstance(node, dict) else None
+        if isinstance(node, dict):
+            for k in keys:
+                node.pop(k, None)
+    return inputs
+
+
+def _stiffness_key(spec: Spec, *extra, scope: str = "k") -> str:
+    """Cache key: a hash of the inputs and of the source of every module the model reads (library
+    moduli live in materials.py, the bore in spec.py). ``scope="k"``: only what the frame model
+    reads (`_k_inputs`); ``"all"``: every section the load cases and peaks may read."""
     from importlib.util import find_spec
 
     data = spec.model_dump(mode="json")
-    inputs = {s: data[s] for s in ("materials", "frame", "rods", "joints", "core", "motors", "printer")}
+    if scope == "k":
+        inputs = _k_inputs(data)
+    else:
+        inputs = {s: data[s] for s in ("materials", "frame", "rods", "joints", "core", "motors", "printer")}
     inputs["stiffness_model"] = data["model"].get("stiffness_model", "fe")
     h = hashlib.sha256(json.dumps([inputs, extra], sort_keys=True, default=str).encode())
-    # every module the model reads from: library moduli live in materials.py, bore in spec.py
     for mod in _MODULES:
         h.update(Path(find_spec(mod).origin).read_bytes())
     return h.hexdigest()[:24]
 
 
-def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropResult) -> dict:
+def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropResult, session: Session | None = None) -> dict:
     """`check --json`'s `stiffness` section: every load case of `stiffness.load_cases`, cached.
 
     The design drop's force is the spring force at its maximum compression, k x_max (the
@@ -82,16 +147,23 @@ def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropR
     k_model = drop.k_n_per_m
     zeta = drop.damping_ratio
     key = _stiffness_key(spec, "cases", round(total_mass_g, 6), round(k_model, 6), round(x, 9), round(zeta, 9),
-                         spec.requirements.wall_impact_speed_m_s)
+                         spec.requirements.wall_impact_speed_m_s, scope="all")
     hit = cache.load_json("cases", key)
     if hit is not None:
         return hit
-    from .. import partlist
     from .stiffness import load_cases as cases
 
-    parts = partlist.build(spec, frame)
-    lc = cases(spec, frame, parts, total_mass_g, joint_model=spec.model.stiffness_model, damping_ratio=zeta,
-               design_force_n=k_model * x / 1000.0)
+    session = session or Session(spec, frame)
+    play, solved = None, None
+    if spec.model.k_n_per_m is None:  # the predicted k's play springs: not iterated again
+        if session.solution is not None:  # solved in this check: its model and payload solution too
+            play, solved = session.solution.play, session.solution
+        else:  # k came from the cache, with its play springs
+            import numpy as np
+
+            play = {n: np.asarray(p, float) for n, p in _secant(spec, frame, session)["play"].items()}
+    lc = cases(spec, frame, session.parts, total_mass_g, joint_model=spec.model.stiffness_model, damping_ratio=zeta,
+               design_force_n=k_model * x / 1000.0, joints=session.joints, play=play, solved=solved)
     out = lc.to_dict()
     out["design_drop_height_cm"] = h_design
     out["design_force_n"] = k_model * x / 1000.0
@@ -104,7 +176,8 @@ def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropR
 def peak_prediction(spec: Spec, total_mass_g: float, drop: impact.DropResult, exo_mass_g: float) -> dict:
     """Predicted peak |a| (G, as the logger sees it) per drop height, from the better-validated model."""
     heights = sorted({*spec.requirements.drop_heights_cm, spec.requirements.design_drop_height_cm})
-    key = _stiffness_key(spec, "peaks", total_mass_g, drop.k_n_per_m, drop.c_n_s_per_m, exo_mass_g, heights, drop.clearance_mm)
+    key = _stiffness_key(spec, "peaks", total_mass_g, drop.k_n_per_m, drop.c_n_s_per_m, exo_mass_g, heights, drop.clearance_mm,
+                         scope="all")
     hit = cache.load_json("peaks", key)
     if hit is not None:
         return hit

@@ -198,6 +198,26 @@ def _state(sys: _System, v0: float, t: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return x, v
 
 
+def _state_at(sys: _System, v0: float, t: float) -> tuple[float, float]:
+    """`_state` at one time, in plain floats (the scalar root and maximum searches call it
+    thousands of times per design; a one-element array costs ten times more)."""
+    a = sys.alpha
+    if sys.wdsq > 0.0:
+        wd = math.sqrt(sys.wdsq)
+        decay = math.exp(-a * t)
+        ec, es = decay * math.cos(wd * t), decay * math.sin(wd * t) / wd
+    elif sys.wdsq == 0.0:
+        ec = math.exp(-a * t)
+        es = ec * t
+    else:
+        sq = math.sqrt(-sys.wdsq)
+        e_slow = math.exp(-sys.w0sq / (a + sq) * t)
+        e_2s = math.expm1(-2.0 * sq * t)
+        ec, es = e_slow * (1.0 + 0.5 * e_2s), e_slow * (-0.5 * e_2s) / sq
+    y0 = -sys.xs
+    return sys.xs + y0 * ec + (v0 + a * y0) * es, v0 * ec - (a * v0 - sys.g) * es
+
+
 def _accel(sys: _System, x: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Payload acceleration x'' = g - (k x + c x') / m in m/s^2 (positive towards the ground)."""
     return sys.g - (sys.k * x + sys.c * v) / sys.m
@@ -241,8 +261,7 @@ def _x_max(sys: _System, v0: float) -> tuple[float, float]:
     t_max = _time_of_max(sys, v0)
     if not math.isfinite(t_max):
         return sys.xs, t_max  # supremum, approached as t -> inf
-    x, _ = _state(sys, v0, np.array([t_max]))
-    return float(x[0]), t_max
+    return _state_at(sys, v0, t_max)[0], t_max
 
 
 def _settle_time(sys: _System) -> float:
@@ -289,7 +308,7 @@ def _golden_max(f, lo: float, hi: float, xtol: float) -> float:
 
 def _time_to_reach(sys: _System, v0: float, x_target: float, t_hi: float) -> float:
     """First t in (0, t_hi] where x(t) = x_target; x increases monotonically there."""
-    f = lambda t: float(_state(sys, v0, np.array([t]))[0][0]) - x_target  # noqa: E731
+    f = lambda t: _state_at(sys, v0, t)[0] - x_target  # noqa: E731
     if f(t_hi) <= 0.0:
         return t_hi
     return _bisect(f, 0.0, t_hi, xtol=1e-14)
@@ -303,8 +322,7 @@ def _peak_abs_accel(sys: _System, v0: float, t_end: float) -> float:
     finishes it to ~1e-10 relative.
     """
     if t_end <= 0.0:
-        x, v = _state(sys, v0, np.array([0.0]))
-        return float(abs(_accel(sys, x, v)[0]))
+        return abs(_accel(sys, *_state_at(sys, v0, 0.0)))
     t = np.linspace(0.0, t_end, 2001)
     x, v = _state(sys, v0, t)
     a = np.abs(_accel(sys, x, v))
@@ -312,7 +330,7 @@ def _peak_abs_accel(sys: _System, v0: float, t_end: float) -> float:
     best = float(a[i])
     lo, hi = t[max(i - 1, 0)], t[min(i + 1, t.size - 1)]
     if hi > lo:
-        mag = lambda s: float(np.abs(_accel(sys, *_state(sys, v0, np.array([s]))))[0])  # noqa: E731
+        mag = lambda s: abs(_accel(sys, *_state_at(sys, v0, s)))  # noqa: E731
         best = max(best, _golden_max(mag, lo, hi, xtol=1e-13))
     return best
 
@@ -353,9 +371,9 @@ def simulate_height(
     e_k = 0.5 * mass_kg * v0 * v0
     if strikes:
         t_hit = _time_to_reach(sys, v0, x_c, t_max if math.isfinite(t_max) else _settle_time(sys))
-        _, v_hit = _state(sys, v0, np.array([t_hit]))
+        _, v_hit = _state_at(sys, v0, t_hit)
         e_spring = 0.5 * k_n_per_m * x_c * x_c
-        e_rigid = 0.5 * mass_kg * float(v_hit[0]) ** 2
+        e_rigid = 0.5 * mass_kg * v_hit**2
         t_end = t_hit
     else:
         e_spring = 0.5 * k_n_per_m * x_max * x_max
@@ -404,6 +422,31 @@ def lowpass_first_order(u: np.ndarray, dt_s: float, w_rad_per_s: float) -> np.nd
 
     # zi = -b1 u[0] makes y[0] = 0: the filter starts from rest (lfilter is DF-II transposed).
     y, _ = lfilter([b1, b0], [1.0, -e], u, zi=[-b1 * u[0]])
+    return y
+
+
+def lowpass_first_order_np(u: np.ndarray, dt_s: float, w_rad_per_s: float) -> np.ndarray:
+    """`lowpass_first_order` in numpy alone (no scipy.signal: its import costs `check` 0.6-1 s).
+
+    The same recurrence y[n+1] = E y[n] + c[n], c[n] = b0 u[n] + b1 u[n+1], solved in closed
+    form chunk by chunk: y[s+j] = E^j (y[s] + sum_{k<j} E^-(k+1) c[s+k]), with chunks short enough
+    that E^-j stays below 1e150 (no overflow; the rounding is that of the recurrence's, relative
+    to the signal's size). tests/test_impact.py checks it against `lowpass_first_order`."""
+    u = np.asarray(u, dtype=float)
+    if u.size == 0:
+        return u.copy()
+    a = w_rad_per_s * dt_s
+    e = math.exp(-a)
+    one_minus_e = -math.expm1(-a)
+    b1 = 1.0 - one_minus_e / a
+    b0 = one_minus_e / a - e
+    c = b0 * u[:-1] + b1 * u[1:]
+    y = np.zeros(u.size)
+    chunk = max(1, int(345.0 / a))  # 345 = ln(1e150)
+    for s in range(0, c.size, chunk):
+        cc = c[s:s + chunk]
+        j = np.arange(1, cc.size + 1)
+        y[s + 1:s + 1 + cc.size] = np.exp(-a * j) * (y[s] + np.cumsum(np.exp(a * j) * cc))
     return y
 
 

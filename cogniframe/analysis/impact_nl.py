@@ -148,10 +148,18 @@ def x_max_mm(p: TwoMass, height_cm: float, n_samples: int = 120) -> float:
 
 
 def kv_logger_peak_g(m: float, c: float, k: float, height_cm: float, lowpass_rad_per_s: float | None = 500.0,
-                     n_samples: int = 120) -> float:
-    from .fit import model_accel_g
+                     n_samples: int = 120, rate_hz: float = 1000.0) -> float:
+    """Kelvin-Voigt peak |a| (G) as the logger sees it: the closed-form response sampled at
+    `rate_hz` from touch-down, low-passed (what `fit.model_accel_g` computes; not imported from
+    there, whose scipy.optimize import would cost `check` ~0.4 s; filtered in numpy alone)."""
+    from .impact import lowpass_first_order_np, response
 
-    return float(model_accel_g(m, c, k, height_cm, n_samples, lowpass_rad_per_s).max())
+    t = np.arange(n_samples) / rate_hz
+    _, _, a = response(t, m, c, k, impact_velocity(height_cm))
+    a = np.abs(a) / G
+    if lowpass_rad_per_s is not None:
+        a = lowpass_first_order_np(a, 1.0 / rate_hz, lowpass_rad_per_s)
+    return float(a.max())
 
 
 def predict(model: str, m: float, c: float, k: float, heights_cm, clearance_mm: float, m_exo: float | None = None,

@@ -209,14 +209,12 @@ def code_digest() -> str:
 
 
 def warm_up() -> str:
-    """Run on every worker (client.run) before the clock starts: import the pipeline and the FE
-    library, and return the worker's code hash (the client refuses workers running other code)."""
+    """Run on every worker (client.run) before the clock starts: import the pipeline and what the
+    frame model imports on first use (scipy's sparse LU and eigensolver, dense eigh), and return
+    the worker's code hash (the client refuses workers running other code)."""
     from .. import pipeline  # noqa: F401
-    from ..analysis import drop, impact  # noqa: F401
+    from ..analysis import drop, framefe, impact, stiffness  # noqa: F401
 
-    try:
-        from ..analysis import stiffness  # noqa: F401
-        import Pynite  # noqa: F401
-    except ImportError:
-        pass
+    import scipy.linalg  # noqa: F401
+    import scipy.sparse.linalg  # noqa: F401
     return code_digest()

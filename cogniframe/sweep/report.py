@@ -220,6 +220,14 @@ def write_reports(out_dir: Path, sweep, table, result) -> None:
              f"{c['timeout']} TIMEOUT, {c['error']} ERROR.", "",
              "Varied: " + ", ".join(f"`{k.name}` " + (f"{{{', '.join(map(str, k.choices))}}}" if k.is_choice else f"[{k.lo:g}, {k.hi:g}]")
                                     for k in sweep.keys), ""]
+    joint_model = str(sweep.base_data.get("model", {}).get("stiffness_model", "fe"))
+    if joint_model == "analytic":
+        lines += ["Joints from the closed forms (`model.stiffness_model: analytic`): milliseconds per design, but "
+                  "they differ from the solid-FE joints of the presets by -49 % to +40 % in k (docs/stiffness-model.md). "
+                  "Read trends here; re-check a chosen design with `cogniframe check` (FE), as `cogniframe optimize` "
+                  "does for its finalists.", ""]
+    else:
+        lines += [f"Joints from `{joint_model}` (the solid FE of each joint geometry).", ""]
     passed = table[table["verdict"] == "PASS"].sort_values("mass_g")
     if len(passed):
         best = passed.iloc[0]
