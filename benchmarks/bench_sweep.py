@@ -3,9 +3,10 @@
 Run: python benchmarks/bench_sweep.py [--designs 120] [--workers 2] [--repeat 3]
 
 Prints medians over --repeat runs of:
-  1. cold: every design new (FE stiffness solved per design), designs/s over the batches;
-  2. warm: the same designs into a new folder with the workers' FE cache filled (what a design
-     costs when its frame was solved before: check-level evaluation without the FE solve);
+  1. new designs: every design new, with the example sweeps' closed-form joints (frame model, load
+     cases and drop model solved per design), designs/s over the batches;
+  2. repeat designs: the same designs into a new folder with the workers' caches filled (k, load
+     cases and peaks read from the cache);
   3. resume: a rerun into the finished folder (everything skipped), and after losing half the
      batch files (as a killed sweep would);
   4. the per-design breakdown, serial in this process with single-threaded BLAS as in a worker.
@@ -130,9 +131,9 @@ def main() -> None:
     print(f"{args.designs} designs (examples/sweeps/carbon.yaml box), LocalCluster of {args.workers} worker processes, "
           f"{os.cpu_count()} cores, median of {args.repeat}:")
     print(f"  load average at start {load0:.1f}, at end {os.getloadavg()[0]:.1f} (wall rates fall when the cores are shared)")
-    print(f"  cold (FE solved per design):      {med(cold):6.1f} designs/s wall; "
+    print(f"  new designs (closed-form joints): {med(cold):6.1f} designs/s wall; "
           f"{med(cold_cpu):6.1f} designs/s on {args.workers} dedicated cores (from the median CPU time per design)")
-    print(f"  warm (FE cached in the workers):  {med(warm):6.1f} designs/s wall; "
+    print(f"  repeat designs (k, cases cached): {med(warm):6.1f} designs/s wall; "
           f"{med(warm_cpu):6.1f} designs/s on {args.workers} dedicated cores")
     print(f"  cluster start + warm-up + reports overhead per run: {med(startup):.1f} s")
     print(f"  resume, everything done:          {med(resume_all):6.2f} s (no cluster started)")
