@@ -63,7 +63,7 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"  joint FE {p.name:14s} {js.n_dofs:6d} DOF  {js.seconds:6.2f} s")
         joints = st.joint_models(s, parts, "fe")
         an = st.joint_models(s, parts, "analytic")
-        print(f"closed-form joints (all four), median:         {_median(lambda: st.joint_models(s, parts, 'analytic'), args.repeat) * 1e3:7.1f} ms")
+        print(f"closed-form joints (all five), median:         {_median(lambda: st.joint_models(s, parts, 'analytic'), args.repeat) * 1e3:7.1f} ms")
         print(f"frame k, FE joints cached, median:             {_median(lambda: st.predict_stiffness(s, f, parts, joints=joints), args.repeat) * 1e3:7.1f} ms")
         print(f"frame k, closed-form joints, median:           {_median(lambda: st.predict_stiffness(s, f, parts, joints=an), args.repeat) * 1e3:7.1f} ms")
         print(f"all load cases (joints cached), median:        {_median(lambda: st.load_cases(s, f, parts, 240.0, joints=joints, design_force_n=95.0), max(1, args.repeat // 2)):7.2f} s")
