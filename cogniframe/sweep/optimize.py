@@ -119,10 +119,13 @@ class OptimizeResult:
 
     def text(self) -> str:
         lines = [f"{self.trials} trials, {self.feasible} feasible, {self.seconds:.1f} s on {self.workers} workers"]
-        if self.fidelity:
+        if self.fidelity and self.verified:
             ok = sum(1 for r in self.verified if r.get("feasible"))
             lines.append(f"screened with {self.fidelity[0]} joints; {len(self.verified)} best re-checked with "
                          f"{self.fidelity[1]} joints, {ok} still feasible")
+        elif self.fidelity:
+            lines.append(f"screened with {self.fidelity[0]} joints; no design came near enough to feasible to re-check "
+                         f"with {self.fidelity[1]} joints")
         if self.best is None:
             lines.append(f"no feasible design. {self.note}")
         else:
@@ -474,7 +477,11 @@ def _write_summary(sweep: Sweep, result: OptimizeResult) -> None:
              "Objectives: " + ", ".join(f"{o.direction} `{o.name}`" for o in result.objectives) + "; constraints: "
              + (", ".join(f"`{c}`" for c in result.constraints) or "none") + " (and verdict PASS).", "",
              f"{result.trials} trials ({result.feasible} feasible) in {result.seconds:.1f} s on {result.workers} Dask workers.", ""]
-    if result.fidelity:
+    if result.fidelity and not result.verified:
+        lines += [f"Screened with {result.fidelity[0]} joints (the sweep file's set:); no design passed within "
+                  f"{100 * SCREEN_TOLERANCE:.0f} % of the constraints, so none was re-checked with the base file's "
+                  f"{result.fidelity[1]} joints.", ""]
+    if result.fidelity and result.verified:
         outs_v = list(dict.fromkeys([o.name for o in result.objectives] + [c.name for c in result.constraints]))
         lines += [f"## Finalists re-checked with {result.fidelity[1]} joints", "",
                   f"The trials were screened with {result.fidelity[0]} joints (the sweep file's set:); the "
