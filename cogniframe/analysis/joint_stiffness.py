@@ -422,11 +422,34 @@ def joint_stiffness(spec, part, method: str = "fe", factor: float | None = None,
 
 
 def _fe_unit(spec, part, mesh_mm: float) -> tuple[str, dict | None, str | None]:
-    """A worker's task: the FE super-element at factor 1, as cache JSON (or the mesher's error)."""
+    """A worker's task: the FE super-element at factor 1, as cache JSON (or the mesher's error).
+    With one BLAS thread wherever it runs (pool, fork or this process), so the cached numbers
+    are the same bits whichever path solved them (the thread count changes dense sums' order)."""
+    from ..threads import one_blas_thread
+
     try:
-        return part.name, fe_joint(spec, part, 1.0, mesh_mm).to_json(), None
+        with one_blas_thread():
+            return part.name, fe_joint(spec, part, 1.0, mesh_mm).to_json(), None
     except RuntimeError as exc:
         return part.name, None, str(exc)
+
+
+def _fe_pool(jobs: int):
+    """Worker processes for the joint FE. `fork` when this process is single-threaded and has not
+    loaded OpenCascade (the `check` command): no re-import of the main module, nothing to preload
+    (each worker imports CadQuery itself, in parallel). Otherwise the build's forkserver pool
+    (a fork after OCC work or beside running threads can deadlock). Both die with this process."""
+    import multiprocessing as mp
+    import sys
+    import threading
+    from concurrent.futures import ProcessPoolExecutor
+
+    from ..export.build import die_with_build, make_pool
+
+    if "OCP" not in sys.modules and threading.active_count() == 1 and "fork" in mp.get_all_start_methods():
+        return ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("fork"), initializer=die_with_build,
+                                   initargs=(os.getpid(),))
+    return make_pool(jobs)
 
 
 def _in_dask_worker() -> bool:
@@ -451,9 +474,8 @@ def solve_missing(spec, parts, mesh_mm: float | None = None, jobs: int | None = 
     tie selection could not handle (nothing cached for them).
 
     Measured on 2 cores, carbon preset, 5 new joints: serial 11 s (CadQuery import 2.3 s + the
-    five FE), 2 workers ~6.5 s. The pool is the build's (`export.build.make_pool`: forkserver
-    with CadQuery preloaded, workers that die with their parent). Inside a daemonic process (a
-    Dask or pool worker, which may not have children) the joints are solved serially."""
+    five FE), 2 workers ~8.5 s wall for the whole check. The pool: `_fe_pool`. Inside a daemonic
+    process or a Dask worker the joints are solved serially, and if the pool breaks, the rest too."""
     import multiprocessing as mp
 
     from .. import cache
@@ -486,17 +508,22 @@ def solve_missing(spec, parts, mesh_mm: float | None = None, jobs: int | None = 
             failed[name] = str(err)
             progress_log.info("joint FE %d/%d: %s failed (%s)", done, len(todo), name, err)
 
+    pending = list(todo)
     if jobs > 1 and not mp.current_process().daemon:
         from concurrent.futures import as_completed
-
-        from ..export.build import make_pool
+        from concurrent.futures.process import BrokenProcessPool
 
         progress_log.info("joint FE: %d new joint geometries on %d processes", len(todo), jobs)
-        with make_pool(jobs) as pool:
-            futures = [pool.submit(_fe_unit, spec, p, mesh_mm) for p, _ in todo]
-            for fut in as_completed(futures):
-                finished(*fut.result())
-    else:
-        for p, _ in todo:
-            finished(*_fe_unit(spec, p, mesh_mm))
+        try:
+            with _fe_pool(jobs) as pool:
+                futures = {pool.submit(_fe_unit, spec, p, mesh_mm): p.name for p, _ in todo}
+                for fut in as_completed(futures):
+                    finished(*fut.result())
+                    pending = [x for x in pending if x[0].name != futures[fut]]
+        except BrokenProcessPool:
+            # a worker could not start or died (e.g. a script without `if __name__ == "__main__":`
+            # when the pool must use forkserver): the rest is solved here, serially
+            progress_log.info("joint FE: worker processes failed; solving %d joint(s) in this process", len(pending))
+    for p, _ in pending:
+        finished(*_fe_unit(spec, p, mesh_mm))
     return failed

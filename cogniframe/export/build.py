@@ -150,11 +150,11 @@ def make_pool(workers: int) -> ProcessPoolExecutor:
     """A process pool for CadQuery work: forkserver with CadQuery preloaded (workers start warm), or
     spawn where forkserver is missing; never fork (a fork after any OCC operation can deadlock).
     Workers die with the build: a killed build leaves no worker writing into its temp folder."""
-    return ProcessPoolExecutor(max_workers=max(1, int(workers)), mp_context=_context(), initializer=_die_with_build,
+    return ProcessPoolExecutor(max_workers=max(1, int(workers)), mp_context=_context(), initializer=die_with_build,
                                initargs=(os.getpid(),))
 
 
-def _die_with_build(build_pid: int) -> None:
+def die_with_build(build_pid: int) -> None:
     """Exit this worker as soon as the build process `build_pid` is gone (even by SIGKILL).
 
     A worker's parent is the forkserver, not the build, and the forkserver only exits once every
