@@ -401,6 +401,14 @@ def simulate_height(
     )
 
 
+def _lowpass_coefficients(dt_s: float, w_rad_per_s: float) -> tuple[float, float, float, float]:
+    """(a = w dt, E = exp(-a), b0, b1) of the first-order low-pass recurrence below."""
+    a = w_rad_per_s * dt_s
+    e = math.exp(-a)
+    one_minus_e = -math.expm1(-a)
+    return a, e, one_minus_e / a - e, 1.0 - one_minus_e / a
+
+
 def lowpass_first_order(u: np.ndarray, dt_s: float, w_rad_per_s: float) -> np.ndarray:
     """Filter samples ``u`` (uniform step ``dt_s``) through H(s) = w / (s + w), from rest.
 
@@ -413,11 +421,7 @@ def lowpass_first_order(u: np.ndarray, dt_s: float, w_rad_per_s: float) -> np.nd
     u = np.asarray(u, dtype=float)
     if u.size == 0:
         return u.copy()
-    a = w_rad_per_s * dt_s
-    e = math.exp(-a)
-    one_minus_e = -math.expm1(-a)
-    b1 = 1.0 - one_minus_e / a
-    b0 = one_minus_e / a - e
+    _, e, b0, b1 = _lowpass_coefficients(dt_s, w_rad_per_s)
     from scipy.signal import lfilter  # imported here: scipy.signal costs ~0.6 s, and `check` never filters
 
     # zi = -b1 u[0] makes y[0] = 0: the filter starts from rest (lfilter is DF-II transposed).
@@ -435,11 +439,7 @@ def lowpass_first_order_np(u: np.ndarray, dt_s: float, w_rad_per_s: float) -> np
     u = np.asarray(u, dtype=float)
     if u.size == 0:
         return u.copy()
-    a = w_rad_per_s * dt_s
-    e = math.exp(-a)
-    one_minus_e = -math.expm1(-a)
-    b1 = 1.0 - one_minus_e / a
-    b0 = one_minus_e / a - e
+    a, _, b0, b1 = _lowpass_coefficients(dt_s, w_rad_per_s)
     c = b0 * u[:-1] + b1 * u[1:]
     y = np.zeros(u.size)
     chunk = max(1, int(345.0 / a))  # 345 = ln(1e150)
