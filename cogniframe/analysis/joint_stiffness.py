@@ -300,7 +300,18 @@ def analytic_joint(spec, part, factor: float | None = None) -> JointStiffness:
 # -- solid FE ----------------------------------------------------------------------------------
 
 def fe_joint(spec, part, factor: float | None = None, mesh_mm: float | None = None) -> JointStiffness:
-    """Super-element from the solid FE of the part's CAD (see the module docstring)."""
+    """Super-element from the solid FE of the part's CAD (see the module docstring).
+
+    With one BLAS thread wherever it runs (a pool worker, a fork, this process): the thread count
+    changes the order of the dense sums, and the cached numbers must be the same bits whichever
+    path solved them."""
+    from ..threads import one_blas_thread
+
+    with one_blas_thread():
+        return _fe_joint(spec, part, factor, mesh_mm)
+
+
+def _fe_joint(spec, part, factor: float | None, mesh_mm: float | None) -> JointStiffness:
     from . import joint_fe
     from ..parts import joint as joint_cad
 
@@ -422,14 +433,9 @@ def joint_stiffness(spec, part, method: str = "fe", factor: float | None = None,
 
 
 def _fe_unit(spec, part, mesh_mm: float) -> tuple[str, dict | None, str | None]:
-    """A worker's task: the FE super-element at factor 1, as cache JSON (or the mesher's error).
-    With one BLAS thread wherever it runs (pool, fork or this process), so the cached numbers
-    are the same bits whichever path solved them (the thread count changes dense sums' order)."""
-    from ..threads import one_blas_thread
-
+    """A worker's task: the FE super-element at factor 1, as cache JSON (or the mesher's error)."""
     try:
-        with one_blas_thread():
-            return part.name, fe_joint(spec, part, 1.0, mesh_mm).to_json(), None
+        return part.name, fe_joint(spec, part, 1.0, mesh_mm).to_json(), None
     except RuntimeError as exc:
         return part.name, None, str(exc)
 
@@ -474,7 +480,7 @@ def solve_missing(spec, parts, mesh_mm: float | None = None, jobs: int | None = 
     tie selection could not handle (nothing cached for them).
 
     Measured on 2 cores, carbon preset, 5 new joints: serial 11 s (CadQuery import 2.3 s + the
-    five FE), 2 workers ~8.5 s wall for the whole check. The pool: `_fe_pool`. Inside a daemonic
+    five FE), 2 workers 7-8 s wall for the whole check. The pool: `_fe_pool`. Inside a daemonic
     process or a Dask worker the joints are solved serially, and if the pool breaks, the rest too."""
     import multiprocessing as mp
 

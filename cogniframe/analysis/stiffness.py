@@ -95,17 +95,17 @@ def joint_models(spec, parts, method: str = "fe", factor: float | None = None) -
     # new geometries first, all at once (in parallel); then every joint comes from the cache
     failed = solve_missing(spec, joint_parts(parts)) if method == "fe" else {}
     for p in joint_parts(parts):
-        try:
-            if p.name in failed:
-                raise RuntimeError(failed[p.name])
-            out[p.name] = joint_stiffness(spec, p, method, factor)
-        except RuntimeError:
-            # a solid the mesher cannot handle (reported by gmsh/joint_fe as RuntimeError, or a
-            # bore whose surface was not found): fall back to the closed forms for this joint
-            # rather than fail the whole check; the method is reported per joint
-            if method != "fe":
-                raise
-            out[p.name] = joint_stiffness(spec, p, "analytic", factor)
+        if p.name not in failed:
+            try:
+                out[p.name] = joint_stiffness(spec, p, method, factor)
+                continue
+            except RuntimeError:
+                if method != "fe":
+                    raise
+        # a solid the mesher cannot handle (reported by gmsh/joint_fe as RuntimeError, or a bore
+        # whose surface was not found): the closed forms for this joint rather than failing the
+        # whole check; the method is reported per joint
+        out[p.name] = joint_stiffness(spec, p, "analytic", factor)
     return out
 
 

@@ -166,12 +166,13 @@ def _overrides(sweep: Sweep, params: dict) -> dict:
     return out
 
 
-def _feasible(row: dict, objectives, constraints) -> bool:
+def _feasible(row: dict, objectives, constraints, slack: float = 0.0) -> bool:
+    """PASS, finite objectives, and every constraint holding -- within `slack` x |bound| if given."""
     if row.get("verdict") != "PASS":
         return False
     if any(not isinstance(row.get(o.name), (int, float)) or not math.isfinite(row[o.name]) for o in objectives):
         return False
-    return all(c.violation(row) <= 0 for c in constraints)
+    return all(c.violation(row) <= slack * abs(c.value) for c in constraints)
 
 
 def _dominates(a: dict, b: dict, objectives) -> bool:
@@ -258,10 +259,9 @@ def _run_optimize(sweep, objectives, constraints, out_dir: Path, trials, schedul
                 progress(run_mod.BatchDone(tuple(got), got[0]["worker"] if got else "", done, n_trials, time.perf_counter() - tb, "round"))
         best_rows, pareto = ranked(rows, objectives, constraints)
         fidelity = two_fidelities(sweep) if verify > 0 else None
+        finalists = near_feasible(rows, objectives, constraints, SCREEN_TOLERANCE)[:verify] if fidelity else []
         verified: list[dict] = []
-        if fidelity:
-            finalists = near_feasible(rows, objectives, constraints, SCREEN_TOLERANCE)[:verify]
-        if fidelity and finalists:
+        if finalists:
             verified = verify_rows(client, sweep, finalists, objectives, constraints, n_workers, fidelity[1])
             (out_dir / "verified.json").write_text(json.dumps(verified, indent=2, default=_py) + "\n")
             best_rows = sorted((r for r in verified if r["feasible"]), key=lambda r: _objective_key(r, objectives))
@@ -297,13 +297,7 @@ SCREEN_TOLERANCE = 0.2
 def near_feasible(rows: list[dict], objectives, constraints, tolerance: float) -> list[dict]:
     """Screened PASS rows whose every constraint holds within `tolerance` (relative to its bound),
     best objective first: the candidates worth the full model."""
-    ok = []
-    for r in rows:
-        if r.get("verdict") != "PASS" or any(not isinstance(r.get(o.name), (int, float)) or not math.isfinite(r[o.name])
-                                             for o in objectives):
-            continue
-        if all(c.violation(r) <= tolerance * abs(c.value) for c in constraints):
-            ok.append(r)
+    ok = [r for r in rows if _feasible(r, objectives, constraints, slack=tolerance)]
     return sorted(ok, key=lambda r: _objective_key(r, objectives))
 
 
