@@ -149,18 +149,24 @@ def code_hash(*patterns: str) -> str:
     """sha256 of cogniframe's source files matching `patterns` (globs relative to the package,
     e.g. "parts/*.py"): part of a cache key, so editing the code that makes a result invalidates it."""
     if patterns not in _CODE:
-        import hashlib
-
-        pkg = Path(__file__).resolve().parent
-        h = hashlib.sha256()
-        for pat in patterns:
-            found = sorted(pkg.glob(pat))
-            if not found:
-                raise FileNotFoundError(f"cache.code_hash: no cogniframe source matches {pat!r}")
-            for src in found:
-                h.update(src.relative_to(pkg).as_posix().encode() + b"\0" + src.read_bytes())
-        _CODE[patterns] = h.hexdigest()[:16]
+        _CODE[patterns] = sources_hash(Path(__file__).resolve().parent, patterns)
     return _CODE[patterns]
+
+
+def sources_hash(root: Path, patterns) -> str:
+    """sha256 of the files under `root` matching the glob `patterns`, by relative path and bytes.
+    Files only: an installed package has `__pycache__` folders beside the sources (a pattern
+    such as "report/viewer/*" matches them), and their presence must not change the key."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for pat in patterns:
+        found = sorted(p for p in root.glob(pat) if p.is_file())
+        if not found:
+            raise FileNotFoundError(f"cache.code_hash: no cogniframe source matches {pat!r}")
+        for src in found:
+            h.update(src.relative_to(root).as_posix().encode() + b"\0" + src.read_bytes())
+    return h.hexdigest()[:16]
 
 
 def fingerprint(obj) -> str:
