@@ -108,7 +108,9 @@ def test_zero_quantity_makes_no_plate():
     assert pack_plates([PlateItem("x", "abs", 0, _box(10, 10, 10))], BED, MARGIN) == ()
 
 
-def test_3mf_has_named_objects_and_is_byte_stable(tmp_path):
+def test_3mf_names_every_copy_shares_each_shape_and_is_byte_stable(tmp_path):
+    from cogniframe.export.plates import read_3mf_items
+
     plates = pack_plates(_items(), BED, MARGIN)
     a = write_plates(plates, tmp_path / "a")
     b = write_plates(pack_plates(_items(), BED, MARGIN), tmp_path / "b")
@@ -117,22 +119,39 @@ def test_3mf_has_named_objects_and_is_byte_stable(tmp_path):
         assert fa.threemf.read_bytes() == fb.threemf.read_bytes()
         assert fa.preview.read_bytes() == fb.preview.read_bytes()
     tpu = a[1]
+    plate = next(p for p in plates if p.material == "tpu_95a")
     with zipfile.ZipFile(tpu.threemf) as z:
         assert all(i.date_time == (1980, 1, 1, 0, 0, 0) for i in z.infolist())
         model = z.read("3D/3dmodel.model").decode()
-    names = re.findall(r'<object [^>]*name="([^"]+)"', model)
-    assert sorted(names) == sorted(tpu.copies) and len(names) == 12
-    uuids = re.findall(r'p:UUID="([^"]+)"', model)
-    assert len(set(uuids)) == len(uuids)  # stable but still unique
-    scene = trimesh.load(tpu.threemf, force="scene")
-    plate = next(p for p in plates if p.material == "tpu_95a")
-    assert sorted(scene.graph.nodes_geometry) == sorted(c.name for c in plate.copies)
-    for c in plate.copies:
-        tf, geom = scene.graph[c.name]
-        m = scene.geometry[geom].copy()
+        prusa = z.read("Metadata/Slic3r_PE_model.config").decode()
+    parts = re.findall(r'partnumber="([^"]+)"', model)
+    assert sorted(parts) == sorted(tpu.copies) and len(parts) == 12
+    # one mesh per shape: 3 parts, each laid out one or two ways round (a turned copy is another shape)
+    shapes = {(c.part, c.rotation_deg) for c in plate.copies}
+    assert model.count("<mesh>") == len(shapes) and 3 <= len(shapes) <= 6
+    assert model.count("<component ") == 12 - len(shapes)
+    # PrusaSlicer's instance counts add up to the copies, per part
+    counts = re.findall(r'instances_count="(\d+)">\n  <metadata type="object" key="name" value="([^"]+)"', prusa)
+    per_part = {}
+    for n, part in counts:
+        per_part[part] = per_part.get(part, 0) + int(n)
+    assert per_part == {"corner_top": 4, "knee": 4, "motor_mount": 4}
+    # read back (our reader; trimesh's can swap the names of identical copies): every copy where it was laid out
+    items = read_3mf_items(tpu.threemf)
+    assert sorted(n for n, _, _ in items) == sorted(c.name for c in plate.copies)
+    assert len({id(m) for _, m, _ in items}) == len(shapes)
+    for name, base, tf in items:
+        c = next(c for c in plate.copies if c.name == name)
+        m = base.copy()
         m.apply_transform(tf)
         assert m.is_watertight and m.is_volume
         assert np.allclose(m.bounds, c.mesh.bounds, atol=1e-6)
+        assert m.volume == pytest.approx(c.mesh.volume, rel=1e-9)
+    # trimesh reads the same geometry (names aside)
+    scene = trimesh.load(tpu.threemf, force="scene")
+    assert len(scene.graph.nodes_geometry) == 12
+    assert sum(scene.geometry[scene.graph[n][1]].volume for n in scene.graph.nodes_geometry) == pytest.approx(
+        plate.volume_mm3, rel=1e-9)
 
 
 def test_preview_png(tmp_path):

@@ -290,3 +290,42 @@ def test_build_gcode_keeps_gcode_per_plate_outside_the_promise(run_cli, tmp_path
     assert grams > 30
     code, _, err = run_cli("build", PARAMS / "carbon.yaml", "-o", out, "--gcode")
     assert code == 0 and "nothing rebuilt" in err  # a --gcode build is kept by the next --gcode build
+
+
+@needs_slicer
+def test_prusaslicer_reads_copies_as_instances_of_one_object(tmp_path):
+    """Copies of a shape are one PrusaSlicer object with instances (sliced once, not once per copy),
+    kept where cogniframe laid them out, and the grams are the copies' sum."""
+    import re
+    import subprocess
+    import zipfile
+
+    spec = spec_mod.from_dict({"name": "t"})
+    exe = shutil.which("prusa-slicer")
+    (four,) = write_plates(pack_plates([PlateItem("knee", "tpu_95a", 4, _cyl(6, 10))], spec.printer.bed,
+                                       spec.printer.margin), tmp_path / "four", configs=slicer.project_configs(spec))
+    (one,) = write_plates(pack_plates([PlateItem("knee", "tpu_95a", 1, _cyl(6, 10))], spec.printer.bed,
+                                      spec.printer.margin), tmp_path / "one", configs=slicer.project_configs(spec))
+    again = tmp_path / "again.3mf"
+    subprocess.run([exe, "--loglevel", "1", "--export-3mf", "--dont-arrange", str(four.threemf), "-o", str(again)],
+                   capture_output=True, text=True, timeout=300, check=True)
+    config = zipfile.ZipFile(again).read("Metadata/Slic3r_PE_model.config").decode()
+    assert re.findall(r'instances_count="(\d+)"', config) == ["4"]
+    grams = {}
+    for f in (four, one):
+        gcode = tmp_path / f"{f.name}_{len(f.copies)}.gcode"
+        subprocess.run([exe, "--loglevel", "1", "--export-gcode", "--dont-arrange", str(f.threemf), "-o", str(gcode)],
+                       capture_output=True, text=True, timeout=300, check=True)
+        grams[len(f.copies)], _ = slicer.read_gcode_stats(gcode)
+        # the extrusions stay inside the copies' footprints as laid out (no re-centring by the slicer)
+        xs, ys = [], []
+        for line in gcode.read_text().splitlines():
+            if line.startswith("G1 ") and " E" in line and " X" in line and " Y" in line and " E-" not in line:
+                xs.append(float(re.search(r" X([-\d.]+)", line).group(1)))
+                ys.append(float(re.search(r" Y([-\d.]+)", line).group(1)))
+        plate = {o.name: o for o in slicer.load_plate_objects(f.threemf)}
+        lo = min(o.lo[0] for o in plate.values()), min(o.lo[1] for o in plate.values())
+        hi = max(o.hi[0] for o in plate.values()), max(o.hi[1] for o in plate.values())
+        assert lo[0] - 0.3 < min(xs) < lo[0] + 1.0 and hi[0] - 1.0 < max(xs) < hi[0] + 0.3
+        assert lo[1] - 0.3 < min(ys) < lo[1] + 1.0 and hi[1] - 1.0 < max(ys) < hi[1] + 0.3
+    assert grams[4] == pytest.approx(4 * grams[1], rel=0.02)

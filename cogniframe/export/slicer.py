@@ -356,28 +356,37 @@ def load_plate_objects(path: Path | str) -> tuple[PlateObject, ...]:
     """The objects of a plate 3MF in bed coordinates (name, volume, bounds), checked for soundness.
 
     Raises SliceError for an object that is not a closed, consistently wound volume."""
-    import trimesh
+    import numpy as np
+
+    from .plates import read_3mf_items
 
     path = Path(path)
     try:
-        scene = trimesh.load(path, force="scene")
+        items = read_3mf_items(path)
     except Exception as e:  # corrupt zip / xml
         raise SliceError(f"{path}: cannot read the plate ({e}). Fix: rebuild the plates with `cogniframe build`.") from None
     objs = []
-    for node in sorted(scene.graph.nodes_geometry):
-        tf, geom = scene.graph[node]
-        mesh = scene.geometry[geom].copy()
-        mesh.apply_transform(tf)
-        name = str(node)
-        if len(mesh.faces) == 0:
+    sound: set[int] = set()  # shapes already checked (copies share their mesh)
+    for name, base, tf in sorted(items, key=lambda t: t[0]):
+        if len(base.faces) == 0:
             raise SliceError(f"{path}: object {name} is empty. Fix: rebuild the plates with `cogniframe build`.")
-        if not (mesh.is_watertight and mesh.is_winding_consistent and mesh.is_volume):
-            raise SliceError(
-                f"{path}: object {name} is not a closed solid (watertight {mesh.is_watertight}, consistent winding "
-                f"{mesh.is_winding_consistent}); PrusaSlicer would repair it silently and print something else. "
-                f"Fix: rebuild with `cogniframe build`; if it persists, report it with this file (CAD meshing bug).")
-        lo, hi = mesh.bounds
-        objs.append(PlateObject(name, float(mesh.volume), tuple(float(v) for v in lo), tuple(float(v) for v in hi)))
+        if id(base) not in sound:
+            if not (base.is_watertight and base.is_winding_consistent and base.is_volume):
+                raise SliceError(
+                    f"{path}: object {name} is not a closed solid (watertight {base.is_watertight}, consistent winding "
+                    f"{base.is_winding_consistent}); PrusaSlicer would repair it silently and print something else. "
+                    f"Fix: rebuild with `cogniframe build`; if it persists, report it with this file (CAD meshing bug).")
+            sound.add(id(base))
+        corners = base.bounds
+        box = np.array([[x, y, z, 1.0] for x in corners[:, 0] for y in corners[:, 1] for z in corners[:, 2]]) @ tf.T
+        if np.allclose(tf[:3, :3], np.eye(3)):  # a translated copy (how cogniframe writes them): exact bounds
+            lo, hi = box[:, :3].min(axis=0), box[:, :3].max(axis=0)
+        else:
+            m = base.copy()
+            m.apply_transform(tf)
+            lo, hi = m.bounds
+        volume = float(base.volume) * abs(float(np.linalg.det(tf[:3, :3])))
+        objs.append(PlateObject(name, volume, tuple(float(v) for v in lo), tuple(float(v) for v in hi)))
     if not objs:
         raise SliceError(f"{path}: the plate has no objects. Fix: rebuild the plates with `cogniframe build`.")
     return tuple(objs)
