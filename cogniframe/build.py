@@ -89,7 +89,7 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
     from . import graph, steps
 
     design = pipeline.design(spec)
-    cad = steps.CadPool(jobs or os.cpu_count() or 1)
+    cad = steps.CadPool(jobs or os.cpu_count() or 1, fe=steps.needs_joint_fe(spec, design))
     log = lambda m: console.print(m, markup=False, highlight=False)  # noqa: E731
     ctx = steps.BuildContext(out, {"spec": spec, "design": design, "cad": cad, "slicer": steps.Slicer(log), "log": log,
                                     "gcode": gcode},
