@@ -234,7 +234,7 @@ def budget(ctx) -> Made:
     the mass and drop figures draw, so they need not wait for the load cases."""
     from . import pipeline
 
-    _, mass, drop = pipeline.mass_and_drop(ctx.spec, _geometry(ctx))
+    _, mass, drop = pipeline.mass_and_drop(ctx.spec, _geometry(ctx), ctx.design)
     return Made((), {"mass": mass, "drop": drop})
 
 
@@ -245,7 +245,7 @@ def physics(ctx) -> Made:
     thread's plates, figures and renders go on meanwhile."""
     from . import pipeline
 
-    pipeline.check(ctx.spec, _geometry(ctx))
+    pipeline.check(ctx.spec, _geometry(ctx), design_=ctx.design)
     return Made()
 
 
@@ -255,7 +255,7 @@ def check(ctx) -> Made:
     from . import cutlist, pipeline
     from .analysis import clash
 
-    result = pipeline.check(ctx.spec, _geometry(ctx), clash=clash.from_dict(ctx["clash"]))  # physics: from the cache
+    result = pipeline.check(ctx.spec, _geometry(ctx), clash=clash.from_dict(ctx["clash"]), design_=ctx.design)  # physics: from the cache
     out = ctx.out
     files = {"check.json": json.dumps(pipeline.check_dict(result), indent=2) + "\n",
              "cutlist.csv": cutlist.to_csv(ctx.design.cut), "cutlist.md": cutlist.to_markdown(ctx.design.cut),
