@@ -464,7 +464,8 @@ def reflection(original, part) -> tuple[np.ndarray, tuple[int, ...]]:
         if best is None or err < best[0]:
             best = (err, P, tuple(order))
     if best is None or best[0] > MIRROR_TOL:
-        raise ValueError("no reflection maps the sockets onto each other" + (f" (best: {best[0]:.3g} mm)" if best else ""))
+        worst = f" (best: {best[0]:.3g} mm)" if best else ""
+        raise ValueError(f"no reflection maps the sockets onto each other{worst}")
     _, P, order = best
     snapped = np.round(P)
     if np.abs(P - snapped).max() < 1e-9:  # a mirror across a coordinate plane: exact signs, no round-off
@@ -472,13 +473,14 @@ def reflection(original, part) -> tuple[np.ndarray, tuple[int, ...]]:
     ez = np.array([0.0, 0.0, 1.0])
     if np.abs(P @ ez - ez).max() > 1e-9:
         raise ValueError("the mirror plane is not vertical")
-    if "bolt_hole" in dict(original.params) or "bolt_hole" in dict(part.params):
-        bo, bp = (np.asarray(x.param("bolt_hole"), float) for x in (original, part))
-        if np.abs(P @ bo - bp).max() > MIRROR_TOL:
+    holes = [dict(x.params).get("bolt_hole") for x in (original, part)]
+    if holes != [None, None]:
+        if None in holes or np.abs(P @ np.asarray(holes[0], float) - np.asarray(holes[1], float)).max() > MIRROR_TOL:
             raise ValueError("the bolt hole is not the mirror image of the original's")
     mo, mp = print_from_local(original), print_from_local(part)
     Q = mp[:3, :3] @ P @ mo[:3, :3].T  # print(part) = Q print(original)
-    if np.abs(Q[:, 2] - ez).max() > 1e-9 or np.abs(Q[2, :] - ez).max() > 1e-9 or np.abs(mp[:3, 3] - mo[:3, 3]).max() > MIRROR_TOL:
+    keeps_bed = np.abs(Q[:, 2] - ez).max() < 1e-9 and np.abs(Q[2, :] - ez).max() < 1e-9
+    if not keeps_bed or np.abs(mp[:3, 3] - mo[:3, 3]).max() > MIRROR_TOL:
         raise ValueError("the print orientations are not mirror images on the bed")
     return P, order
 
