@@ -32,9 +32,9 @@ import numpy as np
 class Tie:
     """Facets of the mesh tied to a rigid reference body.
 
-    ``select(centroids, normals) -> bool mask`` picks boundary facets (normals outward); ``ref`` is the body's
-    reference point; ``kn``/``kt`` the interface stiffness per unit area (N/mm^3) normal and
-    tangential to the surface.
+    ``select(centroids, normals) -> bool mask`` picks boundary facets (normals outward); ``ref``
+    is the body's reference point; ``kn``/``kt`` the interface stiffness per unit area (N/mm^3)
+    normal and tangential to the surface.
     """
 
     name: str
