@@ -6,7 +6,7 @@ from .check_cache import quick
 
 code = quick(sys.argv[1:])  # a repeated `check` answered from the cache without importing the CLI
 if code is None:
-    from .cli import main
+    from .cli import _leave, main
 
-    code = main()
+    _leave(main())
 sys.exit(code)

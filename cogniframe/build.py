@@ -41,7 +41,7 @@ def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None 
               console: Console | None = None, gcode: bool = False) -> BuildResult:
     console = console or Console(stderr=True)
     with spec.blamed():
-        pipeline.design(spec)  # a design that cannot exist is refused before any folder is touched
+        design = pipeline.design(spec)  # a design that cannot exist is refused before any folder is touched
     final = pipeline.output_dir(spec, out)
     key = build_key(spec, params_path) + ("+gcode" if gcode else "")  # issue 14: a --gcode build differs
     if use_cache and _up_to_date(final, key):
@@ -50,7 +50,7 @@ def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None 
         files = len(json.loads((final / "manifest.json").read_text())["files"]) + 1
         return BuildResult(final, files, verdict, None, ())
     with outdir.writing(final) as tmp, spec.blamed():
-        result = _build_into(spec, params_path, tmp, jobs, use_cache, console, key, gcode=gcode)
+        result = _build_into(spec, params_path, tmp, jobs, use_cache, console, key, gcode=gcode, design=design)
     return BuildResult(final, result[0], result[1].verdict, result[1], result[2], result[3])
 
 
@@ -81,15 +81,15 @@ def _up_to_date(final: Path, key: str) -> bool:
 
 
 def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_cache: bool, console: Console,
-                key: str, gcode: bool = False):
+                key: str, gcode: bool = False, design: pipeline.Design | None = None):
     """Run the build graph (steps.py) into `out`, then write the manifest. `gcode`: keep the
     sliced G-code per plate (`build --gcode`, issue 14; read by fabrication.make_slice).
 
     Returns (files, check result, built parts, ((step, "ran" | "cached" | "always"), ...))."""
     from . import graph, steps
 
-    design = pipeline.design(spec)
-    cad = steps.CadPool(jobs or os.cpu_count() or 1)
+    design = pipeline.design(spec) if design is None else design
+    cad = steps.CadPool(jobs or os.cpu_count() or 1, fe=steps.needs_joint_fe(spec, design))
     log = lambda m: console.print(m, markup=False, highlight=False)  # noqa: E731
     ctx = steps.BuildContext(out, {"spec": spec, "design": design, "cad": cad, "slicer": steps.Slicer(log), "log": log,
                                     "gcode": gcode},

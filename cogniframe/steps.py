@@ -9,6 +9,7 @@
     clash                     part:*                         STL hashes, copies and placements, rods, vitamins, prop margin (issue 13)
     slice:{material}          plates:{material}              plate files, profile, PrusaSlicer version (each plate on its own key)
     assembly                  part:*                         STEP hashes, copies and placements, rods, vitamins
+    glb                       part:*                         STL hashes, copies and placements, rods, vitamins
     check                     budget physics clash           (always: check.json, cut list, mass.md from the cached physics)
     plots                     budget                         the drop model's numbers
     figures                   budget                         the mass budget's and drop model's numbers
@@ -83,6 +84,29 @@ class BuildContext(graph.Context):
 
         return tuple(_built(p, self.part_value(p.name)) for p in self.design.parts)
 
+    def warm_imports(self) -> None:
+        """Import the libraries of the main thread's steps (matplotlib for plates, previews and
+        plots, pyvista for renders, trimesh for meshes), once per build, from the first part step
+        that runs: a rebuilt part means those steps run too, and the main thread has nothing else
+        to do while the CAD workers start (1.7 s) and build. Off the critical path, 1.2 s
+        of imports that otherwise sat at the head of the first plate, plot and render."""
+        lock = self.__dict__.setdefault("_warm_lock", threading.Lock())
+        if not lock.acquire(blocking=False):  # another part step is importing: never wait for it
+            return
+        try:
+            if self.__dict__.get("_warm"):
+                return
+            self.__dict__["_warm"] = True
+            from .report.renders import _ensure_headless
+
+            _ensure_headless()
+            import matplotlib.backends.backend_agg  # noqa: F401
+            import matplotlib.figure  # noqa: F401
+            import pyvista  # noqa: F401
+            import trimesh  # noqa: F401
+        finally:
+            lock.release()
+
     def mesh(self, name: str):
         """The part's STL as a trimesh, read once per build (plates, part renders and assembly
         renders all read it; they copy before they move it)."""
@@ -97,20 +121,26 @@ class BuildContext(graph.Context):
 
 
 class CadPool:
-    """The CAD process pool, started by the first step that needs it (never on a cached build)."""
+    """The CAD process pool, started by the first step that needs it (never on a cached build).
+    `fe`: its workers preload the joint FE's modules too (`needs_joint_fe`)."""
 
-    def __init__(self, workers: int):
+    def __init__(self, workers: int, fe: bool = True):
         self.workers = workers
+        self.fe = fe
         self._pool = None
         self._lock = threading.Lock()
 
-    def run(self, fn, *args):
+    def submit(self, fn, *args):
+        """`fn(*args)` in a worker; returns its Future."""
         with self._lock:
             if self._pool is None:
                 from .export.build import make_pool
 
-                self._pool = make_pool(self.workers)
-        return self._pool.submit(fn, *args).result()
+                self._pool = make_pool(self.workers, self.fe)
+        return self._pool.submit(fn, *args)
+
+    def run(self, fn, *args):
+        return self.submit(fn, *args).result()
 
     def run_in_pool_if_started(self, fn, *args):
         """`fn(*args)` in the pool when it is already running (its own process: Python work there
@@ -123,6 +153,19 @@ class CadPool:
         if self._pool is not None:
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
+
+
+def needs_joint_fe(spec, design) -> bool:
+    """Whether this build meshes and solves a joint: the FE model and a joint geometry that is not
+    in the joint cache yet (a few milliseconds: the cache keys are hashes of the parts' inputs)."""
+    if spec.model.stiffness_model != "fe":
+        return False
+    from . import cache
+    from .analysis.joint_stiffness import FE_MESH_MM, geometry_key
+    from .analysis.stiffness import joint_parts
+
+    return any(cache.load_json("joint", geometry_key(spec, p, "fe", 1.0, FE_MESH_MM)) is None
+               for p in joint_parts(design.parts))
 
 
 class Slicer:
@@ -173,7 +216,9 @@ def part_key(ctx, material: str, part: str):
 def make_part(ctx, material: str, part: str) -> Made:
     from .export.build import build_part_files
 
-    meta = ctx.cad.run(build_part_files, ctx.part(part), ctx.bed, str(ctx.out))
+    made = ctx.cad.submit(build_part_files, ctx.part(part), ctx.bed, str(ctx.out))
+    ctx.warm_imports()  # while the CAD workers start and build
+    meta = made.result()
     meta["stl_sha256"] = file_sha256(ctx.out / meta["stl"])
     return Made((meta["stl"], meta["step"]), meta)
 
@@ -189,7 +234,7 @@ def budget(ctx) -> Made:
     the mass and drop figures draw, so they need not wait for the load cases."""
     from . import pipeline
 
-    _, mass, drop = pipeline.mass_and_drop(ctx.spec, _geometry(ctx))
+    _, mass, drop = pipeline.mass_and_drop(ctx.spec, _geometry(ctx), ctx.design)
     return Made((), {"mass": mass, "drop": drop})
 
 
@@ -200,7 +245,7 @@ def physics(ctx) -> Made:
     thread's plates, figures and renders go on meanwhile."""
     from . import pipeline
 
-    pipeline.check(ctx.spec, _geometry(ctx))
+    pipeline.check(ctx.spec, _geometry(ctx), design_=ctx.design)
     return Made()
 
 
@@ -210,7 +255,7 @@ def check(ctx) -> Made:
     from . import cutlist, pipeline
     from .analysis import clash
 
-    result = pipeline.check(ctx.spec, _geometry(ctx), clash=clash.from_dict(ctx["clash"]))  # physics: from the cache
+    result = pipeline.check(ctx.spec, _geometry(ctx), clash=clash.from_dict(ctx["clash"]), design_=ctx.design)  # physics: from the cache
     out = ctx.out
     files = {"check.json": json.dumps(pipeline.check_dict(result), indent=2) + "\n",
              "cutlist.csv": cutlist.to_csv(ctx.design.cut), "cutlist.md": cutlist.to_markdown(ctx.design.cut),
@@ -266,10 +311,25 @@ def assembly_key(ctx):
 
 
 def make_assembly(ctx) -> Made:
-    from .export.assembly import write_assembly
+    from .export.assembly import write_assembly_step
 
-    ctx.cad.run(write_assembly, ctx.spec, ctx.design.frame, ctx.design.parts, ctx.built_parts(), str(ctx.out))
-    return Made(("assembly.step", "assembly.glb"))
+    ctx.cad.run(write_assembly_step, ctx.spec, ctx.design.frame, ctx.design.parts, ctx.built_parts(), str(ctx.out))
+    return Made(("assembly.step",))
+
+
+def glb_key(ctx):
+    """The GLB reads each part's STL (by hash), the copies' names, colours and placements, the rods
+    and the vitamins."""
+    return [_copies(ctx, "stl"), _rods_and_vitamins(ctx)]
+
+
+def make_glb(ctx) -> Made:
+    from .export.assembly import write_glb
+
+    d = ctx.design
+    write_glb(ctx.spec, d.frame, d.parts, {p.name: ctx.mesh(p.name) for p in d.parts},
+              {p.name: ctx.part_value(p.name)["print_from_local"] for p in d.parts}, ctx.out / "assembly.glb")
+    return Made(("assembly.glb",))
 
 
 def clash_key(ctx):
@@ -323,6 +383,7 @@ STEPS = (
     Step("slice:{material}",       ("plates:{material}",),                make_slice,    slice_key,        ("export/slicer.py",), "wait"),
     Step("assembly",               ("part:*",),                           make_assembly, assembly_key,     ("export/assembly.py", "export/step.py", "vitamins.py"), "wait",
          after=("plates:*",)),
+    Step("glb",                    ("part:*",),                           make_glb,      glb_key,          ("export/assembly.py", "vitamins.py")),
     Step("check",                  ("budget", "physics", "clash"),        check),
     Step("plots",                  ("budget",),                           make_plots,    plots_key,        ("report/drop_plots.py", "analysis/impact.py")),
     Step("figures",                ("budget",),                           make_figures,  figures_key,      ("report/html.py", "report/drop_plots.py")),

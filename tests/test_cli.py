@@ -126,3 +126,13 @@ def test_part_too_big_for_the_printer_is_exit_2(run_cli, tmp_path):
     code, out, err = run_cli("check", p)
     assert code == 2 and out == ""
     assert "battery_holder" in err and "printer.bed" in err and "80 x 80 x 80" in err
+
+
+def test_leaving_runs_exit_handlers_flushes_output_and_keeps_the_code():
+    """`cli._leave` ends the process with os._exit (no interpreter teardown): exit handlers still
+    run, buffered output is not lost, the exit code is the command's."""
+    code = ("import atexit; from cogniframe.cli import _leave; atexit.register(lambda: print('handler ran')); "
+            "print('x' * 100000, end=''); _leave(3)")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert r.returncode == 3
+    assert r.stdout == "x" * 100000 + "handler ran\n"

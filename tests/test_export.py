@@ -146,6 +146,44 @@ def test_assembly_has_every_part_copy_and_rod_named_and_coloured(tmp_path):
     assert _sha(step) == first
 
 
+def test_glb_places_every_copy_rod_and_vitamin_y_up_in_mm_and_is_byte_stable(tmp_path):
+    """assembly.glb from the build's meshes: one node per part copy, rod and vitamin, by name and
+    colour; glTF's y up (world z -> y) in mm; copies share their part's mesh; same bytes twice."""
+    import trimesh
+
+    from cogniframe.export.assembly import write_glb
+    from cogniframe.vitamins import vitamins
+
+    d = built_preset("carbon")
+    parts = tuple(d.parts.values())
+    pfl = {n: b.print_from_local for n, b in d.built.items()}
+    a = write_glb(d.spec, d.frame, parts, d.meshes, pfl, tmp_path / "a.glb")
+    b = write_glb(d.spec, d.frame, parts, d.meshes, pfl, tmp_path / "b.glb")
+    assert _sha(a) == _sha(b)
+    scene = trimesh.load(a, force="scene")
+    vits = vitamins(d.spec, d.frame)
+    nodes = set(scene.graph.nodes_geometry)
+    assert len(nodes) == sum(p.qty for p in parts) + len(d.frame.rods) + len(vits)
+    assert {"knee_fl", "corner_top_rr", "core_link_rl", "motor_mount_fr", "core_plate", "battery"} | set(d.frame.rods) <= nodes
+    assert len(scene.geometry) == len(parts) + len(d.frame.rods) + len(vits)  # copies share a mesh
+    # the knee copy sits on its frame node; y up: world (x, y, z) is glTF (x, z, -y)
+    tf, geom = scene.graph["knee_fl"]
+    knee = scene.geometry[geom].copy()
+    knee.apply_transform(tf)
+    x, y, z = d.frame.nodes["knee_fl"].pos
+    lo, hi = knee.bounds
+    assert lo[0] - 1 <= x <= hi[0] + 1 and lo[1] - 1 <= z <= hi[1] + 1 and lo[2] - 1 <= -y <= hi[2] + 1
+    assert knee.volume == pytest.approx(d.meshes["knee"].volume, rel=1e-6)
+    # colours: TPU red, rods black
+    red = scene.geometry[geom].visual.face_colors[0]
+    assert red[0] > 150 > red[1]
+    rod = scene.geometry[scene.graph["rod_arm_fl_1"][1]].visual.face_colors[0]
+    assert max(rod[:3]) < 25
+    # the whole aircraft's height is the glTF y extent
+    assert scene.bounds[1][1] - scene.bounds[0][1] == pytest.approx(
+        max(n.pos[2] for n in d.frame.nodes.values()) - min(n.pos[2] for n in d.frame.nodes.values()), abs=40)
+
+
 def test_mesh_tolerances_agree_with_the_cache_key():
     from cogniframe.export import build, mesh
 
@@ -162,6 +200,7 @@ def test_assembly_cache_gives_the_same_files(tmp_path):
     for sub in ("a", "b"):
         (tmp_path / sub).mkdir()
         shutil.copytree(d.out / "step", tmp_path / sub / "step")
+        shutil.copytree(d.out / "stl", tmp_path / sub / "stl")  # the GLB is made from the STLs
     s1, g1 = write_assembly(*args, tmp_path / "a", cache_dir=tmp_path / "cache")
     t = time.perf_counter()
     s2, g2 = write_assembly(*args, tmp_path / "b", cache_dir=tmp_path / "cache")

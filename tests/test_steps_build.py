@@ -120,7 +120,7 @@ VIEW = {"viewer"}  # the report's 3D view: it shows each part's and rod's grams 
 
 def _part_change(*parts: str) -> set[str]:
     """Steps that rerun when exactly these parts' geometry changes (their mass changes too)."""
-    out = set(MASS) | {"assembly", "renders", "viewer", "clash"}  # clash: issue 13, keyed like the assembly
+    out = set(MASS) | {"assembly", "glb", "renders", "viewer", "clash"}  # clash: issue 13, keyed like the assembly
     for p in parts:
         m = TPU if p in TPU_PARTS else ABS
         out |= {f"part:{m}/{p}", f"render:{p}", f"plates:{m}", f"previews:{m}"}

@@ -146,11 +146,18 @@ def _jobs(jobs: int | None, n: int) -> int:
     return max(1, min(int(jobs), n))
 
 
-def make_pool(workers: int) -> ProcessPoolExecutor:
+CAD_PRELOAD = ("cogniframe.export.cad_worker",)  # CadQuery (with a lazy vtk), trimesh, the part builders
+FE_PRELOAD = ("gmsh", "skfem", "pymetis")  # the joint FE's mesher and solver
+
+
+def make_pool(workers: int, fe: bool = True) -> ProcessPoolExecutor:
     """A process pool for CadQuery work: forkserver with CadQuery preloaded (workers start warm), or
     spawn where forkserver is missing; never fork (a fork after any OCC operation can deadlock).
+    `fe`: preload the joint FE's modules too (1 s more before the first worker starts; a build
+    whose joints are all cached says False). The forkserver is one per process, started by the
+    first pool: later pools get its preload, and import what else they need themselves.
     Workers die with the build: a killed build leaves no worker writing into its temp folder."""
-    return ProcessPoolExecutor(max_workers=max(1, int(workers)), mp_context=_context(), initializer=die_with_build,
+    return ProcessPoolExecutor(max_workers=max(1, int(workers)), mp_context=_context(fe), initializer=die_with_build,
                                initargs=(os.getpid(),))
 
 
@@ -188,12 +195,12 @@ def die_with_build(build_pid: int) -> None:
     threading.Thread(target=watch, name="die-with-build", daemon=True).start()
 
 
-def _context():
+def _context(fe: bool = True):
     import multiprocessing as mp
 
     try:
         ctx = mp.get_context("forkserver")
-        ctx.set_forkserver_preload(["cogniframe.parts.registry", "cadquery", "trimesh", "gmsh", "skfem", "pymetis"])
+        ctx.set_forkserver_preload(list(CAD_PRELOAD + (FE_PRELOAD if fe else ())))
         return ctx
     except ValueError:
         return mp.get_context("spawn")

@@ -372,7 +372,9 @@ def plot_plate(plate: Plate, path: Path | str, size_in: float = 6.0, dpi: int = 
     pt_per_mm = size_in * 72 * 0.82 / (bx + 4)  # roughly: the axes take ~82 % of the figure width
     for c in plate.copies:
         tri = np.asarray(c.mesh.vertices)[np.asarray(c.mesh.faces)][:, :, :2]
-        up = np.abs(np.asarray(c.mesh.face_normals)[:, 2]) > 1e-3  # walls project to lines: skip
+        # the upward faces of a closed solid cover its silhouette once (every vertical line through
+        # it leaves through one); walls project to lines, and the downward faces would cover it again
+        up = np.asarray(c.mesh.face_normals)[:, 2] > 1e-3
         ax.add_collection(PolyCollection(tri[up], facecolors=colour, edgecolors=colour, linewidths=0.3, alpha=0.85),
                           autolim=False)  # the limits are set below: no need to measure 50k triangles
         ax.add_patch(Rectangle((c.x, c.y), c.size[0], c.size[1], fill=False, edgecolor="#555555",
