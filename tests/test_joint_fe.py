@@ -37,6 +37,19 @@ def test_solid_cantilever_block_matches_timoshenko_PL3_over_3EI_plus_shear():
     assert 1 / flex[0, 0] == pytest.approx(e * a / L, rel=0.05)  # axial EA/L
 
 
+def test_tie_selection_sees_outward_normals_every_face_of_a_box_whole():
+    # Benchmark: the box's face areas. A tie picking "the faces facing -z" (and +x, -y) must get
+    # the whole face: skfem's facet vertices are sorted by number, so an unoriented normal points
+    # either way and such a selection took about half of the facets.
+    L, b, h, e = 12.0, 6.0, 4.0, 26.0
+    p, t = J.mesh_occ(lambda occ: occ.addBox(0, 0, 0, L, b, h), 1.0)
+    ties = [J.Tie("bottom", lambda c, n: n[2] < -0.99, (L / 2, b / 2, 0.0), e, e),
+            J.Tie("end", lambda c, n: n[0] > 0.99, (L, b / 2, h / 2), e, e),
+            J.Tie("side", lambda c, n: n[1] < -0.99, (L / 2, 0.0, h / 2), e, e)]
+    C = J.condense(p, t, e, 0.3, ties)
+    assert C.tied_area == pytest.approx((L * b, b * h, L * h), rel=1e-9)
+
+
 def _sleeve(L, od, id_):
     def build(occ):
         outer = occ.addCylinder(0, 0, 0, L, 0, 0, od / 2)

@@ -32,9 +32,9 @@ import numpy as np
 class Tie:
     """Facets of the mesh tied to a rigid reference body.
 
-    ``select(centroids, normals) -> bool mask`` picks boundary facets; ``ref`` is the body's
-    reference point; ``kn``/``kt`` the interface stiffness per unit area (N/mm^3) normal and
-    tangential to the surface.
+    ``select(centroids, normals) -> bool mask`` picks boundary facets (normals outward); ``ref``
+    is the body's reference point; ``kn``/``kt`` the interface stiffness per unit area (N/mm^3)
+    normal and tangential to the surface.
     """
 
     name: str
@@ -145,6 +145,12 @@ def condense(points: np.ndarray, tets: np.ndarray, e_mpa: float, nu: float, ties
     b = mesh.p[:, mesh.facets[2, bf]] - mesh.p[:, mesh.facets[0, bf]]
     nrm = np.cross(a.T, b.T).T
     nrm /= np.linalg.norm(nrm, axis=0)
+    # outward: skfem stores a facet's vertices sorted by number, so the cross product's sign is
+    # arbitrary (a selection by "facing down" took a mesh-dependent half of the core link's tab
+    # underside, and a mirror image of a joint got another half); flip away from the vertex of
+    # the facet's tetrahedron that is not on it
+    opp = mesh.p[:, mesh.t[:, mesh.f2t[0, bf]]].sum(axis=1) - mesh.p[:, mesh.facets[:, bf]].sum(axis=1)
+    nrm *= np.where(np.einsum("ij,ij->j", cen - opp, nrm) < 0, -1.0, 1.0)
 
     nr = 6 * len(ties)
     Kur = np.zeros((n_dofs, nr))
