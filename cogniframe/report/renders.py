@@ -129,8 +129,11 @@ def _set_view(p, view: str, bounds: np.ndarray, zoom: float = 1.0) -> None:
     d /= np.linalg.norm(d)
     dist = 3.0 * float(np.linalg.norm(hi - lo))
     p.camera.parallel_projection = parallel
-    p.camera_position = [tuple(centre + d * dist), tuple(centre), up]
-    p.reset_camera(render=False, bounds=(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]))
+    # the camera's own setters: Plotter.camera_position would render the scene once more (0.13 s)
+    p.camera.position = tuple(centre + d * dist)
+    p.camera.focal_point = tuple(centre)
+    p.camera.up = tuple(up)
+    p.renderer.reset_camera(render=False, bounds=(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]))  # Plotter.reset_camera renders anyway
     if zoom != 1.0 and not parallel:
         p.camera.zoom(zoom)
     if parallel:  # fit the projected box (reset_camera fits the bounding sphere, which wastes space)
@@ -140,7 +143,6 @@ def _set_view(p, view: str, bounds: np.ndarray, zoom: float = 1.0) -> None:
         w, h = float(np.abs(right) @ ext), float(np.abs(u) @ ext)
         width_px, height_px = p.window_size
         p.camera.parallel_scale = 0.55 * max(h, w * height_px / width_px)
-    # Setting camera_position renders at once (before the projection and scale above are set) and
     # screenshot() does not render again: render explicitly so the image shows this view.
     p.render()
 
