@@ -247,6 +247,13 @@ def test_optimize_carbon_finds_a_lighter_design_that_passes(tcp_cluster, tmp_pat
                            out_dir=out, trials=96, scheduler=tcp_cluster, batch=4, verify=6)
     assert res.trials == 96 and res.workers == 2 and res.best is not None
     assert res.fidelity == ("analytic", "fe") and len(res.verified) == 6
+    # the screen was corrected by the base's FE / closed-form ratio (the closed forms under-rate the safe drop)
+    from cogniframe.sweep import evaluate as ev
+
+    screened_base = ev.evaluate_one(sweep.base_data, {}, 600.0, "test", sweep.base_text, sweep.base_label)
+    assert res.correction["max_safe_drop_cm"] == pytest.approx(
+        res.base["max_safe_drop_cm"] / screened_base["max_safe_drop_cm"], rel=1e-9)
+    assert res.correction["max_safe_drop_cm"] > 1.05  # the closed forms under-rate the base's safe drop
     best, base = res.best, res.base
     assert base["verdict"] == "PASS" and base["mass_g"] == pytest.approx(243.86, abs=0.01)  # the preset, FE joints
     assert best["verdict"] == "PASS" and best["max_safe_drop_cm"] >= 120
@@ -341,3 +348,24 @@ def test_near_feasible_keeps_pass_rows_within_the_screening_tolerance():
             {"design_id": "e", "verdict": "PASS", "mass_g": float("nan"), "max_safe_drop_cm": 130.0}]
     got = opt.near_feasible(rows, objs, cons, 0.2)
     assert [r["design_id"] for r in got] == ["a", "d"]  # lightest first
+
+
+def test_screen_correction_is_the_base_designs_ratio_of_the_two_models():
+    from cogniframe.sweep.optimize import Constraint, corrected, near_feasible, screen_correction
+
+    drop = Constraint("max_safe_drop_cm", ">=", 120.0)
+    mass = Constraint("mass_g", "<=", 250.0)
+    f = screen_correction({"max_safe_drop_cm": 120.0, "mass_g": 240.0}, {"max_safe_drop_cm": 138.0, "mass_g": 240.0},
+                          [drop, mass])
+    assert f == {"max_safe_drop_cm": pytest.approx(1.15), "mass_g": 1.0}
+    assert screen_correction({"max_safe_drop_cm": 0.0}, {"max_safe_drop_cm": 138.0}, [drop]) == {"max_safe_drop_cm": 1.0}
+    assert screen_correction({}, {"max_safe_drop_cm": float("nan")}, [drop]) == {"max_safe_drop_cm": 1.0}
+    row = {"design_id": "a", "verdict": "PASS", "mass_g": 241.0, "max_safe_drop_cm": 110.0}
+    assert corrected(row, f)["max_safe_drop_cm"] == pytest.approx(126.5) and row["max_safe_drop_cm"] == 110.0
+    assert corrected(row, {}) is row
+    # 110 cm screened misses 120 by 8 %: infeasible as screened, feasible once corrected (126.5)
+    from cogniframe.sweep.optimize import Objective
+
+    obj = [Objective("mass_g", "minimize")]
+    assert near_feasible([row], obj, [drop], 0.0) == []
+    assert [r["design_id"] for r in near_feasible([corrected(row, f)], obj, [drop], 0.0)] == ["a"]
