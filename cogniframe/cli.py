@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
@@ -42,8 +43,8 @@ def check(params: ParamsArg,
     spec = spec_mod.load(params)
     from .threads import one_blas_thread
 
-    _progress_to_stderr()  # a new joint geometry's solid FE takes seconds: say what it is doing
-    with spec.blamed(), one_blas_thread():  # as `build` computes it: same numbers, no spinning BLAS threads
+    # a new joint geometry's solid FE takes seconds: say what it is doing
+    with _progress_to_stderr(), spec.blamed(), one_blas_thread():  # as `build` computes it: same numbers
         result = pipeline.check(spec)
     if plots is not None and result.drop is not None:
         from .outdir import claim_file
@@ -68,17 +69,27 @@ def check(params: ParamsArg,
     raise typer.Exit(code)
 
 
-def _progress_to_stderr() -> None:
-    """Plain stderr lines for the `cogniframe.progress` log (the joint FE's), one per record."""
+@contextlib.contextmanager
+def _progress_to_stderr():
+    """Plain stderr lines for the `cogniframe.progress` log (the joint FE's), one per record, for
+    the duration of one command: the handler, level and propagation are put back afterwards (a
+    handler left behind wrote to a closed stream and hid the records from later callers in the
+    same process, such as a script or a test)."""
     import logging
 
     log = logging.getLogger("cogniframe.progress")
-    if not log.handlers:
-        handler = logging.StreamHandler(sys.stderr)
-        handler.setFormatter(logging.Formatter("%(message)s"))
-        log.addHandler(handler)
-        log.setLevel(logging.INFO)
-        log.propagate = False
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("%(message)s"))
+    before = (log.level, log.propagate)
+    log.addHandler(handler)
+    log.setLevel(logging.INFO)
+    log.propagate = False
+    try:
+        yield
+    finally:
+        log.removeHandler(handler)
+        log.setLevel(before[0])
+        log.propagate = before[1]
 
 
 @app.command()

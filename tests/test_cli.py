@@ -136,3 +136,17 @@ def test_leaving_runs_exit_handlers_flushes_output_and_keeps_the_code():
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert r.returncode == 3
     assert r.stdout == "x" * 100000 + "handler ran\n"
+
+
+def test_check_leaves_the_progress_log_as_it_found_it(run_cli, tmp_path):
+    """`check` shows the joint FE's progress on stderr for its own run only: a handler left on the
+    `cogniframe.progress` logger wrote to a closed stream later and hid its records from the
+    caller (a test's caplog saw nothing)."""
+    import logging
+
+    log = logging.getLogger("cogniframe.progress")
+    before = (list(log.handlers), log.propagate, log.level)
+    p = _variant(tmp_path, "carbon", model={"stiffness_model": "analytic"})
+    code, out, _ = run_cli("check", p, "--json")
+    assert code == 0 and json.loads(out)["verdict"] == "PASS"
+    assert (list(log.handlers), log.propagate, log.level) == before
