@@ -150,3 +150,10 @@ def test_check_leaves_the_progress_log_as_it_found_it(run_cli, tmp_path):
     code, out, _ = run_cli("check", p, "--json")
     assert code == 0 and json.loads(out)["verdict"] == "PASS"
     assert (list(log.handlers), log.propagate, log.level) == before
+
+
+def test_leaving_with_a_closed_output_is_quiet():
+    """A reader that went away (`cogniframe ... | head`) or a closed stdout: no traceback, the code kept."""
+    code = "import sys; from cogniframe.cli import _leave; sys.stdout.write('x'); sys.stdout.close(); _leave(1)"
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert r.returncode == 1 and "Traceback" not in r.stderr and r.stderr == ""
