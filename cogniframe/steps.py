@@ -160,12 +160,10 @@ def needs_joint_fe(spec, design) -> bool:
     in the joint cache yet (a few milliseconds: the cache keys are hashes of the parts' inputs)."""
     if spec.model.stiffness_model != "fe":
         return False
-    from . import cache
-    from .analysis.joint_stiffness import FE_MESH_MM, geometry_key
+    from .analysis.joint_stiffness import has_unsolved
     from .analysis.stiffness import joint_parts
 
-    return any(cache.load_json("joint", geometry_key(spec, p, "fe", 1.0, FE_MESH_MM)) is None
-               for p in joint_parts(design.parts))
+    return has_unsolved(spec, joint_parts(design.parts))
 
 
 class Slicer:

@@ -629,6 +629,15 @@ def _in_dask_worker() -> bool:
         return False
 
 
+def has_unsolved(spec, parts, mesh_mm: float | None = None) -> bool:
+    """Whether a joint in ``parts`` has no FE super-element in the joint cache yet (the test
+    `solve_missing` makes; milliseconds: the keys are hashes of the parts' inputs)."""
+    from .. import cache
+
+    mesh_mm = FE_MESH_MM if mesh_mm is None else mesh_mm
+    return any(cache.load_json("joint", geometry_key(spec, p, "fe", 1.0, mesh_mm)) is None for p in parts)
+
+
 def solve_missing(spec, parts, mesh_mm: float | None = None, jobs: int | None = None) -> dict[str, str]:
     """Solve and cache the FE of every joint in ``parts`` whose geometry is not cached yet, in
     parallel worker processes when more than one is missing (one per core by default, ``jobs``
@@ -644,8 +653,9 @@ def solve_missing(spec, parts, mesh_mm: float | None = None, jobs: int | None = 
 
     Measured on 2 cores, carbon preset, 5 new joints: serial 11 s (CadQuery import 2.3 s + the
     five FE), 2 workers 7-8 s wall for the whole check; with the mirror reflected (4 FE) the
-    whole cold check takes ~1.8 s less CPU and ~3 s less wall (the two workers end together). The pool: `_fe_pool`. Inside a daemonic
-    process or a Dask worker the joints are solved serially, and if the pool breaks, the rest too."""
+    whole cold check takes ~1.8 s less CPU and ~3 s less wall (the two workers end together).
+    The pool: `_fe_pool`. Inside a daemonic process or a Dask worker the joints are solved
+    serially, and if the pool breaks, the rest too."""
     from .. import cache
 
     mesh_mm = FE_MESH_MM if mesh_mm is None else mesh_mm

@@ -40,7 +40,10 @@ class _LazyModule(types.ModuleType):
         return getattr(real, attr)
 
 
-atexit.register(os._exit, 0)  # registered first, so it runs last
+# exit handlers run last-registered first: this one runs after anything registered later in the
+# forkserver and ends it before multiprocessing's own (registered earlier, on its import), which
+# has nothing to do there: the workers are plain forks, not Process objects to join
+atexit.register(os._exit, 0)
 if "vtk" not in sys.modules:
     sys.modules["vtk"] = _LazyModule("vtk", "vtkmodules.all")
 

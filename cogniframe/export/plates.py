@@ -485,8 +485,9 @@ def read_3mf_items(path: Path | str) -> tuple[tuple[str, trimesh.Trimesh, np.nda
     items = []
     for it in root.iter(f"{_NS}item"):
         oid = it.get("objectid")
-        name = it.get("partnumber") or objects.get(oid, ElementTree.Element("x")).get("name") or f"object_{oid}"
-        items.append((name, mesh_of(oid), tf(it.get("transform"))))
+        mesh = mesh_of(oid)  # raises for a missing object
+        name = it.get("partnumber") or objects[oid].get("name") or f"object_{oid}"
+        items.append((name, mesh, tf(it.get("transform"))))
     return tuple(items)
 
 

@@ -377,10 +377,8 @@ def load_plate_objects(path: Path | str) -> tuple[PlateObject, ...]:
                     f"{base.is_winding_consistent}); PrusaSlicer would repair it silently and print something else. "
                     f"Fix: rebuild with `cogniframe build`; if it persists, report it with this file (CAD meshing bug).")
             sound.add(id(base))
-        corners = base.bounds
-        box = np.array([[x, y, z, 1.0] for x in corners[:, 0] for y in corners[:, 1] for z in corners[:, 2]]) @ tf.T
-        if np.allclose(tf[:3, :3], np.eye(3)):  # a translated copy (how cogniframe writes them): exact bounds
-            lo, hi = box[:, :3].min(axis=0), box[:, :3].max(axis=0)
+        if np.allclose(tf[:3, :3], np.eye(3)):  # a translated copy (how cogniframe writes them)
+            lo, hi = base.bounds + tf[:3, 3]
         else:
             m = base.copy()
             m.apply_transform(tf)
