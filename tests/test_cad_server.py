@@ -144,3 +144,31 @@ def test_wanted_follows_the_flag_then_the_environment(monkeypatch):
     assert cad_server.wanted(False) is False
     monkeypatch.delenv(cad_server.ENV)
     assert cad_server.wanted() is True
+
+
+def test_a_killed_build_leaves_no_worker_running(server_env):
+    """The build's workers die with it (`die_with_build`), even by SIGKILL mid-job; the server stays."""
+    import signal
+    import subprocess
+
+    script = (
+        "import os, time\n"
+        "from cogniframe.export import cad_server\n"
+        "pool = cad_server.connect(1, idle_s=60)\n"
+        "print(pool.submit(os.getpid).result(), cad_server.running(), flush=True)\n"
+        "pool.submit(time.sleep, 60)\n"
+        "time.sleep(60)\n"
+    )
+    build = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True,
+                             env={**os.environ, "COGNIFRAME_CACHE": str(server_env / "cache")})
+    worker, server = map(int, build.stdout.readline().split())  # (its key is not this process's: its sys.path differs)
+    assert _pid_alive(worker)
+    time.sleep(0.3)  # the worker is in its 60 s job
+    build.send_signal(signal.SIGKILL)
+    build.wait()
+    t0 = time.monotonic()
+    while _pid_alive(worker) and time.monotonic() - t0 < 10:
+        time.sleep(0.05)
+    assert not _pid_alive(worker)
+    assert _pid_alive(server)
+    os.kill(server, signal.SIGTERM)
