@@ -10,6 +10,16 @@ A pure function over named solids (trimesh meshes with a 4x4 world transform eac
 
 Booleans and gaps are manifold3d's (`^` intersection volume, `min_gap`), after an axis-aligned
 bounding-box prefilter (grown by the margin for the discs), so only neighbours are tested.
+
+A pair with a rod is first tested for being provably apart (`_apart`): neither solid can hold a
+piece of the other, and, in a frame turned so that the rod runs along z, their surfaces are at
+least `APART_MM` apart. Such a pair's intersection is empty, so its volume is 0.0 without the
+boolean -- the number the boolean gives. The turn is what makes it cheap: manifold3d classifies
+vertices by vertical rays, and a slanted rod's long facets have bounding boxes that every ray
+through the part meets (a motor mount's clips around its arm rods: 0.13 s a pair in the world
+frame, 4 ms turned). A pair that is not proved apart (the rods in their sockets touch the
+socket floor) gets the boolean in the world frame as before, so every volume, gap and the
+largest overlap are the same numbers whether or not the shortcut was taken.
 """
 
 from __future__ import annotations
@@ -20,6 +30,9 @@ from typing import MutableMapping, Sequence
 import numpy as np
 
 TOLERANCE_MM3 = 0.5
+# Surfaces this far apart (in the turned frame) prove a pair disjoint: far above the rounding of
+# the turn (~1e-13 mm on a 200 mm aircraft), far below a fit's clearance (0.05 mm).
+APART_MM = 1e-3
 
 
 @dataclass(frozen=True, eq=False)
@@ -81,14 +94,56 @@ def from_dict(d: dict) -> ClashResult:
                        (mo["a"], mo["b"], mo["volume_mm3"]), tuple((g["propeller"], g["nearest"], g["gap_mm"]) for g in d["prop_gaps"]))
 
 
-def _manifold(body: Body):
+def _manifold(body: Body, base=None):
+    """The body as a manifold3d solid in the world frame; `base`: its mesh's Manifold, if made."""
     import manifold3d as m3
 
-    mesh = body.mesh
-    man = m3.Manifold(m3.Mesh(np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.uint32)))
+    if base is None:
+        mesh = body.mesh
+        base = m3.Manifold(m3.Mesh(np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.uint32)))
     if body.transform is not None:
-        man = man.transform(np.asarray(body.transform, float)[:3, :4])
-    return man
+        return base.transform(np.asarray(body.transform, float)[:3, :4])
+    return base
+
+
+def _long_axis(man) -> np.ndarray:
+    """Unit direction of a solid's largest extent (a rod's axis): principal axis of its vertices."""
+    v = np.asarray(man.to_mesh().vert_properties, float)[:, :3]
+    return np.linalg.svd(v - v.mean(axis=0), full_matrices=False)[2][0]
+
+
+def _turn_to_z(d: np.ndarray) -> np.ndarray:
+    """3x4 rotation taking unit vector d to +z (Rodrigues; the identity if d is already along z)."""
+    z = np.array([0.0, 0.0, 1.0])
+    c = np.cross(d, z)
+    s = float(np.linalg.norm(c))
+    if s < 1e-12:
+        R = np.eye(3) if d[2] > 0 else np.diag([1.0, -1.0, -1.0])
+    else:
+        k = c / s
+        K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+        R = np.eye(3) + s * K + (1.0 - float(d @ z)) * (K @ K)
+    return np.c_[R, np.zeros(3)]
+
+
+def _inside(inner, outer) -> bool:
+    """Whether bounding box `inner` (manifold3d's (x0, y0, z0, x1, y1, z1)) lies within `outer`."""
+    return all(inner[j] >= outer[j] for j in range(3)) and all(inner[j] <= outer[j] for j in range(3, 6))
+
+
+def _apart(ma, mb, pieces_a: int, pieces_b: int, turn) -> bool:
+    """True when solids `ma` and `mb` provably share no volume. Turned by `turn` (3x4, a rotation),
+    their surfaces are at least APART_MM apart, so they do not meet, and each connected piece of
+    one solid is wholly inside or wholly outside the other; a piece reaching out of the other's
+    bounding box (in the turned frame, where a rod's box is tight) is outside. `pieces_*`: the
+    solids' numbers of connected pieces (with one, its box is the solid's)."""
+    ta, tb = ma.transform(turn), mb.transform(turn)
+    box_a, box_b = ta.bounding_box(), tb.bounding_box()
+    for t, n, other in ((ta, pieces_a, box_b), (tb, pieces_b, box_a)):
+        boxes = [t.bounding_box()] if n == 1 else [p.bounding_box() for p in t.decompose()]
+        if any(_inside(b, other) for b in boxes):
+            return False
+    return float(ta.min_gap(tb, APART_MM)) >= APART_MM
 
 
 def body_key(body: Body, mesh_hash: str | None = None) -> str:
@@ -129,7 +184,14 @@ def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_mar
     if len(set(names)) != len(names):
         dup = sorted({n for n in names if names.count(n) > 1})
         raise ValueError(f"clash check: duplicate body names {dup}")
-    mans = [_manifold(b) for b in bodies]
+    bases: dict[int, object] = {}  # the copies of a part share one mesh: one Manifold of it
+    mans = []
+    for b in bodies:
+        if id(b.mesh) not in bases:
+            bases[id(b.mesh)] = _manifold(Body(b.name, b.kind, b.mesh))
+        mans.append(_manifold(b, bases[id(b.mesh)]))
+    turns: dict[int, np.ndarray] = {}  # a rod's turn to z
+    pieces: dict[int, int] = {}  # connected pieces of a mesh (by id), for the bodies tested for `_apart`
     boxes = []
     for m in mans:
         bb = m.bounding_box()
@@ -162,7 +224,16 @@ def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_mar
             if known is not None:
                 vol, gap = float(known[0]), known[1]
             else:
-                vol = float((mans[i] ^ mans[k]).volume())
+                rod = i if a.kind == "rod" else k if b.kind == "rod" else None
+                proved = False
+                if rod is not None:
+                    for body in (a, b):
+                        if id(body.mesh) not in pieces:
+                            pieces[id(body.mesh)] = len(bases[id(body.mesh)].decompose())
+                    if rod not in turns:
+                        turns[rod] = _turn_to_z(_long_axis(mans[rod]))
+                    proved = _apart(mans[i], mans[k], pieces[id(a.mesh)], pieces[id(b.mesh)], turns[rod])
+                vol = 0.0 if proved else float((mans[i] ^ mans[k]).volume())
                 gap = None
                 if disc is not None:
                     gap = 0.0 if vol > 0 else float(mans[i].min_gap(mans[k], prop_margin + 20.0))
