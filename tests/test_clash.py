@@ -1,6 +1,6 @@
-"""The clash check's shortcut for pairs with a rod (`clash._apart`): a pair it proves apart has
-the volume the boolean gives (0), a pair it cannot prove gets the boolean, and the whole check
-is the same with and without it."""
+"""The clash check's booleans of a pair with a rod, taken in a frame turned so that the rod runs
+along z (analysis/clash.py): the same volumes as in the world frame -- an empty intersection
+stays exactly empty, a real overlap equals its closed form -- and the turn is a rotation."""
 
 from __future__ import annotations
 
@@ -13,6 +13,8 @@ import trimesh
 from cogniframe.analysis import clash
 
 R_ROD = 3.0
+SLANT = np.array([1.0, 1.0, -0.6]) / np.linalg.norm([1.0, 1.0, -0.6])  # an arm rod's direction
+CENTRE = np.array([10.0, 10.0, 4.0])
 
 
 def _rod(name: str, start, end) -> clash.Body:
@@ -20,87 +22,63 @@ def _rod(name: str, start, end) -> clash.Body:
     return clash.Body(name, "rod", m)
 
 
+def _slanted_rod() -> clash.Body:
+    return _rod("rod_arm", CENTRE - 40 * SLANT, CENTRE + 40 * SLANT)
+
+
 def _clip(inner_r: float, name: str = "clip") -> clash.Body:
     """A ring 12 mm long around the slanted rod's axis (a motor-mount clip), bore `inner_r`."""
     ring = trimesh.creation.annulus(r_min=inner_r, r_max=inner_r + 2.0, height=12.0, sections=48)
-    d = np.array([1.0, 1.0, -0.6]) / np.linalg.norm([1.0, 1.0, -0.6])
-    T = trimesh.geometry.align_vectors([0, 0, 1.0], d)
-    T[:3, 3] = [10.0, 10.0, 4.0]  # on the rod's axis (below)
+    T = trimesh.geometry.align_vectors([0, 0, 1.0], SLANT)
+    T[:3, 3] = CENTRE
     return clash.Body(name, "part", ring, T)
 
 
-def _slanted_rod() -> clash.Body:
-    d = np.array([1.0, 1.0, -0.6]) / np.linalg.norm([1.0, 1.0, -0.6])
-    c = np.array([10.0, 10.0, 4.0])
-    return _rod("rod_arm", c - 40 * d, c + 40 * d)
-
-
-def _without_shortcut(monkeypatch, bodies, **kw):
-    monkeypatch.setattr(clash, "_apart", lambda *a: False)
+def _world_frame(monkeypatch, bodies, **kw) -> clash.ClashResult:
+    """The check with the turn replaced by the identity: every boolean in the world frame."""
+    monkeypatch.setattr(clash, "_turn_to_z", lambda d: np.c_[np.eye(3), np.zeros(3)])
     r = clash.check(bodies, **kw)
     monkeypatch.undo()
     return r
 
 
-def _pair(bodies):
-    a, b = bodies
-    ma, mb = clash._manifold(a), clash._manifold(b)
-    rod = ma if a.kind == "rod" else mb
-    turn = clash._turn_to_z(clash._long_axis(rod))
-    return ma, mb, turn
+def _polygon_area(r: float, n: int = 48) -> float:
+    return n / 2 * r**2 * math.sin(2 * math.pi / n)
 
 
-def test_rod_in_a_clip_with_clearance_is_proved_apart_and_gets_the_booleans_zero(monkeypatch):
-    # the rod (r 3, 48 facets: its flats 3 cos(pi/48) from the axis) in a bore of r 3.05
+def test_rod_in_a_clip_with_clearance_is_exactly_clear_as_in_the_world_frame(monkeypatch):
+    # the rod (r 3) in a bore of r 3.05: 0.04 mm between the 48-gons, no volume in common
     bodies = [_clip(3.05), _slanted_rod()]
-    ma, mb, turn = _pair(bodies)
-    assert clash._apart(ma, mb, 1, 1, turn)
-    assert (ma ^ mb).volume() == 0.0  # what the boolean says
-    proved = []
-    real = clash._apart
-    monkeypatch.setattr(clash, "_apart", lambda *a: proved.append(real(*a)) or proved[-1])
     r = clash.check(bodies)
-    monkeypatch.undo()
-    assert proved == [True]  # the check took the shortcut
     assert r.pairs_tested == 1 and r.ok and r.max_overlap == ("", "", 0.0)
-    assert r == _without_shortcut(monkeypatch, bodies)
+    assert r == _world_frame(monkeypatch, bodies)
 
 
-def test_rod_pressed_into_a_tight_clip_is_not_proved_and_gets_its_overlap(monkeypatch):
-    # bore r 2.8 around a rod of r 3: the overlap is a 0.2 mm thick sleeve, ~ 2 pi r t L
+def test_rod_pressed_into_a_tight_clip_overlaps_by_the_sleeve_between_the_polygons(monkeypatch):
+    # bore r 2.8 around the rod of r 3: the overlap is the prism between the two 48-gons
     bodies = [_clip(2.8), _slanted_rod()]
-    ma, mb, turn = _pair(bodies)
-    assert not clash._apart(ma, mb, 1, 1, turn)
-    r = clash.check(bodies)
-    (c,) = r.clashes
-    assert c.volume_mm3 == pytest.approx(math.pi * (3.0**2 - 2.8**2) * 12.0, rel=0.02)
-    assert r == _without_shortcut(monkeypatch, bodies)
+    (c,) = clash.check(bodies).clashes
+    assert c.volume_mm3 == pytest.approx((_polygon_area(3.0) - _polygon_area(2.8)) * 12.0, rel=1e-3)
+    (w,) = _world_frame(monkeypatch, bodies).clashes
+    assert c.volume_mm3 == pytest.approx(w.volume_mm3, rel=1e-9)
 
 
-def test_a_rod_wholly_inside_a_block_is_not_proved_apart(monkeypatch):
-    # surfaces 7 mm apart, but the rod is inside the block: the overlap is the whole rod
+def test_a_rod_wholly_inside_a_block_overlaps_by_its_whole_volume():
     block = clash.Body("block", "part", trimesh.creation.box(extents=(20.0, 20.0, 40.0)))
     rod = _rod("rod_in", (0, 0, -10.0), (0, 0, 10.0))
-    ma, mb, turn = _pair([block, rod])
-    assert not clash._apart(ma, mb, 1, 1, turn)
     (c,) = clash.check([block, rod]).clashes
-    area = 48 / 2 * R_ROD**2 * math.sin(2 * math.pi / 48)  # the 48-gon's area
-    assert c.volume_mm3 == pytest.approx(area * 20.0, rel=1e-6)
+    assert c.volume_mm3 == pytest.approx(_polygon_area(R_ROD) * 20.0, rel=1e-6)  # float32 vertices
 
 
-def test_a_piece_of_a_part_inside_the_rod_is_found_though_the_part_reaches_out(monkeypatch):
-    # a part of two pieces: a 1 mm cube inside a fat rod and a block far away; the part's box is
-    # not inside the rod's, the cube's is
+def test_a_piece_of_a_part_inside_a_slanted_rod_is_found():
+    # a part of two pieces: a 1 mm cube inside the rod and a block far away
     cube = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
+    cube.apply_translation(CENTRE)
     far = trimesh.creation.box(extents=(2.0, 2.0, 2.0))
-    far.apply_translation((0.0, 0.0, 30.0))
+    far.apply_translation(CENTRE + (0.0, 0.0, 30.0))
     part = clash.Body("two_pieces", "part", trimesh.util.concatenate([cube, far]))
-    rod = _rod("rod_fat", (0, 0, -10.0), (0, 0, 10.0))
-    assert len(clash._manifold(part).decompose()) == 2
-    r = clash.check([part, rod])
-    (c,) = r.clashes
-    assert c.volume_mm3 == pytest.approx(1.0, rel=1e-9)
-    assert r == _without_shortcut(monkeypatch, [part, rod])
+    (c,) = clash.check([part, _slanted_rod()]).clashes
+    assert c.volume_mm3 == pytest.approx(1.0, rel=1e-6)  # float32 vertices
 
 
 def test_turn_to_z_is_a_rotation_taking_the_axis_to_z():
@@ -111,3 +89,8 @@ def test_turn_to_z_is_a_rotation_taking_the_axis_to_z():
         np.testing.assert_allclose(R @ R.T, np.eye(3), atol=1e-14)
         assert np.linalg.det(R) == pytest.approx(1.0, abs=1e-14)
         np.testing.assert_allclose(R @ d, (0, 0, 1.0), atol=1e-14)
+
+
+def test_long_axis_of_a_rod_mesh_is_its_axis():
+    rod = clash._manifold(_slanted_rod())
+    assert abs(float(clash._long_axis(rod) @ SLANT)) == pytest.approx(1.0, abs=1e-9)
