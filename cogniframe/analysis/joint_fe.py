@@ -231,45 +231,62 @@ def _elasticity_blocks(basis, lam: float, mu: float):
     """Linear elasticity (skfem's `linear_elasticity`: sigma(u) : eps(v), sigma = 2 mu eps +
     lam tr(eps) I) as 3 x 3 blocks of scalar P2 function pairs. With G_kl[i, j] = int d_i phi_k
     d_j phi_l, the block of (phi_k e_c, phi_l e_d) is mu tr(G_kl) delta_cd + mu G_kl[d, c] +
-    lam G_kl[c, d]; the G of all pairs of an element is one (30 x nq) @ (nq x 30) product."""
+    lam G_kl[c, d]; the G of all pairs of an element is one (30 x nq) @ (nq x 30) product.
+    Returns (row points, column points, values) with the values component-major,
+    (9, ne, 10, 10): entry (c, d) of every block contiguous."""
     g = np.stack([np.asarray(f[0].grad) for f in basis.basis])  # (10, 3, ne, nq)
     nl, _, ne, nq = g.shape
     a = g.transpose(2, 0, 1, 3).reshape(ne, 3 * nl, nq)  # rows (k, i)
-    G = np.matmul(a * basis.dx[:, None, :], a.transpose(0, 2, 1)).reshape(ne, nl, 3, nl, 3)
-    G = G.transpose(0, 1, 3, 2, 4)  # (ne, k, l, i, j)
-    tr = G[..., 0, 0] + G[..., 1, 1] + G[..., 2, 2]
-    ke = lam * G + mu * G.swapaxes(-1, -2)
-    ke += (mu * tr)[..., None, None] * np.eye(3)
+    G = np.matmul(a * basis.dx[:, None, :], a.transpose(0, 2, 1)).reshape(ne, nl, 3, nl, 3)  # (e, k, i, l, j)
+    mtr = mu * (G[:, :, 0, :, 0] + G[:, :, 1, :, 1] + G[:, :, 2, :, 2])
+    ke = np.empty((3, 3, ne, nl, nl))
+    for c in range(3):
+        for d in range(3):
+            np.multiply(lam, G[:, :, c, :, d], out=ke[c, d])
+            ke[c, d] += mu * G[:, :, d, :, c]
+            if c == d:
+                ke[c, d] += mtr
     pts = basis.element_dofs  # (10, ne)
     return (np.broadcast_to(pts.T[:, :, None], (ne, nl, nl)), np.broadcast_to(pts.T[:, None, :], (ne, nl, nl)),
-            ke.reshape(ne, nl, nl, 9))
+            ke.reshape(9, ne, nl, nl))
 
 
 def _interface_blocks(pts: np.ndarray, phi: np.ndarray, n: np.ndarray, dx: np.ndarray, kn: float, kt: float):
     """Elastic interface on facets: traction kn u_n n + kt u_t per unit area, i.e. the form
     kn (u.n)(v.n) + kt (u.v - (u.n)(v.n)); the block of (phi_k e_c, phi_l e_d) is
-    int phi_k phi_l (kt delta_cd + (kn - kt) n_c n_d) dA."""
+    int phi_k phi_l (kt delta_cd + (kn - kt) n_c n_d) dA. Layout as `_elasticity_blocks`."""
     nl, nf, _ = phi.shape
     m = np.einsum("kfq,lfq,fq->fkl", phi, phi, dx)  # (nf, 10, 10)
     nn = n[:, None, :, 0] * n[None, :, :, 0]  # (3, 3, nf): n n^T of each facet
     t = kt * np.eye(3)[:, :, None] + (kn - kt) * nn
-    ke = m[:, :, :, None, None] * t.transpose(2, 0, 1)[:, None, None]  # (nf, 10, 10, 3, 3)
-    return (np.broadcast_to(pts.T[:, :, None], (nf, nl, nl)), np.broadcast_to(pts.T[:, None, :], (nf, nl, nl)),
-            ke.reshape(nf, nl, nl, 9))
+    ke = t.reshape(9, nf, 1, 1) * m[None]  # (9, nf, 10, 10)
+    return (np.broadcast_to(pts.T[:, :, None], (nf, nl, nl)), np.broadcast_to(pts.T[:, None, :], (nf, nl, nl)), ke)
 
 
 def _sum_blocks(blocks, npts: int):
     """Sum the 3 x 3 blocks of equal (row point, column point): (rows, cols, values (nb, 3, 3)),
-    sorted by row then column; summed in a fixed order (same bits every run)."""
-    bi = np.concatenate([b[0].ravel() for b in blocks]).astype(np.int64)
-    bj = np.concatenate([b[1].ravel() for b in blocks]).astype(np.int64)
-    key = bi * npts + bj
-    order = np.argsort(key, kind="stable")
-    key = key[order]
-    first = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
-    vals = np.concatenate([b[2].reshape(-1, 9) for b in blocks])[order]
-    bv = np.add.reduceat(vals, first, axis=0).reshape(-1, 3, 3)
-    return bi[order[first]], bj[order[first]], bv
+    sorted by row then column. Each entry of the blocks is one `np.bincount` over the blocks'
+    ranks (a sequential sum: the same bits every run)."""
+    keys = [b[0].ravel().astype(np.int64) * npts + b[1].ravel() for b in blocks]
+    key = np.concatenate(keys)
+    order = np.argsort(key)  # ties in any order: the ranks below do not depend on it
+    sk = key[order]
+    new = np.empty(sk.size, dtype=bool)
+    new[0] = True
+    np.not_equal(sk[1:], sk[:-1], out=new[1:])
+    rank = np.empty(key.size, dtype=np.int64)
+    rank[order] = np.cumsum(new) - 1
+    nb = int(rank.max()) + 1 if rank.size else 0
+    bv = np.zeros((9, nb))
+    start = 0
+    for b, k in zip(blocks, keys):
+        r = rank[start:start + k.size]
+        start += k.size
+        vals = b[2].reshape(9, -1)
+        for c in range(9):
+            bv[c] += np.bincount(r, vals[c], minlength=nb)
+    uk = sk[new]
+    return uk // npts, uk % npts, np.ascontiguousarray(bv.T).reshape(nb, 3, 3)
 
 
 def _csc_blocks(bi: np.ndarray, bj: np.ndarray, bv: np.ndarray, iperm: np.ndarray, npts: int):
