@@ -167,10 +167,11 @@ def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_mar
             bases[id(b.mesh)] = _manifold(Body(b.name, b.kind, b.mesh))
         mans.append(_manifold(b, bases[id(b.mesh)]))
     turns: dict[int, object] = {}  # a rod's turn to z: (3x4, the rod turned)
-    boxes = []
-    for m in mans:
-        bb = m.bounding_box()
-        boxes.append((np.array(bb[:3]), np.array(bb[3:])))
+    bb = np.array([m.bounding_box() for m in mans], float).reshape(-1, 6)
+    lo, hi = bb[:, :3], bb[:, 3:]
+    # apart[g][i, k]: i's box starts past k's (grown by g), on some axis; a pair is skipped when
+    # either starts past the other
+    apart = {g: (lo[:, None, :] - g > hi[None, :, :]).any(axis=2) for g in (0.0, prop_margin)}
     keys: list[str | None] = [None] * len(bodies)
     if memo is not None:
         meshes: dict[int, str] = {}  # the copies of a part share one mesh: hash it once
@@ -190,8 +191,7 @@ def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_mar
                 continue
             disc = a if a.disc else b if b.disc else None
             grow = prop_margin if disc is not None else 0.0
-            (lo_a, hi_a), (lo_b, hi_b) = boxes[i], boxes[k]
-            if np.any(lo_a - grow > hi_b) or np.any(lo_b - grow > hi_a):
+            if apart[grow][i, k] or apart[grow][k, i]:
                 continue
             tested += 1
             pk = None if memo is None else _pair_key(keys[i], keys[k], prop_margin if disc is not None else None)
