@@ -136,8 +136,10 @@ def condense(points: np.ndarray, tets: np.ndarray, e_mpa: float, nu: float, ties
     blocks of point pairs from the *scalar* P2 basis (a vector basis function is a scalar one
     times a unit vector: 9x fewer basis evaluations, 9x fewer triplets to sort), and the sparse
     matrix is written once, directly in the nested-dissection order the factorization uses
-    (`_csc_blocks`). `tests/test_joint_fe.py` checks it against skfem's own BilinearForm /
-    LinearForm assembly."""
+    (`_csc_blocks`). `tests/test_joint_fe_assembly.py` checks it against skfem's own
+    BilinearForm / LinearForm assembly. Measured on the carbon knee (28 000 DOF, one BLAS
+    thread): 1.85 s CPU with skfem's vector basis, a COO scatter and a permuted copy, 1.35 s
+    this way, of which the SuperLU factorization and solve are 1.0 s."""
     sysm = assemble(points, tets, e_mpa, nu, ties)
     iperm = _nd_order_points(sysm.rows, sysm.cols, sysm.blocks, sysm.n_points)
     P = _csc_blocks(sysm.rows, sysm.cols, sysm.blocks, iperm, sysm.n_points)
