@@ -302,16 +302,19 @@ def _csc_blocks(bi: np.ndarray, bj: np.ndarray, bv: np.ndarray, iperm: np.ndarra
     I, J, bv = I[order], J[order], bv[order]
     bptr = np.zeros(npts + 1, dtype=np.int64)
     np.cumsum(np.bincount(J, minlength=npts), out=bptr[1:])
-    m = bptr[J + 1] - bptr[J]  # blocks in each block's column
-    k = np.arange(J.size) - bptr[J]  # rank of the block in its column
-    r = np.arange(3)
-    # entry (r, c) of block b goes to 9 bptr[J] + 3 c m + 3 k + r
-    pos = (9 * bptr[J] + 3 * k)[:, None, None] + r[:, None] + (3 * m)[:, None, None] * r[None, :]
     nnz = 9 * J.size
+    if nnz >= 2**31:
+        raise RuntimeError(f"joint FE: {nnz} nonzeros exceed SuperLU's 32-bit indices")
+    m = (bptr[J + 1] - bptr[J]).astype(np.int32)  # blocks in each block's column
+    k = np.arange(J.size, dtype=np.int32) - bptr[J].astype(np.int32)  # rank of the block in its column
+    r = np.arange(3, dtype=np.int32)
+    # entry (r, c) of block b goes to 9 bptr[J] + 3 c m + 3 k + r (column 3 J + c holds, block by
+    # block, the three rows of each)
+    pos = ((9 * bptr[J].astype(np.int32) + 3 * k)[:, None, None] + r[:, None] + (3 * m)[:, None, None] * r).ravel()
     data = np.empty(nnz)
+    data[pos] = bv.ravel()
     indices = np.empty(nnz, dtype=np.int32)
-    data[pos.ravel()] = bv.ravel()
-    indices[pos.ravel()] = (3 * I[:, None, None] + r[:, None] + 0 * r[None, :]).ravel()
+    indices[pos] = np.broadcast_to((3 * I.astype(np.int32))[:, None, None] + r[:, None], (J.size, 3, 3)).ravel()
     cm = np.diff(bptr)
     indptr = np.empty(3 * npts + 1, dtype=np.int32)
     indptr[:-1] = (9 * bptr[:-1, None] + 3 * cm[:, None] * r[None, :]).ravel()
