@@ -80,6 +80,7 @@ def test_block_assembly_equals_skfem_bilinear_and_linear_forms(box):
     A = sysm.Kuu()
     assert A.shape == K.shape == (3 * sysm.n_points,) * 2
     assert abs(A - K).max() <= 1e-12 * abs(K).max()
+    assert abs(A - A.T).max() <= 1e-14 * abs(K).max()  # symmetric (assembled from one triangle)
     assert np.abs(sysm.Kur - Kur).max() <= 1e-12 * np.abs(Kur).max()
     assert np.abs(sysm.Krr - Krr).max() <= 1e-12 * np.abs(Krr).max()
     # the tied areas: the end faces and the bottom
@@ -99,7 +100,8 @@ def test_csc_blocks_in_a_point_order_equal_the_permuted_matrix(box):
     points, tets = box
     sysm = J.assemble(points, tets, E, NU, _ties())
     iperm = np.random.default_rng(3).permutation(sysm.n_points)
-    P = J._csc_blocks(sysm.rows, sysm.cols, sysm.blocks, iperm, sysm.n_points)
+    assert np.all(sysm.rows <= sysm.cols)  # the upper triangle, mirrored for the CSC
+    P = J._csc_blocks(*J._mirror(sysm.rows, sysm.cols, sysm.blocks), iperm, sysm.n_points)
     perm = (3 * np.argsort(iperm)[:, None] + np.arange(3)).ravel()
     ref = sysm.Kuu()[perm][:, perm].tocsc()
     ref.sort_indices()

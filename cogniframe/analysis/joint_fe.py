@@ -142,7 +142,7 @@ def condense(points: np.ndarray, tets: np.ndarray, e_mpa: float, nu: float, ties
     this way, of which the SuperLU factorization and solve are 1.0 s."""
     sysm = assemble(points, tets, e_mpa, nu, ties)
     iperm = _nd_order_points(sysm.rows, sysm.cols, sysm.blocks, sysm.n_points)
-    P = _csc_blocks(sysm.rows, sysm.cols, sysm.blocks, iperm, sysm.n_points)
+    P = _csc_blocks(*_mirror(sysm.rows, sysm.cols, sysm.blocks), iperm, sysm.n_points)
     perm = (3 * np.argsort(iperm)[:, None] + np.arange(3)[None, :]).ravel()  # new DOF -> old DOF
     Bp = np.ascontiguousarray(sysm.Kur[perm])
     Kc = sysm.Krr - Bp.T @ _factor_solve(P, Bp)
@@ -154,10 +154,11 @@ def condense(points: np.ndarray, tets: np.ndarray, e_mpa: float, nu: float, ties
 @dataclass(frozen=True)
 class System:
     """The assembled joint before condensation: K_uu as summed 3 x 3 blocks of point pairs
-    (point p holds DOFs 3 p .. 3 p + 2), sorted by row then column; K_ur and K_rr dense."""
+    (point p holds DOFs 3 p .. 3 p + 2) of its upper triangle (row <= column), sorted by row
+    then column; K_ur and K_rr dense."""
 
     rows: np.ndarray  # (nb,) row point of each block
-    cols: np.ndarray  # (nb,) column point
+    cols: np.ndarray  # (nb,) column point, >= row
     blocks: np.ndarray  # (nb, 3, 3)
     n_points: int
     Kur: np.ndarray  # (3 n_points, 6 n_ties)
@@ -168,7 +169,7 @@ class System:
 
     def Kuu(self):
         """K_uu as a scipy CSC matrix in skfem's DOF numbering."""
-        return _csc_blocks(self.rows, self.cols, self.blocks, np.arange(self.n_points), self.n_points)
+        return _csc_blocks(*_mirror(self.rows, self.cols, self.blocks), np.arange(self.n_points), self.n_points)
 
 
 def assemble(points: np.ndarray, tets: np.ndarray, e_mpa: float, nu: float, ties: list[Tie]) -> System:
@@ -229,47 +230,66 @@ def assemble(points: np.ndarray, tets: np.ndarray, e_mpa: float, nu: float, ties
     return System(bi, bj, bv, npts, Kur, Krr, mesh.p.shape[1], mesh.t.shape[1], tuple(areas))
 
 
+_KU, _LU = np.triu_indices(10)  # the 55 pairs k <= l of a P2 tetrahedron's 10 functions
+_T9 = np.arange(9).reshape(3, 3).T.ravel()  # entry (c, d) of a 3 x 3 block -> entry (d, c)
+
+
+def _upper(rows: np.ndarray, cols: np.ndarray, vals: np.ndarray):
+    """Blocks of function pairs k <= l as blocks of the upper triangle of K_uu (row point <=
+    column point): a pair whose points run the other way is stored as its transpose."""
+    rows, cols = rows.ravel(), cols.ravel()
+    vals = vals.reshape(9, -1)
+    swap = rows > cols
+    return np.where(swap, cols, rows), np.where(swap, rows, cols), np.where(swap, vals[_T9], vals)
+
+
 def _elasticity_blocks(basis, lam: float, mu: float):
     """Linear elasticity (skfem's `linear_elasticity`: sigma(u) : eps(v), sigma = 2 mu eps +
     lam tr(eps) I) as 3 x 3 blocks of scalar P2 function pairs. With G_kl[i, j] = int d_i phi_k
     d_j phi_l, the block of (phi_k e_c, phi_l e_d) is mu tr(G_kl) delta_cd + mu G_kl[d, c] +
     lam G_kl[c, d]; the G of all pairs of an element is one (30 x nq) @ (nq x 30) product.
-    Returns (row points, column points, values) with the values component-major,
-    (9, ne, 10, 10): entry (c, d) of every block contiguous."""
+    K_uu is symmetric: only the pairs k <= l, as upper-triangle blocks (`_upper`), values
+    component-major (9, n): entry (c, d) of every block contiguous."""
     g = np.stack([np.asarray(f[0].grad) for f in basis.basis])  # (10, 3, ne, nq)
     nl, _, ne, nq = g.shape
     a = g.transpose(2, 0, 1, 3).reshape(ne, 3 * nl, nq)  # rows (k, i)
-    G = np.matmul(a * basis.dx[:, None, :], a.transpose(0, 2, 1)).reshape(ne, nl, 3, nl, 3)  # (e, k, i, l, j)
-    mtr = mu * (G[:, :, 0, :, 0] + G[:, :, 1, :, 1] + G[:, :, 2, :, 2])
-    ke = np.empty((3, 3, ne, nl, nl))
+    G = np.matmul(a * basis.dx[:, None, :], a.transpose(0, 2, 1)).reshape(ne, nl, 3, nl, 3)
+    G = G.transpose(0, 1, 3, 2, 4)[:, _KU, _LU]  # (e, pair, i, j)
+    mtr = mu * (G[..., 0, 0] + G[..., 1, 1] + G[..., 2, 2])
+    ke = np.empty((3, 3) + G.shape[:2])
     for c in range(3):
         for d in range(3):
-            np.multiply(lam, G[:, :, c, :, d], out=ke[c, d])
-            ke[c, d] += mu * G[:, :, d, :, c]
+            np.multiply(lam, G[..., c, d], out=ke[c, d])
+            ke[c, d] += mu * G[..., d, c]
             if c == d:
                 ke[c, d] += mtr
     pts = basis.element_dofs  # (10, ne)
-    return (np.broadcast_to(pts.T[:, :, None], (ne, nl, nl)), np.broadcast_to(pts.T[:, None, :], (ne, nl, nl)),
-            ke.reshape(9, ne, nl, nl))
+    return _upper(pts[_KU].T, pts[_LU].T, ke)
 
 
 def _interface_blocks(pts: np.ndarray, phi: np.ndarray, n: np.ndarray, dx: np.ndarray, kn: float, kt: float):
     """Elastic interface on facets: traction kn u_n n + kt u_t per unit area, i.e. the form
     kn (u.n)(v.n) + kt (u.v - (u.n)(v.n)); the block of (phi_k e_c, phi_l e_d) is
     int phi_k phi_l (kt delta_cd + (kn - kt) n_c n_d) dA. Layout as `_elasticity_blocks`."""
-    nl, nf, _ = phi.shape
-    m = np.einsum("kfq,lfq,fq->fkl", phi, phi, dx)  # (nf, 10, 10)
+    m = np.einsum("kfq,lfq,fq->fkl", phi, phi, dx)[:, _KU, _LU]  # (nf, pair)
     nn = n[:, None, :, 0] * n[None, :, :, 0]  # (3, 3, nf): n n^T of each facet
     t = kt * np.eye(3)[:, :, None] + (kn - kt) * nn
-    ke = t.reshape(9, nf, 1, 1) * m[None]  # (9, nf, 10, 10)
-    return (np.broadcast_to(pts.T[:, :, None], (nf, nl, nl)), np.broadcast_to(pts.T[:, None, :], (nf, nl, nl)), ke)
+    ke = t.reshape(9, -1, 1) * m[None]  # (9, nf, pair)
+    return _upper(pts[_KU].T, pts[_LU].T, ke)
+
+
+def _mirror(rows: np.ndarray, cols: np.ndarray, blocks: np.ndarray):
+    """Upper-triangle blocks -> all blocks (each off-diagonal one also transposed below)."""
+    low = rows != cols
+    return (np.concatenate([rows, cols[low]]), np.concatenate([cols, rows[low]]),
+            np.concatenate([blocks, blocks[low].transpose(0, 2, 1)]))
 
 
 def _sum_blocks(blocks, npts: int):
     """Sum the 3 x 3 blocks of equal (row point, column point): (rows, cols, values (nb, 3, 3)),
     sorted by row then column. Each entry of the blocks is one `np.bincount` over the blocks'
     ranks (a sequential sum: the same bits every run)."""
-    keys = [b[0].ravel().astype(np.int64) * npts + b[1].ravel() for b in blocks]
+    keys = [b[0].astype(np.int64) * npts + b[1] for b in blocks]
     key = np.concatenate(keys)
     order = np.argsort(key)  # ties in any order: the ranks below do not depend on it
     sk = key[order]
@@ -284,7 +304,7 @@ def _sum_blocks(blocks, npts: int):
     for b, k in zip(blocks, keys):
         r = rank[start:start + k.size]
         start += k.size
-        vals = b[2].reshape(9, -1)
+        vals = b[2]
         for c in range(9):
             bv[c] += np.bincount(r, vals[c], minlength=nb)
     uk = sk[new]
@@ -327,13 +347,15 @@ def _csc_blocks(bi: np.ndarray, bj: np.ndarray, bv: np.ndarray, iperm: np.ndarra
 
 def _nd_order_points(bi: np.ndarray, bj: np.ndarray, bv: np.ndarray, npts: int) -> np.ndarray:
     """Nested-dissection order of the points (METIS through pymetis, fixed seed: same order every
-    run) on the graph of point pairs with a nonzero block; iperm[p] = new position of point p.
-    The three DOFs of a point stay together (METIS on the DOF graph gives no less fill and
-    takes longer)."""
+    run) on the graph of point pairs with a nonzero block, given by the upper-triangle blocks
+    (bi < bj); iperm[p] = new position of point p. The three DOFs of a point stay together
+    (METIS on the DOF graph gives no less fill and takes longer)."""
     import pymetis
 
     keep = (bi != bj) & np.any(bv != 0, axis=(1, 2))
-    rows, cols = bi[keep], bj[keep]  # sorted by row then column
+    rows, cols = np.concatenate([bi[keep], bj[keep]]), np.concatenate([bj[keep], bi[keep]])
+    order = np.argsort(rows * npts + cols)  # adjacency lists in ascending order
+    rows, cols = rows[order], cols[order]
     xadj = np.zeros(npts + 1, dtype=np.int64)
     np.cumsum(np.bincount(rows, minlength=npts), out=xadj[1:])
     _, iperm = pymetis.nested_dissection(pymetis.CSRAdjacency(xadj, cols), options=pymetis.Options(seed=1))
