@@ -150,8 +150,28 @@ def make_render_part(ctx, part: str) -> Made:
     from .report import renders
 
     p = ctx.part(part)
-    renders.render_parts({p.name: (p.material, ctx.mesh(p.name))}, ctx.out / "renders" / "parts")
+    renders.render_parts({p.name: (p.material, ctx.mesh(p.name))}, ctx.out / "renders" / "parts",
+                         plotter=_part_plotter(ctx))
     return Made((f"renders/parts/{p.name}.png",))
+
+
+def _part_plotter(ctx):
+    """One off-screen plotter for every part render of this build (the render:{part} steps all run
+    on the main thread), made by the first that runs and closed by the report: a plotter per part
+    cost a render context and a first render each (0.1 s CPU of a part render's 0.2 s); the images
+    are the same bytes (renders.render_parts)."""
+    from .report import renders
+
+    plotter = ctx.__dict__.get("_part_plotter")
+    if plotter is None:
+        plotter = ctx.__dict__["_part_plotter"] = renders.part_plotter()
+    return plotter
+
+
+def _close_part_plotter(ctx) -> None:
+    plotter = ctx.__dict__.pop("_part_plotter", None)
+    if plotter is not None:
+        plotter.close()
 
 
 def renders_key(ctx):
@@ -203,6 +223,7 @@ def bom(ctx) -> Made:
 def report(ctx) -> Made:
     from .report import html
 
+    _close_part_plotter(ctx)  # every render:{part} is done (the report needs them)
     lines, steps, sliced = ctx["bom"]
     files = ctx.out / html.FILES_DIR
     figures = {"mass": [("mass by group", files / "mass_by_group.png")]}
