@@ -37,13 +37,16 @@ def make_plates(ctx, material: str) -> Made:
     folder = ctx.out / "plates"
     folder.mkdir(parents=True, exist_ok=True)
     value = []
+    read_back = ctx.__dict__.setdefault("_plate_items", {})
     for plate in pl.pack_plates(items, ctx.spec.printer.bed, ctx.spec.printer.margin):
         f3 = folder / f"{plate.name}.3mf"
-        data = pl.plate_3mf_bytes(plate, _config(ctx, material))
+        data, read = pl.plate_3mf(plate, _config(ctx, material))
         f3.write_bytes(data)
+        model = pl.model_sha256(data)
+        read_back[model] = read  # what reading the file back gives: the preview need not read it
         value.append({"name": plate.name, "material": plate.material, "threemf": f"plates/{f3.name}",
                       "preview": f"plates/{plate.name}.png", "copies": [c.name for c in plate.copies],
-                      "volume_mm3": plate.volume_mm3, "sha256": file_sha256(f3), "model_sha256": pl.model_sha256(data)})
+                      "volume_mm3": plate.volume_mm3, "sha256": file_sha256(f3), "model_sha256": model})
     return Made(tuple(v["threemf"] for v in value), value)
 
 
@@ -56,8 +59,12 @@ def make_previews(ctx, material: str) -> Made:
     from .export import plates as pl
 
     files = []
+    read_back = ctx.__dict__.get("_plate_items", {})
     for v in ctx[f"plates:{material}"]:
-        plate = pl.read_plate(ctx.out / v["threemf"], ctx.spec.printer.bed, ctx.spec.printer.margin)
+        # the plate's items as the plates step wrote them when it ran in this build (the same as
+        # reading its 3MF back: plates.plate_3mf), else read from the file (a cached plate)
+        plate = pl.read_plate(ctx.out / v["threemf"], ctx.spec.printer.bed, ctx.spec.printer.margin,
+                              items=read_back.pop(v["model_sha256"], None))
         pl.plot_plate(plate, ctx.out / v["preview"])
         files.append(v["preview"])
     return Made(tuple(files))
