@@ -64,7 +64,7 @@ def make_previews(ctx, material: str) -> Made:
         # the plate's items as the plates step wrote them when it ran in this build (the same as
         # reading its 3MF back: plates.plate_3mf), else read from the file (a cached plate)
         plate = pl.read_plate(ctx.out / v["threemf"], ctx.spec.printer.bed, ctx.spec.printer.margin,
-                              items=read_back.pop(v["model_sha256"], None))
+                              items=read_back.get(v["model_sha256"]))
         pl.plot_plate(plate, ctx.out / v["preview"])
         files.append(v["preview"])
     return Made(tuple(files))
