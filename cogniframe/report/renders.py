@@ -216,12 +216,12 @@ def vitamin_viewer_items(spec, frame, mass=None) -> list:
     """The vitamins as items of the report's 3D view (kind "vitamin"): their mesh in world
     coordinates (manifold3d, no mesh library), colour, what to buy and which budget line holds
     their mass (the grams themselves only when `mass` is given)."""
-    from ..vitamins import to_manifold, vitamins
+    from ..vitamins import mesh_arrays, vitamins
     from .viewer import Mesh, ViewerItem
 
     def mesh_of(v):
-        m = to_manifold(v).to_mesh()
-        return Mesh(np.asarray(m.vert_properties, float)[:, :3], np.asarray(m.tri_verts, np.int64))
+        verts, faces = mesh_arrays(v)
+        return Mesh(verts, faces)
 
     grams = {i.name: i.mass_g_each for i in mass.items} if mass is not None else {}
     vits = vitamins(spec, frame)
