@@ -28,6 +28,8 @@ def main(argv=None) -> None:
     ap.add_argument("--params", default=str(ROOT / "params" / "carbon.yaml"))
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--out", default=None)
+    ap.add_argument("--warm-renders", action="store_true",
+                    help="also call renders.warm_up() from BuildContext.warm_imports (what steps.py would do)")
     ap.add_argument("--profile", default=None, help="cProfile this step's first run (a task name: glb, previews:abs)")
     args = ap.parse_args(argv)
     sys.path.insert(0, str(ROOT))
@@ -63,6 +65,18 @@ def main(argv=None) -> None:
             return made
         return dataclasses.replace(step, run=run, key=None)  # uncached: it runs every time
 
+    if args.warm_renders:
+        warm = steps.BuildContext.warm_imports
+
+        def warm_imports(self):
+            first = not self.__dict__.get("_warm")
+            warm(self)
+            if first:
+                from cogniframe.report import renders
+
+                renders.warm_up()
+
+        steps.BuildContext.warm_imports = warm_imports
     steps.STEPS = tuple(timed(s) if s.name.startswith(TIMED) else s for s in steps.STEPS)
     spec = load_spec(Path(args.params))
     out = Path(args.out or tempfile.mkdtemp(prefix="bench-mainthread-")) / "build"
