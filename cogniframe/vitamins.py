@@ -14,6 +14,7 @@ shown in the BOM only.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -272,10 +273,14 @@ def vitamins(spec: Spec, frame: Frame) -> tuple[Vitamin, ...]:
 
 def to_manifold(v: Vitamin, segments: int = 48):
     """The vitamin as one manifold3d solid (union of its primitives)."""
+    return _prims_manifold(v.prims, segments)
+
+
+def _prims_manifold(prims: tuple[Prim, ...], segments: int):
     import manifold3d as m3
 
     parts = []
-    for p in v.prims:
+    for p in prims:
         if p.kind == "box":
             s = m3.Manifold.cube(tuple(float(x) for x in p.size), True)
             mat = np.zeros((3, 4))
@@ -291,11 +296,28 @@ def to_manifold(v: Vitamin, segments: int = 48):
     return m3.Manifold.batch_boolean(parts, m3.OpType.Add) if len(parts) > 1 else parts[0]
 
 
+def mesh_arrays(v: Vitamin, segments: int = 48) -> tuple[np.ndarray, np.ndarray]:
+    """The vitamin's solid as (vertices, faces) arrays (read-only: they are shared), made once per
+    process for the same primitives: the GLB, the renders and the report's 3D view all draw the
+    vitamins, each used to union their primitives again (manifold3d)."""
+    return _prims_arrays(v.prims, segments)
+
+
+@functools.lru_cache(maxsize=256)
+def _prims_arrays(prims: tuple[Prim, ...], segments: int) -> tuple[np.ndarray, np.ndarray]:
+    mesh = _prims_manifold(prims, segments).to_mesh()
+    verts = np.array(np.asarray(mesh.vert_properties)[:, :3], float)
+    faces = np.array(mesh.tri_verts, np.int64)
+    verts.flags.writeable = False
+    faces.flags.writeable = False
+    return verts, faces
+
+
 def to_trimesh(v: Vitamin, segments: int = 48):
     import trimesh
 
-    mesh = to_manifold(v, segments).to_mesh()
-    return trimesh.Trimesh(np.asarray(mesh.vert_properties)[:, :3], np.asarray(mesh.tri_verts), process=True)
+    verts, faces = mesh_arrays(v, segments)
+    return trimesh.Trimesh(verts.copy(), faces.copy(), process=True)
 
 
 def to_cq(v: Vitamin):

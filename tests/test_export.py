@@ -206,3 +206,19 @@ def test_assembly_cache_gives_the_same_files(tmp_path):
     s2, g2 = write_assembly(*args, tmp_path / "b", cache_dir=tmp_path / "cache")
     assert time.perf_counter() - t < 0.5
     assert _sha(s1) == _sha(s2) and _sha(g1) == _sha(g2)
+
+
+def test_glb_rod_cylinder_is_a_closed_prism_of_the_polygon_area():
+    """The GLB's rods: a closed, outward-facing 48-gon prism from start to end; its volume is the
+    polygon's area (n/2 r^2 sin(2 pi / n)) times the length, whatever the axis direction."""
+    import trimesh
+
+    from cogniframe.export.assembly import cylinder_arrays
+
+    for start, end in (((0, 0, 0), (0, 0, 30)), ((10, -5, 2), (40, 15, -8)), ((1, 1, 1), (1, 1, -4))):
+        v, f = cylinder_arrays(start, end, 2.5)
+        m = trimesh.Trimesh(v, f, process=True)
+        length = float(np.linalg.norm(np.subtract(end, start)))
+        assert m.is_watertight and m.is_winding_consistent and m.volume > 0  # outward faces
+        assert m.volume == pytest.approx(48 / 2 * 2.5 ** 2 * np.sin(2 * np.pi / 48) * length, rel=1e-9)
+        assert np.allclose(v[-2], start) and np.allclose(v[-1], end)

@@ -165,6 +165,49 @@ def test_preview_png(tmp_path):
     assert img.std() > 10
 
 
+def test_plate_3mf_items_are_what_reading_the_file_back_gives(tmp_path):
+    """The build draws a preview from the items plate_3mf returns instead of reading the 3MF it just
+    wrote; a cached plate's preview is drawn from the file. Both must be the same numbers, bit for
+    bit (same shared meshes, names, transforms), so the PNG is the same bytes either way."""
+    from cogniframe.export.plates import plate_3mf, plot_plate, read_3mf_items, read_plate
+
+    plate = next(p for p in pack_plates(_items(), BED, MARGIN) if p.material == "tpu_95a")
+    data, items = plate_3mf(plate, "; fill_density = 20%\n")
+    assert data == plate_3mf_bytes(plate, "; fill_density = 20%\n")
+    f = tmp_path / f"{plate.name}.3mf"
+    f.write_bytes(data)
+    back = read_3mf_items(f)
+    assert [n for n, _, _ in items] == [n for n, _, _ in back] and len(items) == 12
+    for (_, m, tf), (_, mb, tfb) in zip(items, back):
+        assert np.array_equal(m.vertices, mb.vertices) and m.vertices.dtype == mb.vertices.dtype
+        assert np.array_equal(m.faces, mb.faces) and m.faces.dtype == mb.faces.dtype
+        assert np.array_equal(tf, tfb)
+    # copies of one shape share one mesh in both
+    assert [[j for j, (_, o, _) in enumerate(items) if o is m] for _, m, _ in items] == [
+        [j for j, (_, o, _) in enumerate(back) if o is m] for _, m, _ in back]
+    a = plot_plate(read_plate(f, BED, MARGIN), tmp_path / "from_file.png")
+    b = plot_plate(read_plate(f, BED, MARGIN, items=items), tmp_path / "from_memory.png")
+    assert a.read_bytes() == b.read_bytes()
+
+
+def test_preview_silhouette_is_the_union_of_upward_faces_counter_clockwise():
+    """The preview fills one path of the upward faces with the nonzero rule: that is the top-view
+    silhouette only if every projected triangle turns counter-clockwise and, for a convex solid, they
+    tile its footprint once (area of the box 20 x 18 and of the 32-gon of radius 8)."""
+    from cogniframe.export.plates import _silhouettes
+
+    plates = pack_plates([PlateItem("box", "tpu_95a", 1, _box(20, 18, 15)), PlateItem("disc", "tpu_95a", 1, _cyl(8, 12))],
+                         BED, MARGIN)
+    for c in plates[0].copies:
+        tri = _silhouettes([c]).vertices.reshape(-1, 4, 2)
+        assert np.array_equal(tri[:, 0], tri[:, 3])  # each closed
+        a, b, d = tri[:, 0], tri[:, 1], tri[:, 2]
+        areas = 0.5 * ((b[:, 0] - a[:, 0]) * (d[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (d[:, 0] - a[:, 0]))
+        assert (areas > 0).all()
+        expected = 20 * 18 if c.part == "box" else 0.5 * 32 * 8 ** 2 * np.sin(2 * np.pi / 32)
+        assert areas.sum() == pytest.approx(expected, rel=1e-9)
+
+
 def test_rewriting_removes_stale_plates(tmp_path):
     write_plates(pack_plates([PlateItem("big", "abs", 10, _box(50, 50, 5))], BED, MARGIN), tmp_path)
     assert len(list(tmp_path.glob("*.3mf"))) == 3

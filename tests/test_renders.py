@@ -123,3 +123,48 @@ def test_same_bytes_in_another_process(scene, tmp_path):
     subprocess.run([sys.executable, "-c", _RENDER_IN_CHILD, str(ROOT / "params" / "carbon.yaml"), str(tmp_path / "there")],
                    check=True, timeout=180, capture_output=True)
     assert here["iso"].read_bytes() == (tmp_path / "there" / "assembly_iso.png").read_bytes()
+
+
+def test_a_shared_part_plotter_gives_the_bytes_of_a_new_one(scene, tmp_path):
+    """The build draws every part render in one plotter (fabrication._part_plotter); a cached render
+    was drawn in another order, or alone: the bytes must not depend on what the plotter drew before."""
+    d, meshes = scene
+    parts = {"knee": ("tpu_95a", meshes["knee"]), "core_plate": ("abs", meshes["core_plate"]),
+             "battery_holder": ("abs", meshes["battery_holder"])}
+    alone = {n: renders.render_parts({n: parts[n]}, tmp_path / "alone" / n)[n] for n in parts}
+    shared = renders.part_plotter()
+    try:
+        out = {}
+        for n in ("battery_holder", "knee", "core_plate", "knee"):  # knee twice: after a part and after itself
+            out[n] = renders.render_parts({n: parts[n]}, tmp_path / "shared" / n, plotter=shared)[n]
+            assert out[n].read_bytes() == alone[n].read_bytes(), n
+        with pytest.raises(ValueError, match="not"):
+            renders.render_parts({"knee": parts["knee"]}, tmp_path / "big", size=renders.SIZE, plotter=shared)
+    finally:
+        shared.close()
+    assert len({p.read_bytes() for p in alone.values()}) == 3  # three different pictures
+
+
+_WARM_THEN_RENDER = """
+import sys, threading
+import trimesh
+from cogniframe.report import renders
+t = threading.Thread(target=renders.warm_up)
+t.start()
+t.join()
+renders.render_parts({"knee": ("tpu_95a", trimesh.creation.cylinder(radius=7, height=8, sections=24))}, sys.argv[1])
+"""
+
+
+def test_warming_up_in_another_thread_changes_no_pixel(scene, tmp_path):
+    """renders.warm_up (run by the build while it waits for the CAD workers) makes the first part
+    render cheap; in a fresh process, after it ran in another thread, a part render is the same bytes."""
+    import subprocess
+    import sys
+
+    _, meshes = scene
+    here = renders.render_parts({"knee": ("tpu_95a", meshes["knee"])}, tmp_path / "here")["knee"]
+    subprocess.run([sys.executable, "-c", _WARM_THEN_RENDER, str(tmp_path / "there")], check=True, timeout=180,
+                   capture_output=True)
+    assert here.read_bytes() == (tmp_path / "there" / "knee.png").read_bytes()
+    assert sorted(p.name for p in tmp_path.rglob("*.png")) == ["knee.png", "knee.png"]  # warm_up writes nothing

@@ -93,33 +93,100 @@ def write_glb(spec: Spec, frame, parts: Sequence[PartSpec], meshes: dict, print_
               path: str | Path) -> Path:
     """`assembly.glb`: every part copy (its print mesh moved by world <- print), rod and vitamin, by
     name and colour, in mm, y up (glTF's convention: world z becomes y). Copies of a part share one
-    mesh. Byte-stable: the same meshes and placements give the same bytes."""
-    import trimesh
+    mesh. Byte-stable: the same meshes and placements give the same bytes.
 
-    from ..vitamins import to_trimesh, vitamins
+    `meshes`: part name -> its print mesh (anything with `vertices` and `faces`). Written here
+    (`glb_bytes`), not by trimesh's scene export: its scene graph, hashing and colour conversion
+    took 0.1 s CPU of the main thread on each change of any part, for a file this simple."""
+    from ..vitamins import mesh_arrays, vitamins
 
     up = np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0], [0, -1.0, 0, 0], [0, 0, 0, 1.0]])  # z up -> y up
-    scene = trimesh.Scene()
+    shapes: dict[str, tuple] = {}
+    nodes: list[tuple[str, str, np.ndarray]] = []
 
-    def add(name: str, geom: str, mesh, colour, matrix) -> None:
-        if geom not in scene.geometry:
-            m = mesh.copy()
-            m.visual = trimesh.visual.ColorVisuals(m, face_colors=[int(round(c * 255)) for c in colour] + [255])
-            scene.add_geometry(m, geom_name=geom, node_name=name, transform=up @ matrix)
-        else:
-            scene.graph.update(frame_to=name, frame_from=scene.graph.base_frame, matrix=up @ matrix, geometry=geom)
+    def add(name: str, geom: str, arrays, colour, matrix) -> None:
+        if geom not in shapes:
+            shapes[geom] = (*arrays(), tuple(int(round(c * 255)) for c in colour) + (255,))
+        nodes.append((name, geom, up @ matrix))
 
     for p in parts:
+        m = meshes[p.name]
         for pl in p.placements:
-            add(instance_name(p, pl.instance), p.name, meshes[p.name], colour_of(p.material),
+            add(instance_name(p, pl.instance), p.name, lambda m=m: (m.vertices, m.faces), colour_of(p.material),
                 world_from_print(pl.matrix(), np.asarray(print_from_local[p.name], float)))
     for rod in frame.rods.values():
-        add(rod.name, rod.name, rod_mesh(rod), ROD_BLACK, np.eye(4))
+        add(rod.name, rod.name, lambda rod=rod: cylinder_arrays(rod.start, rod.end, rod.diameter / 2), ROD_BLACK, np.eye(4))
     for v in vitamins(spec, frame):
-        add(v.name, v.name, to_trimesh(v), v.colour, np.eye(4))
+        add(v.name, v.name, lambda v=v: mesh_arrays(v), v.colour, np.eye(4))
     path = Path(path)
-    path.write_bytes(scene.export(file_type="glb"))
+    path.write_bytes(glb_bytes(shapes, nodes))
     return path
+
+
+def cylinder_arrays(start, end, radius: float, sections: int = 48) -> tuple[np.ndarray, np.ndarray]:
+    """A closed cylinder from `start` to `end` (its axis), `sections` sides: (vertices, faces), faces
+    turning outwards. What rods look like in the GLB (trimesh.creation.cylinder's shape, 20x cheaper)."""
+    from ..vitamins import _frame_z
+
+    start, end = np.asarray(start, float), np.asarray(end, float)
+    axis = end - start
+    rot = _frame_z(axis)
+    a = np.arange(sections) * (2 * np.pi / sections)
+    ring = radius * (np.outer(np.cos(a), rot[:, 0]) + np.outer(np.sin(a), rot[:, 1]))
+    verts = np.vstack([start + ring, end + ring, start, end])
+    i = np.arange(sections)
+    j = (i + 1) % sections
+    n = sections
+    faces = np.vstack([np.column_stack([i, j, n + j]), np.column_stack([i, n + j, n + i]),  # sides
+                       np.column_stack([np.full(n, 2 * n), j, i]),  # bottom cap, seen from below
+                       np.column_stack([np.full(n, 2 * n + 1), n + i, n + j])])  # top cap
+    return verts, faces
+
+
+def glb_bytes(shapes: dict, nodes: Sequence[tuple[str, str, np.ndarray]]) -> bytes:
+    """A binary glTF 2.0: `shapes` name -> (vertices, faces, (r, g, b, a) 0-255), one mesh each (float32
+    positions with their bounds, uint32 indices, the colour as a constant COLOR_0); `nodes` (name,
+    shape, 4x4 matrix), one scene node each, in order. Same input, same bytes."""
+    import struct
+
+    blob = bytearray()
+    views: list[dict] = []
+    accessors: list[dict] = []
+
+    def put(data: np.ndarray, **accessor) -> int:
+        while len(blob) % 4:
+            blob.append(0)
+        views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": int(data.nbytes)})
+        blob.extend(data.tobytes())
+        accessors.append({"bufferView": len(views) - 1, **accessor})
+        return len(accessors) - 1
+
+    meshes, index = [], {}
+    for name, (verts, faces, rgba) in shapes.items():
+        v = np.ascontiguousarray(verts, np.float32).reshape(-1, 3)
+        f = np.ascontiguousarray(faces, np.uint32).reshape(-1)
+        c = np.tile(np.asarray(rgba, np.uint8), (len(v), 1))
+        ind = put(f, componentType=5125, count=int(f.size), type="SCALAR",
+                  max=[int(f.max()) if f.size else 0], min=[int(f.min()) if f.size else 0])
+        pos = put(v, componentType=5126, count=len(v), type="VEC3",
+                  max=[float(x) for x in v.max(axis=0)], min=[float(x) for x in v.min(axis=0)])
+        col = put(c, componentType=5121, normalized=True, count=len(v), type="VEC4")
+        index[name] = len(meshes)
+        meshes.append({"name": name, "primitives": [{"attributes": {"POSITION": pos, "COLOR_0": col},
+                                                     "indices": ind, "mode": 4}]})
+    gltf = {"asset": {"version": "2.0", "generator": "cogniframe"}, "scene": 0,
+            "scenes": [{"nodes": list(range(len(nodes)))}],
+            "nodes": [{"name": name, "mesh": index[geom],
+                       "matrix": [float(x) for x in np.asarray(m, float).T.ravel()]} for name, geom, m in nodes],
+            "meshes": meshes, "accessors": accessors, "bufferViews": views,
+            "buffers": [{"byteLength": len(blob)}]}
+    while len(blob) % 4:
+        blob.append(0)
+    text = json.dumps(gltf, separators=(",", ":")).encode()
+    text += b" " * (-len(text) % 4)
+    total = 12 + 8 + len(text) + 8 + len(blob)
+    return (struct.pack("<4sII", b"glTF", 2, total) + struct.pack("<I4s", len(text), b"JSON") + text
+            + struct.pack("<I4s", len(blob), b"BIN\0") + bytes(blob))
 
 
 # -- issue 13: the clash check over everything in the assembly --------------------------------

@@ -283,6 +283,11 @@ def _num(v: float) -> str:
 
 
 def plate_3mf_bytes(plate: Plate, config: str | None = None) -> bytes:
+    """The plate as a 3MF (`plate_3mf`'s bytes)."""
+    return plate_3mf(plate, config)[0]
+
+
+def plate_3mf(plate: Plate, config: str | None = None) -> tuple[bytes, tuple[tuple[str, trimesh.Trimesh, np.ndarray], ...]]:
     """The plate as a 3MF, byte-stable: one mesh per shape, placed once per copy.
 
     Copies of one part (the same way round) are one mesh object; every further copy is an object
@@ -293,16 +298,27 @@ def plate_3mf_bytes(plate: Plate, config: str | None = None) -> bytes:
     the same grams and a print time within 0.2 %. Other slicers read the plain 3MF core spec.
 
     `config`: PrusaSlicer project settings (`slicer.project_config`), stored as
-    `Metadata/Slic3r_PE.config` so PrusaSlicer slices the plate with them and no .ini."""
+    `Metadata/Slic3r_PE.config` so PrusaSlicer slices the plate with them and no .ini.
+
+    Returns (bytes, items): items are what `read_3mf_items` reads back from those bytes, equal to
+    the last bit (parsed from the same text, shared meshes shared), so the build draws a plate's
+    preview without reading the file it just wrote (`read_plate(items=)`)."""
+    import trimesh
     from xml.sax.saxutils import quoteattr
 
     objects, items, prusa = [], [], []
+    read: list[tuple[str, trimesh.Trimesh, np.ndarray]] = []
     oid = 0
     for verts, faces, copies in _instances(plate):
         oid += 1
         base = oid
-        vx = "".join(f'<vertex x="{_num(x)}" y="{_num(y)}" z="{_num(z)}"/>' for x, y, z in verts.tolist())
+        text = [_num(x) for x in verts.ravel().tolist()]
+        it = iter(text)
+        vx = "".join(f'<vertex x="{x}" y="{y}" z="{z}"/>' for x, y, z in zip(it, it, it))
         tr = "".join(f'<triangle v1="{a}" v2="{b}" v3="{c}"/>' for a, b, c in faces.tolist())
+        # the mesh read_3mf_items builds from this text
+        mesh = trimesh.Trimesh(np.array([float(x) for x in text], float).reshape(-1, 3),
+                               np.array(faces, np.int64).reshape(-1, 3), process=False)
         objects.append(f'<object id="{base}" name={quoteattr(copies[0].name)} type="model">'
                        f'<mesh><vertices>{vx}</vertices><triangles>{tr}</triangles></mesh></object>')
         for k, c in enumerate(copies):
@@ -310,8 +326,10 @@ def plate_3mf_bytes(plate: Plate, config: str | None = None) -> bytes:
                 oid += 1
                 objects.append(f'<object id="{oid}" name={quoteattr(c.name)} type="model">'
                                f'<components><component objectid="{base}"/></components></object>')
-            items.append(f'<item objectid="{oid}" transform="1 0 0 0 1 0 0 0 1 {_num(c.x)} {_num(c.y)} 0" '
+            transform = f"1 0 0 0 1 0 0 0 1 {_num(c.x)} {_num(c.y)} 0"
+            items.append(f'<item objectid="{oid}" transform="{transform}" '
                          f'partnumber={quoteattr(c.name)} printable="1"/>')
+            read.append((c.name, mesh, _transform(transform)))
         part = quoteattr(copies[0].part)
         prusa.append(f' <object id="{base}" instances_count="{len(copies)}">\n'
                      f'  <metadata type="object" key="name" value={part}/>\n'
@@ -330,7 +348,7 @@ def plate_3mf_bytes(plate: Plate, config: str | None = None) -> bytes:
                PRUSA_MODEL_CONFIG: '<?xml version="1.0" encoding="UTF-8"?>\n<config>\n' + "".join(prusa) + '</config>\n'}
     if config:
         entries[PRUSA_CONFIG] = config
-    return _zip({k: v.encode("utf-8") for k, v in entries.items()})
+    return _zip({k: v.encode("utf-8") for k, v in entries.items()}), tuple(read)
 
 
 def model_sha256(threemf: bytes) -> str:
@@ -357,9 +375,8 @@ def plot_plate(plate: Plate, path: Path | str, size_in: float = 6.0, dpi: int = 
     """Top view of a plate: the bed, each copy's faces filled in its material colour, its
     footprint outlined (dashed) and its name written on it. PNG without metadata."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.collections import PolyCollection
     from matplotlib.figure import Figure
-    from matplotlib.patches import Rectangle
+    from matplotlib.patches import PathPatch, Rectangle
 
     path = Path(path)
     bx, by = plate.bed[0], plate.bed[1]
@@ -372,13 +389,9 @@ def plot_plate(plate: Plate, path: Path | str, size_in: float = 6.0, dpi: int = 
     ax.add_patch(Rectangle((0, 0), bx, by, facecolor="#f4f4f0", edgecolor="black", linewidth=1.2))
     colour = material_colour(plate.material)
     pt_per_mm = size_in * 72 * 0.82 / (bx + 4)  # roughly: the axes take ~82 % of the figure width
+    # add_artist, not add_patch: the limits are set below, no need to measure 30k triangles
+    ax.add_artist(PathPatch(_silhouettes(plate.copies), facecolor=colour, edgecolor="none", alpha=0.85))
     for c in plate.copies:
-        tri = np.asarray(c.mesh.vertices)[np.asarray(c.mesh.faces)][:, :, :2]
-        # the upward faces of a closed solid cover its silhouette once (every vertical line through
-        # it leaves through one); walls project to lines, and the downward faces would cover it again
-        up = np.asarray(c.mesh.face_normals)[:, 2] > 1e-3
-        ax.add_collection(PolyCollection(tri[up], facecolors=colour, edgecolors=colour, linewidths=0.3, alpha=0.85),
-                          autolim=False)  # the limits are set below: no need to measure 50k triangles
         ax.add_patch(Rectangle((c.x, c.y), c.size[0], c.size[1], fill=False, edgecolor="#555555",
                                linewidth=0.6, linestyle="--"))
         base, _, k = c.name.rpartition("_")
@@ -400,6 +413,28 @@ def plot_plate(plate: Plate, path: Path | str, size_in: float = 6.0, dpi: int = 
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, format="png", dpi=dpi, metadata={"Software": None})
     return path
+
+
+def _silhouettes(copies: Sequence[PlacedCopy]):
+    """The copies' top-view silhouettes as one matplotlib path: each copy's upward faces, projected.
+
+    The upward faces of a closed solid cover its silhouette (every vertical line through it leaves
+    through one); walls project to lines, and the downward faces would cover it again. Projected,
+    they all turn counter-clockwise, so the path's nonzero fill is their union: one path drawn once,
+    in one colour and one alpha, where a triangle per path (a PolyCollection of 30k triangles) cost
+    most of the preview's time and drew overlaps darker."""
+    from matplotlib.path import Path as MplPath
+
+    tris = []
+    for c in copies:
+        faces = np.asarray(c.mesh.faces)
+        up = np.asarray(c.mesh.face_normals)[:, 2] > 1e-3
+        tris.append(np.asarray(c.mesh.vertices)[faces[up]][:, :, :2])
+    tri = np.concatenate(tris) if tris else np.zeros((0, 3, 2))
+    verts = np.concatenate([tri, tri[:, :1]], axis=1).reshape(-1, 2)  # each triangle closed: a b c a
+    codes = np.tile(np.array([MplPath.MOVETO, MplPath.LINETO, MplPath.LINETO, MplPath.CLOSEPOLY], MplPath.code_type),
+                    len(tri))
+    return MplPath(verts, codes)
 
 
 def write_plates(plates: Sequence[Plate], out_dir: Path | str,
@@ -431,6 +466,18 @@ def write_plates(plates: Sequence[Plate], out_dir: Path | str,
 _NS = "{http://schemas.microsoft.com/3dmanufacturing/core/2015/02}"
 
 
+def _transform(text: str | None) -> np.ndarray:
+    """A 3MF transform attribute (12 numbers, column by column) as a 4x4 matrix; identity when absent."""
+    m = np.eye(4)
+    if text:
+        v = np.array(text.split(), float)
+        if v.size != 12:
+            raise ValueError(f"bad transform {text!r}")
+        m[:3, :3] = v[:9].reshape(3, 3).T
+        m[:3, 3] = v[9:12]
+    return m
+
+
 def read_3mf_items(path: Path | str) -> tuple[tuple[str, trimesh.Trimesh, np.ndarray], ...]:
     """The build items of a 3MF: (name, mesh in its object's coordinates, 4x4 item transform).
 
@@ -442,16 +489,7 @@ def read_3mf_items(path: Path | str) -> tuple[tuple[str, trimesh.Trimesh, np.nda
     import trimesh
     from xml.etree import ElementTree
 
-    def tf(text: str | None) -> np.ndarray:
-        m = np.eye(4)
-        if text:
-            v = np.array(text.split(), float)
-            if v.size != 12:
-                raise ValueError(f"bad transform {text!r}")
-            m[:3, :3] = v[:9].reshape(3, 3).T
-            m[:3, 3] = v[9:12]
-        return m
-
+    tf = _transform
     with zipfile.ZipFile(path) as z:
         root = ElementTree.fromstring(z.read("3D/3dmodel.model"))
     objects = {o.get("id"): o for o in root.iter(f"{_NS}object")}
@@ -491,15 +529,16 @@ def read_3mf_items(path: Path | str) -> tuple[tuple[str, trimesh.Trimesh, np.nda
     return tuple(items)
 
 
-def read_plate(path: Path | str, bed: Sequence[float], margin: float) -> Plate:
+def read_plate(path: Path | str, bed: Sequence[float], margin: float, items=None) -> Plate:
     """A plate read back from its 3MF (what `plot_plate` needs: copies in bed coordinates, by name).
 
     The build draws each preview from the 3MF it wrote, so a preview is a function of the plate
-    file alone and can be cached by the file's hash."""
+    file alone and can be cached by the file's hash. `items`: what `plate_3mf` returned with the
+    file's bytes (the same as reading them back): the file is not read."""
     path = Path(path)
     material, index = parse_plate_name(path.stem)
     copies = []
-    for name, base, tf in read_3mf_items(path):
+    for name, base, tf in (read_3mf_items(path) if items is None else items):
         mesh = base.copy()
         mesh.apply_transform(tf)
         lo, ext = mesh.bounds[0], mesh.extents
