@@ -174,15 +174,14 @@ class System:
 
 def assemble(points: np.ndarray, tets: np.ndarray, e_mpa: float, nu: float, ties: list[Tie]) -> System:
     """K_uu, K_ur, K_rr of the mesh and its ties (see `condense`)."""
-    from skfem import Basis, ElementTetP2, FacetBasis, MeshTet
+    from skfem import ElementTetP2, FacetBasis, MeshTet
     from skfem.models.elasticity import lame_parameters
 
     mesh = MeshTet(points, tets)
     elem = ElementTetP2()
-    basis = Basis(mesh, elem, intorder=2)
-    npts = int(basis.N)  # points (vertices + edges): 3 DOFs each
+    npts = mesh.p.shape[1] + mesh.edges.shape[1]  # points (vertices, edge midpoints): 3 DOFs each
     n_dofs = 3 * npts
-    blocks = [_elasticity_blocks(basis, *lame_parameters(e_mpa, nu))]
+    blocks = [_elasticity_blocks(mesh, elem, *lame_parameters(e_mpa, nu))]
 
     bf = mesh.boundary_facets()
     fv = mesh.p[:, mesh.facets[:, bf]]  # (3, 3 vertices, nbf)
@@ -243,18 +242,26 @@ def _upper(rows: np.ndarray, cols: np.ndarray, vals: np.ndarray):
     return np.where(swap, cols, rows), np.where(swap, rows, cols), np.where(swap, vals[_T9], vals)
 
 
-def _elasticity_blocks(basis, lam: float, mu: float):
+def _elasticity_blocks(mesh, elem, lam: float, mu: float):
     """Linear elasticity (skfem's `linear_elasticity`: sigma(u) : eps(v), sigma = 2 mu eps +
     lam tr(eps) I) as 3 x 3 blocks of scalar P2 function pairs. With G_kl[i, j] = int d_i phi_k
     d_j phi_l, the block of (phi_k e_c, phi_l e_d) is mu tr(G_kl) delta_cd + mu G_kl[d, c] +
-    lam G_kl[c, d]; the G of all pairs of an element is one (30 x nq) @ (nq x 30) product.
-    K_uu is symmetric: only the pairs k <= l, as upper-triangle blocks (`_upper`), values
-    component-major (9, n): entry (c, d) of every block contiguous."""
-    g = np.stack([np.asarray(f[0].grad) for f in basis.basis])  # (10, 3, ne, nq)
-    nl, _, ne, nq = g.shape
-    a = g.transpose(2, 0, 1, 3).reshape(ne, 3 * nl, nq)  # rows (k, i)
-    G = np.matmul(a * basis.dx[:, None, :], a.transpose(0, 2, 1)).reshape(ne, nl, 3, nl, 3)
-    G = G.transpose(0, 1, 3, 2, 4)[:, _KU, _LU]  # (e, pair, i, j)
+    lam G_kl[c, d]. On an affine tetrahedron grad phi = A^-T grad_ref phi, so G_kl =
+    |det A| A^-T Gref_kl A^-1 with Gref_kl = sum_q w_q grad_ref phi_k grad_ref phi_l^T the
+    reference element's (skfem's basis and order-2 quadrature, as `Basis(intorder=2)`): the G of
+    every pair of every element is one (55 x 9) @ (9 x 9 ne) product. K_uu is symmetric: only
+    the pairs k <= l, as upper-triangle blocks (`_upper`), values component-major (9, n)."""
+    from skfem.quadrature import get_quadrature
+
+    X, W = get_quadrature(elem.refdom, 2)
+    nl = len(elem.doflocs)  # 10: vertices, edges
+    gref = np.stack([np.asarray(elem.lbasis(X, k)[1]) for k in range(nl)])  # (10, 3, nq)
+    Gref = np.einsum("kaq,lbq,q->klab", gref, gref, W)[_KU, _LU].reshape(-1, 9)  # (pairs, (a, b))
+    mp = mesh._mapping()
+    inv, det = mp.invA, np.abs(mp.detA)  # (3, 3, ne), (ne,)
+    ne = det.size
+    T = np.einsum("aie,bje,e->abeij", inv, inv, det).reshape(9, ne * 9)  # ((a, b), (e, i, j))
+    G = (Gref @ T).reshape(-1, ne, 3, 3)  # (pair, e, i, j)
     mtr = mu * (G[..., 0, 0] + G[..., 1, 1] + G[..., 2, 2])
     ke = np.empty((3, 3) + G.shape[:2])
     for c in range(3):
@@ -263,8 +270,14 @@ def _elasticity_blocks(basis, lam: float, mu: float):
             ke[c, d] += mu * G[..., d, c]
             if c == d:
                 ke[c, d] += mtr
-    pts = basis.element_dofs  # (10, ne)
-    return _upper(pts[_KU].T, pts[_LU].T, ke)
+    pts = _element_points(mesh, elem)  # (10, ne)
+    return _upper(pts[_KU], pts[_LU], ke)
+
+
+def _element_points(mesh, elem) -> np.ndarray:
+    from skfem.assembly import Dofs
+
+    return Dofs(mesh, elem).element_dofs
 
 
 def _interface_blocks(pts: np.ndarray, phi: np.ndarray, n: np.ndarray, dx: np.ndarray, kn: float, kt: float):
