@@ -1,9 +1,15 @@
 """The issue-11 numbers: `cogniframe build` and `check` as a user runs them, each in a fresh process.
 
     python benchmarks/bench_incremental.py [--params params/carbon.yaml] [--runs 3] [--jobs N] [--analytic]
+                                           [--no-server]
 
 `--analytic` sets model.stiffness_model: analytic in the copy (closed-form joints instead of their
 solid FE): the build's own cost without the joints' finite elements.
+
+`--no-server` builds with `--no-server` (a process pool per build, as before the CAD server).
+By default the builds run as a user's do: the cold build starts the CAD server (its start is
+counted in the cold build's CPU), the later builds of the run use it; it is stopped at the end of
+each run, and the next run's cold build starts a new one (a fresh cache folder: a new server).
 
 Per run (a fresh cache folder and output folder each time):
   cold       build with an empty cache (parts, assembly, plates, slicing, renders, report)
@@ -67,8 +73,22 @@ def _subreaper() -> bool:
         return False
 
 
-def _reap(timeout_s: float = 10.0) -> None:
-    """Wait for the adopted orphans (they exit once the build has: their pipe to it closes)."""
+def _children(of: int) -> list[int]:
+    """Live child processes of `of` (zombies included: they wait to be reaped)."""
+    kids = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == of:
+            kids.append(int(stat.parent.name))
+    return kids
+
+
+def _reap(keep: set[int] = frozenset(), timeout_s: float = 10.0) -> None:
+    """Wait for the adopted orphans (they exit once the build has: their pipe to it closes), all
+    but `keep` (the CAD server, which outlives builds on purpose)."""
     t0 = time.perf_counter()
     while time.perf_counter() - t0 < timeout_s:
         try:
@@ -76,7 +96,33 @@ def _reap(timeout_s: float = 10.0) -> None:
         except ChildProcessError:
             return
         if pid == 0:
+            if not set(_children(os.getpid())) - set(keep):
+                return
             time.sleep(0.02)
+
+
+def _server_pid(cache: Path) -> int | None:
+    for f in sorted((cache / "cad-server").glob("*.pid")):
+        try:
+            return int(f.read_text())
+        except (OSError, ValueError):
+            pass
+    return None
+
+
+def _server_cpu(pid: int | None) -> float:
+    """CPU seconds of the CAD server with its reaped workers (it reaps each one as its build hangs
+    up: wait until it has none left)."""
+    if pid is None:
+        return 0.0
+    t0 = time.perf_counter()
+    while _children(pid) and time.perf_counter() - t0 < 10:
+        time.sleep(0.02)
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return 0.0
+    return sum(int(v) for v in fields[11:15]) / os.sysconf("SC_CLK_TCK")  # utime stime cutime cstime
 
 
 def _cpu() -> float:
@@ -86,25 +132,40 @@ def _cpu() -> float:
 
 def _run(args: list[str], env: dict, label: str | None = None) -> float:
     """Wall seconds of one `cogniframe ARGS` in a fresh process; its CPU seconds (with its own
-    children: CAD workers, PrusaSlicer) go to CPU[label]. On a shared machine the CPU time is the
-    steadier number."""
-    c0, t0 = _cpu(), time.perf_counter()
+    children: CAD workers, adopted as a subreaper, PrusaSlicer, and the CAD server's share: its
+    workers for this build, and its start when this build started it) go to CPU[label]. On a
+    shared machine the CPU time is the steadier number."""
+    cache = Path(env["COGNIFRAME_CACHE"])
+    server = _server_pid(cache)
+    c0, s0, t0 = _cpu(), _server_cpu(server), time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "cogniframe", *args], cwd=ROOT, env=env,
                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     wall = time.perf_counter() - t0
-    _reap()
+    started = _server_pid(cache)
+    _reap({started} if started else set())
     if label:
-        CPU.setdefault(label, []).append(_cpu() - c0)
+        server_share = _server_cpu(started) - (s0 if started == server else 0.0)
+        CPU.setdefault(label, []).append(_cpu() - c0 + server_share)
     if proc.returncode not in (0, 1):
         sys.exit(f"cogniframe {' '.join(args)} failed ({proc.returncode}):\n{proc.stderr[-2000:]}")
     return wall
+
+
+def _stop_server(env: dict) -> None:
+    """End the run's CAD server and reap it (its memory then counts in ru_maxrss)."""
+    pid = _server_pid(Path(env["COGNIFRAME_CACHE"]))
+    subprocess.run([sys.executable, "-m", "cogniframe", "server", "stop"], cwd=ROOT, env=env,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    _reap()
+    if pid is not None and pid in _children(os.getpid()):
+        os.waitpid(pid, 0)
 
 
 def _analytic(text: str) -> str:
     return re.sub(r"(\n\s+stiffness_model:\s*)\w+", r"\g<1>analytic", text, count=1)
 
 
-def one_run(params: Path, jobs: str | None, analytic: bool = False) -> dict:
+def one_run(params: Path, jobs: str | None, analytic: bool = False, server: bool = True) -> dict:
     with tempfile.TemporaryDirectory(prefix="bench-incr-") as tmp:
         tmp = Path(tmp)
         env = {**os.environ, "COGNIFRAME_CACHE": str(tmp / "cache")}
@@ -116,7 +177,7 @@ def one_run(params: Path, jobs: str | None, analytic: bool = False) -> dict:
         p = tmp / params.name
         p.write_text(base, encoding="utf-8")
         out = tmp / "out"
-        extra = ["--jobs", jobs] if jobs else []
+        extra = (["--jobs", jobs] if jobs else []) + ([] if server else ["--no-server"])
         r = {"cold": _run(["build", str(p), "-o", str(out), *extra], env, "cold")}
         p.write_text(_battery_mass(base, "61"), encoding="utf-8")
         r["no-geom"] = _run(["build", str(p), "-o", str(out), *extra], env, "no-geom")
@@ -124,6 +185,7 @@ def one_run(params: Path, jobs: str | None, analytic: bool = False) -> dict:
         r["one-part"] = _run(["build", str(p), "-o", str(out), *extra], env, "one-part")
         _run(["check", str(p), "--json"], env)
         r["check"] = statistics.median(_run(["check", str(p), "--json"], env, "check") for _ in range(3))
+        _stop_server(env)
         return r
 
 
@@ -133,14 +195,15 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--jobs", default=None)
     ap.add_argument("--analytic", action="store_true", help="closed-form joints (no joint FE)")
+    ap.add_argument("--no-server", action="store_true", help="builds without the CAD server (a process pool each)")
     a = ap.parse_args()
     global LOAD0
     adopted = _subreaper()
     LOAD0 = ", ".join(f"{v:.1f}" for v in os.getloadavg())
-    runs = [one_run(ROOT / a.params, a.jobs, a.analytic) for _ in range(a.runs)]
+    runs = [one_run(ROOT / a.params, a.jobs, a.analytic, not a.no_server) for _ in range(a.runs)]
     peak_mb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
     print(f"{a.params}{' (analytic joints)' if a.analytic else ''}, {a.runs} runs, {os.cpu_count()} cores, "
-          f"jobs={a.jobs or 'auto'}")
+          f"jobs={a.jobs or 'auto'}, {'no CAD server' if a.no_server else 'CAD server (started by the cold build)'}")
     print(f"  load average before: {LOAD0}, after: {', '.join(f'{v:.1f}' for v in os.getloadavg())}")
     for k, goal in (("cold", 10.0), ("no-geom", 2.0), ("one-part", 5.0), ("check", 0.3)):
         vals = [r[k] for r in runs]

@@ -38,7 +38,9 @@ class BuildResult:
 
 
 def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None = None, use_cache: bool = True,
-              console: Console | None = None, gcode: bool = False) -> BuildResult:
+              console: Console | None = None, gcode: bool = False, server: bool = False) -> BuildResult:
+    """Build `spec` into `out`. `server`: CAD workers from the CAD server that outlives this build
+    (`export.cad_server`; the CLI's default) instead of a process pool of its own."""
     console = console or Console(stderr=True)
     with spec.blamed():
         design = pipeline.design(spec)  # a design that cannot exist is refused before any folder is touched
@@ -50,7 +52,8 @@ def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None 
         files = len(json.loads((final / "manifest.json").read_text())["files"]) + 1
         return BuildResult(final, files, verdict, None, ())
     with outdir.writing(final) as tmp, spec.blamed():
-        result = _build_into(spec, params_path, tmp, jobs, use_cache, console, key, gcode=gcode, design=design)
+        result = _build_into(spec, params_path, tmp, jobs, use_cache, console, key, gcode=gcode, design=design,
+                             server=server)
     return BuildResult(final, result[0], result[1].verdict, result[1], result[2], result[3])
 
 
@@ -81,7 +84,7 @@ def _up_to_date(final: Path, key: str) -> bool:
 
 
 def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_cache: bool, console: Console,
-                key: str, gcode: bool = False, design: pipeline.Design | None = None):
+                key: str, gcode: bool = False, design: pipeline.Design | None = None, server: bool = False):
     """Run the build graph (steps.py) into `out`, then write the manifest. `gcode`: keep the
     sliced G-code per plate (`build --gcode`, issue 14; read by fabrication.make_slice).
 
@@ -89,11 +92,13 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
     from . import graph, steps
 
     design = pipeline.design(spec) if design is None else design
-    cad = steps.CadPool(jobs or os.cpu_count() or 1, fe=steps.needs_joint_fe(spec, design))
     log = lambda m: console.print(m, markup=False, highlight=False)  # noqa: E731
+    stack = steps.stack_fingerprint()
+    cad = steps.CadPool(jobs or os.cpu_count() or 1, fe=steps.needs_joint_fe(spec, design), server=server, stack=stack,
+                        log=log)
     ctx = steps.BuildContext(out, {"spec": spec, "design": design, "cad": cad, "slicer": steps.Slicer(log), "log": log,
                                     "gcode": gcode},
-                              stack=steps.stack_fingerprint(), use_cache=use_cache)
+                              stack=stack, use_cache=use_cache)
     tasks = graph.expand(steps.STEPS, steps.rows(design))
     from .threads import one_blas_thread
 

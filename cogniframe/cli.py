@@ -97,13 +97,16 @@ def build(params: ParamsArg,
           out: Annotated[Optional[Path], typer.Option("-o", "--out", help="output folder (default out/<name>)")] = None,
           jobs: Annotated[Optional[int], typer.Option("--jobs", "-j", min=1, help="parallel part builds (default: all cores)")] = None,
           no_cache: Annotated[bool, typer.Option("--no-cache", help="rebuild every part from scratch")] = False,
-          gcode: Annotated[bool, typer.Option("--gcode", help="also keep the sliced G-code per plate (plates/*.gcode; not byte-stable)")] = False) -> None:
+          gcode: Annotated[bool, typer.Option("--gcode", help="also keep the sliced G-code per plate (plates/*.gcode; not byte-stable)")] = False,
+          server: Annotated[Optional[bool], typer.Option("--server/--no-server", help="CAD workers from a server kept between builds (default; COGNIFRAME_CAD_SERVER=0: off)")] = None) -> None:
     """Build every printable part (STL, STEP), the assembly, cut list, mass budget and manifest."""
     from .build import run_build
+    from .export.cad_server import wanted
     from . import spec as spec_mod
 
     spec = spec_mod.load(params)
-    result = run_build(spec, params, out, jobs=jobs, use_cache=not no_cache, console=Console(stderr=True), gcode=gcode)
+    result = run_build(spec, params, out, jobs=jobs, use_cache=not no_cache, console=Console(stderr=True), gcode=gcode,
+                       server=wanted(server))
     Console().print(f"wrote {result.out_dir} ({result.files} files); verdict {result.verdict}")
     raise typer.Exit(0 if result.verdict == "PASS" else 1)
 
@@ -135,12 +138,13 @@ def schema() -> None:
 
 
 def _register_commands() -> None:
-    from .commands import explore, fab, maker, physics
+    from .commands import explore, fab, maker, physics, server
 
     physics.register(app)
     fab.register(app)
     maker.register(app)
     explore.register(app)
+    server.register(app)
 
 
 _register_commands()

@@ -57,15 +57,29 @@ class Rod:
     diameter: float
     material: str
 
+    def __post_init__(self) -> None:
+        # the axis and the port distance, computed once (read by every later stage, many times):
+        # not fields, so equality, hashing and repr are the dataclass's own
+        d = np.subtract(self.b.port, self.a.port)
+        dist = np.linalg.norm(d)
+        axis = d / dist
+        axis.flags.writeable = False  # shared by every caller
+        object.__setattr__(self, "_axis", axis)
+        object.__setattr__(self, "_centre_distance", float(dist))
+        start = np.asarray(self.a.port) + axis * self.a.seat
+        end = np.asarray(self.b.port) - axis * self.b.seat
+        start.flags.writeable = end.flags.writeable = False
+        object.__setattr__(self, "_start", start)
+        object.__setattr__(self, "_end", end)
+
     @property
     def axis(self) -> np.ndarray:
-        """Unit vector from end a to end b."""
-        d = np.subtract(self.b.port, self.a.port)
-        return d / np.linalg.norm(d)
+        """Unit vector from end a to end b (read-only)."""
+        return self._axis
 
     @property
     def centre_distance(self) -> float:
-        return float(np.linalg.norm(np.subtract(self.b.port, self.a.port)))
+        return self._centre_distance
 
     @property
     def length(self) -> float:
@@ -79,11 +93,12 @@ class Rod:
 
     @property
     def start(self) -> np.ndarray:
-        return np.asarray(self.a.port) + self.axis * self.a.seat
+        """The rod's end in the socket of end a (read-only)."""
+        return self._start
 
     @property
     def end(self) -> np.ndarray:
-        return np.asarray(self.b.port) - self.axis * self.b.seat
+        return self._end
 
     def socket_direction(self, node: str) -> np.ndarray:
         """Unit vector pointing from `node` along this rod (out of the socket)."""

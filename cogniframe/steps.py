@@ -126,22 +126,44 @@ class BuildContext(graph.Context):
 
 class CadPool:
     """The CAD process pool, started by the first step that needs it (never on a cached build).
-    `fe`: its workers preload the joint FE's modules too (`needs_joint_fe`)."""
+    `fe`: its workers preload the joint FE's modules too (`needs_joint_fe`). `server`: the
+    workers are forks of the CAD server that outlives the build (`export.cad_server`; `stack`
+    is part of its key), started by the first build; without one, or when it cannot start, a
+    process pool of this build's own (`export.build.make_pool`)."""
 
-    def __init__(self, workers: int, fe: bool = True):
+    def __init__(self, workers: int, fe: bool = True, server: bool = False, stack: str = "", log=None):
         self.workers = workers
         self.fe = fe
+        self.server = server
+        self.stack = stack
+        self.log = log
         self._pool = None
         self._lock = threading.Lock()
 
-    def submit(self, fn, *args):
-        """`fn(*args)` in a worker; returns its Future."""
+    @property
+    def served(self) -> bool:
+        """Whether the workers are the CAD server's (once started)."""
+        from .export.cad_server import ServerPool
+
+        return isinstance(self._pool, ServerPool)
+
+    def submit(self, fn, *args, background: bool = False):
+        """`fn(*args)` in a worker; returns its Future. `background`: after every job submitted
+        without it (with the server's pool; a process pool runs jobs in order)."""
         with self._lock:
             if self._pool is None:
-                from .export.build import make_pool
+                if self.server:
+                    from .export import cad_server
 
-                self._pool = make_pool(self.workers, self.fe)
-        return self._pool.submit(fn, *args)
+                    self._pool = cad_server.connect(self.workers, self.stack, self.fe, log=self.log)
+                if self._pool is None:
+                    from .export.build import make_pool
+
+                    self._pool = make_pool(self.workers, self.fe)
+            pool = self._pool
+        if self.served:
+            return pool.submit(fn, *args, priority=1 if background else 0)
+        return pool.submit(fn, *args)
 
     def run(self, fn, *args):
         return self.submit(fn, *args).result()
@@ -198,6 +220,11 @@ def estimate(ctx) -> Made:
     joint models, each cached on disk by its own inputs) while the CAD pool builds the parts; the
     mass-dependent load cases wait for the CAD volumes (`physics`)."""
     spec = ctx.spec
+    if ctx.cad.server and spec.model.stiffness_model == "fe":
+        # new joint FEs on the CAD server's workers, after the parts (their priority)
+        from .analysis.stiffness import joint_models
+
+        joint_models(spec, ctx.design.parts, "fe", submit=lambda fn, *a: ctx.cad.submit(fn, *a, background=True))
     if spec.model.k_n_per_m is None:
         from .analysis.drop import predicted_k_n_per_m
 

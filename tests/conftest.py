@@ -49,6 +49,9 @@ def _private_cache(tmp_path_factory):
     import os
 
     os.environ["COGNIFRAME_CACHE"] = str(tmp_path_factory.mktemp("cache"))
+    # builds run by the tests use their own process pools; tests/test_cad_server.py starts and
+    # stops CAD servers itself (a server per test cache would outlive the run by 10 minutes)
+    os.environ["COGNIFRAME_CAD_SERVER"] = "0"
     yield
 
 

@@ -159,3 +159,24 @@ def test_motor_off_the_arm_is_a_clear_error(carbon):
     data["motors"]["radius"] = 200
     with pytest.raises(UserError, match="motors.radius"):
         frame_mod.build(spec_mod.from_dict(data))
+
+
+def test_rod_axis_and_ends_computed_once_are_the_ports_geometry_and_read_only():
+    # a 3-4-12 rod: |(3, 4, 12)| = 13, so axis = (3, 4, 12) / 13 and the ends sit `seat` along it
+    a = frame_mod.RodEnd("n0", (1.0, 2.0, 3.0), 2.0, 5.0)
+    b = frame_mod.RodEnd("n1", (4.0, 6.0, 15.0), 1.5, 5.0)
+    r = frame_mod.Rod("rod_x", "cage", a, b, 6.0, "carbon")
+    np.testing.assert_allclose(r.axis, np.array([3.0, 4.0, 12.0]) / 13, rtol=0, atol=1e-15)
+    assert r.centre_distance == pytest.approx(13.0, rel=1e-15)
+    assert r.length == pytest.approx(13.0 - 2.0 - 1.5, rel=1e-15)
+    np.testing.assert_allclose(r.start, np.array([1.0, 2.0, 3.0]) + 2.0 * np.array([3.0, 4.0, 12.0]) / 13, atol=1e-14)
+    np.testing.assert_allclose(r.end, np.array([4.0, 6.0, 15.0]) - 1.5 * np.array([3.0, 4.0, 12.0]) / 13, atol=1e-14)
+    np.testing.assert_array_equal(r.socket_direction("n1"), -r.axis)
+    # shared arrays: a caller cannot change the rod for the next one
+    with pytest.raises(ValueError):
+        r.axis[0] = 1.0
+    with pytest.raises(ValueError):
+        r.start += 1.0
+    # not fields: equality and hashing are the dataclass's own
+    assert r == frame_mod.Rod("rod_x", "cage", a, b, 6.0, "carbon")
+    assert hash(r) == hash(frame_mod.Rod("rod_x", "cage", a, b, 6.0, "carbon"))

@@ -44,11 +44,11 @@ def _params(folder: Path, change: tuple[str, object] | None = None) -> Path:
     return p
 
 
-def _build(params: Path, out: Path, slicer: bool, use_cache: bool = True, console=None):
+def _build(params: Path, out: Path, slicer: bool, use_cache: bool = True, console=None, server: bool = False):
     with pytest.MonkeyPatch.context() as mp:
         if not slicer:
             mp.setattr(slicer_mod, "find_slicer", lambda: None)
-        return run_build(spec_mod.load(params), params, out, jobs=2, use_cache=use_cache, console=console)
+        return run_build(spec_mod.load(params), params, out, jobs=2, use_cache=use_cache, console=console, server=server)
 
 
 def _ran(result) -> set[str]:
@@ -116,6 +116,38 @@ def test_a_damaged_cache_entry_is_rebuilt_in_a_real_build(warm, tmp_path):
 
 MASS = {"plots", "figures"}  # what a change of the mass budget or the drop model reruns
 VIEW = {"viewer"}  # the report's 3D view: it shows each part's and rod's grams and material
+
+
+@pytest.mark.skipif(not __import__("sys").platform.startswith("linux"), reason="the CAD server is Linux-only")
+def test_builds_through_the_cad_server_give_the_same_bytes(warm, tmp_path, monkeypatch):
+    """A cold build whose parts, joint FEs, clash check and assembly run in the CAD server's
+    workers (export/cad_server.py) equals the module's cold build with a process pool of its own;
+    a one-part change then reuses the server and equals a cold build of the changed params."""
+    import io
+
+    from rich.console import Console
+
+    from cogniframe.export import cad_server
+    from cogniframe.steps import stack_fingerprint
+
+    _, params, first = warm
+    monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))
+    log = io.StringIO()
+    try:
+        served = _build(params, tmp_path / "served", slicer=True, server=True, console=Console(file=log, width=200))
+        pid = cad_server.running(stack_fingerprint())
+        assert pid is not None and f"started a CAD server (pid {pid})" in log.getvalue()
+        # its joint FEs were solved there (4, and the mirrored core link derived): a cache of its own
+        assert len(list((tmp_path / "cache" / "joint").glob("*.json"))) == 5
+        assert _files(tmp_path / "served") == _files(first.out_dir)
+        changed = _params(tmp_path / "params", ("motors.bolt_spacing", 9.7))
+        again = _build(changed, tmp_path / "served", slicer=False, server=True, console=Console(file=io.StringIO()))
+        assert _ran(again) == _part_change("motor_mount")
+        assert cad_server.running(stack_fingerprint()) == pid  # the same server, warm
+    finally:
+        cad_server.stop(stack_fingerprint())
+    cold = _build(changed, tmp_path / "cold", slicer=False, use_cache=False)
+    assert _files(tmp_path / "served") == _files(tmp_path / "cold")
 
 
 def _part_change(*parts: str) -> set[str]:

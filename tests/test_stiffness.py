@@ -507,6 +507,35 @@ def test_solve_missing_solves_four_joint_FEs_and_derives_the_mirror(tmp_path, mo
     assert calls.count("core_link_mirrored") == 0
 
 
+def test_solve_missing_runs_its_FEs_on_the_callers_workers(tmp_path, monkeypatch):
+    """The build's CAD server workers (steps.estimate passes their submit): every FE goes through
+    `submit`, the results are cached as by the pool, and a failed FE is reported, not raised."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    s, f, p = _design(spec_mod.load(CARBON))
+    joints = st.joint_parts(p)
+    calls, submitted = [], []
+    fake = _fake_fe(calls)
+
+    def fe(spec, part, factor=None, mesh_mm=None):
+        if part.name == "knee":
+            raise RuntimeError("gmsh could not mesh knee: test")
+        return fake(spec, part, factor, mesh_mm)
+
+    monkeypatch.setattr(JS, "fe_joint", fe)
+    monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path))
+    with ThreadPoolExecutor(2) as ex:
+        def submit(fn, *args):
+            submitted.append(args[1].name)
+            return ex.submit(fn, *args)
+
+        failed = JS.solve_missing(s, joints, submit=submit)
+    assert sorted(submitted) == sorted(["corner_top", "corner_bottom", "knee", "core_link"])
+    assert failed == {"knee": "gmsh could not mesh knee: test"}
+    assert not JS.has_unsolved(s, [x for x in joints if x.name != "knee"])
+    assert JS.has_unsolved(s, [x for x in joints if x.name == "knee"])
+
+
 def test_a_mirror_that_is_not_an_exact_image_is_solved_by_FE(tmp_path, monkeypatch):
     from dataclasses import replace
 

@@ -10,6 +10,15 @@ A pure function over named solids (trimesh meshes with a 4x4 world transform eac
 
 Booleans and gaps are manifold3d's (`^` intersection volume, `min_gap`), after an axis-aligned
 bounding-box prefilter (grown by the margin for the discs), so only neighbours are tested.
+
+A pair with a rod is intersected in a frame turned so that the rod runs along z
+(`_turn_to_z`): manifold3d classifies vertices by vertical rays, and a slanted rod's long facets
+have bounding boxes that every ray through the part meets (a motor mount's clips around its
+arm rods: 0.13 s a pair in the world frame, 3 ms turned; a rod in its socket 27 ms -> 2.5 ms).
+The volume is the same solid's; only the rounding differs, so a real overlap comes out the
+same to ~1e-12, and so does an empty one (0.0). What moves is the noise of touching faces (a
+rod end on its socket floor: ~1e-6 mm^3 either way, printed as 0.000). The carbon and bamboo
+checks give the same clash.json, largest overlap included, as the world-frame booleans.
 """
 
 from __future__ import annotations
@@ -81,14 +90,36 @@ def from_dict(d: dict) -> ClashResult:
                        (mo["a"], mo["b"], mo["volume_mm3"]), tuple((g["propeller"], g["nearest"], g["gap_mm"]) for g in d["prop_gaps"]))
 
 
-def _manifold(body: Body):
+def _manifold(body: Body, base=None):
+    """The body as a manifold3d solid in the world frame; `base`: its mesh's Manifold, if made."""
     import manifold3d as m3
 
-    mesh = body.mesh
-    man = m3.Manifold(m3.Mesh(np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.uint32)))
+    if base is None:
+        mesh = body.mesh
+        base = m3.Manifold(m3.Mesh(np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.uint32)))
     if body.transform is not None:
-        man = man.transform(np.asarray(body.transform, float)[:3, :4])
-    return man
+        return base.transform(np.asarray(body.transform, float)[:3, :4])
+    return base
+
+
+def _long_axis(man) -> np.ndarray:
+    """Unit direction of a solid's largest extent (a rod's axis): principal axis of its vertices."""
+    v = np.asarray(man.to_mesh().vert_properties, float)[:, :3]
+    return np.linalg.svd(v - v.mean(axis=0), full_matrices=False)[2][0]
+
+
+def _turn_to_z(d: np.ndarray) -> np.ndarray:
+    """3x4 rotation taking unit vector d to +z (Rodrigues; the identity if d is already along z)."""
+    z = np.array([0.0, 0.0, 1.0])
+    c = np.cross(d, z)
+    s = float(np.linalg.norm(c))
+    if s < 1e-12:
+        R = np.eye(3) if d[2] > 0 else np.diag([1.0, -1.0, -1.0])
+    else:
+        k = c / s
+        K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+        R = np.eye(3) + s * K + (1.0 - float(d @ z)) * (K @ K)
+    return np.c_[R, np.zeros(3)]
 
 
 def body_key(body: Body, mesh_hash: str | None = None) -> str:
@@ -129,11 +160,18 @@ def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_mar
     if len(set(names)) != len(names):
         dup = sorted({n for n in names if names.count(n) > 1})
         raise ValueError(f"clash check: duplicate body names {dup}")
-    mans = [_manifold(b) for b in bodies]
-    boxes = []
-    for m in mans:
-        bb = m.bounding_box()
-        boxes.append((np.array(bb[:3]), np.array(bb[3:])))
+    bases: dict[int, object] = {}  # the copies of a part share one mesh: one Manifold of it
+    mans = []
+    for b in bodies:
+        if id(b.mesh) not in bases:
+            bases[id(b.mesh)] = _manifold(Body(b.name, b.kind, b.mesh))
+        mans.append(_manifold(b, bases[id(b.mesh)]))
+    turns: dict[int, object] = {}  # a rod's turn to z: (3x4, the rod turned)
+    bb = np.array([m.bounding_box() for m in mans], float).reshape(-1, 6)
+    lo, hi = bb[:, :3], bb[:, 3:]
+    # apart[g][i, k]: i's box starts past k's (grown by g), on some axis; a pair is skipped when
+    # either starts past the other
+    apart = {g: (lo[:, None, :] - g > hi[None, :, :]).any(axis=2) for g in (0.0, prop_margin)}
     keys: list[str | None] = [None] * len(bodies)
     if memo is not None:
         meshes: dict[int, str] = {}  # the copies of a part share one mesh: hash it once
@@ -153,8 +191,7 @@ def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_mar
                 continue
             disc = a if a.disc else b if b.disc else None
             grow = prop_margin if disc is not None else 0.0
-            (lo_a, hi_a), (lo_b, hi_b) = boxes[i], boxes[k]
-            if np.any(lo_a - grow > hi_b) or np.any(lo_b - grow > hi_a):
+            if apart[grow][i, k] or apart[grow][k, i]:
                 continue
             tested += 1
             pk = None if memo is None else _pair_key(keys[i], keys[k], prop_margin if disc is not None else None)
@@ -162,7 +199,16 @@ def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_mar
             if known is not None:
                 vol, gap = float(known[0]), known[1]
             else:
-                vol = float((mans[i] ^ mans[k]).volume())
+                rod = i if a.kind == "rod" else k if b.kind == "rod" else None
+                if rod is None:
+                    vol = float((mans[i] ^ mans[k]).volume())
+                else:
+                    if rod not in turns:
+                        turn = _turn_to_z(_long_axis(mans[rod]))
+                        turns[rod] = (turn, mans[rod].transform(turn))
+                    turn, turned = turns[rod]
+                    other = mans[k if rod == i else i].transform(turn)
+                    vol = float((turned ^ other).volume())
                 gap = None
                 if disc is not None:
                     gap = 0.0 if vol > 0 else float(mans[i].min_gap(mans[k], prop_margin + 20.0))

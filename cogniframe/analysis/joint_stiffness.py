@@ -638,7 +638,7 @@ def has_unsolved(spec, parts, mesh_mm: float | None = None) -> bool:
     return any(cache.load_json("joint", geometry_key(spec, p, "fe", 1.0, mesh_mm)) is None for p in parts)
 
 
-def solve_missing(spec, parts, mesh_mm: float | None = None, jobs: int | None = None) -> dict[str, str]:
+def solve_missing(spec, parts, mesh_mm: float | None = None, jobs: int | None = None, submit=None) -> dict[str, str]:
     """Solve and cache the FE of every joint in ``parts`` whose geometry is not cached yet, in
     parallel worker processes when more than one is missing (one per core by default, ``jobs``
     or ``COGNIFRAME_JOBS`` to cap). Returns {part name: error} of the joints the mesher or the
@@ -654,8 +654,9 @@ def solve_missing(spec, parts, mesh_mm: float | None = None, jobs: int | None = 
     Measured on 2 cores, carbon preset, 5 new joints: serial 11 s (CadQuery import 2.3 s + the
     five FE), 2 workers 7-8 s wall for the whole check; with the mirror reflected (4 FE) the
     whole cold check takes ~1.8 s less CPU and ~3 s less wall (the two workers end together).
-    The pool: `_fe_pool`. Inside a daemonic process or a Dask worker the joints are solved
-    serially, and if the pool breaks, the rest too."""
+    The pool: `_fe_pool`, or the caller's `submit(fn, *args) -> Future` (the build's CAD workers).
+    Inside a daemonic process or a Dask worker the joints are solved serially, and if the pool
+    breaks, the rest too."""
     from .. import cache
 
     mesh_mm = FE_MESH_MM if mesh_mm is None else mesh_mm
@@ -682,7 +683,7 @@ def solve_missing(spec, parts, mesh_mm: float | None = None, jobs: int | None = 
         seen.add(key)
     if not todo and not derive:
         return {}
-    failed = _solve(spec, todo, mesh_mm, jobs)
+    failed = _solve(spec, todo, mesh_mm, jobs, submit)
     # the mirrors, after their originals (solved above or cached before)
     for p, key, o, okey, P, order in derive:
         hit = cache.load_json("joint", okey)
@@ -700,8 +701,9 @@ def solve_missing(spec, parts, mesh_mm: float | None = None, jobs: int | None = 
     return failed
 
 
-def _solve(spec, todo, mesh_mm: float, jobs: int | None) -> dict[str, str]:
-    """The FE of `todo` [(part, key)], cached; {part name: error} of those that failed."""
+def _solve(spec, todo, mesh_mm: float, jobs: int | None, submit=None) -> dict[str, str]:
+    """The FE of `todo` [(part, key)], cached; {part name: error} of those that failed.
+    `submit`: the caller's workers (`solve_missing`)."""
     import multiprocessing as mp
 
     from .. import cache
@@ -728,18 +730,23 @@ def _solve(spec, todo, mesh_mm: float, jobs: int | None) -> dict[str, str]:
             progress_log.info("joint FE %d/%d: %s failed (%s)", done, len(todo), name, err)
 
     pending = list(todo)
-    if jobs > 1 and not mp.current_process().daemon:
+    if submit is not None or (jobs > 1 and not mp.current_process().daemon):
+        import contextlib
         from concurrent.futures import as_completed
         from concurrent.futures.process import BrokenProcessPool
 
-        progress_log.info("joint FE: %d new joint geometries on %d processes", len(todo), jobs)
+        from ..export.cad_server import BrokenServer
+
+        progress_log.info("joint FE: %d new joint geometries on %s", len(todo),
+                          "the build's CAD workers" if submit is not None else f"{jobs} processes")
         try:
-            with _fe_pool(jobs) as pool:
-                futures = {pool.submit(_fe_unit, spec, p, mesh_mm): p.name for p, _ in todo}
+            with (contextlib.nullcontext() if submit is not None else _fe_pool(jobs)) as pool:
+                run = submit if submit is not None else pool.submit
+                futures = {run(_fe_unit, spec, p, mesh_mm): p.name for p, _ in todo}
                 for fut in as_completed(futures):
                     finished(*fut.result())
                     pending = [x for x in pending if x[0].name != futures[fut]]
-        except BrokenProcessPool:
+        except (BrokenProcessPool, BrokenServer):
             # a worker could not start or died (e.g. a script without `if __name__ == "__main__":`
             # when the pool must use forkserver): the rest is solved here, serially
             progress_log.info("joint FE: worker processes failed; solving %d joint(s) in this process", len(pending))

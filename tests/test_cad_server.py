@@ -1,0 +1,174 @@
+"""The CAD server that `cogniframe build` keeps between builds (export/cad_server.py).
+
+Each test runs its own server on its own cache folder (so its own key and address) and stops it;
+the job functions are standard-library ones, picklable by reference in the server's workers.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+import time
+
+import pytest
+
+from cogniframe.export import cad_server
+
+pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the CAD server is Linux-only")
+
+
+@pytest.fixture
+def server_env(tmp_path, monkeypatch):
+    """A cache folder of its own; whatever server the test started is stopped afterwards."""
+    monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))
+    yield tmp_path
+    cad_server.stop()
+
+
+def _pid_alive(pid: int) -> bool:
+    """Running (not gone, not a zombie waiting for its parent)."""
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+def test_workers_are_warm_forks_of_one_server_that_outlives_a_build(server_env):
+    assert cad_server.running() is None
+    with cad_server.connect(2, idle_s=60) as pool:
+        server = cad_server.running()
+        assert server is not None and server != os.getpid()
+        # two jobs that overlap run in two workers; neither is the server itself
+        a, b = pool.submit(time.sleep, 0.5), pool.submit(time.sleep, 0.5)
+        pids = {pool.submit(os.getpid).result(), pool.submit(os.getpid).result()}
+        a.result(), b.result()
+        assert server not in pids
+        # CadQuery was imported once, in the server, before the fork
+        assert pool.submit(eval, "'cadquery' in __import__('sys').modules").result() is True
+        assert pool.submit(eval, "'OCP' in __import__('sys').modules").result() is True
+    # the next build (a new pool) gets the same server, and a new worker
+    with cad_server.connect(1, idle_s=60) as again:
+        assert cad_server.running() == server
+        assert again.submit(os.getpid).result() not in pids | {server}
+
+
+def test_jobs_run_in_the_builds_folder_and_raise_its_errors(server_env, monkeypatch):
+    work = server_env / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    with cad_server.connect(1, idle_s=60) as pool:
+        assert pool.submit(os.getcwd).result() == str(work)
+        assert pool.submit(math.factorial, 10).result() == 3628800
+        with pytest.raises(ValueError, match="math domain error"):
+            pool.submit(math.sqrt, -1.0).result()
+        # the worker survives a job's exception
+        assert pool.submit(math.hypot, 3.0, 4.0).result() == 5.0
+
+
+def test_a_worker_that_dies_fails_its_job_and_the_next_job_gets_a_new_worker(server_env):
+    with cad_server.connect(1, idle_s=60) as pool:
+        first = pool.submit(os.getpid).result()
+        with pytest.raises(cad_server.BrokenServer):
+            pool.submit(os._exit, 3).result()
+        second = pool.submit(os.getpid).result()
+        assert second != first and not _pid_alive(first)
+
+
+def test_background_jobs_wait_for_the_others(server_env):
+    with cad_server.connect(1, idle_s=60) as pool:
+        busy = pool.submit(time.sleep, 0.5)  # the one worker is busy while the next two queue
+        late = pool.submit(time.monotonic, priority=1)
+        soon = pool.submit(time.monotonic)
+        busy.result()
+        assert soon.result() < late.result()
+
+
+def test_stop_ends_the_server_and_removes_its_pid_file(server_env):
+    with cad_server.connect(1, idle_s=60) as pool:
+        pool.submit(os.getpid).result()
+    pid = cad_server.running()
+    pidfiles = list((server_env / "cache" / "cad-server").glob("*.pid"))
+    assert [int(p.read_text()) for p in pidfiles] == [pid]
+    assert cad_server.stop() == pid
+    t0 = time.monotonic()
+    while _pid_alive(pid) and time.monotonic() - t0 < 10:
+        time.sleep(0.05)
+    assert not _pid_alive(pid)
+    assert cad_server.running() is None
+    assert not list((server_env / "cache" / "cad-server").glob("*.pid"))
+    assert cad_server.stop() is None
+
+
+def test_an_idle_server_exits_by_itself(server_env):
+    with cad_server.connect(1, idle_s=1.0) as pool:
+        pool.submit(os.getpid).result()
+    pid = cad_server.running()
+    assert pid is not None
+    t0 = time.monotonic()
+    while _pid_alive(pid) and time.monotonic() - t0 < 15:
+        time.sleep(0.1)
+    assert not _pid_alive(pid)
+
+
+def test_a_client_without_the_key_gets_nothing(server_env):
+    with cad_server.connect(1, idle_s=60) as pool:
+        pool.submit(os.getpid).result()
+    key = cad_server.server_key()
+    auth = server_env / "cache" / "cad-server" / f"{key}.auth"
+    assert auth.stat().st_mode & 0o077 == 0  # the key is the user's alone
+    assert cad_server._ask(key, b"not the key", ("ping",)) is None
+    assert cad_server._ask(key, auth.read_bytes(), ("ping",))[0] == "pong"
+
+
+def test_the_key_follows_the_code_stack_cache_and_environment(server_env, monkeypatch):
+    base = cad_server.server_key("stack-a")
+    assert cad_server.server_key("stack-a") == base
+    assert cad_server.server_key("stack-b") != base
+    monkeypatch.setenv("TMPDIR", str(server_env))
+    assert cad_server.server_key("stack-a") != base
+    monkeypatch.delenv("TMPDIR")
+    monkeypatch.setenv("SOME_TERMINAL_THING", "1")  # not read by a worker
+    assert cad_server.server_key("stack-a") == base
+    monkeypatch.setenv("COGNIFRAME_CACHE", str(server_env / "other-cache"))
+    assert cad_server.server_key("stack-a") != base
+
+
+def test_wanted_follows_the_flag_then_the_environment(monkeypatch):
+    monkeypatch.setenv(cad_server.ENV, "0")
+    assert cad_server.wanted() is False
+    assert cad_server.wanted(True) is True
+    monkeypatch.setenv(cad_server.ENV, "1")
+    assert cad_server.wanted() is True
+    assert cad_server.wanted(False) is False
+    monkeypatch.delenv(cad_server.ENV)
+    assert cad_server.wanted() is True
+
+
+def test_a_killed_build_leaves_no_worker_running(server_env):
+    """The build's workers die with it (`die_with_build`), even by SIGKILL mid-job; the server stays."""
+    import signal
+    import subprocess
+
+    script = (
+        "import os, time\n"
+        "from cogniframe.export import cad_server\n"
+        "pool = cad_server.connect(1, idle_s=60)\n"
+        "print(pool.submit(os.getpid).result(), cad_server.running(), flush=True)\n"
+        "pool.submit(time.sleep, 60)\n"
+        "time.sleep(60)\n"
+    )
+    build = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True,
+                             env={**os.environ, "COGNIFRAME_CACHE": str(server_env / "cache")})
+    worker, server = map(int, build.stdout.readline().split())  # (its key is not this process's: its sys.path differs)
+    assert _pid_alive(worker)
+    time.sleep(0.3)  # the worker is in its 60 s job
+    build.send_signal(signal.SIGKILL)
+    build.wait()
+    t0 = time.monotonic()
+    while _pid_alive(worker) and time.monotonic() - t0 < 10:
+        time.sleep(0.05)
+    assert not _pid_alive(worker)
+    assert _pid_alive(server)
+    os.kill(server, signal.SIGTERM)
