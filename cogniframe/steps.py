@@ -104,10 +104,6 @@ class BuildContext(graph.Context):
             import matplotlib.figure  # noqa: F401
             import pyvista  # noqa: F401
             import trimesh  # noqa: F401
-
-            from .report.renders import warm_up
-
-            warm_up()
         finally:
             lock.release()
 
