@@ -111,6 +111,31 @@ def test_checks_before_slicing(tmp_path):
         slicer.check_plate(_scene_3mf(tmp_path / "abs_5.3mf", {"a_1": ok, "c_1": other}), bed)
 
 
+@needs_slicer
+def test_a_plate_that_fails_its_check_stops_the_slicer_started_beside_it(tmp_path, spec):
+    """slice_plate starts PrusaSlicer while it checks the plate: a failed check still raises its
+    own message, and leaves no G-code and no slicer process behind."""
+    import os
+
+    a, c = _box(10, 10, 5), _box(10, 10, 5)  # overlapping copies: PrusaSlicer itself would slice them
+    a.apply_translation([10, 10, 0])
+    c.apply_translation([15, 15, 0])
+    plate = _scene_3mf(tmp_path / "abs_1.3mf", {"a_1": a, "c_1": c})
+    ini = tmp_path / "abs.ini"
+    ini.write_text(slicer.profile_ini(spec, "abs", 0.2), encoding="utf-8")
+    before = {p.name for p in __import__("pathlib").Path("/proc").iterdir() if p.name.isdigit()}
+    with pytest.raises(UserError, match="a_1 and c_1 overlap"):
+        slicer.slice_plate(plate, ini, (120, 120, 120), gcode=tmp_path / "abs_1.gcode")
+    time.sleep(2.0)  # a slicer left running would write its G-code by now
+    assert not (tmp_path / "abs_1.gcode").exists()
+    for pid in {p.name for p in __import__("pathlib").Path("/proc").iterdir() if p.name.isdigit()} - before:
+        try:
+            cmd = open(f"/proc/{pid}/cmdline", "rb").read()
+        except OSError:
+            continue
+        assert str(plate).encode() not in cmd, f"a slicer is still running: {cmd!r} ({os.getpid()})"
+
+
 def test_slicer_messages_are_explained(tmp_path):
     msg = slicer._explain_failure(tmp_path / "abs_1.3mf", 134, "[2026] [trace] init\nObjects could not fit on the bed\n")
     assert "exit code 134" in msg and "printer.bed" in msg

@@ -439,19 +439,27 @@ def slice_plate(plate: Path | str, profile: Path | str, bed: Sequence[float], ex
     if exe is None:
         raise UserError(f"{SLICER} is not on PATH. Fix: install it (Debian/Ubuntu: apt-get install prusa-slicer).")
     material, _ = parse_plate_name(plate.stem)
-    objs = check_plate(plate, bed)
     gcode = Path(gcode) if gcode else plate.with_suffix(".gcode")
     gcode.unlink(missing_ok=True)
     cmd = [exe, "--loglevel", "1", "--export-gcode", "--load", str(profile), "--dont-arrange", str(plate), "-o", str(gcode)]
     t0 = time.perf_counter()
+    # PrusaSlicer starts first and the plate is checked while it loads (reading the 3MF back,
+    # 0.2-0.5 s, was at the head of the slicing); a plate that fails the check stops it
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout_s)
+        objs = check_plate(plate, bed)
+        out, err = proc.communicate(timeout=timeout_s)
     except subprocess.TimeoutExpired:
         raise SliceError(f"PrusaSlicer took more than {timeout_s:g} s on {plate}. Fix: check the part meshes "
                          f"(very fine meshes slice slowly) or slice it in the PrusaSlicer GUI.") from None
+    finally:
+        if proc.poll() is None:  # the check failed, or the time ran out
+            proc.kill()
+            proc.communicate()
+            gcode.unlink(missing_ok=True)
     elapsed = time.perf_counter() - t0
     if proc.returncode != 0 or not gcode.is_file():
-        raise SliceError(_explain_failure(plate, proc.returncode, proc.stdout + "\n" + proc.stderr))
+        raise SliceError(_explain_failure(plate, proc.returncode, out + "\n" + err))
     grams, secs = read_gcode_stats(gcode)
     if grams <= 0:
         raise SliceError(f"PrusaSlicer sliced {plate} to no filament at all. Fix: rebuild with `cogniframe build`.")
