@@ -1,12 +1,15 @@
 """Main-thread CPU of the build's output steps (plates, previews, GLB, plots, figures, renders, viewer).
 
-    python benchmarks/bench_mainthread.py [--params params/carbon.yaml] [--runs 3] [--out DIR]
+    python benchmarks/bench_mainthread.py [--params params/carbon.yaml] [--runs 3] [--out DIR] [--keep-keys]
+        [--warm-renders] [--profile TASK]
 
 Runs one build in this process with the cache folder of COGNIFRAME_CACHE (the part steps come from
 it after the first run), with each output step run `--runs` times in a row, uncached, and prints the
 median and the first run's CPU seconds of the thread that ran it (time.thread_time: the main
 thread's own CPU, not the CAD workers' or the slicer's). The first run of a step pays what it
 shares with later steps (reading a part's STL once per build); the median is the step alone.
+With --keep-keys and --runs 1: the main thread's CPU of an incremental build, step by step (build
+once, change the params, run again with the same cache folder).
 """
 
 from __future__ import annotations
@@ -28,6 +31,8 @@ def main(argv=None) -> None:
     ap.add_argument("--params", default=str(ROOT / "params" / "carbon.yaml"))
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--out", default=None)
+    ap.add_argument("--keep-keys", action="store_true",
+                    help="keep the steps' cache keys (a step from the cache is not timed): time an incremental build once")
     ap.add_argument("--warm-renders", action="store_true",
                     help="also call renders.warm_up() from BuildContext.warm_imports (what steps.py would do)")
     ap.add_argument("--profile", default=None, help="cProfile this step's first run (a task name: glb, previews:abs)")
@@ -63,6 +68,8 @@ def main(argv=None) -> None:
                 times.setdefault(name, []).append(time.thread_time() - t0)
                 proc.setdefault(name, []).append(time.process_time() - p0)
             return made
+        if args.keep_keys:
+            return dataclasses.replace(step, run=run)
         return dataclasses.replace(step, run=run, key=None)  # uncached: it runs every time
 
     if args.warm_renders:

@@ -149,9 +149,11 @@ _WARM_THEN_RENDER = """
 import sys, threading
 import trimesh
 from cogniframe.report import renders
-t = threading.Thread(target=renders.warm_up)
+ok = []
+t = threading.Thread(target=lambda: ok.append(renders.warm_up()))
 t.start()
 t.join()
+assert ok == [True]
 renders.render_parts({"knee": ("tpu_95a", trimesh.creation.cylinder(radius=7, height=8, sections=24))}, sys.argv[1])
 """
 

@@ -320,3 +320,7 @@ def test_read_stl_matches_trimesh(tmp_path):
     assert len(got.vertices) == len(ref.vertices) == len(m.vertices) and len(got.faces) == len(m.faces)
     mine = trimesh.Trimesh(got.vertices, got.faces, process=False)
     assert mine.is_watertight and mine.volume == pytest.approx(ref.volume, rel=1e-6)
+    # the corners merged as np.unique merges rows: the same vertices in the same order, the same faces
+    corners = np.asarray(ref.vertices, np.float32)[np.asarray(ref.faces)].reshape(-1, 3)
+    verts, inverse = np.unique(corners, axis=0, return_inverse=True)
+    assert np.array_equal(got.vertices, verts.astype(float)) and np.array_equal(got.faces, inverse.reshape(-1, 3))
