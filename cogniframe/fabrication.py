@@ -109,15 +109,17 @@ def make_slice(ctx, material: str) -> Made:
     ini.write_text(_profile(ctx, material), encoding="utf-8")
     plates = []
     kept = []
+    read_back = ctx.__dict__.get("_plate_items", {})  # as for the previews: no reading back what was just written
     with tempfile.TemporaryDirectory(prefix="cogniframe-gcode-") as tmp:
         for v in ctx[f"plates:{material}"]:
             where = ctx.out / "plates" if _keep_gcode(ctx) else Path(tmp)
+            items = read_back.get(v.get("model_sha256"))
             if ctx.use_cache and not _keep_gcode(ctx):  # per plate: a plate whose bytes did not change is not sliced again
                 r = slicer._slice_cached(ctx.out / v["threemf"], ini, ctx.spec.printer.bed, exe, version,
-                                         where / f"{v['name']}.gcode")
+                                         where / f"{v['name']}.gcode", items=items)
             else:
                 r = slicer.slice_plate(ctx.out / v["threemf"], ini, ctx.spec.printer.bed, exe,
-                                       gcode=where / f"{v['name']}.gcode")
+                                       gcode=where / f"{v['name']}.gcode", items=items)
             plates.append({"plate": r.plate, "material": r.material, "grams": r.grams, "time_s": r.time_s,
                            "objects": [list(o) for o in r.objects]})
             if _keep_gcode(ctx):

@@ -188,6 +188,10 @@ def test_plate_3mf_items_are_what_reading_the_file_back_gives(tmp_path):
     a = plot_plate(read_plate(f, BED, MARGIN), tmp_path / "from_file.png")
     b = plot_plate(read_plate(f, BED, MARGIN, items=items), tmp_path / "from_memory.png")
     assert a.read_bytes() == b.read_bytes()
+    # the slicer's pre-check (slicer.check_plate) reads them the same way
+    from cogniframe.export import slicer
+
+    assert slicer.check_plate(f, BED, items=items) == slicer.check_plate(f, BED)
 
 
 def test_preview_silhouette_is_the_union_of_upward_faces_counter_clockwise():

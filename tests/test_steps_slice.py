@@ -50,9 +50,9 @@ def recorder(monkeypatch, tmp_path):
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))
     calls = []
 
-    def fake_slice(plate, profile, bed, exe=None, gcode=None, timeout_s=0):
+    def fake_slice(plate, profile, bed, exe=None, gcode=None, timeout_s=0, items=None):
         plate = Path(plate)
-        objs = slicer.check_plate(plate, bed)
+        objs = slicer.check_plate(plate, bed, items=items)
         calls.append(plate.stem)
         vol = sum(o.volume_mm3 for o in objs)
         return slicer.PlateSlice(plate.stem, "tpu_95a", plate, Path(gcode), vol * 1.22e-3, vol / 10.0,

@@ -352,8 +352,10 @@ class PlateObject:
     hi: tuple[float, float, float]
 
 
-def load_plate_objects(path: Path | str) -> tuple[PlateObject, ...]:
+def load_plate_objects(path: Path | str, items=None) -> tuple[PlateObject, ...]:
     """The objects of a plate 3MF in bed coordinates (name, volume, bounds), checked for soundness.
+    `items`: what `plates.read_3mf_items` reads from that file, when the caller has it already
+    (`plates.plate_3mf` returns it with the bytes it wrote).
 
     Raises SliceError for an object that is not a closed, consistently wound volume."""
     import numpy as np
@@ -362,7 +364,7 @@ def load_plate_objects(path: Path | str) -> tuple[PlateObject, ...]:
 
     path = Path(path)
     try:
-        items = read_3mf_items(path)
+        items = read_3mf_items(path) if items is None else items
     except Exception as e:  # corrupt zip / xml
         raise SliceError(f"{path}: cannot read the plate ({e}). Fix: rebuild the plates with `cogniframe build`.") from None
     objs = []
@@ -390,9 +392,9 @@ def load_plate_objects(path: Path | str) -> tuple[PlateObject, ...]:
     return tuple(objs)
 
 
-def check_plate(path: Path | str, bed: Sequence[float], tol: float = 1e-3) -> tuple[PlateObject, ...]:
+def check_plate(path: Path | str, bed: Sequence[float], tol: float = 1e-3, items=None) -> tuple[PlateObject, ...]:
     """`load_plate_objects` plus: every object inside the bed (x, y, z in mm) and no two overlapping."""
-    objs = load_plate_objects(path)
+    objs = load_plate_objects(path, items)
     bx, by, bz = (float(v) for v in bed)
     for o in objs:
         if o.lo[0] < -tol or o.lo[1] < -tol or o.hi[0] > bx + tol or o.hi[1] > by + tol or o.hi[2] - o.lo[2] > bz + tol:
@@ -432,8 +434,9 @@ def _explain_failure(plate: Path, rc: int, output: str) -> str:
 # -- slicing ---------------------------------------------------------------------------------
 
 def slice_plate(plate: Path | str, profile: Path | str, bed: Sequence[float], exe: str | None = None,
-                gcode: Path | str | None = None, timeout_s: float = TIMEOUT_S) -> PlateSlice:
-    """Check and slice one plate with a profile .ini; returns grams and time from the G-code."""
+                gcode: Path | str | None = None, timeout_s: float = TIMEOUT_S, items=None) -> PlateSlice:
+    """Check and slice one plate with a profile .ini; returns grams and time from the G-code.
+    `items`: the plate's contents as read back (`load_plate_objects`), when known."""
     plate = Path(plate)
     exe = exe or find_slicer()
     if exe is None:
@@ -447,7 +450,7 @@ def slice_plate(plate: Path | str, profile: Path | str, bed: Sequence[float], ex
     # 0.2-0.5 s, was at the head of the slicing); a plate that fails the check stops it
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
-        objs = check_plate(plate, bed)
+        objs = check_plate(plate, bed, items=items)
         out, err = proc.communicate(timeout=timeout_s)
     except subprocess.TimeoutExpired:
         raise SliceError(f"PrusaSlicer took more than {timeout_s:g} s on {plate}. Fix: check the part meshes "
@@ -514,7 +517,8 @@ def slice_plates(plates: Sequence[Path | str], spec: Spec, estimated_g: Mapping[
     return _report(version, results, estimated_g)
 
 
-def _slice_cached(plate: Path, profile: Path, bed: Sequence[float], exe: str, version: str, gcode: Path) -> PlateSlice:
+def _slice_cached(plate: Path, profile: Path, bed: Sequence[float], exe: str, version: str, gcode: Path,
+                  items=None) -> PlateSlice:
     """slice_plate, reusing the numbers of an identical earlier run.
 
     Keyed by the plate's bytes, the profile and the slicer's version: the same plate always
@@ -529,10 +533,10 @@ def _slice_cached(plate: Path, profile: Path, bed: Sequence[float], exe: str, ve
     key = h.hexdigest()[:24]
     hit = cache.load_json("slice", key)
     if hit is not None:
-        check_plate(plate, bed)
+        check_plate(plate, bed, items=items)
         return PlateSlice(plate.stem, hit["material"], plate, gcode, hit["grams"], hit["time_s"],
                           tuple((n, v) for n, v in hit["objects"]), 0.0)
-    r = slice_plate(plate, profile, bed, exe, gcode=gcode)
+    r = slice_plate(plate, profile, bed, exe, gcode=gcode, items=items)
     cache.store_json("slice", key, {"material": r.material, "grams": r.grams, "time_s": r.time_s,
                                     "objects": [list(o) for o in r.objects]})
     return r
