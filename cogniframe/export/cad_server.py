@@ -171,8 +171,9 @@ def connect(workers: int, stack: str = "", fe: bool = False, idle_s: float | Non
             time.sleep(0.02)
             reply = _ask(key, authkey, ("ping",))
         if log is not None:
-            log(f"started a CAD server (pid {reply[1]}) so that the next build starts warm; it exits after "
-                f"{idle / 60:g} min without a build (`cogniframe build --no-server` or {ENV}=0: none)")
+            log(f"started a CAD server (pid {reply[1]}) so that the next build starts warm: it exits after "
+                f"{idle / 60:g} min without a build, or now with `cogniframe server stop`; "
+                f"`cogniframe build --no-server` (or {ENV}=0) builds without one")
     return ServerPool(key, authkey, workers)
 
 
