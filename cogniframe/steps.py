@@ -217,10 +217,12 @@ def estimate(ctx) -> Made:
     mass-dependent load cases wait for the CAD volumes (`physics`)."""
     spec = ctx.spec
     if ctx.cad.server and spec.model.stiffness_model == "fe":
-        # new joint FEs on the CAD server's workers, after the parts (their priority)
-        from .analysis.stiffness import joint_models
+        # new joint FEs on the CAD server's workers, after the parts (their priority); the frame
+        # model below then reads every joint from the cache
+        from .analysis.joint_stiffness import solve_missing
+        from .analysis.stiffness import joint_parts
 
-        joint_models(spec, ctx.design.parts, "fe", submit=lambda fn, *a: ctx.cad.submit(fn, *a, background=True))
+        solve_missing(spec, joint_parts(ctx.design.parts), submit=lambda fn, *a: ctx.cad.submit(fn, *a, background=True))
     if spec.model.k_n_per_m is None:
         from .analysis.drop import predicted_k_n_per_m
 

@@ -731,17 +731,17 @@ def _solve(spec, todo, mesh_mm: float, jobs: int | None, submit=None) -> dict[st
 
     pending = list(todo)
     if submit is not None or (jobs > 1 and not mp.current_process().daemon):
-        import contextlib
         from concurrent.futures import as_completed
         from concurrent.futures.process import BrokenProcessPool
+        from contextlib import ExitStack
 
         from ..export.cad_server import BrokenServer
 
         progress_log.info("joint FE: %d new joint geometries on %s", len(todo),
                           "the build's CAD workers" if submit is not None else f"{jobs} processes")
         try:
-            with (contextlib.nullcontext() if submit is not None else _fe_pool(jobs)) as pool:
-                run = submit if submit is not None else pool.submit
+            with ExitStack() as owned:  # the pool made here is shut down here; the caller's is not
+                run = submit or owned.enter_context(_fe_pool(jobs)).submit
                 futures = {run(_fe_unit, spec, p, mesh_mm): p.name for p, _ in todo}
                 for fut in as_completed(futures):
                     finished(*fut.result())

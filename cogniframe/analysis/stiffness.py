@@ -87,14 +87,13 @@ def joint_parts(parts) -> list:
     return [p for p in parts if p.family == "joint"]
 
 
-def joint_models(spec, parts, method: str = "fe", factor: float | None = None, submit=None) -> dict:
-    """The super-element of every distinct joint (cached FE, or closed forms). `submit`: worker
-    processes of the caller's for the new joint FEs (`joint_stiffness.solve_missing`)."""
+def joint_models(spec, parts, method: str = "fe", factor: float | None = None) -> dict:
+    """The super-element of every distinct joint (cached FE, or closed forms)."""
     from .joint_stiffness import joint_stiffness, solve_missing
 
     out = {}
     # new geometries first, all at once (in parallel); then every joint comes from the cache
-    failed = solve_missing(spec, joint_parts(parts), submit=submit) if method == "fe" else {}
+    failed = solve_missing(spec, joint_parts(parts)) if method == "fe" else {}
     for p in joint_parts(parts):
         if p.name not in failed:
             try:
