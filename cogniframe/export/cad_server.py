@@ -125,20 +125,22 @@ def _ask(key: str, authkey: bytes, message: tuple, timeout_s: float = 5.0):
         conn.close()
 
 
-def running(stack: str = "") -> int | None:
-    """The pid of this environment's server, or None."""
+def _pid_if(stack: str, message: tuple, answer: str) -> int | None:
+    """Send `message` to this environment's server; its pid when it answers `answer`."""
     key = server_key(stack)
     authkey = _authkey(folder(), key, create=False)
-    reply = None if authkey is None else _ask(key, authkey, ("ping",))
-    return reply[1] if reply and reply[0] == "pong" else None
+    reply = None if authkey is None else _ask(key, authkey, message)
+    return reply[1] if reply and reply[0] == answer else None
+
+
+def running(stack: str = "") -> int | None:
+    """The pid of this environment's server, or None."""
+    return _pid_if(stack, ("ping",), "pong")
 
 
 def stop(stack: str = "") -> int | None:
     """Stop this environment's server; returns its pid (None: there was none)."""
-    key = server_key(stack)
-    authkey = _authkey(folder(), key, create=False)
-    reply = None if authkey is None else _ask(key, authkey, ("stop",))
-    return reply[1] if reply and reply[0] == "stopping" else None
+    return _pid_if(stack, ("stop",), "stopping")
 
 
 def connect(workers: int, stack: str = "", fe: bool = False, idle_s: float | None = None, log=None) -> "ServerPool | None":
