@@ -37,13 +37,12 @@ def make_plates(ctx, material: str) -> Made:
     folder = ctx.out / "plates"
     folder.mkdir(parents=True, exist_ok=True)
     value = []
-    read_back = ctx.__dict__.setdefault("_plate_items", {})
     for plate in pl.pack_plates(items, ctx.spec.printer.bed, ctx.spec.printer.margin):
         f3 = folder / f"{plate.name}.3mf"
         data, read = pl.plate_3mf(plate, _config(ctx, material))
         f3.write_bytes(data)
         model = pl.model_sha256(data)
-        read_back[model] = read  # what reading the file back gives: the preview need not read it
+        ctx.keep_plate_items(model, read)  # what reading the file back gives: its readers need not read it
         value.append({"name": plate.name, "material": plate.material, "threemf": f"plates/{f3.name}",
                       "preview": f"plates/{plate.name}.png", "copies": [c.name for c in plate.copies],
                       "volume_mm3": plate.volume_mm3, "sha256": file_sha256(f3), "model_sha256": model})
@@ -59,12 +58,9 @@ def make_previews(ctx, material: str) -> Made:
     from .export import plates as pl
 
     files = []
-    read_back = ctx.__dict__.get("_plate_items", {})
     for v in ctx[f"plates:{material}"]:
-        # the plate's items as the plates step wrote them when it ran in this build (the same as
-        # reading its 3MF back: plates.plate_3mf), else read from the file (a cached plate)
         plate = pl.read_plate(ctx.out / v["threemf"], ctx.spec.printer.bed, ctx.spec.printer.margin,
-                              items=read_back.get(v["model_sha256"]))
+                              items=ctx.plate_items(v))
         pl.plot_plate(plate, ctx.out / v["preview"])
         files.append(v["preview"])
     return Made(tuple(files))
@@ -109,11 +105,10 @@ def make_slice(ctx, material: str) -> Made:
     ini.write_text(_profile(ctx, material), encoding="utf-8")
     plates = []
     kept = []
-    read_back = ctx.__dict__.get("_plate_items", {})  # as for the previews: no reading back what was just written
     with tempfile.TemporaryDirectory(prefix="cogniframe-gcode-") as tmp:
         for v in ctx[f"plates:{material}"]:
             where = ctx.out / "plates" if _keep_gcode(ctx) else Path(tmp)
-            items = read_back.get(v.get("model_sha256"))
+            items = ctx.plate_items(v)
             if ctx.use_cache and not _keep_gcode(ctx):  # per plate: a plate whose bytes did not change is not sliced again
                 r = slicer._slice_cached(ctx.out / v["threemf"], ini, ctx.spec.printer.bed, exe, version,
                                          where / f"{v['name']}.gcode", items=items)

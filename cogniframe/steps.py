@@ -107,6 +107,15 @@ class BuildContext(graph.Context):
         finally:
             lock.release()
 
+    def plate_items(self, plate: dict):
+        """What reading a plate's 3MF back gives (`plates.read_3mf_items`), when the plates step
+        wrote it in this build (`plates.plate_3mf` returns it with the bytes); None for a plate
+        that came from the cache (its readers read the file). `plate`: a plates step's entry."""
+        return self.__dict__.get("_plate_items", {}).get(plate.get("model_sha256"))
+
+    def keep_plate_items(self, model_sha256: str, items) -> None:
+        self.__dict__.setdefault("_plate_items", {})[model_sha256] = items
+
     def mesh(self, name: str):
         """The part's STL as a trimesh, read once per build (plates, part renders and assembly
         renders all read it; they copy before they move it)."""
