@@ -90,13 +90,17 @@ def from_dict(d: dict) -> ClashResult:
                        (mo["a"], mo["b"], mo["volume_mm3"]), tuple((g["propeller"], g["nearest"], g["gap_mm"]) for g in d["prop_gaps"]))
 
 
-def _manifold(body: Body, base=None):
-    """The body as a manifold3d solid in the world frame; `base`: its mesh's Manifold, if made."""
+def _mesh_manifold(mesh):
+    """A mesh as a manifold3d solid, in its own frame."""
     import manifold3d as m3
 
+    return m3.Manifold(m3.Mesh(np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.uint32)))
+
+
+def _manifold(body: Body, base=None):
+    """The body as a manifold3d solid in the world frame; `base`: its mesh's Manifold, if made."""
     if base is None:
-        mesh = body.mesh
-        base = m3.Manifold(m3.Mesh(np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.uint32)))
+        base = _mesh_manifold(body.mesh)
     if body.transform is not None:
         return base.transform(np.asarray(body.transform, float)[:3, :4])
     return base
@@ -164,7 +168,7 @@ def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_mar
     mans = []
     for b in bodies:
         if id(b.mesh) not in bases:
-            bases[id(b.mesh)] = _manifold(Body(b.name, b.kind, b.mesh))
+            bases[id(b.mesh)] = _mesh_manifold(b.mesh)
         mans.append(_manifold(b, bases[id(b.mesh)]))
     turns: dict[int, object] = {}  # a rod's turn to z: (3x4, the rod turned)
     bb = np.array([m.bounding_box() for m in mans], float).reshape(-1, 6)
