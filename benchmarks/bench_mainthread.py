@@ -1,7 +1,7 @@
 """Main-thread CPU of the build's output steps (plates, previews, GLB, plots, figures, renders, viewer).
 
     python benchmarks/bench_mainthread.py [--params params/carbon.yaml] [--runs 3] [--out DIR] [--keep-keys]
-        [--warm-renders] [--profile TASK]
+        [--profile TASK]
 
 Runs one build in this process with the cache folder of COGNIFRAME_CACHE (the part steps come from
 it after the first run), with each output step run `--runs` times in a row, uncached, and prints the
@@ -33,8 +33,6 @@ def main(argv=None) -> None:
     ap.add_argument("--out", default=None)
     ap.add_argument("--keep-keys", action="store_true",
                     help="keep the steps' cache keys (a step from the cache is not timed): time an incremental build once")
-    ap.add_argument("--warm-renders", action="store_true",
-                    help="also call renders.warm_up() from BuildContext.warm_imports (what steps.py would do)")
     ap.add_argument("--profile", default=None, help="cProfile this step's first run (a task name: glb, previews:abs)")
     args = ap.parse_args(argv)
     sys.path.insert(0, str(ROOT))
@@ -72,18 +70,6 @@ def main(argv=None) -> None:
             return dataclasses.replace(step, run=run)
         return dataclasses.replace(step, run=run, key=None)  # uncached: it runs every time
 
-    if args.warm_renders:
-        warm = steps.BuildContext.warm_imports
-
-        def warm_imports(self):
-            first = not self.__dict__.get("_warm")
-            warm(self)
-            if first:
-                from cogniframe.report import renders
-
-                renders.warm_up()
-
-        steps.BuildContext.warm_imports = warm_imports
     steps.STEPS = tuple(timed(s) if s.name.startswith(TIMED) else s for s in steps.STEPS)
     spec = load_spec(Path(args.params))
     out = Path(args.out or tempfile.mkdtemp(prefix="bench-mainthread-")) / "build"

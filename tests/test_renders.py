@@ -143,30 +143,3 @@ def test_a_shared_part_plotter_gives_the_bytes_of_a_new_one(scene, tmp_path):
     finally:
         shared.close()
     assert len({p.read_bytes() for p in alone.values()}) == 3  # three different pictures
-
-
-_WARM_THEN_RENDER = """
-import sys, threading
-import trimesh
-from cogniframe.report import renders
-ok = []
-t = threading.Thread(target=lambda: ok.append(renders.warm_up()))
-t.start()
-t.join()
-assert ok == [True]
-renders.render_parts({"knee": ("tpu_95a", trimesh.creation.cylinder(radius=7, height=8, sections=24))}, sys.argv[1])
-"""
-
-
-def test_warming_up_in_another_thread_changes_no_pixel(scene, tmp_path):
-    """renders.warm_up (run by the build while it waits for the CAD workers) makes the first part
-    render cheap; in a fresh process, after it ran in another thread, a part render is the same bytes."""
-    import subprocess
-    import sys
-
-    _, meshes = scene
-    here = renders.render_parts({"knee": ("tpu_95a", meshes["knee"])}, tmp_path / "here")["knee"]
-    subprocess.run([sys.executable, "-c", _WARM_THEN_RENDER, str(tmp_path / "there")], check=True, timeout=180,
-                   capture_output=True)
-    assert here.read_bytes() == (tmp_path / "there" / "knee.png").read_bytes()
-    assert sorted(p.name for p in tmp_path.rglob("*.png")) == ["knee.png", "knee.png"]  # warm_up writes nothing

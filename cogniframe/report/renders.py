@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import os
 import sys
-import threading
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Iterable, Mapping, Sequence
@@ -95,54 +94,15 @@ def _ensure_headless() -> None:
         os.environ["VTK_DEFAULT_OPENGL_WINDOW"] = "vtkEGLRenderWindow"
 
 
-# Held while a render window is made (and by warm_up throughout): VTK is not thread-safe, and
-# warm_up may run in another thread while the main thread makes its plotter.
-_WINDOW_LOCK = threading.Lock()
-
-
 def _plotter(size: tuple[int, int]):
     _ensure_headless()
     import pyvista as pv
 
-    with _WINDOW_LOCK:
-        pv.OFF_SCREEN = True
-        p = pv.Plotter(off_screen=True, window_size=list(size), lighting="light_kit")
-        p.set_background(BACKGROUND)
-        p.enable_anti_aliasing("ssaa")  # FXAA is not supported with EGL; SSAA renders 4x and downsamples
+    pv.OFF_SCREEN = True
+    p = pv.Plotter(off_screen=True, window_size=list(size), lighting="light_kit")
+    p.set_background(BACKGROUND)
+    p.enable_anti_aliasing("ssaa")  # FXAA is not supported with EGL; SSAA renders 4x and downsamples
     return p
-
-
-def warm_up() -> bool:
-    """Draw a tiny part render once and throw it away, so this process's first real render is not
-    slow: the first render window loads the EGL driver (0.6 s CPU) and its first render compiles
-    the shaders (0.5 s; Mesa keeps them for the process). Made for another thread while the main
-    thread waits (the build's part steps wait for the CAD workers): measured, the main thread's
-    first part render then takes 0.1 s CPU instead of 0.7-1.2 s. Draws the same kinds of actors as
-    `render_parts` (a flat-shaded mesh and a corner text); writes nothing. Never raises: False when
-    it could not render (the real render then says why)."""
-    try:
-        _warm_up()
-    except Exception:  # noqa: BLE001 - only a head start: a render that cannot work fails where it is made
-        return False
-    return True
-
-
-def _warm_up() -> None:
-    import pyvista as pv
-
-    with _WINDOW_LOCK:
-        _ensure_headless()
-        pv.OFF_SCREEN = True
-        p = pv.Plotter(off_screen=True, window_size=[32, 24], lighting="light_kit")
-        try:
-            p.set_background(BACKGROUND)
-            p.enable_anti_aliasing("ssaa")
-            p.add_mesh(pv.Cube(), color=material_colour("abs"), smooth_shading=False)
-            p.add_text("warm", position="upper_left", font_size=9, color="black")
-            _set_view(p, "iso", np.array([[-0.5, -0.5, -0.5], [0.5, 0.5, 0.5]]), zoom=1.35)
-            p.screenshot(return_img=True)
-        finally:
-            p.close()
 
 
 def _pv(mesh: "trimesh.Trimesh"):
