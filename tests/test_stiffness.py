@@ -555,3 +555,27 @@ def test_a_mirror_that_is_not_an_exact_image_is_solved_by_FE(tmp_path, monkeypat
     JS.joint_stiffness(s, m, "fe")
     JS.joint_stiffness(s, m, "fe")
     assert calls == ["core_link_mirrored", "core_link_mirrored"]
+
+
+def test_solve_missing_submits_the_biggest_joint_first(tmp_path, monkeypatch):
+    """Longest-processing-time-first: the FE jobs go to the workers by falling closed-form volume
+    (the mesh has a fixed size, so the factorization grows with it), so the last one to start is
+    the smallest and the workers end together. Carbon: knee, core link, corner bottom, corner top
+    (measured FE CPU 1.45, 1.57, 1.3, 0.74 s); the mirrored core link is derived, not submitted."""
+    from concurrent.futures import Future
+
+    monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))
+    s, f, p = _design(spec_mod.load(CARBON))
+    order = []
+
+    def submit(fn, spec, part, mesh_mm):
+        order.append(part.name)
+        done = Future()
+        done.set_result((part.name, None, "not solved in this test"))
+        return done
+
+    # the mirror falls back to its own FE when its original fails: not solved here either
+    monkeypatch.setattr(JS, "_fe_unit", lambda spec, part, mesh_mm: (part.name, None, "not solved in this test"))
+    failed = JS.solve_missing(s, st.joint_parts(p), submit=submit)
+    assert order == ["knee", "core_link", "corner_bottom", "corner_top"]
+    assert set(failed) == {"knee", "core_link", "corner_bottom", "corner_top", "core_link_mirrored"}

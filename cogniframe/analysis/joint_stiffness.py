@@ -742,7 +742,11 @@ def _solve(spec, todo, mesh_mm: float, jobs: int | None, submit=None) -> dict[st
         try:
             with ExitStack() as owned:  # the pool made here is shut down here; the caller's is not
                 run = submit or owned.enter_context(_fe_pool(jobs)).submit
-                futures = {run(_fe_unit, spec, p, mesh_mm): p.name for p, _ in todo}
+                # the biggest first (by the closed-form volume: the mesh is of a fixed size, so
+                # its DOFs and the factorization grow with it), so that the last job to start is
+                # a small one and the workers end together (longest-processing-time-first)
+                biggest_first = sorted(todo, key=lambda t: -t[0].estimate.volume)
+                futures = {run(_fe_unit, spec, p, mesh_mm): p.name for p, _ in biggest_first}
                 for fut in as_completed(futures):
                     finished(*fut.result())
                     pending = [x for x in pending if x[0].name != futures[fut]]
