@@ -127,10 +127,16 @@ class BuildContext(graph.Context):
 
 
 def _import_main_thread_libraries() -> None:
-    import matplotlib.backends.backend_agg  # noqa: F401
-    import matplotlib.figure  # noqa: F401
-    import pyvista  # noqa: F401
-    import trimesh  # noqa: F401
+    """`BuildContext.warm_imports`' thread. A library that cannot be imported is left to the step
+    that needs it, which reports it like any step's error (a thread's exception would only print
+    a traceback)."""
+    try:
+        import matplotlib.backends.backend_agg  # noqa: F401
+        import matplotlib.figure  # noqa: F401
+        import pyvista  # noqa: F401
+        import trimesh  # noqa: F401
+    except ImportError:
+        pass
 
 
 class CadPool:
