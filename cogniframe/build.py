@@ -100,6 +100,8 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
                                     "gcode": gcode},
                               stack=stack, use_cache=use_cache)
     tasks = graph.expand(steps.STEPS, steps.rows(design))
+    if cad.fe or any(graph.will_run(t, ctx) for t in tasks if t.name.startswith("part:")):
+        cad.start_server()  # now, beside the set-up below, not when the first part step submits
     from .threads import one_blas_thread
 
     try:

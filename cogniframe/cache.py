@@ -40,6 +40,26 @@ def store_json(kind: str, key: str, value: dict) -> None:
         pass
 
 
+def load_text(kind: str, key: str, suffix: str = ".txt") -> str | None:
+    """A text stored by `store_text`, or None."""
+    try:
+        return (cache_dir() / kind / f"{key}{suffix}").read_text()
+    except (OSError, ValueError):
+        return None
+
+
+def store_text(kind: str, key: str, text: str, suffix: str = ".txt") -> None:
+    """Write atomically (a reader sees the whole text or none); skipped when the cache cannot be written."""
+    folder = cache_dir() / kind
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        tmp = folder / f".{key}.{os.getpid()}.tmp"
+        tmp.write_text(text)
+        tmp.replace(folder / f"{key}{suffix}")
+    except OSError:
+        pass
+
+
 class Memo:
     """A dict-like store of small JSON values under `cache_dir()/kind/`, one file per key, the
     key salted (e.g. with the code and library versions that made the values). For results

@@ -151,6 +151,14 @@ def task_key(task: Task, ctx: Context) -> str | None:
     return hashlib.sha256(fingerprint(payload).encode()).hexdigest()[:32]
 
 
+def will_run(task: Task, ctx: Context) -> bool:
+    """Whether `task` will run rather than come from the cache, as far as can be told before the
+    build (a stored entry that proves damaged when read also runs). Only for tasks whose key reads
+    no other task's value (e.g. `part:*`, keyed by the params alone)."""
+    key = task_key(task, ctx)
+    return key is None or not (cache.entry_dir(_kind(task), key) / "meta.json").is_file()
+
+
 def _kind(task: Task) -> str:
     """Cache folder of a step: steps/<name before ':' or '{'>."""
     return "steps/" + (task.step.name.split(":", 1)[0].split("{", 1)[0].strip("/") or "step")

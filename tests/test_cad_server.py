@@ -172,3 +172,26 @@ def test_a_killed_build_leaves_no_worker_running(server_env):
     assert not _pid_alive(worker)
     assert _pid_alive(server)
     os.kill(server, signal.SIGTERM)
+
+
+def test_deleting_the_cache_folder_ends_the_server_and_the_next_build_gets_a_new_one(server_env):
+    """A cache folder deleted under a running server took its key file with it: the server (same
+    address, another key) answered nobody, the next build's new server could not take the
+    address, and the build fell back to a process pool of its own (2 s of CadQuery imports)."""
+    import shutil
+
+    with cad_server.connect(1, idle_s=60) as pool:
+        pool.submit(os.getpid).result()
+    old = cad_server.running()
+    assert old is not None
+    shutil.rmtree(server_env / "cache")
+    pool = cad_server.connect(1, idle_s=60)
+    assert isinstance(pool, cad_server.ServerPool)  # not None: no fallback
+    with pool:
+        assert pool.submit(os.getpid).result() > 0
+    new = cad_server.running()
+    assert new is not None and new != old
+    t0 = time.monotonic()
+    while _pid_alive(old) and time.monotonic() - t0 < 10:
+        time.sleep(0.1)
+    assert not _pid_alive(old)

@@ -250,3 +250,62 @@ def test_a_main_step_error_waits_for_running_threads_and_starts_nothing_new(tmp_
     with pytest.raises(ValueError, match="main failed"):
         graph.run(graph.expand(steps, [{}]), graph.Context(tmp_path, {}))
     assert started == ["slow"]
+
+
+def test_will_run_tells_before_the_build_which_keyed_tasks_the_cache_lacks(tmp_path, private_cache):
+    """`graph.will_run` (the build's reason to start the CAD server early): a keyed task whose
+    entry is stored will not run; a changed input, or no key at all, will."""
+    steps = _word_steps([])
+    tasks = {t.name: t for t in graph.expand(steps, [{"w": "x"}, {"w": "y"}])}
+    ctx = graph.Context(tmp_path, {"text": {"x": "abc", "y": "hello"}})
+    assert graph.will_run(tasks["word:x"], ctx) and graph.will_run(tasks["word:y"], ctx)
+    _run(tmp_path, "a", {"x": "abc", "y": "hello"}, [])
+    assert not graph.will_run(tasks["word:x"], ctx) and not graph.will_run(tasks["word:y"], ctx)
+    changed = graph.Context(tmp_path, {"text": {"x": "abd", "y": "hello"}})
+    assert graph.will_run(tasks["word:x"], changed) and not graph.will_run(tasks["word:y"], changed)
+    assert graph.will_run(tasks["summary"], ctx)  # no key: always runs
+    assert graph.will_run(tasks["word:y"], graph.Context(tmp_path, {"text": {"y": "hello"}}, use_cache=False))
+
+
+def test_the_cad_pool_connects_once_in_the_background_and_the_first_job_waits_for_it(monkeypatch):
+    """`CadPool.start_server` (called by the build before its own set-up) connects in a thread;
+    a job submitted meanwhile waits for that connection instead of opening a second one, and a
+    pool that had to start its server is marked cold (the warm-up thread then prepares renders)."""
+    from concurrent.futures import Future
+
+    from cogniframe.export import cad_server
+    from cogniframe.steps import CadPool
+
+    calls, release = [], threading.Event()
+
+    class Pool:
+        def submit(self, fn, *args, priority=0):
+            f = Future()
+            f.set_result(fn(*args))
+            return f
+
+        def shutdown(self, wait=True, cancel_futures=False):
+            calls.append("shutdown")
+
+    def connect(workers, stack, fe, log=None, on_start=None):
+        calls.append(threading.current_thread().name)
+        on_start()  # no server ran: this call starts one
+        release.wait(5)
+        return Pool()
+
+    monkeypatch.setattr(cad_server, "connect", connect)
+    cad = CadPool(2, fe=False, server=True)
+    cad.start_server()
+    result = []
+    t = threading.Thread(target=lambda: result.append(cad.run(sum, [1, 2, 3])))
+    t.start()
+    t.join(0.3)
+    assert t.is_alive() and result == []  # waiting for the connection under way
+    release.set()
+    t.join(5)
+    assert result == [6]
+    assert calls == ["cad-connect"] and cad.cold.is_set() and cad.served is False  # (a stand-in pool)
+    cad.close()
+    assert calls[-1] == "shutdown"
+    with pytest.raises(RuntimeError, match="closed"):
+        cad.submit(sum, [1])

@@ -579,3 +579,33 @@ def test_solve_missing_submits_the_biggest_joint_first(tmp_path, monkeypatch):
     failed = JS.solve_missing(s, st.joint_parts(p), submit=submit)
     assert order == ["knee", "core_link", "corner_bottom", "corner_top"]
     assert set(failed) == {"knee", "core_link", "corner_bottom", "corner_top", "core_link_mirrored"}
+
+
+def test_the_joint_fe_meshes_the_shape_the_part_build_shared_to_the_same_bits(tmp_path, monkeypatch):
+    """The build's part job stores a joint's BREP (`build_part_files(share_shape=True)`); the joint
+    FE then meshes that text instead of building the CAD again, and gets the same matrix, bit for
+    bit, as from its own CAD."""
+    from cogniframe.export import build as export_build
+    from cogniframe.parts import joint as joint_cad
+
+    monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))
+    s, f, p = _design(_variant())
+    part = next(x for x in st.joint_parts(p) if x.name == "corner_top")
+    own = JS.fe_joint(s, part, 1.0).matrix  # nothing shared yet: built here
+    assert export_build.shared_brep(part) is None
+    out = tmp_path / "out"
+    out.mkdir()
+    meta = export_build.build_part_files(part, tuple(s.printer.bed), str(out), share_shape=True)
+    assert (out / meta["stl"]).is_file()
+    shared = export_build.shared_brep(part)
+    assert shared == export_build.brep_text(joint_cad.build(part).shape)  # the un-turned shape, as the FE builds it
+    assert "CASCADE Topology" in shared
+
+    def no_cad(part):
+        raise AssertionError("the FE built the CAD although the part build shared it")
+
+    monkeypatch.setattr(joint_cad, "build", no_cad)
+    assert np.array_equal(JS.fe_joint(s, part, 1.0).matrix, own)
+    # a part whose CAD inputs differ has another key: nothing shared for it
+    other = next(x for x in st.joint_parts(p) if x.name == "knee")
+    assert export_build.shape_key(other) != export_build.shape_key(part) and export_build.shared_brep(other) is None

@@ -320,14 +320,15 @@ def fe_joint(spec, part, factor: float | None = None, mesh_mm: float | None = No
 
 def _fe_joint(spec, part, factor: float | None, mesh_mm: float | None) -> JointStiffness:
     from . import joint_fe
+    from ..export.build import brep_text, shared_brep
     from ..parts import joint as joint_cad
 
     t0 = time.perf_counter()
     mesh_mm = FE_MESH_MM if mesh_mm is None else mesh_mm
     itf = interface(spec, factor)
-    built = joint_cad.build(part)
-    m = built.print_from_local
-    brep = _brep_text(built.shape)
+    m = joint_cad.print_from_local(part)
+    # the shape the build's part step stored (the same text), else built here
+    brep = shared_brep(part) or brep_text(joint_cad.build(part).shape)
     pts, tets = joint_fe.mesh_brep_text(brep, mesh_mm, FE_CURVATURE)
     R, o = m[:3, :3], m[:3, 3]
     ties = []
@@ -382,19 +383,6 @@ def _fe_joint(spec, part, factor: float | None, mesh_mm: float | None) -> JointS
     K = 0.5 * (K + K.T)
     return JointStiffness(part.name, "fe", labels, tuple(refs), tuple(map(tuple, K.tolist())), c.n_dofs,
                           time.perf_counter() - t0)
-
-
-def _brep_text(shape) -> str:
-    import os
-    import tempfile
-
-    fd, path = tempfile.mkstemp(suffix=".brep")
-    os.close(fd)
-    try:
-        shape.exportBrep(path)
-        return Path(path).read_text()
-    finally:
-        os.unlink(path)
 
 
 # -- mirrored joints ------------------------------------------------------------------------------

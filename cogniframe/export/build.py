@@ -102,6 +102,51 @@ def cache_key(part: PartSpec, bed) -> str:
     return hashlib.sha256(payload.encode()).hexdigest()[:24]
 
 
+# -- a part's shape, shared with the joint FE ---------------------------------------------------
+
+SHAPE_KIND = "shapes"  # cache folder of the shared BREP texts
+
+
+def shape_key(part: PartSpec) -> str:
+    """Key of the shape `registry.build(part)` makes (before any turn on the bed): the part's CAD
+    inputs, the CAD code and CadQuery's and OpenCascade's versions."""
+    from importlib import metadata
+
+    from ..cache import code_hash
+
+    versions = []
+    for dist in ("cadquery", "cadquery-ocp"):
+        try:
+            versions.append(metadata.version(dist))
+        except metadata.PackageNotFoundError:
+            versions.append(None)
+    payload = json.dumps([geometry_digest(part), CAD_VERSION, code_hash(*PART_CODE), versions])
+    return hashlib.sha256(payload.encode()).hexdigest()[:24]
+
+
+def brep_text(shape) -> str:
+    """The shape as OpenCascade BREP text (CadQuery's `exportBrep`)."""
+    import tempfile
+
+    fd, path = tempfile.mkstemp(suffix=".brep")
+    os.close(fd)
+    try:
+        shape.exportBrep(path)
+        return Path(path).read_text()
+    finally:
+        os.unlink(path)
+
+
+def shared_brep(part: PartSpec) -> str | None:
+    """The BREP text of `part`'s shape when a part build of this build (or an earlier one) stored
+    it (`build_part_files(share_shape=True)`), else None. The joint FE meshes it instead of
+    building the same CAD again (0.1-0.35 s a joint): the text is what building it here gives,
+    so the mesh and the stiffness are the same bits either way (tested)."""
+    from ..cache import load_text
+
+    return load_text(SHAPE_KIND, shape_key(part), ".brep")
+
+
 def build_parts(spec: Spec, frame, parts: Sequence[PartSpec], out_dir: str | Path, jobs: int | None = None,
                 cache_dir: str | Path | None = None, progress: Callable[[str], None] | None = None) -> tuple[BuiltPart, ...]:
     out_dir = Path(out_dir)
@@ -213,8 +258,9 @@ def _built(p: PartSpec, m: dict) -> BuiltPart:
 
 # -- one part (runs in a worker) -------------------------------------------------------------
 
-def build_part_files(part: PartSpec, bed, out_dir: str) -> dict:
-    """Build one part's CAD, fit it on the bed, write its STL and STEP; return its metrics."""
+def build_part_files(part: PartSpec, bed, out_dir: str, share_shape: bool = False) -> dict:
+    """Build one part's CAD, fit it on the bed, write its STL and STEP; return its metrics.
+    `share_shape`: also store the shape's BREP text in the cache for the joint FE (`shared_brep`)."""
     from ..parts import registry
     from ..parts.joint import apply
     from . import mesh as mesh_mod
@@ -222,6 +268,10 @@ def build_part_files(part: PartSpec, bed, out_dir: str) -> dict:
 
     built = registry.build(part)
     shape = built.shape
+    if share_shape:
+        from ..cache import store_text
+
+        store_text(SHAPE_KIND, shape_key(part), brep_text(shape), ".brep")
     pfl = np.asarray(built.print_from_local, float)
     bb = shape.BoundingBox()
     size = np.array([bb.xlen, bb.ylen, bb.zlen])

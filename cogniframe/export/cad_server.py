@@ -17,7 +17,9 @@ in milliseconds. The same idea as Gradle's daemon or Bazel's server.
   environment variables (`server_key`); any difference gets its own server. So a worker computes
   what a fresh forkserver worker would: the outputs are the same bytes either way (tested).
 - **Lifetime.** It exits after `IDLE_S` seconds without a build (10 min; a build in progress
-  keeps it), on `cogniframe server stop`, or when killed. It holds no file open and its output
+  keeps it), on `cogniframe server stop`, when its key file is gone (the cache folder was
+  deleted: no build could reach it, and the next build's server waits for the address), or when
+  killed. It holds no file open and its output
   goes to /dev/null: it never keeps a terminal or a pipe of the build waiting.
 - **Who may connect.** A Linux abstract socket (no file to leave behind), with the standard
   library's HMAC challenge on a random key kept in the cache folder (mode 0600): only the user
@@ -45,6 +47,7 @@ from pathlib import Path
 ENV = "COGNIFRAME_CAD_SERVER"  # "0": never use a server
 IDLE_S = 600.0
 START_TIMEOUT_S = 60.0
+KEY_CHECK_S = 1.0  # how often an idle server checks that its key file is still the one it serves
 # the environment variables that can change what a worker computes or where it writes (the rest,
 # e.g. PATH, a terminal's, or what a library sets for itself while a build runs, cannot)
 _ENV_PREFIXES = ("COGNIFRAME_", "PYTHON", "OMP_", "OPENBLAS_", "MKL_", "GOTO", "LD_", "TMP", "TEMP", "XDG_", "LC_",
@@ -143,10 +146,12 @@ def stop(stack: str = "") -> int | None:
     return _pid_if(stack, ("stop",), "stopping")
 
 
-def connect(workers: int, stack: str = "", fe: bool = False, idle_s: float | None = None, log=None) -> "ServerPool | None":
+def connect(workers: int, stack: str = "", fe: bool = False, idle_s: float | None = None, log=None,
+            on_start=None) -> "ServerPool | None":
     """A pool of `workers` forks of this environment's CAD server, starting the server when none
     runs (and waiting for it: as long as a process pool's first worker would). None when it
-    cannot start: the caller falls back to a process pool."""
+    cannot start: the caller falls back to a process pool. `on_start()` is called when this call
+    starts a server (before the ~2 s wait)."""
     import subprocess
 
     key = server_key(stack)
@@ -155,10 +160,14 @@ def connect(workers: int, stack: str = "", fe: bool = False, idle_s: float | Non
     reply = _ask(key, authkey, ("ping",))
     if reply is None:
         idle = IDLE_S if idle_s is None else float(idle_s)
+        if on_start is not None:
+            on_start()
         proc = subprocess.Popen([sys.executable, "-m", "cogniframe.export.cad_server", str(root), key, repr(idle)]
                                 + (["fe"] if fe else []), cwd=str(root), stdin=subprocess.DEVNULL,
                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, close_fds=True,
-                                start_new_session=True)
+                                start_new_session=True,
+                                # a snapshot: the build may set a variable in another thread meanwhile
+                                env=os.environ.copy())
         # reaped by this thread whenever it ends while this process lives (a script or a test that
         # builds many times would otherwise keep a zombie); after this process, by init
         threading.Thread(target=proc.wait, name="cad-server-reaper", daemon=True).start()
@@ -298,15 +307,22 @@ def serve(root: Path, key: str, idle_s: float, fe: bool) -> None:
     authkey = _authkey(root, key, create=False)
     if authkey is None:
         return
-    try:
-        listener = Listener(address(key), family="AF_UNIX", authkey=authkey)
-    except OSError:  # another server took the address first: it serves
-        return
+    t0 = time.monotonic()
+    while True:
+        try:
+            listener = Listener(address(key), family="AF_UNIX", authkey=authkey)
+            break
+        except OSError:
+            # another server holds the address: it serves, unless it is one whose key file was
+            # deleted with the cache folder, which leaves within a second (below): wait for that
+            if time.monotonic() - t0 > KEY_CHECK_S + 2.0:
+                return
+            time.sleep(0.1)
     pidfile = root / f"{key}.pid"
     pidfile.write_text(f"{os.getpid()}\n")
     sock = listener._listener._socket
     workers: set[int] = set()
-    last = time.monotonic()
+    last = checked = time.monotonic()
     try:
         while True:
             for pid in list(workers):  # reap (their CPU time then counts as this process's children)
@@ -317,6 +333,13 @@ def serve(root: Path, key: str, idle_s: float, fe: bool) -> None:
                 if done:
                     workers.discard(pid)
                     last = time.monotonic()
+            if not workers and time.monotonic() - checked > KEY_CHECK_S:
+                # (also while clients knock: a build with the new key pings every 20 ms)
+                checked = time.monotonic()
+                if _authkey(root, key, create=False) != authkey:
+                    # the cache folder was deleted (or its key replaced): no build can reach this
+                    # server any more, and the next one starts its own at this address
+                    break
             ready, _, _ = select.select([sock], [], [], 0.2)
             if not ready:
                 if not workers and time.monotonic() - last > idle_s:

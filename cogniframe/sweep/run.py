@@ -233,7 +233,11 @@ def evaluate_all(client, base: dict, items: list[dict], timeout_s: float, size: 
         raise UserError(f"Dask worker(s) {', '.join(sorted(other))} run different cogniframe code than this machine "
                         f"(code hash {', '.join(sorted(set(other.values())))} against {mine}): their rows would not match. "
                         "Fix: install the same cogniframe version on every worker and restart them.")
-    base_f, text_f = client.scatter([base, text], broadcast=True)  # a list: a dict would be scattered per key
+    # the base params and text go with each batch (a few kB), not scattered once: scattered data
+    # lives only on the workers, so a worker that dropped out (killed, or its heartbeat missed on a
+    # loaded machine) took it along and the batches that needed it were cancelled ("lost
+    # dependencies", seen once in the test suite); a batch's own arguments are re-sent with it
+    base_f, text_f = base, text
     batches = [items[i:i + size] for i in range(0, len(items), size)]
     index = {}
     rows_by_batch: dict[int, list[dict]] = {}
