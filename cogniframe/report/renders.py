@@ -94,14 +94,21 @@ def _ensure_headless() -> None:
         os.environ["VTK_DEFAULT_OPENGL_WINDOW"] = "vtkEGLRenderWindow"
 
 
-def _plotter(size: tuple[int, int]):
+def _plotter(size: tuple[int, int], antialiasing: str = "ssaa"):
     _ensure_headless()
     import pyvista as pv
 
     pv.OFF_SCREEN = True
     p = pv.Plotter(off_screen=True, window_size=list(size), lighting="light_kit")
     p.set_background(BACKGROUND)
-    p.enable_anti_aliasing("ssaa")  # FXAA is not supported with EGL; SSAA renders 4x and downsamples
+    # FXAA is not supported with EGL. SSAA renders 4x the pixels and downsamples; 8x MSAA smooths
+    # the edges alike (the faces are flat-shaded) and costs less for a part's 640 x 480 image, more
+    # for the assembly's 1024 x 768 (llvmpipe, CPU seconds: 11 part renders 1.2-1.5 SSAA, 0.8 MSAA;
+    # the assembly views 0.9 SSAA, 1.05 MSAA)
+    if antialiasing == "msaa":
+        p.enable_anti_aliasing("msaa", multi_samples=8)
+    else:
+        p.enable_anti_aliasing("ssaa")
     return p
 
 
@@ -248,7 +255,7 @@ def part_plotter(size: tuple[int, int] = PART_SIZE):
     """An off-screen plotter for `render_parts(..., plotter=)`, to draw many parts' renders in one
     window (the caller closes it): a new window costs a render context and a first render
     (~0.1 s CPU each, half of a part's render), and the images are the same bytes either way."""
-    return _plotter(size)
+    return _plotter(size, "msaa")
 
 
 def render_parts(parts: Mapping[str, tuple[str, "trimesh.Trimesh"]], out_dir: Path | str,
@@ -261,7 +268,7 @@ def render_parts(parts: Mapping[str, tuple[str, "trimesh.Trimesh"]], out_dir: Pa
     written: dict[str, Path] = {}
     if not parts:
         return written
-    p = _plotter(size) if plotter is None else plotter
+    p = part_plotter(size) if plotter is None else plotter
     if tuple(p.window_size) != tuple(size):
         raise ValueError(f"plotter is {tuple(p.window_size)} px, not {tuple(size)}")
     try:
