@@ -127,9 +127,15 @@ class BuildContext(graph.Context):
 
 
 def _warm_up(ctx) -> None:
-    """`BuildContext.warm_imports`' thread: the imports, then, when the CAD workers start cold (a
-    core idle for ~2 s), the part renders' off-screen plotter (0.25 s of VTK set-up; no render, so
-    no OpenGL context yet: the main thread's first render makes it)."""
+    """`BuildContext.warm_imports`' thread: PrusaSlicer's version (a `--help` run, 0.25 s, cached
+    by the executable after the first build: it no longer delays the first slice), the imports,
+    then, when the CAD workers start cold (a core idle for ~2 s), the part renders' off-screen
+    plotter (0.25 s of VTK set-up; no render, so no OpenGL context yet: the main thread's first
+    render makes it)."""
+    try:
+        ctx.slicer.get()
+    except Exception:  # left to the slice steps, which report it
+        pass
     _import_main_thread_libraries()
     if ctx.cad.cold.is_set():
         try:
