@@ -609,3 +609,11 @@ def test_the_joint_fe_meshes_the_shape_the_part_build_shared_to_the_same_bits(tm
     # a part whose CAD inputs differ has another key: nothing shared for it
     other = next(x for x in st.joint_parts(p) if x.name == "knee")
     assert export_build.shape_key(other) != export_build.shape_key(part) and export_build.shared_brep(other) is None
+    # a damaged shared file is a miss: the FE builds the CAD itself and gets the same bits
+    monkeypatch.undo()
+    monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))
+    from cogniframe import cache
+
+    cache.store_text(export_build.SHAPE_KIND, export_build.shape_key(part), shared[: len(shared) // 3], ".brep")
+    assert export_build.shared_brep(part) != shared
+    assert np.array_equal(JS.fe_joint(s, part, 1.0).matrix, own)

@@ -328,8 +328,14 @@ def _fe_joint(spec, part, factor: float | None, mesh_mm: float | None) -> JointS
     itf = interface(spec, factor)
     m = joint_cad.print_from_local(part)
     # the shape the build's part step stored (the same text), else built here
-    brep = shared_brep(part) or brep_text(joint_cad.build(part).shape)
-    pts, tets = joint_fe.mesh_brep_text(brep, mesh_mm, FE_CURVATURE)
+    shared = shared_brep(part)
+    try:
+        pts, tets = joint_fe.mesh_brep_text(shared or brep_text(joint_cad.build(part).shape), mesh_mm, FE_CURVATURE)
+    except RuntimeError:
+        if shared is None:
+            raise
+        # a damaged cache file is a miss, never an error
+        pts, tets = joint_fe.mesh_brep_text(brep_text(joint_cad.build(part).shape), mesh_mm, FE_CURVATURE)
     R, o = m[:3, :3], m[:3, 3]
     ties = []
     refs_local = []
