@@ -195,3 +195,24 @@ def test_deleting_the_cache_folder_ends_the_server_and_the_next_build_gets_a_new
     while _pid_alive(old) and time.monotonic() - t0 < 10:
         time.sleep(0.1)
     assert not _pid_alive(old)
+
+
+def test_the_server_runs_the_builds_code_and_refuses_a_key_it_does_not_compute(server_env, tmp_path):
+    """The server imports cogniframe through the build's `sys.path` (not its own working
+    directory's), and serves only under the key it computes itself: a build that ran a checkout's
+    code while the server imported another cogniframe got a TypeError from a job (seen when a
+    build from a source folder started a server that imported an installed copy)."""
+    import json
+    import subprocess
+
+    with cad_server.connect(1, idle_s=60) as pool:
+        assert pool.submit(eval, "__import__('sys').path").result() == sys.path
+        assert pool.submit(eval, "__import__('cogniframe').__file__").result() == __import__("cogniframe").__file__
+    cad_server.stop()
+    root = cad_server.folder()
+    wrong = "0" * 32
+    proc = subprocess.run([sys.executable, "-c", cad_server._BOOT, json.dumps(sys.path), str(root), wrong, "60", "", ""],
+                          cwd=str(root), timeout=60, capture_output=True, text=True)
+    assert proc.returncode == 0 and proc.stderr == ""
+    assert not (root / f"{wrong}.pid").exists()  # it never listened
+    assert cad_server.running() is None

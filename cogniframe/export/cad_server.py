@@ -28,7 +28,10 @@ in milliseconds. The same idea as Gradle's daemon or Bazel's server.
   sets it; its own tests start and stop servers explicitly). Elsewhere than Linux, or when the
   server cannot start, the build uses its per-build process pool (`export.build.make_pool`).
 
-Run as `python -m cogniframe.export.cad_server FOLDER KEY IDLE_S [fe]` by `connect` only.
+Started by `connect` only, as `python -c BOOT SYS_PATH FOLDER KEY IDLE_S STACK [fe]`: BOOT sets
+`sys.path` to the build's (a server started from the cache folder would otherwise import, say, an
+installed cogniframe where the build imported the checkout it runs in), then `main` checks that
+`server_key(STACK)` computed there is KEY before it imports anything heavy, and exits otherwise.
 """
 
 from __future__ import annotations
@@ -70,14 +73,14 @@ def folder() -> Path:
     return cache_dir().resolve() / "cad-server"
 
 
-def server_key(stack: str = "") -> str:
+def server_key(stack: str = "", root: Path | None = None) -> str:
     """Hash of everything a worker's results could depend on besides its arguments: interpreter,
     import path, cogniframe's source, the library versions (`stack`), the environment variables
     that matter, and the cache folder (which holds the server's key)."""
     from ..cache import code_hash
 
     env = {k: v for k, v in os.environ.items() if k.startswith(_ENV_PREFIXES) and k != ENV}
-    payload = [sys.executable, sys.path, code_hash("**/*.py"), stack, sorted(env.items()), str(folder())]
+    payload = [sys.executable, sys.path, code_hash("**/*.py"), stack, sorted(env.items()), str(root or folder())]
     return hashlib.sha256(json.dumps(payload).encode()).hexdigest()[:32]
 
 
@@ -162,7 +165,7 @@ def connect(workers: int, stack: str = "", fe: bool = False, idle_s: float | Non
         idle = IDLE_S if idle_s is None else float(idle_s)
         if on_start is not None:
             on_start()
-        proc = subprocess.Popen([sys.executable, "-m", "cogniframe.export.cad_server", str(root), key, repr(idle)]
+        proc = subprocess.Popen([sys.executable, "-c", _BOOT, json.dumps(sys.path), str(root), key, repr(idle), stack]
                                 + (["fe"] if fe else []), cwd=str(root), stdin=subprocess.DEVNULL,
                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, close_fds=True,
                                 start_new_session=True,
@@ -382,5 +385,15 @@ def serve(root: Path, key: str, idle_s: float, fe: bool) -> None:
             pass
 
 
-if __name__ == "__main__":
-    serve(Path(sys.argv[1]), sys.argv[2], float(sys.argv[3]), len(sys.argv) > 4 and sys.argv[4] == "fe")
+_BOOT = ("import json, sys; sys.path[:] = json.loads(sys.argv[1]); "
+         "from cogniframe.export.cad_server import main; main(sys.argv[2:])")
+
+
+def main(argv: list[str]) -> None:
+    """The server process (`connect` starts it with `_BOOT`): serve only if this process, with the
+    build's `sys.path` and environment, computes the key the build asked for, i.e. it runs the same
+    interpreter, cogniframe source and environment; else end, and the build uses a pool of its own."""
+    root, key, idle_s, stack = Path(argv[0]), argv[1], float(argv[2]), argv[3]
+    if server_key(stack, root) != key:  # (root: the build's cache folder, resolved in its working directory)
+        return
+    serve(root, key, idle_s, len(argv) > 4 and argv[4] == "fe")
