@@ -192,7 +192,7 @@ def _jobs(jobs: int | None, n: int) -> int:
 
 
 CAD_PRELOAD = ("cogniframe.export.cad_worker",)  # CadQuery (with a lazy vtk), trimesh, the part builders
-FE_PRELOAD = ("gmsh", "skfem", "pymetis")  # the joint FE's mesher and solver
+FE_PRELOAD = ("gmsh", "skfem", "pymetis", "cvxopt.cholmod")  # the joint FE's mesher and solver
 
 
 def make_pool(workers: int, fe: bool = True) -> ProcessPoolExecutor:
