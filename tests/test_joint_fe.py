@@ -205,10 +205,10 @@ def test_euler_buckling_of_a_pinned_rod_pi2_EI_over_L2():
     assert math.pi**2 * ei / L**2 < mid < 4 * math.pi**2 * ei / L**2
 
 
-def test_cholesky_factor_solve_matches_a_dense_solve_and_refuses_an_indefinite_matrix():
-    """`joint_fe._factor_solve` (CHOLMOD LL^T): the solution of a sparse SPD system (a 1D
-    Laplacian plus a diagonal) equals numpy's dense solve; an indefinite matrix is a RuntimeError
-    (the joint then falls back to its closed form), not a wrong answer."""
+def test_cholesky_inverse_form_matches_a_dense_solve_and_refuses_an_indefinite_matrix():
+    """`joint_fe._inverse_form` (CHOLMOD LL^T, one forward solve): B^T A^-1 B of a sparse SPD
+    matrix (a 1D Laplacian plus a diagonal) equals numpy's dense solve; an indefinite matrix is a
+    RuntimeError (the joint then falls back to its closed form), not a wrong answer."""
     import scipy.sparse as sp
 
     from cogniframe.analysis import joint_fe
@@ -216,7 +216,6 @@ def test_cholesky_factor_solve_matches_a_dense_solve_and_refuses_an_indefinite_m
     n = 60
     A = sp.diags([-np.ones(n - 1), 2.5 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1], format="csc")
     B = np.random.default_rng(1).normal(size=(n, 3))
-    X = joint_fe._factor_solve(A, B)
-    assert np.allclose(X, np.linalg.solve(A.toarray(), B), rtol=1e-12, atol=1e-12)
+    assert np.allclose(joint_fe._inverse_form(A, B), B.T @ np.linalg.solve(A.toarray(), B), rtol=1e-12, atol=1e-12)
     with pytest.raises(RuntimeError, match="not positive definite"):
-        joint_fe._factor_solve(sp.diags([1.0, -1.0, 2.0], 0, format="csc"), np.ones((3, 1)))
+        joint_fe._inverse_form(sp.diags([1.0, -1.0, 2.0], 0, format="csc"), np.ones((3, 1)))

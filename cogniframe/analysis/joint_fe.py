@@ -139,14 +139,14 @@ def condense(points: np.ndarray, tets: np.ndarray, e_mpa: float, nu: float, ties
     (`_csc_blocks`). `tests/test_joint_fe_assembly.py` checks it against skfem's own
     BilinearForm / LinearForm assembly. Measured on the carbon knee (28 000 DOF, one BLAS
     thread): 1.85 s CPU with skfem's vector basis, a COO scatter and a permuted copy, 1.35 s
-    this way, of which the factorization and solve were 1.0 s with SuperLU (0.5 s now with CHOLMOD:
-    `_factor_solve`)."""
+    this way, of which the factorization and solve were 1.0 s with SuperLU (0.3 s now with CHOLMOD:
+    `_inverse_form`)."""
     sysm = assemble(points, tets, e_mpa, nu, ties)
     iperm = _nd_order_points(sysm.rows, sysm.cols, sysm.blocks, sysm.n_points)
     P = _csc_blocks(*_mirror(sysm.rows, sysm.cols, sysm.blocks), iperm, sysm.n_points)
     perm = (3 * np.argsort(iperm)[:, None] + np.arange(3)[None, :]).ravel()  # new DOF -> old DOF
     Bp = np.ascontiguousarray(sysm.Kur[perm])
-    Kc = sysm.Krr - Bp.T @ _factor_solve(P, Bp)
+    Kc = sysm.Krr - _inverse_form(P, Bp)
     Kc = 0.5 * (Kc + Kc.T)
     return Condensed(tuple(t.name for t in ties), np.array([t.ref for t in ties], float), Kc,
                      sysm.n_nodes, sysm.n_elements, 3 * sysm.n_points, sysm.tied_area)
@@ -376,17 +376,18 @@ def _nd_order_points(bi: np.ndarray, bj: np.ndarray, bv: np.ndarray, npts: int) 
     return np.asarray(iperm, dtype=np.int64)
 
 
-def _factor_solve(P, B: np.ndarray) -> np.ndarray:
-    """Solve P X = B with one sparse Cholesky factorisation (CHOLMOD, supernodal, through cvxopt)
-    of P, already in its fill-reducing order.
+def _inverse_form(P, B: np.ndarray) -> np.ndarray:
+    """B^T P^-1 B from one sparse Cholesky factorisation (CHOLMOD, supernodal, through cvxopt) of
+    P, already in its fill-reducing order: with P = Q^T L L^T Q (Q: CHOLMOD's own postorder),
+    B^T P^-1 B = Y^T Y for Y = L^-1 Q B, one triangular solve instead of the two of P X = B.
 
     P is symmetric positive definite: LL^T takes half the flops and memory of the LU that SuperLU
-    (scipy's splu, SymmetricMode, no pivoting) computed. Measured on the carbon preset's joints,
-    factorisation and solve with one BLAS thread: knee 0.79 -> 0.50 s, core link 0.90 -> 0.48 s,
-    corner bottom 0.51 -> 0.38 s, corner top 0.25 -> 0.14 s (1 s of a cold build's CPU), the
-    solutions equal to 1e-13. cvxopt is the wheel that ships CHOLMOD (scikit-sparse has no wheels;
-    pypardiso needs MKL, 200 MB, and was slower: 0.61 s on the knee); its OpenBLAS is built without
-    threads, so the sums are in the same order on every machine and every run.
+    (scipy's splu, SymmetricMode, no pivoting) computed, and the form needs only the forward
+    solve. Measured on the carbon preset's knee (28 000 DOF, 24 columns of B), one BLAS thread:
+    SuperLU factorisation and solve 0.79 s; CHOLMOD factorisation 0.21 s, the two solves 0.25 s,
+    the forward one ~0.13 s. cvxopt is the wheel that ships CHOLMOD (scikit-sparse has no wheels;
+    pypardiso needs MKL, 200 MB, and took 0.61 s); its OpenBLAS is built without threads, so the
+    sums are in the same order on every machine and every run.
 
     The fill of a 3D solid's factor depends on the elimination order: METIS nested dissection
     (`_nd_order_points`) of the mesh's point graph gives ~35 % less fill than a minimum degree
@@ -403,13 +404,15 @@ def _factor_solve(P, B: np.ndarray) -> np.ndarray:
     low = coo.row >= coo.col  # CHOLMOD reads the lower triangle
     A = cvxopt.spmatrix(coo.data[low], coo.row[low].astype(np.int64), coo.col[low].astype(np.int64), size=(n, n))
     cholmod.options.clear()  # the library's defaults, whatever another caller set
-    cholmod.options["supernodal"] = 2
+    cholmod.options["supernodal"] = 2  # LL^T (D = I)
     try:
         F = cholmod.symbolic(A, p=cvxopt.matrix(np.arange(n, dtype=np.int64), tc="i"))
         cholmod.numeric(A, F)
     except ArithmeticError as exc:
         raise RuntimeError(f"joint FE: the stiffness matrix is not positive definite ({exc}): "
                            "a part of the mesh is not held by any tie") from None
-    X = cvxopt.matrix(np.asarray(B, dtype=float))
-    cholmod.solve(F, X)
-    return np.array(X)
+    Y = cvxopt.matrix(np.asarray(B, dtype=float))
+    cholmod.solve(F, Y, sys=7)  # Y = Q B
+    cholmod.solve(F, Y, sys=4)  # Y = L^-1 Q B
+    Y = np.array(Y)
+    return Y.T @ Y
