@@ -1,5 +1,5 @@
 """CPU seconds of the joint FE's condensation (`joint_fe.condense`) per distinct joint, split into
-assembly, METIS order, CSC and the CHOLMOD factorization + solve; one BLAS thread, as the build.
+assembly, METIS order, the lower triangle and the CHOLMOD factorization + solve; one BLAS thread, as the build.
 
     python benchmarks/bench_joint_fe.py [params/carbon.yaml] [--runs 3]
 
@@ -19,7 +19,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-PHASES = ("assemble", "_nd_order_points", "_csc_blocks", "_inverse_form")
+PHASES = ("assemble", "_nd_order_points", "_lower_triplets", "_inverse_form")
 
 
 def main(argv: list[str] | None = None) -> int:

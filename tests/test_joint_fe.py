@@ -216,6 +216,28 @@ def test_cholesky_inverse_form_matches_a_dense_solve_and_refuses_an_indefinite_m
     n = 60
     A = sp.diags([-np.ones(n - 1), 2.5 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1], format="csc")
     B = np.random.default_rng(1).normal(size=(n, 3))
-    assert np.allclose(joint_fe._inverse_form(A, B), B.T @ np.linalg.solve(A.toarray(), B), rtol=1e-12, atol=1e-12)
+    def lower(M):
+        t = sp.tril(M).tocoo()
+        return t.data, t.row, t.col, M.shape[0]
+
+    assert np.allclose(joint_fe._inverse_form(lower(A), B), B.T @ np.linalg.solve(A.toarray(), B), rtol=1e-12, atol=1e-12)
     with pytest.raises(RuntimeError, match="not positive definite"):
-        joint_fe._inverse_form(sp.diags([1.0, -1.0, 2.0], 0, format="csc"), np.ones((3, 1)))
+        joint_fe._inverse_form(lower(sp.diags([1.0, -1.0, 2.0], 0, format="csc")), np.ones((3, 1)))
+
+
+def test_lower_triplets_are_the_lower_triangle_of_the_permuted_symmetric_matrix():
+    """`_lower_triplets` (what CHOLMOD reads) equals the lower triangle of the full symmetric CSC
+    matrix `_csc_blocks(_mirror(...))` in the same point order, entry for entry."""
+    import scipy.sparse as sp
+
+    rng = np.random.default_rng(3)
+    npts = 7
+    pairs = sorted({(min(a, b), max(a, b)) for a, b in rng.integers(0, npts, size=(20, 2))} | {(i, i) for i in range(npts)})
+    bi = np.array([a for a, _ in pairs]); bj = np.array([b for _, b in pairs])
+    bv = rng.normal(size=(len(pairs), 3, 3))
+    iperm = rng.permutation(npts)
+    full = J._csc_blocks(*J._mirror(bi, bj, bv), iperm, npts).toarray()
+    vals, rows, cols, n = J._lower_triplets(bi, bj, bv, iperm)
+    assert n == 3 * npts and np.all(rows >= cols)
+    low = sp.coo_matrix((vals, (rows, cols)), shape=(n, n)).toarray()
+    assert np.array_equal(low, np.tril(full))

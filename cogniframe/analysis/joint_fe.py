@@ -135,18 +135,18 @@ def condense(points: np.ndarray, tets: np.ndarray, e_mpa: float, nu: float, ties
     point p (the mesh's vertices, then its edges' midpoints). Everything is assembled as 3 x 3
     blocks of point pairs from the *scalar* P2 basis (a vector basis function is a scalar one
     times a unit vector: 9x fewer basis evaluations, 9x fewer triplets to sort), and the sparse
-    matrix is written once, directly in the nested-dissection order the factorization uses
-    (`_csc_blocks`). `tests/test_joint_fe_assembly.py` checks it against skfem's own
+    matrix's lower triangle is written once, directly in the nested-dissection order the
+    factorization uses (`_lower_triplets`). `tests/test_joint_fe_assembly.py` checks it against skfem's own
     BilinearForm / LinearForm assembly. Measured on the carbon knee (28 000 DOF, one BLAS
     thread): 1.85 s CPU with skfem's vector basis, a COO scatter and a permuted copy, 1.35 s
     this way, of which the factorization and solve were 1.0 s with SuperLU (0.3 s now with CHOLMOD:
     `_inverse_form`)."""
     sysm = assemble(points, tets, e_mpa, nu, ties)
     iperm = _nd_order_points(sysm.rows, sysm.cols, sysm.blocks, sysm.n_points)
-    P = _csc_blocks(*_mirror(sysm.rows, sysm.cols, sysm.blocks), iperm, sysm.n_points)
+    lower = _lower_triplets(sysm.rows, sysm.cols, sysm.blocks, iperm)
     perm = (3 * np.argsort(iperm)[:, None] + np.arange(3)[None, :]).ravel()  # new DOF -> old DOF
     Bp = np.ascontiguousarray(sysm.Kur[perm])
-    Kc = sysm.Krr - _inverse_form(P, Bp)
+    Kc = sysm.Krr - _inverse_form(lower, Bp)
     Kc = 0.5 * (Kc + Kc.T)
     return Condensed(tuple(t.name for t in ties), np.array([t.ref for t in ties], float), Kc,
                      sysm.n_nodes, sysm.n_elements, 3 * sysm.n_points, sysm.tied_area)
@@ -359,6 +359,23 @@ def _csc_blocks(bi: np.ndarray, bj: np.ndarray, bv: np.ndarray, iperm: np.ndarra
     return P
 
 
+def _lower_triplets(bi: np.ndarray, bj: np.ndarray, bv: np.ndarray, iperm: np.ndarray):
+    """The lower triangle of K_uu in the point order ``iperm`` (point p moves to iperm[p]) as
+    (values, rows, columns, size), from its upper-triangle blocks (`System`): each block, or its
+    transpose, placed where its row point follows its column point; of a diagonal block, the
+    entries on and below the diagonal. What CHOLMOD reads (`_inverse_form`), without the full
+    symmetric matrix (`_csc_blocks` of `_mirror`), its COO copy and the filter."""
+    I, J = iperm[bi], iperm[bj]
+    swap = I < J
+    R, C = np.where(swap, J, I), np.where(swap, I, J)  # block row >= block column
+    V = np.where(swap[:, None, None], bv.transpose(0, 2, 1), bv)
+    r = np.broadcast_to(3 * R[:, None, None] + np.arange(3)[None, :, None], V.shape)
+    c = np.broadcast_to(3 * C[:, None, None] + np.arange(3)[None, None, :], V.shape)
+    keep = r >= c
+    n = 3 * (int(iperm.max()) + 1) if iperm.size else 0
+    return V[keep], r[keep], c[keep], n
+
+
 def _nd_order_points(bi: np.ndarray, bj: np.ndarray, bv: np.ndarray, npts: int) -> np.ndarray:
     """Nested-dissection order of the points (METIS through pymetis, fixed seed: same order every
     run) on the graph of point pairs with a nonzero block, given by the upper-triangle blocks
@@ -376,9 +393,10 @@ def _nd_order_points(bi: np.ndarray, bj: np.ndarray, bv: np.ndarray, npts: int) 
     return np.asarray(iperm, dtype=np.int64)
 
 
-def _inverse_form(P, B: np.ndarray) -> np.ndarray:
+def _inverse_form(lower, B: np.ndarray) -> np.ndarray:
     """B^T P^-1 B from one sparse Cholesky factorisation (CHOLMOD, supernodal, through cvxopt) of
-    P, already in its fill-reducing order: with P = Q^T L L^T Q (Q: CHOLMOD's own postorder),
+    P, given by its lower triangle (values, rows, columns, size: `_lower_triplets`) and already in
+    its fill-reducing order: with P = Q^T L L^T Q (Q: CHOLMOD's own postorder),
     B^T P^-1 B = Y^T Y for Y = L^-1 Q B, one triangular solve instead of the two of P X = B.
 
     P is symmetric positive definite: LL^T takes half the flops and memory of the LU that SuperLU
@@ -399,10 +417,8 @@ def _inverse_form(P, B: np.ndarray) -> np.ndarray:
     import cvxopt
     from cvxopt import cholmod
 
-    n = P.shape[0]
-    coo = P.tocoo()
-    low = coo.row >= coo.col  # CHOLMOD reads the lower triangle
-    A = cvxopt.spmatrix(coo.data[low], coo.row[low].astype(np.int64), coo.col[low].astype(np.int64), size=(n, n))
+    vals, rows, cols, n = lower
+    A = cvxopt.spmatrix(vals, rows.astype(np.int64), cols.astype(np.int64), size=(n, n))
     cholmod.options.clear()  # the library's defaults, whatever another caller set
     cholmod.options["supernodal"] = 2  # LL^T (D = I)
     try:
