@@ -21,23 +21,16 @@ def cache_dir() -> Path:
 
 
 def load_json(kind: str, key: str) -> dict | None:
-    path = cache_dir() / kind / f"{key}.json"
+    text = load_text(kind, key, ".json")
     try:
-        return json.loads(path.read_text())
-    except (OSError, ValueError):
+        return None if text is None else json.loads(text)
+    except ValueError:
         return None
 
 
 def store_json(kind: str, key: str, value: dict) -> None:
     """Write atomically; a cache that cannot be written is skipped, never an error."""
-    folder = cache_dir() / kind
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        tmp = folder / f".{key}.{os.getpid()}.tmp"
-        tmp.write_text(json.dumps(value, sort_keys=True))
-        tmp.replace(folder / f"{key}.json")
-    except OSError:
-        pass
+    store_text(kind, key, json.dumps(value, sort_keys=True), ".json")
 
 
 def load_text(kind: str, key: str, suffix: str = ".txt") -> str | None:

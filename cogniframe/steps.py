@@ -242,10 +242,8 @@ class CadPool:
         """`fn(*args)` in the pool when it is already running (its own process: Python work there
         does not hold this process's GIL), else right here (starting the pool costs a CadQuery import)."""
         with self._lock:
-            pool = self._pool
-        if pool is None:
-            return fn(*args)
-        return (pool.submit(fn, *args, priority=priority) if self.served else pool.submit(fn, *args)).result()
+            started = self._pool is not None
+        return self.run(fn, *args, priority=priority) if started else fn(*args)
 
     def close(self) -> None:
         with self._lock:  # after a connection under way (`start_server`)
@@ -324,7 +322,8 @@ def make_part(ctx, material: str, part: str) -> Made:
     ctx.warm_imports()  # in a thread, while the CAD workers start and build
     spec = ctx.part(part)
     # a joint whose FE this build solves: its shape goes to the FE job too (`export.build.shared_brep`)
-    made = ctx.cad.submit(build_part_files, spec, ctx.bed, str(ctx.out), ctx.cad.fe and spec.family == "joint")
+    made = ctx.cad.submit(build_part_files, spec, ctx.bed, str(ctx.out), ctx.cad.fe and spec.family == "joint",
+                          priority=JOB_ORDER["part"])
     meta = made.result()
     meta["stl_sha256"] = file_sha256(ctx.out / meta["stl"])
     return Made((meta["stl"], meta["step"]), meta)

@@ -237,7 +237,6 @@ def evaluate_all(client, base: dict, items: list[dict], timeout_s: float, size: 
     # lives only on the workers, so a worker that dropped out (killed, or its heartbeat missed on a
     # loaded machine) took it along and the batches that needed it were cancelled ("lost
     # dependencies", seen once in the test suite); a batch's own arguments are re-sent with it
-    base_f, text_f = base, text
     batches = [items[i:i + size] for i in range(0, len(items), size)]
     index = {}
     rows_by_batch: dict[int, list[dict]] = {}
@@ -247,7 +246,7 @@ def evaluate_all(client, base: dict, items: list[dict], timeout_s: float, size: 
         nxt = next(todo, None)
         if nxt is None:
             break
-        fut = client.submit(ev.evaluate_batch, base_f, nxt[1], timeout_s, text_f, base_name, pure=False)
+        fut = client.submit(ev.evaluate_batch, base, nxt[1], timeout_s, text, base_name, pure=False)
         index[fut.key] = nxt[0]
         ac.add(fut)
     for fut in ac:
@@ -259,7 +258,7 @@ def evaluate_all(client, base: dict, items: list[dict], timeout_s: float, size: 
             on_batch(rows)
         nxt = next(todo, None)
         if nxt is not None:
-            f2 = client.submit(ev.evaluate_batch, base_f, nxt[1], timeout_s, text_f, base_name, pure=False)
+            f2 = client.submit(ev.evaluate_batch, base, nxt[1], timeout_s, text, base_name, pure=False)
             index[f2.key] = nxt[0]
             ac.add(f2)
     return [r for i in range(len(batches)) for r in rows_by_batch[i]]
