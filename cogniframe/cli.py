@@ -219,10 +219,13 @@ def _leave(code: int) -> None:
     """End the `cogniframe` process. Once the command has returned and no other thread runs, the
     exit handlers run and the process ends without the interpreter's teardown of every module and
     object (VTK, matplotlib, the meshes: 0.25-0.5 s after a build, for nothing: every file is
-    written and closed by then). Anything else: a normal exit."""
+    written and closed by then). A daemon thread left waiting (the reaper of a CAD server this build
+    started) does not count: the interpreter would not wait for it either. A thread that is not a
+    daemon may still be writing: a normal exit, which waits for it."""
     import atexit
 
-    if threading.active_count() != 1:
+    main = threading.main_thread()
+    if any(t is not main and not t.daemon for t in threading.enumerate()):
         sys.exit(code)
     atexit._run_exitfuncs()
     for stream in (sys.stdout, sys.stderr):

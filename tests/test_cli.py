@@ -138,6 +138,28 @@ def test_leaving_runs_exit_handlers_flushes_output_and_keeps_the_code():
     assert r.stdout == "x" * 100000 + "handler ran\n"
 
 
+def test_leaving_skips_the_teardown_past_a_waiting_daemon_thread_but_waits_for_a_working_one(tmp_path):
+    """A build that started a CAD server leaves a daemon thread waiting on it: `_leave` still ends
+    with os._exit (no object is torn down: 0.5 s saved after a cold build). A thread that is not a
+    daemon is waited for: its file gets written."""
+    daemon = ("import threading; from cogniframe.cli import _leave\n"
+              "class Noisy:\n    def __del__(self): print('torn down', flush=True)\n"
+              "keep = Noisy()\n"
+              "threading.Thread(target=threading.Event().wait, daemon=True).start()\n"
+              "_leave(4)\n")
+    r = subprocess.run([sys.executable, "-c", daemon], capture_output=True, text=True, cwd=ROOT, timeout=60)
+    assert r.returncode == 4 and "torn down" not in r.stdout
+    plain = daemon.replace("_leave(4)", "import sys; sys.exit(4)")
+    r = subprocess.run([sys.executable, "-c", plain], capture_output=True, text=True, cwd=ROOT, timeout=60)
+    assert r.returncode == 4 and r.stdout == "torn down\n"  # the probe works: a normal exit tears it down
+    out = tmp_path / "written.txt"
+    working = ("import threading, time; from pathlib import Path; from cogniframe.cli import _leave\n"
+               f"threading.Thread(target=lambda: (time.sleep(0.3), Path({str(out)!r}).write_text('done'))).start()\n"
+               "_leave(5)\n")
+    r = subprocess.run([sys.executable, "-c", working], capture_output=True, text=True, cwd=ROOT, timeout=60)
+    assert r.returncode == 5 and out.read_text() == "done"
+
+
 def test_check_leaves_the_progress_log_as_it_found_it(run_cli, tmp_path):
     """`check` shows the joint FE's progress on stderr for its own run only: a handler left on the
     `cogniframe.progress` logger wrote to a closed stream later and hid its records from the
