@@ -143,3 +143,26 @@ def test_a_shared_part_plotter_gives_the_bytes_of_a_new_one(scene, tmp_path):
     finally:
         shared.close()
     assert len({p.read_bytes() for p in alone.values()}) == 3  # three different pictures
+
+
+def _dark_box(png: Path, rows: int = 40, cols: int = 400):
+    """(top, left, bottom, right) of the dark pixels in the upper-left corner of an image."""
+    from PIL import Image
+
+    a = np.asarray(Image.open(png))[:rows, :cols, :3]
+    d = np.argwhere(a.min(axis=2) < 128)
+    return (*d.min(axis=0), *d.max(axis=0))
+
+
+def test_part_labels_are_one_height_in_the_corner_whatever_the_name(tmp_path):
+    """Every part's label is PART_LABEL_PX high, LABEL_MARGIN_PX from the top-left corner: a short
+    name is not drawn bigger (pyvista's corner annotation, used before, grew "knee" to 17 px)."""
+    box = trimesh.creation.box((30.0, 30.0, 0.2))  # a flat plate: a thin diamond in the middle of the view
+    parts = {"knee": ("tpu_95a", box), "core_link_mirrored": ("tpu_95a", box)}
+    out = renders.render_parts(parts, tmp_path)
+    short, long = _dark_box(out["knee"]), _dark_box(out["core_link_mirrored"])
+    m = renders.LABEL_MARGIN_PX
+    assert short[0] == long[0] == m and m - 1 <= short[1] <= m and m - 1 <= long[1] <= m  # "f" leans left a pixel
+    # the same glyph heights ("(", "p"): the same rows, whatever the name's length
+    assert short[2] == long[2] and abs((short[2] - short[0] + 1) - renders.PART_LABEL_PX) <= 1
+    assert long[3] - long[1] > 1.5 * (short[3] - short[1])  # the longer name is wider, not smaller
