@@ -8,23 +8,20 @@ cogniframe did not make is never touched (outdir.py: lock, ownership check, atom
 
 from __future__ import annotations
 
-import functools
 import hashlib
 import json
 import os
 import time
 from dataclasses import dataclass
-from importlib import metadata
 from pathlib import Path
 
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from . import __version__, outdir, pipeline
+from . import outdir, pipeline, stack
 from .cache import file_sha256
 from .spec import Spec
 
-STACK = ("cadquery", "cadquery-ocp", "trimesh", "manifold3d", "numpy", "scipy", "pynitefea", "pyvista", "vtk", "matplotlib")
 
 
 @dataclass(frozen=True)
@@ -38,9 +35,11 @@ class BuildResult:
 
 
 def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None = None, use_cache: bool = True,
-              console: Console | None = None, gcode: bool = False, server: bool = False) -> BuildResult:
+              console: Console | None = None, gcode: bool = False, server: bool = False, early=None) -> BuildResult:
     """Build `spec` into `out`. `server`: CAD workers from the CAD server that outlives this build
-    (`export.cad_server`; the CLI's default) instead of a process pool of its own."""
+    (`export.cad_server`; the CLI's default) instead of a process pool of its own. `early`: the
+    server the CLI started before it validated the params (`cad_server.prestart`); the caller
+    releases it (`Early.release`) when the build did not connect to it."""
     console = console or Console(stderr=True)
     with spec.blamed():
         design = pipeline.design(spec)  # a design that cannot exist is refused before any folder is touched
@@ -53,7 +52,7 @@ def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None 
         return BuildResult(final, files, verdict, None, ())
     with outdir.writing(final) as tmp, spec.blamed():
         result = _build_into(spec, params_path, tmp, jobs, use_cache, console, key, gcode=gcode, design=design,
-                             server=server)
+                             server=server, early=early)
     return BuildResult(final, result[0], result[1].verdict, result[1], result[2], result[3])
 
 
@@ -62,7 +61,7 @@ def build_key(spec: Spec, params_path: Path) -> str:
     h = hashlib.sha256()
     h.update(Path(params_path).read_bytes())
     h.update(spec.digest().encode())
-    h.update(json.dumps(_versions(), sort_keys=True).encode())
+    h.update(json.dumps(stack.installed(), sort_keys=True).encode())
     pkg = Path(__file__).resolve().parent
     for src in sorted(pkg.rglob("*.py")):
         h.update(src.relative_to(pkg).as_posix().encode())
@@ -84,7 +83,8 @@ def _up_to_date(final: Path, key: str) -> bool:
 
 
 def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_cache: bool, console: Console,
-                key: str, gcode: bool = False, design: pipeline.Design | None = None, server: bool = False):
+                key: str, gcode: bool = False, design: pipeline.Design | None = None, server: bool = False,
+                early=None):
     """Run the build graph (steps.py) into `out`, then write the manifest. `gcode`: keep the
     sliced G-code per plate (`build --gcode`, issue 14; read by fabrication.make_slice).
 
@@ -93,12 +93,12 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
 
     design = pipeline.design(spec) if design is None else design
     log = lambda m: console.print(m, markup=False, highlight=False)  # noqa: E731
-    stack = steps.stack_fingerprint()
-    cad = steps.CadPool(jobs or os.cpu_count() or 1, fe=steps.needs_joint_fe(spec, design), server=server, stack=stack,
-                        log=log)
+    fingerprint = stack.fingerprint()
+    cad = steps.CadPool(jobs or os.cpu_count() or 1, fe=steps.needs_joint_fe(spec, design), server=server, stack=fingerprint,
+                        log=log, early=early)
     ctx = steps.BuildContext(out, {"spec": spec, "design": design, "cad": cad, "slicer": steps.Slicer(log), "log": log,
                                     "gcode": gcode},
-                              stack=stack, use_cache=use_cache)
+                              stack=fingerprint, use_cache=use_cache)
     tasks = graph.expand(steps.STEPS, steps.rows(design))
     if cad.fe or any(graph.will_run(t, ctx) for t in tasks if t.name.startswith("part:")):
         cad.start_server()  # now, beside the set-up below, not when the first part step submits
@@ -163,22 +163,6 @@ def _write(path: Path, text: str) -> None:
     path.write_text(text, encoding="utf-8")
 
 
-def _versions() -> dict:
-    return dict(_installed_versions())
-
-
-@functools.cache
-def _installed_versions() -> dict:
-    """Looked up once per process (each metadata lookup scans sys.path)."""
-    versions = {"cogniframe": __version__}
-    for dist in STACK:
-        try:
-            versions[dist] = metadata.version(dist)
-        except metadata.PackageNotFoundError:
-            versions[dist] = None
-    return versions
-
-
 def _write_manifest(spec: Spec, params_path: Path, out: Path, key: str) -> int:
     files = sorted(p for p in out.rglob("*") if p.is_file() and p.name != outdir.TEMP_MARK)
     manifest = {
@@ -188,7 +172,7 @@ def _write_manifest(spec: Spec, params_path: Path, out: Path, key: str) -> int:
         "params_file": Path(params_path).name,
         "params_sha256": file_sha256(Path(params_path)),
         "spec_sha256": spec.digest(),
-        "versions": _versions(),
+        "versions": stack.installed(),
         "files": [{"path": p.relative_to(out).as_posix(), "size": p.stat().st_size, "sha256": file_sha256(p)} for p in files],
         # outside the identical-rebuild promise (issue 14): `build --gcode`'s G-code has a timestamp and threaded path order
         "not_reproducible": [p.relative_to(out).as_posix() for p in files if p.suffix == ".gcode"],

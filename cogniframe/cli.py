@@ -100,13 +100,25 @@ def build(params: ParamsArg,
           gcode: Annotated[bool, typer.Option("--gcode", help="also keep the sliced G-code per plate (plates/*.gcode; not byte-stable)")] = False,
           server: Annotated[Optional[bool], typer.Option("--server/--no-server", help="CAD workers from a server kept between builds (default; COGNIFRAME_CAD_SERVER=0: off)")] = None) -> None:
     """Build every printable part (STL, STEP), the assembly, cut list, mass budget and manifest."""
-    from .build import run_build
-    from .export.cad_server import wanted
-    from . import spec as spec_mod
+    from .export import cad_server
 
-    spec = spec_mod.load(params)
-    result = run_build(spec, params, out, jobs=jobs, use_cache=not no_cache, console=Console(stderr=True), gcode=gcode,
-                       server=wanted(server))
+    use_server = cad_server.wanted(server)
+    if use_server:  # first thing: the server's imports then overlap this process's own and the validation
+        from .stack import fingerprint
+
+        early = cad_server.prestart(fingerprint())
+    else:
+        early = None
+    try:
+        from .build import run_build
+        from . import spec as spec_mod
+
+        spec = spec_mod.load(params)
+        result = run_build(spec, params, out, jobs=jobs, use_cache=not no_cache, console=Console(stderr=True),
+                           gcode=gcode, server=use_server, early=early)
+    finally:
+        if early is not None:
+            early.release()  # unless the build connected to it: bad params, nothing to build, Ctrl-C
     Console().print(f"wrote {result.out_dir} ({result.files} files); verdict {result.verdict}")
     raise typer.Exit(0 if result.verdict == "PASS" else 1)
 

@@ -44,25 +44,6 @@ from .graph import Made, Step
 
 
 
-# Libraries whose versions are in every step's key, besides build.STACK (which the manifest lists).
-EXTRA_STACK = ("rectpack", "pillow", "lxml", "networkx", "rich")
-
-
-def stack_fingerprint() -> str:
-    """Versions of everything that shapes the output bytes: part of every cache key."""
-    from importlib import metadata
-
-    from .build import _versions
-
-    versions = _versions()
-    for dist in EXTRA_STACK:
-        try:
-            versions[dist] = metadata.version(dist)
-        except metadata.PackageNotFoundError:
-            versions[dist] = None
-    return json.dumps(versions, sort_keys=True)
-
-
 class BuildContext(graph.Context):
     """graph.Context plus what many steps look up: parts by name, their step values and meshes."""
 
@@ -175,12 +156,13 @@ class CadPool:
     is part of its key), started by the first build; without one, or when it cannot start, a
     process pool of this build's own (`export.build.make_pool`)."""
 
-    def __init__(self, workers: int, fe: bool = True, server: bool = False, stack: str = "", log=None):
+    def __init__(self, workers: int, fe: bool = True, server: bool = False, stack: str = "", log=None, early=None):
         self.workers = workers
         self.fe = fe
         self.server = server
         self.stack = stack
         self.log = log
+        self.early = early  # the server `cogniframe build` started first thing (`cad_server.prestart`), if any
         self._pool = None
         self._closed = False
         # set when the workers start cold (a new CAD server, or a process pool of this build's own):
@@ -219,7 +201,7 @@ class CadPool:
                     from .export import cad_server
 
                     self._pool = cad_server.connect(self.workers, self.stack, self.fe, log=self.log,
-                                                    on_start=self.cold.set)
+                                                    on_start=self.cold.set, early=self.early)
                 if self._pool is None:
                     from .export.build import make_pool
 

@@ -216,3 +216,72 @@ def test_the_server_runs_the_builds_code_and_refuses_a_key_it_does_not_compute(s
     assert proc.returncode == 0 and proc.stderr == ""
     assert not (root / f"{wrong}.pid").exists()  # it never listened
     assert cad_server.running() is None
+
+
+def _written(root) -> list[str]:
+    """The files in the server folder (key, pid): what a server and its clients wrote."""
+    return sorted(p.name for p in root.iterdir()) if root.is_dir() else []
+
+
+def test_a_server_started_early_is_the_one_its_build_connects_to_and_stays(server_env):
+    """`cogniframe build` starts the server first thing (`prestart`), before it has validated the
+    params: nothing is written until the build connects, which then waits for that process
+    instead of starting another; once connected it serves like any server (FE modules loaded)."""
+    early = cad_server.prestart(idle_s=60)
+    assert early is not None and early.proc.poll() is None
+    assert _written(early.root) == []  # no key file: the process cannot serve anyone yet
+    started = []
+    with cad_server.connect(1, idle_s=60, early=early, on_start=lambda: started.append(1)) as pool:
+        assert early.adopted and cad_server.running() == early.proc.pid and started == [1]
+        assert pool.submit(eval, "'gmsh' in __import__('sys').modules").result() is True
+    early.release()  # connected: it stays for the next build
+    assert cad_server.running() == early.proc.pid
+    assert cad_server.prestart(idle_s=60) is None  # a server answers: no second one
+
+
+def test_an_early_server_its_build_did_not_use_ends_having_written_nothing(server_env):
+    """Bad params, an up-to-date folder, nothing to build: the CLI releases the early server,
+    killed at once; and one whose build died before connecting exits by itself once it has
+    imported CadQuery and found no key file (it never listens)."""
+    early = cad_server.prestart(idle_s=60)
+    time.sleep(0.2)
+    early.release()
+    assert early.proc.returncode is not None and not _pid_alive(early.proc.pid)
+    orphan = cad_server.prestart(idle_s=60)
+    assert orphan is not None and orphan.proc.pid != early.proc.pid
+    assert orphan.proc.wait(timeout=120) == 0  # no kill: it ended by itself
+    assert _written(orphan.root) == [] and cad_server.running() is None
+
+
+def test_bad_params_with_the_server_on_leave_no_server_and_no_key(server_env, monkeypatch, tmp_path):
+    """The CLI path: exit 2 with the usual message, and the early server is gone."""
+    from pathlib import Path
+
+    from cogniframe.cli import main
+
+    monkeypatch.setenv(cad_server.ENV, "1")
+    made = []
+    real = cad_server.prestart
+    monkeypatch.setattr(cad_server, "prestart", lambda *a, **k: made.append(real(*a, **k)) or made[-1])
+    good = Path(__file__).resolve().parents[1] / "params" / "bamboo.yaml"
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(good.read_text().replace("diameter: 3", "diameter: -3", 1))
+    assert "diameter: -3" in bad.read_text()
+    assert main(["build", str(bad), "-o", str(tmp_path / "out")]) == 2
+    assert not (tmp_path / "out").exists()
+    assert len(made) == 1 and made[0] is not None and made[0].proc.returncode is not None  # started, then ended
+    assert _written(cad_server.folder()) == [] and cad_server.running() is None
+    assert _processes_naming(str(cad_server.folder())) == []
+
+
+def _processes_naming(text: str) -> list[int]:
+    """Running processes with `text` in their command line (a server has its folder there)."""
+    found = []
+    for p in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            with open(f"/proc/{p}/cmdline", "rb") as fh:
+                if text.encode() in fh.read() and _pid_alive(int(p)):
+                    found.append(int(p))
+        except OSError:  # it ended meanwhile
+            pass
+    return found

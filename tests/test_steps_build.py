@@ -128,7 +128,7 @@ def test_builds_through_the_cad_server_give_the_same_bytes(warm, tmp_path, monke
     from rich.console import Console
 
     from cogniframe.export import cad_server
-    from cogniframe.steps import stack_fingerprint
+    from cogniframe.stack import fingerprint as stack_fingerprint
 
     _, params, first = warm
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))

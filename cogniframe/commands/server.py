@@ -14,9 +14,9 @@ server_app = typer.Typer(help="The CAD server that keeps CadQuery loaded between
 
 
 def _stack() -> str:
-    from cogniframe.steps import stack_fingerprint
+    from cogniframe.stack import fingerprint
 
-    return stack_fingerprint()
+    return fingerprint()
 
 
 @server_app.command("status")
