@@ -110,16 +110,11 @@ SHAPE_KIND = "shapes"  # cache folder of the shared BREP texts
 def shape_key(part: PartSpec) -> str:
     """Key of the shape `registry.build(part)` makes (before any turn on the bed): the part's CAD
     inputs, the CAD code and CadQuery's and OpenCascade's versions."""
-    from importlib import metadata
-
     from ..cache import code_hash
+    from ..stack import installed
 
-    versions = []
-    for dist in ("cadquery", "cadquery-ocp"):
-        try:
-            versions.append(metadata.version(dist))
-        except metadata.PackageNotFoundError:
-            versions.append(None)
+    stack = installed()  # looked up once per process
+    versions = [stack["cadquery"], stack["cadquery-ocp"]]
     payload = json.dumps([geometry_digest(part), CAD_VERSION, code_hash(*PART_CODE), versions])
     return hashlib.sha256(payload.encode()).hexdigest()[:24]
 
