@@ -77,14 +77,10 @@ def build_holder(part: PartSpec) -> Built:
     outer = cq.Solid.makeBox(w, length, h, cq.Vector(-w / 2, -length / 2, -h / 2))
     # Cavity: open at the front (+y), the back stop at the rear.
     cavity = cq.Solid.makeBox(iw, il + 1.0, ih, cq.Vector(-iw / 2, -length / 2 + back, -h / 2 + skin))
-    shape = outer.cut(cavity)
     d = float(part.param("hole_d"))
     holes = [cq.Solid.makeCylinder(d / 2, skin + 2.0, cq.Vector(float(x), float(y), h / 2 - skin - 1.0)) for x, y in part.param("holes")]
-    for hole in holes:
-        shape = shape.cut(hole)
-    if "lead_exit" in dict(part.params):
-        for c in holder_cutters(part):
-            shape = shape.cut(c)
+    cutters = holder_cutters(part) if "lead_exit" in dict(part.params) else []
+    shape = outer.cut(cavity, *holes, *cutters)  # one boolean with every tool: half the time of one per tool
     m = holder_from_local(part)
     placed = apply(shape.clean(), m)
     return Built(placed, m)
@@ -150,10 +146,8 @@ def build_sensor_mount(part: PartSpec) -> Built:
     import cadquery as cq
 
     t = float(part.param("thickness"))
-    body = None
-    for poly in part.param("pieces"):
-        piece = _prism_xy(poly, 0.0, t)
-        body = piece if body is None else body.fuse(piece)
+    first, *rest = (_prism_xy(poly, 0.0, t) for poly in part.param("pieces"))
+    body = first.fuse(*rest) if rest else first
     d = float(part.param("hole_d"))
     cut = [cq.Solid.makeCylinder(d / 2, t + 2.0, cq.Vector(float(x), float(y), -1.0)) for x, y in
            (*part.param("stack_holes"), *part.param("link_holes"))]
@@ -164,8 +158,7 @@ def build_sensor_mount(part: PartSpec) -> Built:
     zw, zl = (float(v) for v in part.param("zip_slot"))
     for x, y in part.param("zip_slots"):
         cut.append(cq.Solid.makeBox(zl, zw, t + 2.0, cq.Vector(float(x) - zl / 2, float(y) - zw / 2, -1.0)))
-    for c in cut:
-        body = body.cut(c)
+    body = body.cut(*cut)  # one boolean with all 16 tools: 0.09 s instead of 0.17 s one by one
     solids = body.clean().Solids()
     if len(solids) != 1:
         raise RuntimeError(f"{part.name} geometry produced {len(solids)} solids instead of 1")
@@ -205,31 +198,31 @@ def build_camera_mount(part: PartSpec) -> Built:
     # base, so the two fuse at any tilt) to height
     up = cq.Solid.makeBox(w, wall, height + bt, cq.Vector(-w / 2, -wall, -bt))
     hd = float(p["camera_hole_d"])
-    for x, z in p["camera_holes"]:
-        up = up.cut(cq.Solid.makeCylinder(hd / 2, wall + 2.0, cq.Vector(float(x), -wall - 1.0, float(z) - bt), cq.Vector(0, 1, 0)))
+    tools = [cq.Solid.makeCylinder(hd / 2, wall + 2.0, cq.Vector(float(x), -wall - 1.0, float(z) - bt), cq.Vector(0, 1, 0))
+             for x, z in p["camera_holes"]]
     win_half = 5.0
     if height - 6.0 > 2 * win_half and abs(float(p["tilt_deg"])) <= 5.0:
         # window behind the board (its connector side), pointed along z; a tilted upright would
         # turn one of its 45 deg roofs into an overhang, so tilted uprights stay solid
         pts = [(a, z) for z, a in _pointed(3.0, height - 9.0, win_half)]
-        up = up.cut(cq.Workplane("XZ", origin=(0, 1.0, 0)).polyline(pts).close().extrude(wall + 2.0).val())
-    up = apply(up, camera_upright_matrix(p))
+        tools.append(cq.Workplane("XZ", origin=(0, 1.0, 0)).polyline(pts).close().extrude(wall + 2.0).val())
+    up = apply(up.cut(*tools) if tools else up, camera_upright_matrix(p))
     body = base.fuse(up)
     # cut everything below the base (a tilted upright's heel) and, below the base top, in front of
     # the plate edge (the heel of an upright leaning back would hang there)
-    body = body.cut(cq.Solid.makeBox(4 * w, 4 * (yf - yb) + 4 * height, 4 * height, cq.Vector(-2 * w, -2 * (yf - yb) - height, -4 * height)))
-    body = body.cut(cq.Solid.makeBox(4 * w, 2 * height, bt + 1.0, cq.Vector(-2 * w, yf, -1.0)))
+    tools = [cq.Solid.makeBox(4 * w, 4 * (yf - yb) + 4 * height, 4 * height, cq.Vector(-2 * w, -2 * (yf - yb) - height, -4 * height)),
+             cq.Solid.makeBox(4 * w, 2 * height, bt + 1.0, cq.Vector(-2 * w, yf, -1.0))]
     cc = float(p["corner_cut"])
     for sx in (-1.0, 1.0):  # front corners of the base, clear of the core links' tabs
         y_cut = yf - wall  # behind the upright only, so the upright never overhangs the cut
         tri = [(sx * (cc - y_cut), y_cut), (sx * (cc + 50.0), -50.0), (sx * (cc + 50.0), y_cut)]
-        body = body.cut(_prism_xy(tri, -1.0, bt))
+        tools.append(_prism_xy(tri, -1.0, bt))
     hole_d = float(p["stack_hole_d"])
-    for x, y in p["stack_holes"]:
-        body = body.cut(cq.Solid.makeCylinder(hole_d / 2, bt + 2.0, cq.Vector(float(x), float(y), -1.0)))
+    tools += [cq.Solid.makeCylinder(hole_d / 2, bt + 2.0, cq.Vector(float(x), float(y), -1.0)) for x, y in p["stack_holes"]]
     bw, hy = min(w / 2 - 4.0, 6.0), min(5.0, (yf - yb) / 2 - 8.0)
     if bw > 2.0 and hy > 1.0 and 2 * bw >= 2 * hy:  # lightening window between the stack holes, pointed along x (print z)
-        body = body.cut(_prism_xy(_pointed(-bw, bw, hy), -1.0, bt + 1.0))
+        tools.append(_prism_xy(_pointed(-bw, bw, hy), -1.0, bt + 1.0))
+    body = body.cut(*tools)  # one boolean with every tool
     solids = body.clean().Solids()
     if len(solids) != 1:
         raise RuntimeError(f"camera_mount geometry produced {len(solids)} solids instead of 1")
