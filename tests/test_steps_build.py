@@ -119,24 +119,30 @@ VIEW = {"viewer"}  # the report's 3D view: it shows each part's and rod's grams 
 
 
 @pytest.mark.skipif(not __import__("sys").platform.startswith("linux"), reason="the CAD server is Linux-only")
-def test_builds_through_the_cad_server_give_the_same_bytes(warm, tmp_path, monkeypatch):
-    """A cold build whose parts, joint FEs, clash check and assembly run in the CAD server's
-    workers (export/cad_server.py) equals the module's cold build with a process pool of its own;
-    a one-part change then reuses the server and equals a cold build of the changed params."""
+def test_builds_through_the_cad_server_give_the_same_bytes(warm, tmp_path, monkeypatch, capsys):
+    """A cold `cogniframe build` whose parts, joint FEs, clash check and assembly run in the CAD
+    server's workers (export/cad_server.py) equals the module's cold build with a process pool of
+    its own; the server is the one the CLI started before validating the params (`prestart`).
+    A one-part change then reuses the server and equals a cold build of the changed params."""
     import io
 
     from rich.console import Console
 
+    from cogniframe.cli import main
     from cogniframe.export import cad_server
     from cogniframe.stack import fingerprint as stack_fingerprint
 
     _, params, first = warm
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))
-    log = io.StringIO()
+    monkeypatch.setenv(cad_server.ENV, "1")
+    early = []
+    real = cad_server.prestart
+    monkeypatch.setattr(cad_server, "prestart", lambda *a, **k: early.append(real(*a, **k)) or early[-1])
     try:
-        served = _build(params, tmp_path / "served", slicer=True, server=True, console=Console(file=log, width=200))
+        assert main(["build", str(params), "-o", str(tmp_path / "served"), "--jobs", "2"]) == 0
         pid = cad_server.running(stack_fingerprint())
-        assert pid is not None and f"started a CAD server (pid {pid})" in log.getvalue()
+        assert pid is not None and f"started a CAD server (pid {pid})" in capsys.readouterr().err
+        assert len(early) == 1 and early[0].adopted and early[0].proc.pid == pid
         # its joint FEs were solved there (4, and the mirrored core link derived): a cache of its own
         assert len(list((tmp_path / "cache" / "joint").glob("*.json"))) == 5
         assert _files(tmp_path / "served") == _files(first.out_dir)
