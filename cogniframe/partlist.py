@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .frame import CAMERA_BASE_T, CORNER_SIGN, CORNERS, SENSOR_GAP, Frame, strap_mouth
+from .frame import CAMERA_BASE_T, CORNER_SIGN, CORNERS, Frame
 from .materials import BOARDS, CONNECTORS, SCREWS, STACK_PATTERNS
 from .spec import Spec
 

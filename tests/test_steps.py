@@ -287,14 +287,15 @@ def test_the_cad_pool_connects_once_in_the_background_and_the_first_job_waits_fo
         def shutdown(self, wait=True, cancel_futures=False):
             calls.append("shutdown")
 
-    def connect(workers, stack, fe, log=None, on_start=None):
+    def connect(workers, stack, fe, log=None, on_start=None, early=None):
         calls.append(threading.current_thread().name)
+        assert early == "the CLI's early server"  # handed on to connect, which waits for it
         on_start()  # no server ran: this call starts one
         release.wait(5)
         return Pool()
 
     monkeypatch.setattr(cad_server, "connect", connect)
-    cad = CadPool(2, fe=False, server=True)
+    cad = CadPool(2, fe=False, server=True, early="the CLI's early server")
     cad.start_server()
     result = []
     t = threading.Thread(target=lambda: result.append(cad.run(sum, [1, 2, 3])))

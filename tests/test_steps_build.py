@@ -152,7 +152,7 @@ def test_builds_through_the_cad_server_give_the_same_bytes(warm, tmp_path, monke
         assert cad_server.running(stack_fingerprint()) == pid  # the same server, warm
     finally:
         cad_server.stop(stack_fingerprint())
-    cold = _build(changed, tmp_path / "cold", slicer=False, use_cache=False)
+    _build(changed, tmp_path / "cold", slicer=False, use_cache=False)
     assert _files(tmp_path / "served") == _files(tmp_path / "cold")
 
 

@@ -4,7 +4,6 @@ trends, load cases, symmetry."""
 from __future__ import annotations
 
 import copy
-import math
 import subprocess
 import sys
 from pathlib import Path

@@ -19,7 +19,6 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-import yaml
 
 from cogniframe.sweep import evaluate as ev
 from cogniframe.sweep import run as run_mod

@@ -20,7 +20,6 @@ the joint results are cached.
 
 from __future__ import annotations
 
-import math
 import os
 import tempfile
 from dataclasses import dataclass

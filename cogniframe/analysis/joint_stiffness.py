@@ -544,7 +544,6 @@ def geometry_key(spec, part, method: str, factor: float | None, mesh_mm: float) 
     """Hash of everything the joint model reads: the part's geometry digest (sockets, wall, params),
     the interface (clearance, layer height), materials, method, and this module's source."""
     itf = interface(spec, factor)
-    rod = spec.material(spec.rods.material)
     # the FE takes the rods as rigid: their modulus does not enter (the closed forms are not cached)
     data = [_CACHE_VERSION, part.digest, method, itf.e, itf.g, itf.h, spec.rods.diameter, mesh_mm, FE_CURVATURE]
     h = hashlib.sha256(json.dumps(data, default=str).encode())

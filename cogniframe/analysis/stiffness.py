@@ -722,7 +722,6 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
     from .joint_stiffness import TPU_PRINTED_MODULUS_FACTOR
 
     masses = masses_g(spec, frame, parts, total_mass_g)
-    m_kg = total_mass_g / 1000.0
 
     # 1. payload vertical
     f_design = design_force_n if design_force_n is not None else 95.0
@@ -974,7 +973,6 @@ def _strain(spec, frame, parts, joints, mdl: Model, u: np.ndarray, eps_break: fl
     for inst, labs in mdl.joint_nodes.items():
         if mdl.instance_part[inst] != "knee":
             continue
-        R = mdl.instance_rot[inst]
         leg = labs[knee_part.sockets[hi].rod]
         arms = [n for l, n in labs.items() if "arm" in l]
         th_leg = u[6 * idx[leg] + 3:6 * idx[leg] + 6]

@@ -25,7 +25,7 @@ import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Iterable, Iterator
+from typing import Callable, Iterator
 
 from ..errors import UserError
 from . import evaluate as ev
@@ -132,7 +132,6 @@ def read_log(out_dir: Path, code: str | None = None):
 
 
 def write_batch(out_dir: Path, rows: list[dict], code: str) -> Path:
-    import pandas as pd
 
     folder = out_dir / "results"
     folder.mkdir(exist_ok=True)
