@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import json
 import threading
+import time
 
 from . import graph
 from .cache import file_sha256
@@ -112,11 +113,24 @@ def _warm_up(ctx) -> None:
     by the executable after the first build: it no longer delays the first slice), the imports,
     then, when the CAD workers start cold (a core idle for ~2 s), the part renders' off-screen
     plotter (0.25 s of VTK set-up; no render, so no OpenGL context yet: the main thread's first
-    render makes it)."""
+    render makes it).
+
+    The plates' libraries come first. When the workers are warm (a rebuild of a few parts), the
+    plates, the head of the path to the slicer, follow the part at once: matplotlib's and
+    pyvista's imports then wait until they are laid out, instead of holding the interpreter
+    while the plates import trimesh (a one-part change's plates took 1.0-1.4 s, mostly that
+    import; 4.58 -> 4.24 s median of 4 one-part builds each, alternated)."""
     try:
         ctx.slicer.get()
     except Exception:  # left to the slice steps, which report it
         pass
+    try:
+        import rectpack  # noqa: F401
+        import trimesh  # noqa: F401
+    except ImportError:  # left to the step that needs it, like any step's error
+        pass
+    if not ctx.cad.cold.is_set():
+        _wait_for_the_plates(ctx)
     _import_main_thread_libraries()
     if ctx.cad.cold.is_set():
         try:
@@ -125,6 +139,15 @@ def _warm_up(ctx) -> None:
             _part_plotter(ctx)
         except Exception:  # left to the first render, which reports it like any step's error
             pass
+
+
+def _wait_for_the_plates(ctx, timeout_s: float = 10.0) -> None:
+    """Until every material's plates are laid out (run or cached), the build has ended, or
+    `timeout_s` (a safety: the thread is waited for when the process exits)."""
+    names = {f"plates:{p.material}" for p in ctx.design.parts}
+    t0 = time.monotonic()
+    while not names <= ctx.values.keys() and not ctx.cad.closed and time.monotonic() - t0 < timeout_s:
+        time.sleep(0.02)
 
 
 def _import_main_thread_libraries() -> None:
@@ -169,6 +192,11 @@ class CadPool:
         # the ~2 s of CadQuery imports leave a core to the build's own preparations
         self.cold = threading.Event()
         self._lock = threading.Lock()
+
+    @property
+    def closed(self) -> bool:
+        """Whether the build closed the pool (it has ended)."""
+        return self._closed
 
     @property
     def served(self) -> bool:
