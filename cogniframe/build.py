@@ -19,7 +19,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from . import outdir, pipeline, stack
-from .cache import file_sha256
+from .cache import code_hash, file_sha256
 from .spec import Spec
 
 
@@ -62,10 +62,7 @@ def build_key(spec: Spec, params_path: Path) -> str:
     h.update(Path(params_path).read_bytes())
     h.update(spec.digest().encode())
     h.update(json.dumps(stack.installed(), sort_keys=True).encode())
-    pkg = Path(__file__).resolve().parent
-    for src in sorted(pkg.rglob("*.py")):
-        h.update(src.relative_to(pkg).as_posix().encode())
-        h.update(src.read_bytes())
+    h.update(code_hash("**/*.py").encode())  # read once per process: the CAD server's key hashed it already
     return h.hexdigest()
 
 

@@ -124,14 +124,12 @@ def _warm_up(ctx) -> None:
         ctx.slicer.get()
     except Exception:  # left to the slice steps, which report it
         pass
-    try:
-        import rectpack  # noqa: F401
-        import trimesh  # noqa: F401
-    except ImportError:  # left to the step that needs it, like any step's error
-        pass
+    _import_main_thread_libraries(("rectpack", "trimesh"))  # the plates'
     if not ctx.cad.cold.is_set():
         _wait_for_the_plates(ctx)
-    _import_main_thread_libraries()
+    # the previews', plots', figures' and renders' (pyvista >= 0.45 loads `pyvista.plotting` on
+    # first use, Plotter: 0.4 s of VTK)
+    _import_main_thread_libraries(("matplotlib.backends.backend_agg", "matplotlib.figure", "pyvista", "pyvista.plotting"))
     if ctx.cad.cold.is_set():
         try:
             from .fabrication import _part_plotter
@@ -150,18 +148,17 @@ def _wait_for_the_plates(ctx, timeout_s: float = 10.0) -> None:
         time.sleep(0.02)
 
 
-def _import_main_thread_libraries() -> None:
+def _import_main_thread_libraries(names) -> None:
     """`BuildContext.warm_imports`' thread. A library that cannot be imported is left to the step
     that needs it, which reports it like any step's error (a thread's exception would only print
     a traceback)."""
-    try:
-        import matplotlib.backends.backend_agg  # noqa: F401
-        import matplotlib.figure  # noqa: F401
-        import pyvista  # noqa: F401
-        import pyvista.plotting  # noqa: F401 - pyvista >= 0.45 loads it on first use (Plotter): 0.4 s of VTK
-        import trimesh  # noqa: F401
-    except ImportError:
-        pass
+    import importlib
+
+    for name in names:
+        try:
+            importlib.import_module(name)
+        except ImportError:
+            pass
 
 
 # The order of the CAD server's jobs (lower first, then in order of submission). The joint FE,
