@@ -110,8 +110,11 @@ def build(params: ParamsArg,
     else:
         early = None
     try:
-        from .build import run_build
-        from . import spec as spec_mod
+        from .heap import imports_frozen
+
+        with imports_frozen():
+            from .build import run_build
+            from . import spec as spec_mod
 
         spec = spec_mod.load(params)
         result = run_build(spec, params, out, jobs=jobs, use_cache=not no_cache, console=Console(stderr=True),

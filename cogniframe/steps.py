@@ -154,11 +154,14 @@ def _import_main_thread_libraries(names) -> None:
     a traceback)."""
     import importlib
 
-    for name in names:
-        try:
-            importlib.import_module(name)
-        except ImportError:
-            pass
+    from .heap import imports_frozen
+
+    with imports_frozen():
+        for name in names:
+            try:
+                importlib.import_module(name)
+            except ImportError:
+                pass
 
 
 # The order of the CAD server's jobs (lower first, then in order of submission). The joint FE,

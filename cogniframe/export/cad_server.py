@@ -347,12 +347,15 @@ def serve(root: Path, key: str, idle_s: float, fe: bool) -> None:
     import select
     from multiprocessing.connection import Listener
 
-    importlib.import_module("cogniframe.export.cad_worker")  # CadQuery, trimesh, the part builders
-    if fe:
-        from .build import FE_PRELOAD
+    from ..heap import imports_frozen
 
-        for mod in FE_PRELOAD:
-            importlib.import_module(mod)
+    with imports_frozen():
+        importlib.import_module("cogniframe.export.cad_worker")  # CadQuery, trimesh, the part builders
+        if fe:
+            from .build import FE_PRELOAD
+
+            for mod in FE_PRELOAD:
+                importlib.import_module(mod)
     authkey = _authkey(root, key, create=False)
     if authkey is None:
         return

@@ -7,7 +7,9 @@ What it does, in that process only:
   0.8 s of the 2.6 s CadQuery import, for CadQuery's VTK display helpers, which a worker never
   calls. The stand-in module imports the real `vtkmodules.all` the first time anything reads an
   attribute of it, so a use still works, only later.
-- imports CadQuery, trimesh and the part builders, so each worker starts with them loaded.
+- imports CadQuery, trimesh and the part builders, so each worker starts with them loaded,
+  with the garbage collector off, then freezes their objects (`heap.imports_frozen`): no
+  worker's collection walks them again.
 - lets the forkserver end without tearing OpenCascade down. It ends when the build does, and its
   interpreter's teardown took 1.2 s more, holding the build's stdout and stderr open all along: a
   build piped into another program (`| tee`, a benchmark, CI) seemed to run 1.2 s longer. It has
@@ -47,7 +49,10 @@ atexit.register(os._exit, 0)
 if "vtk" not in sys.modules:
     sys.modules["vtk"] = _LazyModule("vtk", "vtkmodules.all")
 
-import cadquery  # noqa: E402,F401
-import trimesh  # noqa: E402,F401
+from ..heap import imports_frozen  # noqa: E402
 
-from ..parts import registry  # noqa: E402,F401
+with imports_frozen():  # the forks start with nothing for the collector to walk
+    import cadquery  # noqa: E402,F401
+    import trimesh  # noqa: E402,F401
+
+    from ..parts import registry  # noqa: E402,F401
