@@ -74,6 +74,19 @@ def test_durations_and_gcode_stats(tmp_path):
         slicer.read_gcode_stats(g)
 
 
+def test_gcode_stats_come_from_the_closing_comments_and_else_from_the_whole_file(tmp_path):
+    moves = "G1 X10.123 Y20.456 E0.01234\n" * 20_000  # 560 kB, as a plate's layers
+    footer = "; filament used [g] = 1.5, 0.25\n; estimated printing time (normal mode) = 1h 2m 3s\n"
+    g = tmp_path / "big.gcode"
+    # a line at the top that a read of the whole file would choke on: only the last 64 kB are read
+    g.write_text("; filament used [g] = n/a\n" + moves + footer + "; prusaslicer_config = begin\n" + "; k = v\n" * 300)
+    assert g.stat().st_size > 8 * slicer.GCODE_TAIL_BYTES
+    assert slicer.read_gcode_stats(g) == (1.75, 3723.0)
+    # the closing comments elsewhere (not in the last 64 kB): found by reading the whole file
+    g.write_text(footer + moves)
+    assert slicer.read_gcode_stats(g) == (1.75, 3723.0)
+
+
 def _scene_3mf(path, meshes: dict):
     s = trimesh.Scene()
     for n, m in meshes.items():
