@@ -54,6 +54,18 @@ def test_workers_are_warm_forks_of_one_server_that_outlives_a_build(server_env):
         assert again.submit(os.getpid).result() not in pids | {server}
 
 
+def test_workers_run_behind_the_build_and_the_server_does_not(server_env):
+    """The workers are BACKGROUND_NICE steps nicer than the build (`behind_the_build`): the build's
+    main thread goes first. The server itself keeps the build's priority (its start heads the
+    critical path of a cold build)."""
+    from cogniframe.export.build import BACKGROUND_NICE
+
+    mine = os.getpriority(os.PRIO_PROCESS, 0)
+    with cad_server.connect(1, idle_s=60) as pool:
+        assert pool.submit(os.getpriority, os.PRIO_PROCESS, 0).result() == min(19, mine + BACKGROUND_NICE)
+        assert os.getpriority(os.PRIO_PROCESS, cad_server.running()) == mine
+
+
 def test_jobs_run_in_the_builds_folder_and_raise_its_errors(server_env, monkeypatch):
     work = server_env / "work"
     work.mkdir()

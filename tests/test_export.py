@@ -222,3 +222,15 @@ def test_glb_rod_cylinder_is_a_closed_prism_of_the_polygon_area():
         assert m.is_watertight and m.is_winding_consistent and m.volume > 0  # outward faces
         assert m.volume == pytest.approx(48 / 2 * 2.5 ** 2 * np.sin(2 * np.pi / 48) * length, rel=1e-9)
         assert np.allclose(v[-2], start) and np.allclose(v[-1], end)
+
+
+def test_a_process_pools_cad_workers_run_behind_the_build():
+    """Without the CAD server the build's own pool's workers are as nice as the server's
+    (`export.build.start_worker`): BACKGROUND_NICE steps nicer than the build."""
+    import os
+
+    from cogniframe.export.build import BACKGROUND_NICE, make_pool
+
+    with make_pool(1, fe=False) as pool:
+        got = pool.submit(os.getpriority, os.PRIO_PROCESS, 0).result()
+    assert got == min(19, os.getpriority(os.PRIO_PROCESS, 0) + BACKGROUND_NICE)

@@ -149,6 +149,31 @@ def test_a_plate_that_fails_its_check_stops_the_slicer_started_beside_it(tmp_pat
         assert str(plate).encode() not in cmd, f"a slicer is still running: {cmd!r} ({os.getpid()})"
 
 
+def test_the_slicer_runs_behind_the_build(tmp_path):
+    """PrusaSlicer (here a stand-in that writes down its nice value, then its G-code) runs
+    BACKGROUND_NICE steps nicer than the build: its threads then leave the build's main thread go
+    first (`export.build.behind_the_build`)."""
+    import os
+
+    from cogniframe.export.build import BACKGROUND_NICE
+
+    ok = _box(10, 10, 5)
+    ok.apply_translation([10, 10, 0])
+    plate = _scene_3mf(tmp_path / "abs_1.3mf", {"a_1": ok})
+    fake = tmp_path / "prusa-slicer"
+    seen = tmp_path / "nice.txt"
+    # (the last argument is the G-code path; the nice value is read once the build has set it)
+    fake.write_text(f"#!/bin/sh\nsleep 0.5\nnice > {seen}\n"
+                    "for a; do out=$a; done\n"
+                    "printf '; filament used [g] = 0.5\\n; estimated printing time (normal mode) = 1m 0s\\n' > $out\n")
+    fake.chmod(0o755)
+    ini = tmp_path / "abs.ini"
+    ini.write_text("layer_height = 0.2\n")
+    got = slicer.slice_plate(plate, ini, (120, 120, 120), exe=str(fake), gcode=tmp_path / "abs_1.gcode")
+    assert (got.grams, got.time_s) == (0.5, 60.0)
+    assert int(seen.read_text()) == min(19, os.nice(0) + BACKGROUND_NICE)
+
+
 def test_slicer_messages_are_explained(tmp_path):
     msg = slicer._explain_failure(tmp_path / "abs_1.3mf", 134, "[2026] [trace] init\nObjects could not fit on the bed\n")
     assert "exit code 134" in msg and "printer.bed" in msg

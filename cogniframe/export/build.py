@@ -197,8 +197,36 @@ def make_pool(workers: int, fe: bool = True) -> ProcessPoolExecutor:
     whose joints are all cached says False). The forkserver is one per process, started by the
     first pool: later pools get its preload, and import what else they need themselves.
     Workers die with the build: a killed build leaves no worker writing into its temp folder."""
-    return ProcessPoolExecutor(max_workers=max(1, int(workers)), mp_context=_context(fe), initializer=die_with_build,
+    return ProcessPoolExecutor(max_workers=max(1, int(workers)), mp_context=_context(fe), initializer=start_worker,
                                initargs=(os.getpid(),))
+
+
+def start_worker(build_pid: int) -> None:
+    """What a CAD worker of the build `build_pid` does first, in a process pool or forked by the CAD
+    server: die with the build, and run behind it (`behind_the_build`)."""
+    die_with_build(build_pid)
+    behind_the_build()
+
+
+BACKGROUND_NICE = 10  # how much nicer than the build its CAD workers and PrusaSlicer run
+
+
+def behind_the_build(pid: int = 0) -> None:
+    """Make process `pid` (0: this one) BACKGROUND_NICE steps nicer than it is (at most 19).
+
+    In the second half of a build the CAD workers (the joints' FE, the clash check, the assembly
+    STEP) and PrusaSlicer's threads run beside the build's own main thread, which draws the
+    previews, renders and plots one after the other: that thread is then the critical path, and
+    the others' results are awaited only at the end. With every process at the same priority the
+    main thread got a share of a core and finished ~1.5 s after the rest, on one core. Running the
+    others nicer lets it go first; they take the time it leaves. Measured on this 2-core machine,
+    alternated cold carbon builds, 8 each: 9.04 -> 8.83 s median. Nothing else on the machine is
+    slowed: only the build's own helpers give way, and only to it.
+    Linux applies the nice value to the thread that sets it and to the threads it starts later."""
+    try:
+        os.setpriority(os.PRIO_PROCESS, pid, min(19, os.getpriority(os.PRIO_PROCESS, pid) + BACKGROUND_NICE))
+    except (AttributeError, OSError):  # no setpriority (Windows), or the process has just ended
+        pass
 
 
 def die_with_build(build_pid: int) -> None:

@@ -317,12 +317,13 @@ class ServerPool:
 # -- the server process ------------------------------------------------------------------------
 
 def _serve_worker(conn, hello) -> None:
-    """A forked worker: run the build's jobs until it hangs up (or dies: `die_with_build`)."""
-    from .build import die_with_build
+    """A forked worker: run the build's jobs until it hangs up (or dies: `die_with_build`), behind
+    the build (`behind_the_build`)."""
+    from .build import start_worker
 
     _, build_pid, cwd = hello
     os.chdir(cwd)
-    die_with_build(int(build_pid))
+    start_worker(int(build_pid))
     while True:
         try:
             fn, args = conn.recv()

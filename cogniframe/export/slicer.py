@@ -470,6 +470,11 @@ def slice_plate(plate: Path | str, profile: Path | str, bed: Sequence[float], ex
     # PrusaSlicer starts first and the plate is checked while it loads (reading the 3MF back,
     # 0.2-0.5 s, was at the head of the slicing); a plate that fails the check stops it
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    # behind the build's main thread, before PrusaSlicer has loaded and started its threads (they
+    # inherit it): `export.build.behind_the_build`
+    from .build import behind_the_build
+
+    behind_the_build(proc.pid)
     try:
         objs = check_plate(plate, bed, items=items)
         out, err = proc.communicate(timeout=timeout_s)
