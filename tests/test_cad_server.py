@@ -64,6 +64,9 @@ def test_workers_run_behind_the_build_and_the_server_does_not(server_env):
     with cad_server.connect(1, idle_s=60) as pool:
         assert pool.submit(os.getpriority, os.PRIO_PROCESS, 0).result() == min(19, mine + BACKGROUND_NICE)
         assert os.getpriority(os.PRIO_PROCESS, cad_server.running()) == mine
+        # and OpenCascade's thread pool is the worker's own thread only (`cad_worker`)
+        occ_threads = "__import__('OCP.OSD', fromlist=['OSD_ThreadPool']).OSD_ThreadPool.DefaultPool_s(-1).NbThreads()"
+        assert pool.submit(eval, occ_threads).result() == 1
 
 
 def test_jobs_run_in_the_builds_folder_and_raise_its_errors(server_env, monkeypatch):

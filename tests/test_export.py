@@ -224,7 +224,7 @@ def test_glb_rod_cylinder_is_a_closed_prism_of_the_polygon_area():
         assert np.allclose(v[-2], start) and np.allclose(v[-1], end)
 
 
-def test_a_process_pools_cad_workers_run_behind_the_build():
+def test_a_process_pools_cad_workers_run_behind_the_build_on_one_thread_each():
     """Without the CAD server the build's own pool's workers are as nice as the server's
     (`export.build.start_worker`): BACKGROUND_NICE steps nicer than the build."""
     import os
@@ -233,4 +233,8 @@ def test_a_process_pools_cad_workers_run_behind_the_build():
 
     with make_pool(1, fe=False) as pool:
         got = pool.submit(os.getpriority, os.PRIO_PROCESS, 0).result()
+        # OpenCascade's algorithms on the worker's own thread: one worker per core already
+        occ_threads = pool.submit(eval, "__import__('OCP.OSD', fromlist=['OSD_ThreadPool'])"
+                                        ".OSD_ThreadPool.DefaultPool_s(-1).NbThreads()").result()
     assert got == min(19, os.getpriority(os.PRIO_PROCESS, 0) + BACKGROUND_NICE)
+    assert occ_threads == 1
