@@ -16,7 +16,7 @@ Per run (a fresh cache folder and output folder each time):
   no-geom    build after core.battery.mass changes (no part geometry changes)
   one-part   build after motors.bolt_spacing changes (only the motor mount changes)
   check      `check --json` run again with a warm cache
-Prints the median wall and CPU seconds (the process and all its descendants: CAD workers, adopted
+Prints the machine's speed before and after (`_probe`), the median wall and CPU seconds (the process and all its descendants: CAD workers, adopted
 as a subreaper, and PrusaSlicer) of each over the runs, the load average (the machine may be shared), and the peak resident memory of the biggest child
 process (resource.getrusage(RUSAGE_CHILDREN).ru_maxrss, which is per process, not summed).
 Targets (2 cores): cold <= 10 s, no-geom <= 2 s, one-part <= 5 s, check <= 0.3 s, peak <= 1 GB.
@@ -161,6 +161,14 @@ def _stop_server(env: dict) -> None:
         os.waitpid(pid, 0)
 
 
+def _probe() -> float:
+    """Seconds of a 3-million-step pure-Python loop in a fresh interpreter: the machine's speed at
+    the moment. This 2-core machine takes 0.27-0.50 s by phase, and a build's CPU seconds follow
+    it, so a median means little without it."""
+    code = "import time; t = time.perf_counter(); s = 0\nfor i in range(3_000_000): s += i * i\nprint(time.perf_counter() - t)"
+    return float(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout)
+
+
 def _analytic(text: str) -> str:
     return re.sub(r"(\n\s+stiffness_model:\s*)\w+", r"\g<1>analytic", text, count=1)
 
@@ -200,11 +208,15 @@ def main() -> None:
     global LOAD0
     adopted = _subreaper()
     LOAD0 = ", ".join(f"{v:.1f}" for v in os.getloadavg())
+    probe0 = _probe()
     runs = [one_run(ROOT / a.params, a.jobs, a.analytic, not a.no_server) for _ in range(a.runs)]
+    probe1 = _probe()
     peak_mb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
     print(f"{a.params}{' (analytic joints)' if a.analytic else ''}, {a.runs} runs, {os.cpu_count()} cores, "
           f"jobs={a.jobs or 'auto'}, {'no CAD server' if a.no_server else 'CAD server (started by the cold build)'}")
     print(f"  load average before: {LOAD0}, after: {', '.join(f'{v:.1f}' for v in os.getloadavg())}")
+    print(f"  machine speed: a 3 M-step Python loop took {probe0:.3f} s before, {probe1:.3f} s after "
+          "(this machine: 0.27-0.50 s by phase)")
     for k, goal in (("cold", 10.0), ("no-geom", 2.0), ("one-part", 5.0), ("check", 0.3)):
         vals = [r[k] for r in runs]
         print(f"  {k:9s} median {statistics.median(vals):6.2f} s wall, {statistics.median(CPU[k]):6.2f} s CPU  "
