@@ -23,7 +23,6 @@ from .cache import code_hash, file_sha256
 from .spec import Spec
 
 
-
 @dataclass(frozen=True)
 class BuildResult:
     out_dir: Path

@@ -10,9 +10,9 @@ machine: the CAD server's imports ran 4 full collections (0.22 s of its 2.0 s), 
 then moves every object alive into the permanent generation (`gc.freeze`), which no collection
 walks. Used where a process imports for the rest of its life: the CAD server and the
 forkserver before they fork their workers (the forks start with nothing to walk, and pages are
-not written by the collector's bookkeeping, so they stay shared), and the `build` command's
-own imports. Never in library code a caller may run in a long session: frozen garbage is never
-freed.
+not written by the collector's bookkeeping, so they stay shared), the `build` command's own
+imports and the build's warm-up imports. Frozen garbage is never freed, so a block that imports
+nothing new freezes nothing: a session that builds again and again freezes once at most.
 """
 
 from __future__ import annotations

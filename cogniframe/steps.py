@@ -44,7 +44,6 @@ from .fabrication import (bom, figures_key, make_figures, make_plates, make_prev
 from .graph import Made, Step
 
 
-
 class BuildContext(graph.Context):
     """graph.Context plus what many steps look up: parts by name, their step values and meshes."""
 

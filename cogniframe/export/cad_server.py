@@ -348,13 +348,12 @@ def serve(root: Path, key: str, idle_s: float, fe: bool) -> None:
     import select
     from multiprocessing.connection import Listener
 
-    from ..heap import imports_frozen
+    importlib.import_module("cogniframe.export.cad_worker")  # CadQuery, trimesh, the part builders (frozen there)
+    if fe:
+        from ..heap import imports_frozen
+        from .build import FE_PRELOAD
 
-    with imports_frozen():
-        importlib.import_module("cogniframe.export.cad_worker")  # CadQuery, trimesh, the part builders
-        if fe:
-            from .build import FE_PRELOAD
-
+        with imports_frozen():
             for mod in FE_PRELOAD:
                 importlib.import_module(mod)
     authkey = _authkey(root, key, create=False)

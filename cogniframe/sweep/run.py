@@ -132,7 +132,6 @@ def read_log(out_dir: Path, code: str | None = None):
 
 
 def write_batch(out_dir: Path, rows: list[dict], code: str) -> Path:
-
     folder = out_dir / "results"
     folder.mkdir(exist_ok=True)
     ids = hashlib.sha256("".join(r["design_id"] for r in rows).encode()).hexdigest()[:16]
