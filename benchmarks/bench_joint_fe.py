@@ -30,7 +30,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from cogniframe import frame, partlist, spec
     from cogniframe.analysis import joint_fe, joint_stiffness, stiffness
-    from cogniframe.threads import one_blas_thread
+    from cogniframe.runtime.blas import one_blas_thread
 
     s = spec.load(args.params)
     f = frame.build(s)

@@ -36,8 +36,8 @@ class BuildResult:
 def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None = None, use_cache: bool = True,
               console: Console | None = None, gcode: bool = False, server: bool = False, early=None) -> BuildResult:
     """Build `spec` into `out`. `server`: CAD workers from the CAD server that outlives this build
-    (`export.cad_server`; the CLI's default) instead of a process pool of its own. `early`: the
-    server the CLI started before it validated the params (`cad_server.prestart`); the caller
+    (`runtime.server`; the CLI's default) instead of a process pool of its own. `early`: the
+    server the CLI started before it validated the params (`runtime.server.prestart`); the caller
     releases it (`Early.release`) when the build did not connect to it."""
     console = console or Console(stderr=True)
     with spec.blamed():
@@ -90,21 +90,21 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
     design = pipeline.design(spec) if design is None else design
     log = lambda m: console.print(m, markup=False, highlight=False)  # noqa: E731
     fingerprint = stack.fingerprint()
-    cad = steps.CadPool(jobs or os.cpu_count() or 1, fe=steps.needs_joint_fe(spec, design), server=server, stack=fingerprint,
-                        log=log, early=early)
-    ctx = steps.BuildContext(out, {"spec": spec, "design": design, "cad": cad, "slicer": steps.Slicer(log), "log": log,
-                                    "gcode": gcode},
-                              stack=fingerprint, use_cache=use_cache)
-    tasks = graph.expand(steps.STEPS, steps.rows(design))
-    if cad.fe or any(graph.will_run(t, ctx) for t in tasks if t.name.startswith("part:")):
-        cad.start_server()  # now, beside the set-up below, not when the first part step submits
-    from .threads import one_blas_thread
+    from .report.renders import ensure_headless
+    from .runtime import BuildRuntime
 
-    try:
-        with _StepProgress(console, len(tasks), spec.name) as progress, one_blas_thread():
-            records = graph.run(tasks, ctx, on_start=progress.start, on_done=progress.done)
-    finally:
-        cad.close()
+    ensure_headless()  # before any thread starts: the environment is not changed while one starts a process
+    slicer = steps.Slicer(log)
+    with BuildRuntime(jobs or os.cpu_count() or 1, fe=steps.needs_joint_fe(spec, design), server=server,
+                      stack=fingerprint, log=log, early=early, warm_before=slicer.get) as rt:
+        ctx = steps.BuildContext(out, {"spec": spec, "design": design, "cad": rt.cad, "warm": rt.warm, "slicer": slicer,
+                                        "log": log, "gcode": gcode}, stack=fingerprint, use_cache=use_cache)
+        tasks = graph.expand(steps.STEPS, steps.rows(design))
+        if rt.cad.fe or any(graph.will_run(t, ctx) for t in tasks if t.name.startswith("part:")):
+            rt.cad.start_server()  # now, beside the set-up below, not when the first part step submits
+        with _StepProgress(console, len(tasks), spec.name) as progress:
+            records = graph.run(tasks, ctx, on_start=progress.start, on_done=progress.done, on_error=rt.cancel,
+                                main_lock=rt.main_lock)
     n = _write_manifest(spec, params_path, out, key)
     return n, ctx["check"], ctx.built_parts(), tuple((r.task, r.status) for r in records)
 

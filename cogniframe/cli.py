@@ -41,7 +41,7 @@ def check(params: ParamsArg,
     from . import spec as spec_mod
 
     spec = spec_mod.load(params)
-    from .threads import one_blas_thread
+    from .runtime.blas import one_blas_thread
 
     # a new joint geometry's solid FE takes seconds: say what it is doing
     with _progress_to_stderr(), spec.blamed(), one_blas_thread():  # as `build` computes it: same numbers
@@ -100,7 +100,7 @@ def build(params: ParamsArg,
           gcode: Annotated[bool, typer.Option("--gcode", help="also keep the sliced G-code per plate (plates/*.gcode; not byte-stable)")] = False,
           server: Annotated[Optional[bool], typer.Option("--server/--no-server", help="CAD workers from a server kept between builds (default; COGNIFRAME_CAD_SERVER=0: off)")] = None) -> None:
     """Build every printable part (STL, STEP), the assembly, cut list, mass budget and manifest."""
-    from .export import cad_server
+    from .runtime import server as cad_server
 
     use_server = cad_server.wanted(server)
     if use_server:  # first thing: the server's imports then overlap this process's own and the validation
@@ -110,7 +110,7 @@ def build(params: ParamsArg,
     else:
         early = None
     try:
-        from .heap import imports_frozen
+        from .runtime.heap import imports_frozen
 
         with imports_frozen():
             from .build import run_build

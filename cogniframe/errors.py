@@ -36,6 +36,8 @@ def bug_message(exc: BaseException, command: str) -> str:
         tb = tb.tb_next
     if tb is not None:
         where = f" in {tb.tb_frame.f_code.co_filename.rsplit('/cogniframe/', 1)[-1]}:{tb.tb_lineno}"
+    for note in getattr(exc, "__notes__", ()):  # e.g. the build step that failed first
+        where += f"; {note}"
     return (f"internal error: this is a bug in cogniframe, not in your input ({type(exc).__name__}: {exc}{where}). "
             f"Nothing was written. Please report it on the cogniframe issue tracker with the command ({command}) and your params "
             f"file; run again with --debug (or COGNIFRAME_DEBUG=1) to print the traceback.")

@@ -12,7 +12,6 @@ from __future__ import annotations
 import os
 import shutil
 import tempfile
-import threading
 from pathlib import Path
 
 from .cache import file_sha256
@@ -162,16 +161,14 @@ def make_render_part(ctx, part: str) -> Made:
 
 def _part_plotter(ctx):
     """One off-screen plotter for every part render of this build (the render:{part} steps all run
-    on the main thread), made by the first that runs (or, while cold CAD workers start, by the
-    warm-up thread: `steps._warm_up`) and closed by the report: a plotter per part
-    cost a render context and a first render each (0.1 s CPU of a part render's 0.2 s); the images
-    are the same bytes (renders.render_parts)."""
+    on the main thread), made by the first that runs and closed by the report: a plotter per part
+    costs a render context and a first render each; the images are the same bytes
+    (renders.render_parts)."""
     from .report import renders
 
-    with ctx.__dict__.setdefault("_part_plotter_lock", threading.Lock()):  # the warm-up thread may make it
-        plotter = ctx.__dict__.get("_part_plotter")
-        if plotter is None:
-            plotter = ctx.__dict__["_part_plotter"] = renders.part_plotter()
+    plotter = ctx.__dict__.get("_part_plotter")
+    if plotter is None:
+        plotter = ctx.__dict__["_part_plotter"] = renders.part_plotter()
     return plotter
 
 

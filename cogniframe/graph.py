@@ -32,6 +32,7 @@ parts and materials, main thread vs waiting threads) is the ~200 lines below.
 
 from __future__ import annotations
 
+import contextlib
 import fnmatch
 import hashlib
 import json
@@ -184,18 +185,32 @@ def _do(task: Task, ctx: Context) -> tuple[Any, str]:
 
 def run(tasks: Sequence[Task], ctx: Context, threads: int = 16,
         on_start: Callable[[str], None] | None = None,
-        on_done: Callable[[Record], None] | None = None) -> list[Record]:
+        on_done: Callable[[Record], None] | None = None,
+        on_error: Callable[[], None] | None = None,
+        main_lock=None) -> list[Record]:
     """Run every task once its needs are done. Main-thread tasks run in list order, one at a time;
     "wait" tasks run in threads and are started the moment their needs are done, also while a
     main-thread task is running (a finished wait task starts the ones that needed it from its own
-    thread: the slicer never waits for a render to end). The first error stops new tasks, waits
-    for running ones, and is raised. Returns one Record per task, in the order they finished."""
+    thread: the slicer never waits for a render to end). Returns one Record per task, in the order
+    they finished.
+
+    The first error (by time) stops new tasks and calls `on_error()` once (the caller cancels
+    the work it has queued elsewhere, e.g. CAD jobs); the tasks under way end, and that first
+    error is raised, with a note naming its task. Errors that follow it (a job cancelled, a
+    step that read what the failed one did not make) are consequences and are not reported.
+    `main_lock`: held around each main-thread task (a lock that other threads take to work only
+    while the main thread has nothing to do)."""
     pending = list(tasks)
     done: set[str] = set()
     records: list[Record] = []
-    errors: list[BaseException] = []
+    errors: list[tuple[float, str, BaseException]] = []  # (when, task, error)
     running = [0]
     lock = threading.Condition()
+
+    def failed(task: str, e: BaseException) -> None:  # holding the lock
+        errors.append((time.perf_counter(), task, e))
+        if len(errors) == 1 and on_error is not None:
+            on_error()
 
     def ready(t: Task) -> bool:
         return all(n in done for n in t.needs) and all(n in done for n in t.after)
@@ -213,7 +228,7 @@ def run(tasks: Sequence[Task], ctx: Context, threads: int = 16,
             value, status = _do(t, ctx)
         except BaseException as e:  # noqa: BLE001 - handed to the caller
             with lock:
-                errors.append(e)
+                failed(t.name, e)
                 running[0] -= 1
                 lock.notify_all()
             return
@@ -249,18 +264,27 @@ def run(tasks: Sequence[Task], ctx: Context, threads: int = 16,
                 if on_start:
                     on_start(main.name)
             t0 = time.perf_counter()
-            value, status = _do(main, ctx)
+            try:
+                with (main_lock if main_lock is not None else contextlib.nullcontext()):
+                    value, status = _do(main, ctx)
+            except Exception as e:  # noqa: BLE001 - handed to the caller, after the running tasks end
+                with lock:
+                    failed(main.name, e)
+                continue
             with lock:
                 finish(main, value, status, t0)
 
     with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="step") as pool:
         try:
             main_loop()
-        except BaseException as e:  # noqa: BLE001 - a main task's error or Ctrl-C: start nothing new,
+        except BaseException as e:  # noqa: BLE001 - Ctrl-C (or the graph stuck): start nothing new,
             with lock:              # let the running tasks end (the executor waits for them), then raise
-                errors.insert(0, e)
+                failed("", e)
                 while running[0]:
                     lock.wait()
     if errors:
-        raise errors[0]
+        _, task, first = min(errors, key=lambda x: (not isinstance(x[2], (KeyboardInterrupt, SystemExit)), x[0]))
+        if task:
+            first.add_note(f"first failed step: {task}")
+        raise first
     return records

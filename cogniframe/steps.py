@@ -42,6 +42,7 @@ from .fabrication import (bom, figures_key, make_figures, make_plates, make_prev
                           make_slice, make_viewer, plates_key, previews_key, render_part_key, renders_key, report,
                           slice_key, viewer_key)
 from .graph import Made, Step
+from .runtime.pools import JOB_ORDER
 
 
 class BuildContext(graph.Context):
@@ -68,22 +69,10 @@ class BuildContext(graph.Context):
         return tuple(_built(p, self.part_value(p.name)) for p in self.design.parts)
 
     def warm_imports(self) -> None:
-        """Start importing the libraries of the main thread's steps (matplotlib for plates,
-        previews and plots, pyvista for renders, trimesh for meshes) in a thread of their own,
-        once per build, from the first part step that runs: a rebuilt part means those steps run
-        too, and while the CAD server starts (2 s of CadQuery imports on one core) and the
-        workers build, the other core has nothing else to do. These imports (~1.3 s of CPU) had
-        followed the server's start; beside it, with the budget thread and the FE jobs biggest
-        first, the cold carbon build went 12.37 -> 11.45 s (bench_incremental, same session). A
-        step that needs a module first waits for the import under way (per-module import lock)."""
-        with self.__dict__.setdefault("_warm_lock", threading.Lock()):
-            if self.__dict__.get("_warm") is not None:
-                return
-            from .report.renders import _ensure_headless
-
-            _ensure_headless()  # here: the environment is not changed while another thread starts a process
-            self.__dict__["_warm"] = t = threading.Thread(target=_warm_up, args=(self,), name="warm-imports")
-        t.start()
+        """Start importing the main thread's libraries while it waits for the CAD workers
+        (`runtime.warm`): called by the first part step that runs, since a rebuilt part means the
+        plates, previews and renders run too."""
+        self.warm.start()
 
     def plate_items(self, plate: dict):
         """What reading a plate's 3MF back gives (`plates.read_3mf_items`), when the plates step
@@ -105,161 +94,6 @@ class BuildContext(graph.Context):
         if key not in memo:
             memo[key] = trimesh.load(self.out / v["stl"], force="mesh")
         return memo[key]
-
-
-def _warm_up(ctx) -> None:
-    """`BuildContext.warm_imports`' thread: PrusaSlicer's version (a `--help` run, 0.25 s, cached
-    by the executable after the first build: it no longer delays the first slice), the imports,
-    then, when the CAD workers start cold (a core idle for ~2 s), the part renders' off-screen
-    plotter (0.25 s of VTK set-up; no render, so no OpenGL context yet: the main thread's first
-    render makes it).
-
-    The plates' libraries come first. When the workers are warm (a rebuild of a few parts), the
-    plates, the head of the path to the slicer, follow the part at once: matplotlib's and
-    pyvista's imports then wait until they are laid out, instead of holding the interpreter
-    while the plates import trimesh (a one-part change's plates took 1.0-1.4 s, mostly that
-    import; 4.58 -> 4.24 s median of 4 one-part builds each, alternated)."""
-    try:
-        ctx.slicer.get()
-    except Exception:  # left to the slice steps, which report it
-        pass
-    _import_main_thread_libraries(("rectpack", "trimesh"))  # the plates'
-    if not ctx.cad.cold.is_set():
-        _wait_for_the_plates(ctx)
-    # the previews', plots', figures' and renders' (pyvista >= 0.45 loads `pyvista.plotting` on
-    # first use, Plotter: 0.4 s of VTK)
-    _import_main_thread_libraries(("matplotlib.backends.backend_agg", "matplotlib.figure", "pyvista", "pyvista.plotting"))
-    if ctx.cad.cold.is_set():
-        try:
-            from .fabrication import _part_plotter
-
-            _part_plotter(ctx)
-        except Exception:  # left to the first render, which reports it like any step's error
-            pass
-
-
-def _wait_for_the_plates(ctx, timeout_s: float = 10.0) -> None:
-    """Until every material's plates are laid out (run or cached), the build has ended, or
-    `timeout_s` (a safety: the thread is waited for when the process exits)."""
-    names = {f"plates:{p.material}" for p in ctx.design.parts}
-    t0 = time.monotonic()
-    while not names <= ctx.values.keys() and not ctx.cad.closed and time.monotonic() - t0 < timeout_s:
-        time.sleep(0.02)
-
-
-def _import_main_thread_libraries(names) -> None:
-    """`BuildContext.warm_imports`' thread. A library that cannot be imported is left to the step
-    that needs it, which reports it like any step's error (a thread's exception would only print
-    a traceback)."""
-    import importlib
-
-    from .heap import imports_frozen
-
-    with imports_frozen():
-        for name in names:
-            try:
-                importlib.import_module(name)
-            except ImportError:
-                pass
-
-
-# The order of the CAD server's jobs (lower first, then in order of submission). The joint FE,
-# submitted when the build starts, after the parts (everything waits for them: the plates, then
-# the slicer, are the critical path) and after the clash check and the assembly STEP, submitted
-# once the plates are laid out. (The FE before those two measured the same: 10.73 vs 10.66 s
-# median of 4 cold carbon builds each, alternated.)
-JOB_ORDER = {"part": 0, "clash": 0, "assembly": 0, "joint FE": 1}
-
-
-class CadPool:
-    """The CAD process pool, started by the first step that needs it (never on a cached build).
-    `fe`: its workers preload the joint FE's modules too (`needs_joint_fe`). `server`: the
-    workers are forks of the CAD server that outlives the build (`export.cad_server`; `stack`
-    is part of its key), started by the first build; without one, or when it cannot start, a
-    process pool of this build's own (`export.build.make_pool`)."""
-
-    def __init__(self, workers: int, fe: bool = True, server: bool = False, stack: str = "", log=None, early=None):
-        self.workers = workers
-        self.fe = fe
-        self.server = server
-        self.stack = stack
-        self.log = log
-        self.early = early  # the server `cogniframe build` started first thing (`cad_server.prestart`), if any
-        self._pool = None
-        self._closed = False
-        # set when the workers start cold (a new CAD server, or a process pool of this build's own):
-        # the ~2 s of CadQuery imports leave a core to the build's own preparations
-        self.cold = threading.Event()
-        self._lock = threading.Lock()
-
-    @property
-    def closed(self) -> bool:
-        """Whether the build closed the pool (it has ended)."""
-        return self._closed
-
-    @property
-    def served(self) -> bool:
-        """Whether the workers are the CAD server's (once started)."""
-        from .export.cad_server import ServerPool
-
-        return isinstance(self._pool, ServerPool)
-
-    def start_server(self) -> None:
-        """Connect to the CAD server in a thread now, starting it if none runs, instead of when the
-        first job is submitted: the build calls this before its own set-up (BLAS limits, the
-        graph's first keys), when it knows that parts will be built, so that the server's 2 s of
-        CadQuery imports begin ~0.25 s earlier, at the head of the cold build's critical path.
-        The first `submit` waits for that connection."""
-        if self.server and self._pool is None:
-            threading.Thread(target=self._connect_quietly, name="cad-connect", daemon=True).start()
-
-    def _connect_quietly(self) -> None:
-        try:
-            self._ensure_pool()
-        except Exception:  # the build closed first, or no pool could start: the first submit says so
-            pass
-
-    def _ensure_pool(self):
-        with self._lock:
-            if self._closed:
-                raise RuntimeError("the CAD pool is closed")
-            if self._pool is None:
-                if self.server:
-                    from .export import cad_server
-
-                    self._pool = cad_server.connect(self.workers, self.stack, self.fe, log=self.log,
-                                                    on_start=self.cold.set, early=self.early)
-                if self._pool is None:
-                    from .export.build import make_pool
-
-                    self.cold.set()
-                    self._pool = make_pool(self.workers, self.fe)
-            return self._pool
-
-    def submit(self, fn, *args, priority: int = 0):
-        """`fn(*args)` in a worker; returns its Future. `priority` (the server's pool; a process
-        pool runs jobs in order): lower first, then in order of submission (`JOB_ORDER`)."""
-        pool = self._ensure_pool()
-        if self.served:
-            return pool.submit(fn, *args, priority=priority)
-        return pool.submit(fn, *args)
-
-    def run(self, fn, *args, priority: int = 0):
-        return self.submit(fn, *args, priority=priority).result()
-
-    def run_in_pool_if_started(self, fn, *args, priority: int = 0):
-        """`fn(*args)` in the pool when it is already running (its own process: Python work there
-        does not hold this process's GIL), else right here (starting the pool costs a CadQuery import)."""
-        with self._lock:
-            started = self._pool is not None
-        return self.run(fn, *args, priority=priority) if started else fn(*args)
-
-    def close(self) -> None:
-        with self._lock:  # after a connection under way (`start_server`)
-            self._closed = True
-            pool, self._pool = self._pool, None
-        if pool is not None:
-            pool.shutdown(wait=True, cancel_futures=True)
 
 
 def needs_joint_fe(spec, design) -> bool:

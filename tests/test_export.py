@@ -226,10 +226,10 @@ def test_glb_rod_cylinder_is_a_closed_prism_of_the_polygon_area():
 
 def test_a_process_pools_cad_workers_run_behind_the_build_on_one_thread_each():
     """Without the CAD server the build's own pool's workers are as nice as the server's
-    (`export.build.start_worker`): BACKGROUND_NICE steps nicer than the build."""
+    (`runtime.pools.start_worker`): BACKGROUND_NICE steps nicer than the build."""
     import os
 
-    from cogniframe.export.build import BACKGROUND_NICE, make_pool
+    from cogniframe.runtime.pools import BACKGROUND_NICE, make_pool
 
     with make_pool(1, fe=False) as pool:
         got = pool.submit(os.getpriority, os.PRIO_PROCESS, 0).result()

@@ -152,10 +152,10 @@ def test_a_plate_that_fails_its_check_stops_the_slicer_started_beside_it(tmp_pat
 def test_the_slicer_runs_behind_the_build(tmp_path):
     """PrusaSlicer (here a stand-in that writes down its nice value, then its G-code) runs
     BACKGROUND_NICE steps nicer than the build: its threads then leave the build's main thread go
-    first (`export.build.behind_the_build`)."""
+    first (`runtime.pools.behind_the_build`)."""
     import os
 
-    from cogniframe.export.build import BACKGROUND_NICE
+    from cogniframe.runtime.pools import BACKGROUND_NICE
 
     ok = _box(10, 10, 5)
     ok.apply_translation([10, 10, 0])

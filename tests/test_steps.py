@@ -270,11 +270,11 @@ def test_will_run_tells_before_the_build_which_keyed_tasks_the_cache_lacks(tmp_p
 def test_the_cad_pool_connects_once_in_the_background_and_the_first_job_waits_for_it(monkeypatch):
     """`CadPool.start_server` (called by the build before its own set-up) connects in a thread;
     a job submitted meanwhile waits for that connection instead of opening a second one, and a
-    pool that had to start its server is marked cold (the warm-up thread then prepares renders)."""
+    pool that had to start its server is marked cold."""
     from concurrent.futures import Future
 
-    from cogniframe.export import cad_server
-    from cogniframe.steps import CadPool
+    from cogniframe.runtime import server as cad_server
+    from cogniframe.runtime.pools import CadPool
 
     calls, release = [], threading.Event()
 
@@ -312,70 +312,37 @@ def test_the_cad_pool_connects_once_in_the_background_and_the_first_job_waits_fo
         cad.submit(sum, [1])
 
 
-_WARM_PROBE = """
-import sys, threading, time
-from types import SimpleNamespace
-from cogniframe import steps
-
-class Cad:
-    def __init__(self, cold):
-        self.cold = threading.Event()
-        if cold:
-            self.cold.set()
-        self.closed = False
-
-cold = sys.argv[1] == "cold"
-ctx = SimpleNamespace(slicer=SimpleNamespace(get=lambda: None), cad=Cad(cold), values={},
-                      design=SimpleNamespace(parts=[SimpleNamespace(material="abs"), SimpleNamespace(material="tpu_95a")]))
-t0 = time.monotonic()
-t = threading.Thread(target=steps._warm_up, args=(ctx,))
-t.start()
-if cold:  # nothing to wait for: it ends well before the wait's 10 s safety timeout
-    t.join(60)
-    print(time.monotonic() - t0 < 8.0, "matplotlib.figure" in sys.modules, "pyvista" in sys.modules)
-else:
-    while "trimesh" not in sys.modules and time.monotonic() - t0 < 30:
-        time.sleep(0.01)
-    time.sleep(1.0)  # matplotlib would be in by now (0.3 s) if it were not held back
-    held = "matplotlib.figure" not in sys.modules and "pyvista" not in sys.modules
-    ctx.values.update({"plates:abs": [], "plates:tpu_95a": []})
-    t.join(60)
-    print(held, "matplotlib.figure" in sys.modules, "pyvista" in sys.modules)
-"""
 
 
-@pytest.mark.parametrize("workers", ["warm", "cold"])
-def test_warm_workers_hold_matplotlib_and_pyvista_back_until_the_plates_are_laid_out(workers):
-    """A rebuild of a few parts on a warm CAD server: the plates follow the part at once and need
-    trimesh; matplotlib's and pyvista's imports (the later steps') wait until the plates are laid
-    out instead of holding the interpreter meanwhile. Cold workers leave a core idle for ~2 s:
-    then everything is imported at once, with no wait."""
-    import subprocess
-    import sys
+def test_the_first_error_by_time_is_raised_with_its_step_and_the_rest_is_cancelled(tmp_path):
+    """A waiting step fails first; the main thread's step under way then fails because of it (as
+    a render failed when the part it drew was missing). The build reports the first failure, names
+    its step, calls `on_error` once (the caller cancels its queued CAD jobs), starts nothing new."""
+    first_failed, cancelled, started = threading.Event(), [], []
 
-    r = subprocess.run([sys.executable, "-c", _WARM_PROBE, workers], capture_output=True, text=True, timeout=180)
-    assert r.returncode == 0, r.stderr[-2000:]
-    assert r.stdout.split() == ["True", "True", "True"]
+    def part(ctx):
+        raise RuntimeError("joint geometry produced 2 solids instead of 1")
+
+    def render(ctx):
+        assert first_failed.wait(20)
+        raise AttributeError("a consequence, reported before: module 'pyvista' has no attribute 'Plotter'")
+
+    def on_error():
+        cancelled.append(1)
+        first_failed.set()
+
+    steps = (Step("part:knee", (), part, where="wait"), Step("render", (), render),
+             Step("later", ("part:knee",), lambda ctx: started.append(1) or Made(), where="wait"))
+    with pytest.raises(RuntimeError, match="2 solids") as info:
+        graph.run(graph.expand(steps, [{}]), graph.Context(tmp_path, {}), on_error=on_error)
+    assert info.value.__notes__ == ["first failed step: part:knee"]
+    assert cancelled == [1] and started == []
 
 
-def test_waiting_for_the_plates_ends_with_them_or_with_the_build():
-    import time
-    from types import SimpleNamespace
-
-    from cogniframe.steps import _wait_for_the_plates
-
-    cad = SimpleNamespace(closed=False)
-    ctx = SimpleNamespace(cad=cad, values={}, design=SimpleNamespace(parts=[SimpleNamespace(material="abs")]))
-    threading.Timer(0.2, lambda: ctx.values.update({"plates:abs": []})).start()
-    t0 = time.monotonic()
-    _wait_for_the_plates(ctx)
-    assert 0.15 < time.monotonic() - t0 < 2.0
-    ctx.values.clear()
-    cad.closed = True  # a build that failed before its plates: no 10 s wait at the process's exit
-    t0 = time.monotonic()
-    _wait_for_the_plates(ctx)
-    assert time.monotonic() - t0 < 0.1
-    cad.closed = False
-    t0 = time.monotonic()
-    _wait_for_the_plates(ctx, timeout_s=0.3)
-    assert 0.25 < time.monotonic() - t0 < 1.0
+def test_a_main_thread_step_runs_holding_the_main_lock(tmp_path):
+    lock = threading.Lock()
+    held = []
+    steps = (Step("main", (), lambda ctx: held.append(lock.locked()) or Made()),
+             Step("wait", (), lambda ctx: held.append(("wait", lock.locked())) or Made(), where="wait"))
+    graph.run(graph.expand(steps[:1], [{}]), graph.Context(tmp_path, {}), main_lock=lock)
+    assert held == [True] and not lock.locked()

@@ -235,8 +235,9 @@ def _block_rot(r: np.ndarray) -> np.ndarray:
 
 
 def hinged_socket(part) -> int | None:
-    """Index of the knee's hinged (upper-leg) socket: the leg making the larger angle with the arms."""
-    if part.name != "knee":
+    """Index of the knee's hinged (upper-leg) socket: the leg making the larger angle with the arms
+    (any knee part: `knee_mirrored`, a rectangle's fr/rl knee, is hinged too)."""
+    if joint_kind(part) != "knee":
         return None
     dirs = [np.asarray(s.direction, float) for s in part.sockets]
     arm = None
@@ -312,7 +313,7 @@ def fe_joint(spec, part, factor: float | None = None, mesh_mm: float | None = No
     With one BLAS thread wherever it runs (a pool worker, a fork, this process): the thread count
     changes the order of the dense sums, and the cached numbers must be the same bits whichever
     path solved them."""
-    from ..threads import one_blas_thread
+    from ..runtime.blas import one_blas_thread
 
     with one_blas_thread():
         return _fe_joint(spec, part, factor, mesh_mm)
@@ -589,39 +590,6 @@ def _fe_unit(spec, part, mesh_mm: float) -> tuple[str, dict | None, str | None]:
         return part.name, None, str(exc)
 
 
-def _fe_pool(jobs: int):
-    """Worker processes for the joint FE. `fork` when this process is single-threaded and has not
-    loaded OpenCascade (the `check` command): no re-import of the main module, nothing to preload
-    (each worker imports CadQuery itself, in parallel). Otherwise the build's forkserver pool
-    (a fork after OCC work or beside running threads can deadlock). Both die with this process."""
-    import multiprocessing as mp
-    import sys
-    import threading
-    from concurrent.futures import ProcessPoolExecutor
-
-    from ..export.build import die_with_build, make_pool
-
-    if "OCP" not in sys.modules and threading.active_count() == 1 and "fork" in mp.get_all_start_methods():
-        return ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("fork"), initializer=die_with_build,
-                                   initargs=(os.getpid(),))
-    return make_pool(jobs)
-
-
-def _in_dask_worker() -> bool:
-    """True inside a Dask worker: its cores are the cluster's to schedule, one design per thread."""
-    import sys
-
-    if "distributed" not in sys.modules:
-        return False
-    try:
-        from distributed import get_worker
-
-        get_worker()
-        return True
-    except (ImportError, ValueError):
-        return False
-
-
 def has_unsolved(spec, parts, mesh_mm: float | None = None) -> bool:
     """Whether a joint in ``parts`` has no FE super-element in the joint cache yet (the test
     `solve_missing` makes; milliseconds: the keys are hashes of the parts' inputs)."""
@@ -647,7 +615,7 @@ def solve_missing(spec, parts, mesh_mm: float | None = None, jobs: int | None = 
     Measured on 2 cores, carbon preset, 5 new joints: serial 11 s (CadQuery import 2.3 s + the
     five FE), 2 workers 7-8 s wall for the whole check; with the mirror reflected (4 FE) the
     whole cold check takes ~1.8 s less CPU and ~3 s less wall (the two workers end together).
-    The pool: `_fe_pool`, or the caller's `submit(fn, *args) -> Future` (the build's CAD workers).
+    The pool: `runtime.pools.fe_pool`, or the caller's `submit(fn, *args) -> Future` (the build's CAD workers).
     Inside a daemonic process or a Dask worker the joints are solved serially, and if the pool
     breaks, the rest too."""
     from .. import cache
@@ -704,7 +672,9 @@ def _solve(spec, todo, mesh_mm: float, jobs: int | None, submit=None) -> dict[st
     if not todo:
         return {}
     if jobs is None:
-        jobs = int(os.environ.get("COGNIFRAME_JOBS") or 0) or (1 if _in_dask_worker() else (os.cpu_count() or 1))
+        from ..runtime.pools import in_dask_worker
+
+        jobs = int(os.environ.get("COGNIFRAME_JOBS") or 0) or (1 if in_dask_worker() else (os.cpu_count() or 1))
     jobs = max(1, min(int(jobs), len(todo)))
     keys = {p.name: key for p, key in todo}
     t0 = time.perf_counter()
@@ -728,13 +698,14 @@ def _solve(spec, todo, mesh_mm: float, jobs: int | None, submit=None) -> dict[st
         from concurrent.futures.process import BrokenProcessPool
         from contextlib import ExitStack
 
-        from ..export.cad_server import BrokenServer
+        from ..runtime.pools import fe_pool
+        from ..runtime.server import BrokenServer
 
         progress_log.info("joint FE: %d new joint geometries on %s", len(todo),
                           "the build's CAD workers" if submit is not None else f"{jobs} processes")
         try:
             with ExitStack() as owned:  # the pool made here is shut down here; the caller's is not
-                run = submit or owned.enter_context(_fe_pool(jobs)).submit
+                run = submit or owned.enter_context(fe_pool(jobs)).submit
                 # the biggest first (by the closed-form volume: the mesh is of a fixed size, so
                 # its DOFs and the factorization grow with it), so that the last job to start is
                 # a small one and the workers end together (longest-processing-time-first)

@@ -1,5 +1,5 @@
 """`cogniframe server status|stop`: the CAD server that `cogniframe build` keeps between builds
-(`export.cad_server`). It exits by itself after 10 minutes without a build; `stop` ends it now.
+(`runtime.server`). It exits by itself after 10 minutes without a build; `stop` ends it now.
 A server belongs to one environment (interpreter, cogniframe source, library versions,
 environment variables, cache folder): these commands see the one this shell's builds use.
 ``register(app)`` adds the command group to a Typer app.
@@ -22,7 +22,7 @@ def _stack() -> str:
 @server_app.command("status")
 def status_cmd() -> None:
     """Say whether this environment's CAD server runs (and its pid)."""
-    from cogniframe.export import cad_server
+    from cogniframe.runtime import server as cad_server
 
     pid = cad_server.running(_stack())
     typer.echo(f"CAD server running (pid {pid})" if pid else "no CAD server running")
@@ -31,7 +31,7 @@ def status_cmd() -> None:
 @server_app.command("stop")
 def stop_cmd() -> None:
     """Stop this environment's CAD server (the next build starts a new one)."""
-    from cogniframe.export import cad_server
+    from cogniframe.runtime import server as cad_server
 
     pid = cad_server.stop(_stack())
     typer.echo(f"stopped the CAD server (pid {pid})" if pid else "no CAD server running")

@@ -23,7 +23,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Sequence
@@ -165,6 +165,8 @@ def build_parts(spec: Spec, frame, parts: Sequence[PartSpec], out_dir: str | Pat
             if progress:
                 progress(p.name)
     elif todo:
+        from ..runtime.pools import make_pool
+
         with make_pool(n_jobs) as pool:
             futures = {pool.submit(build_part_files, p, bed, str(out_dir)): p for p in todo}
             for fut in as_completed(futures):
@@ -184,94 +186,6 @@ def _jobs(jobs: int | None, n: int) -> int:
         # Measured on 2 cores (8 parts): serial 4.4 s, 2 workers 5.1 s. Pool only for many parts.
         return 1 if n <= AUTO_SERIAL_MAX else max(1, min(os.cpu_count() or 1, n))
     return max(1, min(int(jobs), n))
-
-
-CAD_PRELOAD = ("cogniframe.export.cad_worker",)  # CadQuery (with a lazy vtk), trimesh, the part builders
-FE_PRELOAD = ("gmsh", "skfem", "pymetis", "cvxopt.cholmod")  # the joint FE's mesher and solver
-
-
-def make_pool(workers: int, fe: bool = True) -> ProcessPoolExecutor:
-    """A process pool for CadQuery work: forkserver with CadQuery preloaded (workers start warm), or
-    spawn where forkserver is missing; never fork (a fork after any OCC operation can deadlock).
-    `fe`: preload the joint FE's modules too (1 s more before the first worker starts; a build
-    whose joints are all cached says False). The forkserver is one per process, started by the
-    first pool: later pools get its preload, and import what else they need themselves.
-    Workers die with the build: a killed build leaves no worker writing into its temp folder."""
-    return ProcessPoolExecutor(max_workers=max(1, int(workers)), mp_context=_context(fe), initializer=start_worker,
-                               initargs=(os.getpid(),))
-
-
-def start_worker(build_pid: int) -> None:
-    """What a CAD worker of the build `build_pid` does first, in a process pool or forked by the CAD
-    server: die with the build, and run behind it (`behind_the_build`)."""
-    die_with_build(build_pid)
-    behind_the_build()
-
-
-BACKGROUND_NICE = 10  # how much nicer than the build its CAD workers and PrusaSlicer run
-
-
-def behind_the_build(pid: int = 0) -> None:
-    """Make process `pid` (0: this one) BACKGROUND_NICE steps nicer than it is (at most 19).
-
-    In the second half of a build the CAD workers (the joints' FE, the clash check, the assembly
-    STEP) and PrusaSlicer's threads run beside the build's own main thread, which draws the
-    previews, renders and plots one after the other: that thread is then the critical path, and
-    the others' results are awaited only at the end. With every process at the same priority the
-    main thread got a share of a core and finished ~1.5 s after the rest, on one core. Running the
-    others nicer lets it go first; they take the time it leaves. Measured on this 2-core machine,
-    alternated cold carbon builds, 8 each: 9.04 -> 8.83 s median. Nothing else on the machine is
-    slowed: only the build's own helpers give way, and only to it.
-    Linux applies the nice value to the thread that sets it and to the threads it starts later."""
-    try:
-        os.setpriority(os.PRIO_PROCESS, pid, min(19, os.getpriority(os.PRIO_PROCESS, pid) + BACKGROUND_NICE))
-    except (AttributeError, OSError):  # no setpriority (Windows), or the process has just ended
-        pass
-
-
-def die_with_build(build_pid: int) -> None:
-    """Exit this worker as soon as the build process `build_pid` is gone (even by SIGKILL).
-
-    A worker's parent is the forkserver, not the build, and the forkserver only exits once every
-    worker has (they hold its keep-alive pipe), so neither the kernel's parent-death signal nor the
-    forkserver would end them: a killed build used to leave its server and workers running, and a
-    worker could still write into the temp folder after the next build had cleaned it. A daemon
-    thread waits on the build's pidfd (Linux) or polls it, then ends the worker; with the workers
-    gone the forkserver exits too."""
-    import select
-    import threading
-    import time
-
-    def watch() -> None:
-        try:
-            fd = os.pidfd_open(build_pid)
-        except (AttributeError, OSError):
-            fd = None
-        if fd is not None:
-            select.select([fd], [], [])  # readable when the build has exited
-        else:
-            while True:
-                time.sleep(0.5)
-                try:
-                    os.kill(build_pid, 0)
-                except ProcessLookupError:
-                    break
-                except PermissionError:
-                    pass
-        os._exit(1)
-
-    threading.Thread(target=watch, name="die-with-build", daemon=True).start()
-
-
-def _context(fe: bool = True):
-    import multiprocessing as mp
-
-    try:
-        ctx = mp.get_context("forkserver")
-        ctx.set_forkserver_preload(list(CAD_PRELOAD + (FE_PRELOAD if fe else ())))
-        return ctx
-    except ValueError:
-        return mp.get_context("spawn")
 
 
 def _built(p: PartSpec, m: dict) -> BuiltPart:

@@ -471,8 +471,8 @@ def slice_plate(plate: Path | str, profile: Path | str, bed: Sequence[float], ex
     # 0.2-0.5 s, was at the head of the slicing); a plate that fails the check stops it
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     # behind the build's main thread, before PrusaSlicer has loaded and started its threads (they
-    # inherit it): `export.build.behind_the_build`
-    from .build import behind_the_build
+    # inherit it): `runtime.pools.behind_the_build`
+    from ..runtime.pools import behind_the_build
 
     behind_the_build(proc.pid)
     try:

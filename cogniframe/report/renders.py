@@ -94,15 +94,26 @@ def world_meshes(parts: Sequence["PartSpec"], meshes: Mapping[str, "trimesh.Trim
     return out
 
 
-def _ensure_headless() -> None:
+def _pyvista():
+    """pyvista with `pyvista.plotting` fully imported. pyvista resolves `Plotter`, `Text` and the
+    like from that module on first use, and takes a half-imported one as missing: an import
+    statement is what waits for an import under way elsewhere to finish."""
+    import pyvista
+    import pyvista.plotting  # noqa: F401
+
+    return pyvista
+
+
+def ensure_headless() -> None:
+    """VTK renders off-screen through EGL when there is no display (set before the first render window)."""
     if (sys.platform.startswith("linux") and "VTK_DEFAULT_OPENGL_WINDOW" not in os.environ
             and not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY")):
         os.environ["VTK_DEFAULT_OPENGL_WINDOW"] = "vtkEGLRenderWindow"
 
 
 def _plotter(size: tuple[int, int], antialiasing: str = "ssaa"):
-    _ensure_headless()
-    import pyvista as pv
+    ensure_headless()
+    pv = _pyvista()
 
     pv.OFF_SCREEN = True
     p = pv.Plotter(off_screen=True, window_size=list(size), lighting="light_kit")
@@ -123,7 +134,7 @@ def _label(p, text: str, height_px: int):
     position. (pyvista's `add_text(position="upper_left")` makes a vtkCornerAnnotation, which
     fits its font to the window again at every render: 23 ms of each part render's ~85 ms of CPU
     on llvmpipe; this draws the same pixels.)"""
-    import pyvista as pv
+    pv = _pyvista()
 
     actor = pv.Text(text, position=(LABEL_MARGIN_PX - 1, p.window_size[1] - LABEL_MARGIN_PX - 1))
     actor.prop.color = "black"
@@ -134,14 +145,14 @@ def _label(p, text: str, height_px: int):
 
 
 def _pv(mesh: "trimesh.Trimesh"):
-    import pyvista as pv
+    pv = _pyvista()
 
     faces = np.hstack([np.full((len(mesh.faces), 1), 3), np.asarray(mesh.faces)]).ravel()
     return pv.PolyData(np.asarray(mesh.vertices, dtype=float), faces)
 
 
 def _rods_polydata(rods: Sequence[RodSegment]):
-    import pyvista as pv
+    pv = _pyvista()
 
     tubes = []
     for r in rods:

@@ -18,11 +18,11 @@ def _run(code: str) -> list[str]:
 def test_a_block_that_imports_runs_without_the_collector_then_freezes_its_objects():
     on_inside, frozen, on_after, again, off_stays_off = _run("""
         import gc
-        from cogniframe.heap import imports_frozen
+        from cogniframe.runtime.heap import imports_frozen
         assert gc.isenabled() and gc.get_freeze_count() == 0
         with imports_frozen():
             print(gc.isenabled())
-            import decimal, fractions  # not imported by cogniframe.heap
+            import decimal, fractions  # not imported by cogniframe.runtime.heap
         print(gc.get_freeze_count())
         print(gc.isenabled())
         n = gc.get_freeze_count()
@@ -45,7 +45,7 @@ def test_the_cad_workers_start_with_cadquery_frozen():
     the block: the ~400 000 objects are frozen, the collector has next to nothing left to walk."""
     frozen, tracked = map(int, _run("""
         import gc
-        import cogniframe.export.cad_worker
+        import cogniframe.runtime.worker
         print(gc.get_freeze_count(), len(gc.get_objects()))
     """))
     assert frozen > 200_000
@@ -70,9 +70,11 @@ def test_the_warm_up_imports_are_frozen():
     names = ("colorsys",)
     frozen, imported = _run(f"""
         import gc, sys
-        from cogniframe.steps import _import_main_thread_libraries
+        from cogniframe.runtime.warm import Warmup
         n = gc.get_freeze_count()
-        _import_main_thread_libraries({names!r} + ("no_such_module_cogniframe",))
+        w = Warmup({names!r} + ("no_such_module_cogniframe",))
+        w.start()
+        w.wait()
         print(gc.get_freeze_count() - n, all(m in sys.modules for m in {names!r}))
     """)
     assert int(frozen) > 0 and imported == "True"

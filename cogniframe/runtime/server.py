@@ -26,7 +26,7 @@ in milliseconds. The same idea as Gradle's daemon or Bazel's server.
   who owns the cache can submit work.
 - **Off switch.** `cogniframe build --no-server`, or `COGNIFRAME_CAD_SERVER=0` (the test suite
   sets it; its own tests start and stop servers explicitly). Elsewhere than Linux, or when the
-  server cannot start, the build uses its per-build process pool (`export.build.make_pool`).
+  server cannot start, the build uses its per-build process pool (`runtime.pools.make_pool`).
 
 Started by `connect` or `prestart` only, as `python -c BOOT SYS_PATH FOLDER KEY IDLE_S STACK [fe]`: BOOT sets
 `sys.path` to the build's (a server started from the cache folder would otherwise import, say, an
@@ -251,6 +251,7 @@ class ServerPool:
         self._order = itertools.count()
         self._threads: list[threading.Thread] = []
         self._lock = threading.Lock()
+        self._worker_pids: set[int] = set()  # the forks serving this pool's connections
 
     def submit(self, fn, *args, priority: int = 0) -> Future:
         fut: Future = Future()
@@ -274,6 +275,9 @@ class ServerPool:
                 if conn is None:
                     conn = _client(self.key, self.authkey)
                     conn.send(("hello", os.getpid(), os.getcwd()))
+                    _, pid = conn.recv()  # ("ready", the worker's pid)
+                    with self._lock:
+                        self._worker_pids.add(pid)
                 conn.send((fn, args))
                 status, value = conn.recv()
             except (OSError, EOFError) as exc:
@@ -290,15 +294,35 @@ class ServerPool:
         if conn is not None:
             conn.close()
 
+    def cancel_pending(self) -> None:
+        """Cancel every job no worker has taken yet (a job under way ends on its own)."""
+        while True:
+            try:
+                item = self._jobs.get_nowait()
+            except queue.Empty:
+                break
+            if item[2] is not None:
+                item[2].cancel()
+            else:  # a worker's stop mark: keep it
+                self._jobs.put(item)
+                break
+
+    def kill_workers(self) -> None:
+        """End this pool's workers now (the jobs they run fail with BrokenServer); the server,
+        which forked them, stays and reaps them."""
+        import signal
+
+        with self._lock:
+            pids, self._worker_pids = set(self._worker_pids), set()
+        for pid in pids:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except OSError:
+                pass
+
     def shutdown(self, wait: bool = True, cancel_futures: bool = False) -> None:
         if cancel_futures:
-            while True:
-                try:
-                    item = self._jobs.get_nowait()
-                except queue.Empty:
-                    break
-                if item[2] is not None:
-                    item[2].cancel()
+            self.cancel_pending()
         with self._lock:
             threads = list(self._threads)
         for _ in threads:
@@ -319,11 +343,12 @@ class ServerPool:
 def _serve_worker(conn, hello) -> None:
     """A forked worker: run the build's jobs until it hangs up (or dies: `die_with_build`), behind
     the build (`behind_the_build`)."""
-    from .build import start_worker
+    from .pools import start_worker
 
     _, build_pid, cwd = hello
     os.chdir(cwd)
     start_worker(int(build_pid))
+    conn.send(("ready", os.getpid()))
     while True:
         try:
             fn, args = conn.recv()
@@ -348,10 +373,10 @@ def serve(root: Path, key: str, idle_s: float, fe: bool) -> None:
     import select
     from multiprocessing.connection import Listener
 
-    importlib.import_module("cogniframe.export.cad_worker")  # CadQuery, trimesh, the part builders (frozen there)
+    importlib.import_module("cogniframe.runtime.worker")  # CadQuery, trimesh, the part builders (frozen there)
     if fe:
-        from ..heap import imports_frozen
-        from .build import FE_PRELOAD
+        from .heap import imports_frozen
+        from .pools import FE_PRELOAD
 
         with imports_frozen():
             for mod in FE_PRELOAD:
@@ -435,7 +460,7 @@ def serve(root: Path, key: str, idle_s: float, fe: bool) -> None:
 
 
 _BOOT = ("import json, sys; sys.path[:] = json.loads(sys.argv[1]); "
-         "from cogniframe.export.cad_server import main; main(sys.argv[2:])")
+         "from cogniframe.runtime.server import main; main(sys.argv[2:])")
 
 
 def main(argv: list[str]) -> None:

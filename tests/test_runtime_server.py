@@ -1,4 +1,4 @@
-"""The CAD server that `cogniframe build` keeps between builds (export/cad_server.py).
+"""The CAD server that `cogniframe build` keeps between builds (runtime/server.py).
 
 Each test runs its own server on its own cache folder (so its own key and address) and stops it;
 the job functions are standard-library ones, picklable by reference in the server's workers.
@@ -13,7 +13,7 @@ import time
 
 import pytest
 
-from cogniframe.export import cad_server
+from cogniframe.runtime import server as cad_server
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the CAD server is Linux-only")
 
@@ -58,7 +58,7 @@ def test_workers_run_behind_the_build_and_the_server_does_not(server_env):
     """The workers are BACKGROUND_NICE steps nicer than the build (`behind_the_build`): the build's
     main thread goes first. The server itself keeps the build's priority (its start heads the
     critical path of a cold build)."""
-    from cogniframe.export.build import BACKGROUND_NICE
+    from cogniframe.runtime.pools import BACKGROUND_NICE
 
     mine = os.getpriority(os.PRIO_PROCESS, 0)
     with cad_server.connect(1, idle_s=60) as pool:
@@ -168,7 +168,7 @@ def test_a_killed_build_leaves_no_worker_running(server_env):
 
     script = (
         "import os, time\n"
-        "from cogniframe.export import cad_server\n"
+        "from cogniframe.runtime import server as cad_server\n"
         "pool = cad_server.connect(1, idle_s=60)\n"
         "print(pool.submit(os.getpid).result(), cad_server.running(), flush=True)\n"
         "pool.submit(time.sleep, 60)\n"

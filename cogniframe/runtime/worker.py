@@ -1,4 +1,4 @@
-"""Bootstrap of the CAD worker processes: the forkserver of `export.build.make_pool` imports this
+"""Bootstrap of the CAD worker processes: the forkserver of `runtime.pools.make_pool` imports this
 module once (its preload), then forks every worker from it warm. It is the one module of the
 package whose import does something on purpose; nothing else imports it.
 
@@ -8,7 +8,7 @@ What it does, in that process only:
   calls. The stand-in module imports the real `vtkmodules.all` the first time anything reads an
   attribute of it, so a use still works, only later.
 - imports CadQuery, trimesh and the part builders, so each worker starts with them loaded,
-  with the garbage collector off, then freezes their objects (`heap.imports_frozen`): no
+  with the garbage collector off, then freezes their objects (`runtime.heap.imports_frozen`): no
   worker's collection walks them again.
 - runs OpenCascade's algorithms on the calling thread only (below).
 - lets the forkserver end without tearing OpenCascade down. It ends when the build does, and its
@@ -50,7 +50,7 @@ atexit.register(os._exit, 0)
 if "vtk" not in sys.modules:
     sys.modules["vtk"] = _LazyModule("vtk", "vtkmodules.all")
 
-from ..heap import imports_frozen  # noqa: E402
+from .heap import imports_frozen  # noqa: E402
 
 with imports_frozen():  # the forks start with nothing for the collector to walk
     import cadquery  # noqa: E402,F401

@@ -1,0 +1,245 @@
+"""The build's worker processes: the CAD pool a build submits to, and the process pools behind it.
+
+`CadPool` is what the build steps see: `submit(fn, *args, priority=...)` returns a Future,
+`run(...)` its result, `cancel_pending()` drops the jobs not started yet (a failed build), and
+`close()` ends the build's use of it. Behind it the workers are forks of the CAD server
+(`runtime.server`, kept between builds) or a process pool of this build's own (`make_pool`).
+
+Every worker, whichever kind, starts with `start_worker`: it dies with the build that asked for
+it and runs `BACKGROUND_NICE` steps nicer than the build (the build's main thread, which draws
+the previews and renders, is the critical path in a build's second half).
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from concurrent.futures import ProcessPoolExecutor
+
+CAD_PRELOAD = ("cogniframe.runtime.worker",)  # CadQuery (with a lazy vtk), trimesh, the part builders
+FE_PRELOAD = ("gmsh", "skfem", "pymetis", "cvxopt.cholmod")  # the joint FE's mesher and solver
+
+# The order of the CAD workers' jobs (lower first, then in order of submission): the parts first,
+# because everything waits for them (the plates, then the slicer, are the critical path).
+JOB_ORDER = {"part": 0, "clash": 0, "assembly": 0, "joint FE": 1}
+
+BACKGROUND_NICE = 10  # how much nicer than the build its CAD workers and PrusaSlicer run
+
+
+class CadPool:
+    """The CAD workers of one build, started by the first job (never on a fully cached build).
+    `fe`: the workers preload the joint FE's modules too. `server`: the workers are forks of the
+    CAD server that outlives the build (`runtime.server`; `stack` is part of its key), started by
+    the first build; without one, or when it cannot start, a process pool of this build's own.
+    `early`: the server `cogniframe build` started first thing (`server.prestart`), if any."""
+
+    def __init__(self, workers: int, fe: bool = True, server: bool = False, stack: str = "", log=None, early=None):
+        self.workers = workers
+        self.fe = fe
+        self.server = server
+        self.stack = stack
+        self.log = log
+        self.early = early
+        self._pool = None
+        self._closed = False
+        # set when the workers start cold (a new CAD server, or a process pool of this build's
+        # own): their imports take seconds, which the build's own idle work can use
+        self.cold = threading.Event()
+        self._lock = threading.Lock()
+
+    @property
+    def closed(self) -> bool:
+        """Whether the build closed the pool (it has ended)."""
+        return self._closed
+
+    @property
+    def served(self) -> bool:
+        """Whether the workers are the CAD server's (once started)."""
+        from .server import ServerPool
+
+        return isinstance(self._pool, ServerPool)
+
+    def start_server(self) -> None:
+        """Connect to the CAD server in a thread now, starting it if none runs, instead of when the
+        first job is submitted: the server's imports head a cold build's critical path. The first
+        `submit` waits for that connection."""
+        if self.server and self._pool is None:
+            threading.Thread(target=self._connect_quietly, name="cad-connect", daemon=True).start()
+
+    def _connect_quietly(self) -> None:
+        try:
+            self._ensure_pool()
+        except Exception:  # the build closed first, or no pool could start: the first submit says so
+            pass
+
+    def _ensure_pool(self):
+        with self._lock:
+            if self._closed:
+                raise RuntimeError("the CAD pool is closed")
+            if self._pool is None:
+                if self.server:
+                    from . import server
+
+                    self._pool = server.connect(self.workers, self.stack, self.fe, log=self.log,
+                                                on_start=self.cold.set, early=self.early)
+                if self._pool is None:
+                    self.cold.set()
+                    self._pool = make_pool(self.workers, self.fe)
+            return self._pool
+
+    def submit(self, fn, *args, priority: int = 0):
+        """`fn(*args)` in a worker; returns its Future. `priority` (the server's pool; a process
+        pool runs jobs in order): lower first, then in order of submission (`JOB_ORDER`)."""
+        pool = self._ensure_pool()
+        if self.served:
+            return pool.submit(fn, *args, priority=priority)
+        return pool.submit(fn, *args)
+
+    def run(self, fn, *args, priority: int = 0):
+        return self.submit(fn, *args, priority=priority).result()
+
+    def run_in_pool_if_started(self, fn, *args, priority: int = 0):
+        """`fn(*args)` in the pool when it is already running (its own process: Python work there
+        does not hold this process's GIL), else right here (starting the pool costs a CadQuery import)."""
+        with self._lock:
+            started = self._pool is not None
+        return self.run(fn, *args, priority=priority) if started else fn(*args)
+
+    def cancel(self) -> None:
+        """Drop every job not started yet and end the workers running one (the build calls this
+        when a step fails: nothing else it submitted is wanted). Their Futures are cancelled or
+        fail, and no new job is taken. The CAD server itself stays."""
+        with self._lock:
+            self._closed = True
+            pool = self._pool
+        if pool is not None:
+            pool.cancel_pending()
+            pool.kill_workers()
+
+    def close(self) -> None:
+        with self._lock:  # after a connection under way (`start_server`)
+            self._closed = True
+            pool, self._pool = self._pool, None
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+
+class _ProcessPool(ProcessPoolExecutor):
+    """A ProcessPoolExecutor whose queued jobs can be dropped and whose workers can be ended."""
+
+    def cancel_pending(self) -> None:
+        """Nothing here: `kill_workers` fails every job, queued or running, at once (the pool's
+        manager thread fails them all with BrokenProcessPool; it must not meet a cancelled one)."""
+
+    def kill_workers(self) -> None:
+        """End every worker now: the jobs they run fail (the pool is then broken; shut it down)."""
+        for proc in list((self._processes or {}).values()):
+            try:
+                proc.kill()
+            except (OSError, AttributeError):
+                pass
+
+
+def make_pool(workers: int, fe: bool = True) -> ProcessPoolExecutor:
+    """A process pool for CadQuery work: forkserver with CadQuery preloaded (workers start warm), or
+    spawn where forkserver is missing; never fork (a fork after any OCC operation can deadlock).
+    `fe`: preload the joint FE's modules too (a build whose joints are all cached says False).
+    The forkserver is one per process, started by the first pool: later pools get its preload,
+    and import what else they need themselves. Workers die with the build: a killed build leaves
+    no worker writing into its temp folder."""
+    return _ProcessPool(max_workers=max(1, int(workers)), mp_context=_context(fe), initializer=start_worker,
+                        initargs=(os.getpid(),))
+
+
+def fe_pool(jobs: int) -> ProcessPoolExecutor:
+    """Worker processes for the joint FE of `check`. `fork` when this process is single-threaded
+    and has not loaded OpenCascade (no re-import of the main module, nothing to preload); otherwise
+    the forkserver pool (a fork after OCC work or beside running threads can deadlock). Both die
+    with this process."""
+    import multiprocessing as mp
+    import sys
+
+    if "OCP" not in sys.modules and threading.active_count() == 1 and "fork" in mp.get_all_start_methods():
+        return _ProcessPool(max_workers=jobs, mp_context=mp.get_context("fork"), initializer=die_with_build,
+                            initargs=(os.getpid(),))
+    return make_pool(jobs)
+
+
+def in_dask_worker() -> bool:
+    """True inside a Dask worker: its cores are the cluster's to schedule, one design per thread."""
+    import sys
+
+    if "distributed" not in sys.modules:
+        return False
+    try:
+        from distributed import get_worker
+
+        get_worker()
+        return True
+    except (ImportError, ValueError):
+        return False
+
+
+def start_worker(build_pid: int) -> None:
+    """What a CAD worker of the build `build_pid` does first, in a process pool or forked by the CAD
+    server: die with the build, and run behind it (`behind_the_build`)."""
+    die_with_build(build_pid)
+    behind_the_build()
+
+
+def behind_the_build(pid: int = 0) -> None:
+    """Make process `pid` (0: this one) BACKGROUND_NICE steps nicer than it is (at most 19).
+
+    In the second half of a build the CAD workers (the joints' FE, the clash check, the assembly
+    STEP) and PrusaSlicer run beside the build's main thread, which draws the previews, renders
+    and plots one after the other and is then the critical path; the others' results are awaited
+    only at the end. Running them nicer lets the main thread go first (docs/build.md has the
+    measurements). Only the build's own helpers give way, and only to it. Linux applies the nice
+    value to the thread that sets it and to the threads it starts later."""
+    try:
+        os.setpriority(os.PRIO_PROCESS, pid, min(19, os.getpriority(os.PRIO_PROCESS, pid) + BACKGROUND_NICE))
+    except (AttributeError, OSError):  # no setpriority (Windows), or the process has just ended
+        pass
+
+
+def die_with_build(build_pid: int) -> None:
+    """Exit this worker as soon as the build process `build_pid` is gone (even by SIGKILL).
+
+    A worker's parent is the forkserver, not the build, and the forkserver only exits once every
+    worker has (they hold its keep-alive pipe), so neither the kernel's parent-death signal nor the
+    forkserver would end them, and a worker could still write into the temp folder after the next
+    build had cleaned it. A daemon thread waits on the build's pidfd (Linux) or polls it, then ends
+    the worker; with the workers gone the forkserver exits too."""
+    import select
+    import time
+
+    def watch() -> None:
+        try:
+            fd = os.pidfd_open(build_pid)
+        except (AttributeError, OSError):
+            fd = None
+        if fd is not None:
+            select.select([fd], [], [])  # readable when the build has exited
+        else:
+            while True:
+                time.sleep(0.5)
+                try:
+                    os.kill(build_pid, 0)
+                except ProcessLookupError:
+                    break
+                except PermissionError:
+                    pass
+        os._exit(1)
+
+    threading.Thread(target=watch, name="die-with-build", daemon=True).start()
+
+
+def _context(fe: bool = True):
+    import multiprocessing as mp
+
+    try:
+        ctx = mp.get_context("forkserver")
+        ctx.set_forkserver_preload(list(CAD_PRELOAD + (FE_PRELOAD if fe else ())))
+        return ctx
+    except ValueError:
+        return mp.get_context("spawn")
