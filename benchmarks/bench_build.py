@@ -25,7 +25,7 @@ import json, sys, time
 t0 = time.perf_counter()
 from pathlib import Path
 from cogniframe import frame as frame_mod, partlist, spec as spec_mod
-from cogniframe.export.build import build_parts
+from cogniframe.export.part_files import build_parts
 spec = spec_mod.load(sys.argv[1])
 data = spec.model_dump(mode="json")
 for key, value in json.loads(sys.argv[4]).items():
@@ -36,7 +36,7 @@ fr = frame_mod.build(spec)
 parts = partlist.build(spec, fr)
 t1 = time.perf_counter()
 built_names = []
-import cogniframe.export.build as b
+import cogniframe.export.part_files as b
 real = b.build_part_files
 b.build_part_files = lambda p, *a: built_names.append(p.name) or real(p, *a)
 jobs = None if sys.argv[5] == "auto" else int(sys.argv[5])

@@ -38,7 +38,7 @@ def main(argv=None) -> None:
     sys.path.insert(0, str(ROOT))
     from rich.console import Console
 
-    from cogniframe import steps
+    from cogniframe.build import steps
     from cogniframe.build import run_build
     from cogniframe.spec import load as load_spec
 

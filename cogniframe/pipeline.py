@@ -8,7 +8,7 @@ CadQuery is only imported by `build` (through export/), so `check` stays fast.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from . import cutlist as cutlist_mod
@@ -68,26 +68,13 @@ def _check_printer_fit(spec: Spec, parts) -> None:
 def check(spec: Spec, geometry: dict | None = None, clash=None, design_: Design | None = None) -> CheckResult:
     """Mass budget, crash margin, flight and requirements; `geometry` = CAD volumes when known,
     `clash` = the build's clash check (analysis.clash.ClashResult) when known, `design_` = this
-    spec's design when the caller has it (the build: 50 ms saved per call)."""
-    d, budget, drop, session = _mass_and_drop(spec, geometry, design_)
-    stiffness, peak = _physics(spec, d, budget, drop, session)
-    from .analysis import flight as flight_mod
-
-    flight = flight_mod.evaluate(spec, budget.total_g)
-    problems = (_problems(spec, budget, drop) + _physics_problems(spec, stiffness, peak)
-                + _aircraft_problems(spec, flight, clash))
-    return CheckResult(d, budget, drop, tuple(problems), stiffness, peak, flight, clash)
+    spec's design when the caller has it."""
+    return with_clash(complete(spec, *mass_and_drop(spec, geometry, design_)), clash)
 
 
-def mass_and_drop(spec: Spec, geometry: dict | None = None,
-                  design_: Design | None = None) -> tuple[Design, mass_mod.MassBudget, object]:
-    """The first, cheap part of `check`: the design, its mass budget and drop model (what the
-    build's mass and drop figures draw while the load cases are still being solved)."""
-    d, budget, drop, _ = _mass_and_drop(spec, geometry, design_)
-    return d, budget, drop
-
-
-def _mass_and_drop(spec: Spec, geometry: dict | None = None, design_: Design | None = None):
+def mass_and_drop(spec: Spec, geometry: dict | None = None, design_: Design | None = None):
+    """The first, cheap part of `check`: (design, mass budget, drop model, frame session): what the
+    build's mass and drop figures draw while the load cases are still being solved."""
     d = design(spec) if design_ is None else design_
     budget = mass_mod.budget(spec, d.frame, d.cut, d.parts, geometry)
     from .analysis import drop as drop_mod
@@ -96,15 +83,31 @@ def _mass_and_drop(spec: Spec, geometry: dict | None = None, design_: Design | N
     return d, budget, _drop(spec, d, budget, session), session
 
 
-def _aircraft_problems(spec: Spec, flight, clash) -> list[str]:
-    """Issue 13: thrust-to-weight below requirements.min_thrust_to_weight; any clash."""
+def complete(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=None) -> CheckResult:
+    """The rest of `check` for that mass budget and drop model: load cases, peaks, flight and the
+    verdict (no clash check: `with_clash` adds the build's)."""
+    stiffness, peak = _physics(spec, d, budget, drop, session)
+    from .analysis import flight as flight_mod
+
+    flight = flight_mod.evaluate(spec, budget.total_g)
+    problems = _problems(spec, budget, drop) + _physics_problems(spec, stiffness, peak) + _aircraft_problems(spec, flight)
+    return CheckResult(d, budget, drop, tuple(problems), stiffness, peak, flight)
+
+
+def with_clash(result: CheckResult, clash) -> CheckResult:
+    """`result` with the build's clash check: its clashes are FAIL problems, after the others."""
+    if clash is None:
+        return result
+    return replace(result, problems=result.problems + tuple(clash.messages()), clash=clash)
+
+
+def _aircraft_problems(spec: Spec, flight) -> list[str]:
+    """Thrust-to-weight below requirements.min_thrust_to_weight."""
     out = []
     if flight is not None and flight.thrust_to_weight < spec.requirements.min_thrust_to_weight:
         out.append(f"thrust-to-weight {flight.thrust_to_weight:.2f} is below {spec.requirements.min_thrust_to_weight:g} "
                    f"(requirements.min_thrust_to_weight): {flight.max_thrust_g_per_motor:.0f} g per motor lifts "
                    f"{flight.mass_g:.0f} g; choose stronger motors, bigger props, more cells or a lighter design")
-    if clash is not None:
-        out += clash.messages()
     return out
 
 

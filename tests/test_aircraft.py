@@ -414,7 +414,7 @@ def test_a_build_with_a_clash_exits_1_naming_both_solids(run_cli, tmp_path, monk
 
     import yaml
 
-    from cogniframe import steps
+    from cogniframe.build import steps
 
     keep = ("estimate", "part:{material}/{part}", "budget", "physics", "clash", "check")
     monkeypatch.setattr(steps, "STEPS", tuple(s for s in steps.STEPS if s.name in keep))
@@ -478,7 +478,7 @@ def test_vitamin_bom_rows_name_their_budget_lines():
 def test_tilted_camera_mount_prints_without_support_and_carries_the_camera(tilt, tmp_path):
     """Tilted uprights still print as they sit (lean < 45 deg) and the camera board stays on the
     upright's front face: the board's back corners lie on the mount's surface (ray from behind)."""
-    from cogniframe.export.build import build_parts
+    from cogniframe.export.part_files import build_parts
     from cogniframe.export.mesh import load_stl, overhangs
     from cogniframe.vitamins import camera_vitamin, to_trimesh
 

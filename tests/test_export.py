@@ -30,7 +30,7 @@ def _design(preset="carbon", **changes):
 
 @pytest.mark.parametrize("preset", PRESETS)
 def test_same_params_give_byte_identical_stl_and_step(preset, tmp_path):
-    from cogniframe.export.build import build_parts
+    from cogniframe.export.part_files import build_parts
 
     first = built_preset(preset)
     spec, fr, parts = first.spec, first.frame, tuple(first.parts.values())
@@ -42,7 +42,7 @@ def test_same_params_give_byte_identical_stl_and_step(preset, tmp_path):
 
 
 def test_parallel_build_gives_the_same_bytes(tmp_path):
-    from cogniframe.export.build import build_parts
+    from cogniframe.export.part_files import build_parts
 
     first = built_preset("carbon")
     parts = tuple(first.parts.values())[:4]
@@ -79,7 +79,7 @@ def test_files_are_laid_out_by_material(tmp_path):
 
 
 def test_cache_hit_is_fast_identical_and_reports_progress(tmp_path):
-    from cogniframe.export.build import build_parts
+    from cogniframe.export.part_files import build_parts
 
     spec, fr, parts = _design()
     cache = tmp_path / "cache"
@@ -96,7 +96,7 @@ def test_cache_hit_is_fast_identical_and_reports_progress(tmp_path):
 
 
 def test_only_changed_parts_are_rebuilt(tmp_path, monkeypatch):
-    from cogniframe.export import build as build_mod
+    from cogniframe.export import part_files as build_mod
 
     cache = tmp_path / "cache"
     spec, fr, parts = _design()
@@ -185,7 +185,7 @@ def test_glb_places_every_copy_rod_and_vitamin_y_up_in_mm_and_is_byte_stable(tmp
 
 
 def test_mesh_tolerances_agree_with_the_cache_key():
-    from cogniframe.export import build, mesh
+    from cogniframe.export import part_files as build, mesh
 
     assert (build.LINEAR_TOL, build.ANGULAR_TOL) == (mesh.LINEAR_TOL, mesh.ANGULAR_TOL)
 

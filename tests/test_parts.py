@@ -36,7 +36,7 @@ OVERHANG_MAX = 0.01  # unsupported fraction of the downward-facing area
 @functools.lru_cache(maxsize=None)
 def built_preset(name: str):
     """Build a preset's parts once (no cache) into a temp dir; meshes re-read from the STL files."""
-    from cogniframe.export.build import build_parts
+    from cogniframe.export.part_files import build_parts
     from cogniframe.export.mesh import load_stl
 
     spec = spec_mod.load(ROOT / "params" / f"{name}.yaml")
@@ -172,7 +172,7 @@ def test_registry_lists_families_and_rejects_unknown_ones():
 
 
 def test_part_larger_than_the_bed_is_a_user_error(tmp_path):
-    from cogniframe.export.build import build_parts
+    from cogniframe.export.part_files import build_parts
 
     spec = spec_mod.from_dict({"printer": {"bed": [60, 60, 60]}})
     frame = frame_mod.build(spec)
@@ -185,7 +185,7 @@ def test_part_larger_than_the_bed_is_a_user_error(tmp_path):
 
 
 def test_part_that_fits_only_turned_is_turned(tmp_path):
-    from cogniframe.export.build import build_parts
+    from cogniframe.export.part_files import build_parts
     from cogniframe.export.mesh import load_stl
 
     spec = spec_mod.from_dict({"printer": {"bed": [40, 70, 60]}})
@@ -264,7 +264,7 @@ def test_frame_without_struts_builds_and_fails_the_drop_check(tmp_path):
     import yaml
 
     from cogniframe import pipeline, spec as spec_mod
-    from cogniframe.export.build import build_parts
+    from cogniframe.export.part_files import build_parts
     from cogniframe.export.mesh import load_stl
 
     data = yaml.safe_load((ROOT / "params" / "carbon.yaml").read_text())

@@ -69,7 +69,7 @@ def test_180mm_printer_packs_the_carbon_parts_on_fewer_plates_than_120mm(tmp_pat
 
     from cogniframe import pipeline
     from cogniframe.cache import cache_dir
-    from cogniframe.export.build import build_parts
+    from cogniframe.export.part_files import build_parts
     from cogniframe.export.plates import PlateItem, pack_plates
 
     small = spec_mod.from_dict({**yaml.safe_load((ROOT / "params/carbon.yaml").read_text()), "printer": {"preset": "monoprice_mini_v2"}})

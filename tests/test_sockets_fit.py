@@ -129,7 +129,7 @@ def test_part_quantities_match_the_frame_graph(preset):
 def test_rod_diameter_drives_every_bore_and_the_cut_list(tmp_path):
     """3 -> 4 mm rods: every socket hole measured on the STL grows by 1 mm; the cut list follows."""
     from cogniframe import cutlist, frame as frame_mod, partlist, spec as spec_mod
-    from cogniframe.export.build import build_parts
+    from cogniframe.export.part_files import build_parts
     from cogniframe.export.mesh import load_stl, ray_first_hit
     from cogniframe.parts.joint import map_sockets
 

@@ -584,7 +584,7 @@ def test_the_joint_fe_meshes_the_shape_the_part_build_shared_to_the_same_bits(tm
     """The build's part job stores a joint's BREP (`build_part_files(share_shape=True)`); the joint
     FE then meshes that text instead of building the CAD again, and gets the same matrix, bit for
     bit, as from its own CAD."""
-    from cogniframe.export import build as export_build
+    from cogniframe.export import part_files as export_build
     from cogniframe.parts import joint as joint_cad
 
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))

@@ -50,7 +50,7 @@ def _browser_or_skip():
 def carbon_report(tmp_path_factory):
     """report.html for the carbon preset with the real meshes; returns (path, items, check result)."""
     from cogniframe.cache import cache_dir
-    from cogniframe.export.build import build_parts
+    from cogniframe.export.part_files import build_parts
 
     out = tmp_path_factory.mktemp("viewer") / "carbon"
     out.mkdir()

@@ -321,7 +321,7 @@ def fe_joint(spec, part, factor: float | None = None, mesh_mm: float | None = No
 
 def _fe_joint(spec, part, factor: float | None, mesh_mm: float | None) -> JointStiffness:
     from . import joint_fe
-    from ..export.build import brep_text, shared_brep
+    from ..export.part_files import brep_text, shared_brep
     from ..parts import joint as joint_cad
 
     t0 = time.perf_counter()

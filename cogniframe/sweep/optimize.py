@@ -477,7 +477,7 @@ def cad_check(params: dict, design_id: str) -> dict:
     from .. import pipeline
     from .. import spec as spec_mod
     from ..export.assembly import check_clashes
-    from ..export.build import build_parts, fits
+    from ..export.part_files import build_parts, fits
 
     t0 = time.perf_counter()
     spec = spec_mod.from_dict(params, source=f"design {design_id}")

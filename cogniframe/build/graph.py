@@ -44,8 +44,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
-from . import cache
-from .cache import fingerprint
+from .. import cache
+from ..cache import fingerprint
 
 
 @dataclass(frozen=True)
@@ -65,6 +65,7 @@ class Step:
     code: tuple[str, ...] = ()  # cogniframe sources (globs) the step's output depends on
     where: str = "main"  # "main" or "wait"
     after: tuple[str, ...] = ()  # order only, not inputs: start after these (patterns like needs)
+    reads: str = ""  # what the key reads, in words (the docs' step table)
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """`cogniframe build`: the whole fabrication folder, built in a temp dir and moved into place whole.
 
-The work is the graph of cached steps in steps.py (part CAD, check with CAD volumes, plates,
+The work is the graph of cached steps in build/steps.py (part CAD, check with CAD volumes, plates,
 slicer, assembly, plots, previews, renders, BOM, report; docs/build.md), then the manifest.
 Nothing appears in the output folder unless every step succeeded, and a folder
 cogniframe did not make is never touched (outdir.py: lock, ownership check, atomic swap).
@@ -18,9 +18,9 @@ from pathlib import Path
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from . import outdir, pipeline, stack
-from .cache import code_hash, file_sha256
-from .spec import Spec
+from .. import outdir, pipeline, stack
+from ..cache import code_hash, file_sha256
+from ..spec import Spec
 
 
 @dataclass(frozen=True)
@@ -82,22 +82,23 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
                 key: str, gcode: bool = False, design: pipeline.Design | None = None, server: bool = False,
                 early=None):
     """Run the build graph (steps.py) into `out`, then write the manifest. `gcode`: keep the
-    sliced G-code per plate (`build --gcode`, issue 14; read by fabrication.make_slice).
+    sliced G-code per plate (`build --gcode`, issue 14; read by build.plates.make_slice).
 
     Returns (files, check result, built parts, ((step, "ran" | "cached" | "always"), ...))."""
     from . import graph, steps
+    from .context import BuildContext, Slicer, needs_joint_fe
 
     design = pipeline.design(spec) if design is None else design
     log = lambda m: console.print(m, markup=False, highlight=False)  # noqa: E731
     fingerprint = stack.fingerprint()
-    from .report.renders import ensure_headless
-    from .runtime import BuildRuntime
+    from ..report.renders import ensure_headless
+    from ..runtime import BuildRuntime
 
     ensure_headless()  # before any thread starts: the environment is not changed while one starts a process
-    slicer = steps.Slicer(log)
-    with BuildRuntime(jobs or os.cpu_count() or 1, fe=steps.needs_joint_fe(spec, design), server=server,
+    slicer = Slicer(log)
+    with BuildRuntime(jobs or os.cpu_count() or 1, fe=needs_joint_fe(spec, design), server=server,
                       stack=fingerprint, log=log, early=early, warm_before=slicer.get) as rt:
-        ctx = steps.BuildContext(out, {"spec": spec, "design": design, "cad": rt.cad, "warm": rt.warm, "slicer": slicer,
+        ctx = BuildContext(out, {"spec": spec, "design": design, "cad": rt.cad, "warm": rt.warm, "slicer": slicer,
                                         "log": log, "gcode": gcode}, stack=fingerprint, use_cache=use_cache)
         tasks = graph.expand(steps.STEPS, steps.rows(design))
         if rt.cad.fe or any(graph.will_run(t, ctx) for t in tasks if t.name.startswith("part:")):

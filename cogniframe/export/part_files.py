@@ -76,7 +76,7 @@ LINEAR_TOL, ANGULAR_TOL = 0.02, 0.15
 
 
 # Everything the part CAD and its files are made by: editing any of these invalidates the part cache.
-PART_CODE = ("parts/*.py", "export/build.py", "export/mesh.py", "export/step.py", "partlist.py")  # joint.py reads PARALLEL_TOL
+PART_CODE = ("parts/*.py", "export/part_files.py", "export/mesh.py", "export/step.py", "partlist.py")  # joint.py reads PARALLEL_TOL
 
 
 # PartSpec fields the CAD does not read (where copies go, the mass model's inputs, the BOM): a change

@@ -1,0 +1,89 @@
+"""What the build's steps share: the context they read (the design, its parts and their files)
+and PrusaSlicer's path, looked up once per build."""
+
+from __future__ import annotations
+
+import threading
+
+from . import graph
+
+
+class BuildContext(graph.Context):
+    """graph.Context plus what many steps look up: parts by name, their step values and meshes."""
+
+    @property
+    def bed(self) -> tuple[float, float, float]:
+        return tuple(float(b) for b in self.spec.printer.bed)
+
+    def part(self, name: str):
+        return next(p for p in self.design.parts if p.name == name)
+
+    def parts_of(self, material: str):
+        return [p for p in self.design.parts if p.material == material]
+
+    def part_value(self, name: str) -> dict:
+        (value,) = self.each(f"part:*/{name}").values()
+        return value
+
+    def built_parts(self):
+        """BuiltPart per part, in the design's order, from the part steps' values."""
+        from ..export.part_files import _built
+
+        return tuple(_built(p, self.part_value(p.name)) for p in self.design.parts)
+
+    def warm_imports(self) -> None:
+        """Start importing the main thread's libraries while it waits for the CAD workers
+        (`runtime.warm`): called by the first part step that runs, since a rebuilt part means the
+        plates, previews and renders run too."""
+        self.warm.start()
+
+    def plate_items(self, plate: dict):
+        """What reading a plate's 3MF back gives (`plates.read_3mf_items`), when the plates step
+        wrote it in this build (`plates.plate_3mf` returns it with the bytes); None for a plate
+        that came from the cache (its readers read the file). `plate`: a plates step's entry."""
+        return self.__dict__.get("_plate_items", {}).get(plate.get("model_sha256"))
+
+    def keep_plate_items(self, model_sha256: str, items) -> None:
+        self.__dict__.setdefault("_plate_items", {})[model_sha256] = items
+
+    def mesh(self, name: str):
+        """The part's STL as a trimesh, read once per build (plates, part renders and assembly
+        renders all read it; they copy before they move it)."""
+        import trimesh
+
+        v = self.part_value(name)
+        memo = self.__dict__.setdefault("_meshes", {})
+        key = (name, v["stl_sha256"])
+        if key not in memo:
+            memo[key] = trimesh.load(self.out / v["stl"], force="mesh")
+        return memo[key]
+
+class Slicer:
+    """PrusaSlicer's path and version, looked up once per build (None when it is not installed)."""
+
+    def __init__(self, log):
+        self.log = log
+        self._found = None
+        self._lock = threading.Lock()
+
+    def get(self) -> tuple[str, str] | None:
+        with self._lock:
+            if self._found is None:
+                from ..export import slicer
+
+                exe = slicer.find_slicer()
+                self._found = (exe, slicer.known_version(exe)) if exe else ()
+                if not exe:
+                    self.log(f"{slicer.SLICER} not found on PATH: skipping the slicer check "
+                             f"(install it with `apt-get install prusa-slicer` to get grams and print times).")
+            return self._found or None
+
+def needs_joint_fe(spec, design) -> bool:
+    """Whether this build meshes and solves a joint: the FE model and a joint geometry that is not
+    in the joint cache yet (a few milliseconds: the cache keys are hashes of the parts' inputs)."""
+    if spec.model.stiffness_model != "fe":
+        return False
+    from ..analysis.joint_stiffness import has_unsolved
+    from ..analysis.stiffness import joint_parts
+
+    return has_unsolved(spec, joint_parts(design.parts))

@@ -1,0 +1,113 @@
+"""The print plates: laid out per material (3MF with their slicer settings inside), sliced by
+PrusaSlicer, and drawn as previews. Each step's row sits beside its make and key functions."""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+from ..cache import file_sha256
+from .graph import Made, Step
+
+
+def plates_key(ctx, material: str):
+    return [[[p.name, p.qty, ctx.part_value(p.name)["stl_sha256"]] for p in ctx.parts_of(material)],
+            ctx.bed, float(ctx.spec.printer.margin), _config(ctx, material)]
+
+def _config(ctx, material: str) -> str:
+    """PrusaSlicer settings embedded in this material's plates (issue 14): the .ini's values."""
+    from ..export import slicer
+
+    return slicer.project_config(ctx.spec, material, _infill(ctx, material))
+
+def make_plates(ctx, material: str) -> Made:
+    from ..export import plates as pl
+
+    items = [pl.PlateItem(p.name, p.material, p.qty, ctx.mesh(p.name)) for p in ctx.parts_of(material)]
+    folder = ctx.out / "plates"
+    folder.mkdir(parents=True, exist_ok=True)
+    value = []
+    for plate in pl.pack_plates(items, ctx.spec.printer.bed, ctx.spec.printer.margin):
+        f3 = folder / f"{plate.name}.3mf"
+        data, read = pl.plate_3mf(plate, _config(ctx, material))
+        f3.write_bytes(data)
+        model = pl.model_sha256(data)
+        ctx.keep_plate_items(model, read)  # what reading the file back gives: its readers need not read it
+        value.append({"name": plate.name, "material": plate.material, "threemf": f"plates/{f3.name}",
+                      "preview": f"plates/{plate.name}.png", "copies": [c.name for c in plate.copies],
+                      "volume_mm3": plate.volume_mm3, "sha256": file_sha256(f3), "model_sha256": model})
+    return Made(tuple(v["threemf"] for v in value), value)
+
+def previews_key(ctx, material: str):
+    # the layout only (3D/3dmodel.model): a print setting inside the 3MF does not change the picture
+    return [[v["name"], v["model_sha256"]] for v in ctx[f"plates:{material}"]] + [ctx.bed, float(ctx.spec.printer.margin)]
+
+def make_previews(ctx, material: str) -> Made:
+    from ..export import plates as pl
+
+    files = []
+    for v in ctx[f"plates:{material}"]:
+        plate = pl.read_plate(ctx.out / v["threemf"], ctx.spec.printer.bed, ctx.spec.printer.margin,
+                              items=ctx.plate_items(v))
+        pl.plot_plate(plate, ctx.out / v["preview"])
+        files.append(v["preview"])
+    return Made(tuple(files))
+
+def _infill(ctx, material: str) -> float:
+    infill = {}
+    for p in ctx.design.parts:
+        infill[p.material] = max(infill.get(p.material, 0.0), p.infill)
+    return infill.get(material, ctx.spec.core.infill)
+
+def _profile(ctx, material: str) -> str:
+    from ..export import slicer
+
+    return slicer.profile_ini(ctx.spec, material, _infill(ctx, material))
+
+def _keep_gcode(ctx) -> bool:
+    """`build --gcode` (issue 14): keep each plate's G-code beside it (not byte-stable; the manifest says so)."""
+    return bool(getattr(ctx, "gcode", False))
+
+def slice_key(ctx, material: str):
+    found = ctx.slicer.get()
+    if not found:
+        return None  # no PrusaSlicer: nothing to slice or store
+    return [found[1], [v["sha256"] for v in ctx[f"plates:{material}"]], _profile(ctx, material), ctx.bed] + (
+        ["gcode"] if _keep_gcode(ctx) else [])
+
+def make_slice(ctx, material: str) -> Made:
+    """Slice this material's plates (G-code in a temp folder: it is not byte-stable; keep the numbers,
+    and with `build --gcode` the G-code too, as plates/<plate>.gcode)."""
+    from ..export import slicer
+
+    found = ctx.slicer.get()
+    if not found:
+        return Made()
+    exe, version = found
+    ini = ctx.out / "plates" / f"{material}.ini"
+    ini.write_text(_profile(ctx, material), encoding="utf-8")
+    plates = []
+    kept = []
+    with tempfile.TemporaryDirectory(prefix="cogniframe-gcode-") as tmp:
+        for v in ctx[f"plates:{material}"]:
+            where = ctx.out / "plates" if _keep_gcode(ctx) else Path(tmp)
+            items = ctx.plate_items(v)
+            if ctx.use_cache and not _keep_gcode(ctx):  # per plate: a plate whose bytes did not change is not sliced again
+                r = slicer._slice_cached(ctx.out / v["threemf"], ini, ctx.spec.printer.bed, exe, version,
+                                         where / f"{v['name']}.gcode", items=items)
+            else:
+                r = slicer.slice_plate(ctx.out / v["threemf"], ini, ctx.spec.printer.bed, exe,
+                                       gcode=where / f"{v['name']}.gcode", items=items)
+            plates.append({"plate": r.plate, "material": r.material, "grams": r.grams, "time_s": r.time_s,
+                           "objects": [list(o) for o in r.objects]})
+            if _keep_gcode(ctx):
+                kept.append(f"plates/{v['name']}.gcode")
+    return Made((f"plates/{material}.ini", *kept), {"slicer": version, "plates": plates})
+
+
+PLATES = Step("plates:{material}", ("part:{material}/*",), make_plates, plates_key, ("export/plates.py", "export/slicer.py"),
+              reads="each part's STL hash and qty, bed, margin, print settings")
+SLICE = Step("slice:{material}", ("plates:{material}",), make_slice, slice_key, ("export/slicer.py",), "wait",
+             reads="plate files, profile, PrusaSlicer version (each plate on its own key)")
+PREVIEWS = Step("previews:{material}", ("plates:{material}",), make_previews, previews_key, ("export/plates.py",),
+                reads="plate layouts")

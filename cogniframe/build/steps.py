@@ -1,0 +1,54 @@
+"""The build, as a Makefile: every step in the order the main thread takes them.
+
+Each step is declared once, in the module of what it makes (cad, physics, plates, report), beside
+its make and key functions. `table()` prints this list as docs/build.md shows it (a test keeps the
+two the same).
+
+A step with a key runs only when its key changes; otherwise its files come from the cache
+(graph.py). Waiting steps (`where="wait"`) run in threads and start the moment their needs are
+done: part CAD, the clash check and the assembly wait for the CAD workers, the slicer for
+PrusaSlicer, and `estimate`, `budget` and `physics` for LAPACK, which releases the GIL. The other
+steps run on the main thread in this order (plates, previews, plots, figures, renders, the 3D view
+and the report). Heavy imports (cadquery, trimesh, pyvista, matplotlib) happen only inside steps
+that run.
+"""
+
+from __future__ import annotations
+
+from . import cad, physics, plates, report
+
+
+STEPS = (
+    physics.ESTIMATE,
+    cad.PART,
+    plates.PLATES,
+    physics.BUDGET,
+    physics.PHYSICS,
+    cad.CLASH,
+    plates.SLICE,
+    cad.ASSEMBLY,
+    cad.GLB,
+    physics.CHECK,
+    report.PLOTS,
+    report.FIGURES,
+    plates.PREVIEWS,
+    report.RENDER_PART,
+    report.RENDERS,
+    report.VIEWER,
+    report.BOM,
+    report.REPORT,
+)
+
+
+def rows(design) -> list[dict]:
+    """What the {vars} of STEPS range over: one row per printed part."""
+    return [{"material": p.material, "part": p.name} for p in design.parts]
+
+
+def table(steps=STEPS) -> str:
+    """The steps as a Makefile reads: target, needs, and what its cache key reads."""
+    lines = [f"    {'target':<25} {'needs':<30} reads (its cache key)"]
+    for s in steps:
+        needs = " ".join(s.needs) if s.needs else "-"
+        lines.append(f"    {s.name:<25} {needs:<30} {s.reads}".rstrip())
+    return "\n".join(lines) + "\n"
