@@ -109,7 +109,7 @@ def lookup(table: dict, name: str, what: str):
         ) from None
 
 
-# -- vitamins: the bought parts the aircraft carries (issue 13) ---------------------------------
+# -- vitamins: the bought parts the aircraft carries ---------------------------------
 # NopSCADlib / cq_warehouse style: one table per family, each entry its own dimensions and BOM
 # line. Masses here are the catalogue figures shown in the BOM; the mass budget uses the params'
 # `components:` line that names the vitamin (`vitamin: pi_zero`), so nothing is counted twice.

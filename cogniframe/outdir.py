@@ -250,7 +250,7 @@ def record(folder: Path, added: list[Path]) -> None:
         rel = p.relative_to(folder).as_posix()
         entries[rel] = {"path": rel, "size": p.stat().st_size, "sha256": file_sha256(p)}
     m["files"] = [entries[k] for k in sorted(entries)]
-    # G-code is outside the identical-rebuild promise (issue 14): say so, as `build --gcode` does
+    # G-code is outside the identical-rebuild promise ): say so, as `build --gcode` does
     m["not_reproducible"] = sorted(set(m.get("not_reproducible", [])) | {k for k in entries if k.endswith(".gcode")})
     tmp = path.with_name(f".{MANIFEST}.{os.getpid()}.tmp")
     tmp.write_text(json.dumps(m, indent=2) + "\n", encoding="utf-8")

@@ -36,8 +36,8 @@ class CheckResult:
     problems: tuple[str, ...]
     stiffness: dict | None = None  # analysis.drop.load_cases: wall, thrust, modes, buckling, strain
     peak: dict | None = None  # analysis.impact_nl.design_peaks: predicted peak G per drop height
-    flight: object | None = None  # analysis.flight.FlightResult (issue 13)
-    clash: object | None = None  # analysis.clash.ClashResult, from `build` only (issue 13)
+    flight: object | None = None  # analysis.flight.FlightResult
+    clash: object | None = None  # analysis.clash.ClashResult, from `build` only
 
     @property
     def verdict(self) -> str:

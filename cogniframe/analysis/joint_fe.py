@@ -136,10 +136,7 @@ def condense(points: np.ndarray, tets: np.ndarray, e_mpa: float, nu: float, ties
     times a unit vector: 9x fewer basis evaluations, 9x fewer triplets to sort), and the sparse
     matrix's lower triangle is written once, directly in the nested-dissection order the
     factorization uses (`_lower_triplets`). `tests/test_joint_fe_assembly.py` checks it against skfem's own
-    BilinearForm / LinearForm assembly. Measured on the carbon knee (28 000 DOF, one BLAS
-    thread): 1.85 s CPU with skfem's vector basis, a COO scatter and a permuted copy, 1.35 s
-    this way, of which the factorization and solve were 1.0 s with SuperLU (0.3 s now with CHOLMOD:
-    `_inverse_form`)."""
+    BilinearForm / LinearForm assembly (benchmarks/bench_joint_fe.py times it)."""
     sysm = assemble(points, tets, e_mpa, nu, ties)
     iperm = _nd_order_points(sysm.rows, sysm.cols, sysm.blocks, sysm.n_points)
     lower = _lower_triplets(sysm.rows, sysm.cols, sysm.blocks, iperm)
@@ -400,10 +397,9 @@ def _inverse_form(lower, B: np.ndarray) -> np.ndarray:
 
     P is symmetric positive definite: LL^T takes half the flops and memory of the LU that SuperLU
     (scipy's splu, SymmetricMode, no pivoting) computed, and the form needs only the forward
-    solve. Measured on the carbon preset's knee (28 000 DOF, 24 columns of B), one BLAS thread:
-    SuperLU factorisation and solve 0.79 s; CHOLMOD factorisation 0.21 s, the two solves 0.25 s,
-    the forward one ~0.13 s. cvxopt is the wheel that ships CHOLMOD (scikit-sparse has no wheels;
-    pypardiso needs MKL, 200 MB, and took 0.61 s); its OpenBLAS is built without threads, so the
+    solve (about a quarter of SuperLU's time on the carbon knee: benchmarks/bench_joint_fe.py).
+    cvxopt is the wheel that ships CHOLMOD (scikit-sparse has no wheels; pypardiso needs MKL,
+    200 MB); its OpenBLAS is built without threads, so the
     sums are in the same order on every machine and every run.
 
     The fill of a 3D solid's factor depends on the elimination order: METIS nested dissection

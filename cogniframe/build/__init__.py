@@ -43,7 +43,7 @@ def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None 
     with spec.blamed():
         design = pipeline.design(spec)  # a design that cannot exist is refused before any folder is touched
     final = pipeline.output_dir(spec, out)
-    key = build_key(spec, params_path) + ("+gcode" if gcode else "")  # issue 14: a --gcode build differs
+    key = build_key(spec, params_path) + ("+gcode" if gcode else "")  # a --gcode build differs
     if use_cache and _up_to_date(final, key):
         verdict = json.loads((final / "check.json").read_text())["verdict"]
         console.print(f"{final} is up to date (same params, same cogniframe): nothing rebuilt", markup=False)
@@ -82,7 +82,7 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
                 key: str, gcode: bool = False, design: pipeline.Design | None = None, server: bool = False,
                 early=None):
     """Run the build graph (steps.py) into `out`, then write the manifest. `gcode`: keep the
-    sliced G-code per plate (`build --gcode`, issue 14; read by build.plates.make_slice).
+    sliced G-code per plate (`build --gcode`; read by build.plates.make_slice).
 
     Returns (files, check result, built parts, ((step, "ran" | "cached" | "always"), ...))."""
     from . import graph, steps
@@ -171,7 +171,7 @@ def _write_manifest(spec: Spec, params_path: Path, out: Path, key: str) -> int:
         "spec_sha256": spec.digest(),
         "versions": stack.installed(),
         "files": [{"path": p.relative_to(out).as_posix(), "size": p.stat().st_size, "sha256": file_sha256(p)} for p in files],
-        # outside the identical-rebuild promise (issue 14): `build --gcode`'s G-code has a timestamp and threaded path order
+        # outside the identical-rebuild promise: `build --gcode`'s G-code has a timestamp and threaded path order
         "not_reproducible": [p.relative_to(out).as_posix() for p in files if p.suffix == ".gcode"],
     }
     _write(out / "manifest.json", json.dumps(manifest, indent=2) + "\n")

@@ -87,7 +87,7 @@ def clash_key(ctx):
     return [_copies(ctx, "stl"), _rods_and_vitamins(ctx), ctx.spec.requirements.prop_margin, TOLERANCE_MM3]
 
 def make_clash(ctx) -> Made:
-    """Issue 13: every pair of solids of the aircraft (printed part copies, rods, vitamins) and every
+    """Every pair of solids of the aircraft (printed part copies, rods, vitamins) and every
     propeller's clearance (analysis/clash.py); clash.json; its clashes are FAIL problems of `check`."""
     from .. import cache
     from ..export.assembly import check_clashes

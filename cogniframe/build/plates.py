@@ -15,7 +15,7 @@ def plates_key(ctx, material: str):
             ctx.bed, float(ctx.spec.printer.margin), _config(ctx, material)]
 
 def _config(ctx, material: str) -> str:
-    """PrusaSlicer settings embedded in this material's plates (issue 14): the .ini's values."""
+    """PrusaSlicer settings embedded in this material's plates: the .ini's values."""
     from ..export import slicer
 
     return slicer.project_config(ctx.spec, material, _infill(ctx, material))
@@ -65,7 +65,7 @@ def _profile(ctx, material: str) -> str:
     return slicer.profile_ini(ctx.spec, material, _infill(ctx, material))
 
 def _keep_gcode(ctx) -> bool:
-    """`build --gcode` (issue 14): keep each plate's G-code beside it (not byte-stable; the manifest says so)."""
+    """`build --gcode`: keep each plate's G-code beside it (not byte-stable; the manifest says so)."""
     return bool(getattr(ctx, "gcode", False))
 
 def slice_key(ctx, material: str):

@@ -89,7 +89,7 @@ def make_renders(ctx) -> Made:
     pfl = {p.name: ctx.part_value(p.name)["print_from_local"] for p in d.parts}
     views = renders.render_assembly(renders.world_meshes(d.parts, meshes, pfl), renders.rod_segments(d.frame),
                                     ctx.out / "renders", title=ctx.spec.name,
-                                    vitamins=renders.vitamin_meshes(ctx.spec, d.frame))  # issue 13: the bought parts
+                                    vitamins=renders.vitamin_meshes(ctx.spec, d.frame))  # the bought parts
     return Made(tuple(p.relative_to(ctx.out).as_posix() for p in views.values()), list(views))
 
 def _slice_report(ctx):
@@ -150,10 +150,10 @@ def viewer_key(ctx):
     return [[[p.name, p.material, p.qty, p.placements, ctx.part_value(p.name)["stl_sha256"],
               ctx.part_value(p.name)["print_from_local"], grams.get(p.name)] for p in d.parts],
             [[p.name, p.copies] for p in _plate_files(ctx)], list(d.frame.rods.values()), d.cut.rows,
-            _vitamin_key(ctx.spec, d.frame)]  # issue 13: the vitamins' solids (their grams are not shown in the view)
+            _vitamin_key(ctx.spec, d.frame)]  # the vitamins' solids (their grams are not shown in the view)
 
 def make_viewer(ctx) -> Made:
-    """The report's interactive 3D view (issue 14) as one HTML section, kept as this step's value."""
+    """The report's interactive 3D view as one HTML section, kept as this step's value."""
     from ..report.viewer import design_items, read_stl, viewer_section
 
     d = ctx.design
@@ -163,7 +163,7 @@ def make_viewer(ctx) -> Made:
                          _plate_files(ctx))
     from ..report.renders import vitamin_viewer_items
 
-    items += vitamin_viewer_items(ctx.spec, d.frame)  # issue 13: the bought parts (geometry in viewer_key)
+    items += vitamin_viewer_items(ctx.spec, d.frame)  # the bought parts (geometry in viewer_key)
     return Made((), viewer_section(items))
 
 

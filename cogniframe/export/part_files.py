@@ -35,7 +35,7 @@ from ..partlist import PartSpec
 from ..spec import Spec
 
 # Bump when any part's CAD changes shape: it is part of every cache key.
-CAD_VERSION = "cad-2025.3"  # issue 13: mirrored core links, new core parts, tilted camera mounts
+CAD_VERSION = "cad-2025.3"
 AUTO_SERIAL_MAX = 12  # jobs=None builds up to this many parts in-process
 
 
@@ -182,8 +182,8 @@ def _jobs(jobs: int | None, n: int) -> int:
     if n <= 0:
         return 0
     if jobs is None:
-        # A worker pays a CadQuery import (~2-3 s) before its first part; a part takes ~0.1-0.5 s.
-        # Measured on 2 cores (8 parts): serial 4.4 s, 2 workers 5.1 s. Pool only for many parts.
+        # A worker pays a CadQuery import (seconds) before its first part; a part takes a fraction
+        # of a second: a pool of its own pays off only for many parts.
         return 1 if n <= AUTO_SERIAL_MAX else max(1, min(os.cpu_count() or 1, n))
     return max(1, min(int(jobs), n))
 

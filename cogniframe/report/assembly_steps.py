@@ -103,21 +103,41 @@ def assembly_steps(design: "Design") -> tuple[Step, ...]:
     def ring(level: str) -> list[str]:
         return [n for n in rods_by_role.get("cage", []) if n.startswith(f"rod_cage_{level}_")]
 
-    add("Top ring", ["corner_top"], ring("top"), f"ring sockets: {GLUE_CA}",
-        "Lay the four top corners flat, open side up. Push the four top cage rods into them to form a square ring "
-        "(rod_cage_top_front between corner_top_fl and corner_top_fr, and so on round the square). Check the ring is "
-        "square (equal diagonals) before the glue sets.")
-    add("Bottom ring", ["corner_bottom"], ring("bottom"), f"ring sockets: {GLUE_CA}",
-        "Build the bottom ring the same way with the four bottom corners (feet pads down) and the bottom cage rods.")
+    def mirror_note(kind: str) -> str:
+        """A rectangle's fr/rl joints are the mirror image of its fl/rr ones (partlist): which goes where."""
+        if f"{kind}_mirrored" not in parts:
+            return ""
+        return (f"{kind} at front-left and rear-right, its mirror image {kind}_mirrored at front-right and rear-left: "
+                "they do not swap")
+
+    def aside(kind: str) -> str:
+        note = mirror_note(kind)
+        return f" ({note})" if note else ""
+
+    square = spec.frame.width == spec.frame.depth
+    ring_text = ("to form a square ring (rod_cage_top_front between corner_top_fl and corner_top_fr, and so on round the "
+                 "square). Check the ring is square (equal diagonals)" if square else
+                 f"to form a {spec.frame.width:g} x {spec.frame.depth:g} mm rectangular ring: the front and rear rods are "
+                 f"the {'longer' if spec.frame.width > spec.frame.depth else 'shorter'} pair (rod_cage_top_front between "
+                 "corner_top_fl and corner_top_fr, and so on round the ring). Check the corners are square (equal diagonals)")
+    add("Top ring", ["corner_top", "corner_top_mirrored"], ring("top"), f"ring sockets: {GLUE_CA}",
+        f"Lay the four top corners flat, open side up{aside('corner_top')}. Push the four top cage rods into them "
+        f"{ring_text} before the glue sets.")
+    bottom = mirror_note("corner_bottom")
+    add("Bottom ring", ["corner_bottom", "corner_bottom_mirrored"], ring("bottom"), f"ring sockets: {GLUE_CA}",
+        f"Build the bottom ring the same way with the four bottom corners (feet pads down{'; ' + bottom if bottom else ''}) "
+        "and the bottom cage rods.")
     upper = [n for n in rods_by_role.get("leg", []) if "_upper_" in n]
     lower = [n for n in rods_by_role.get("leg", []) if "_lower_" in n]
-    add("Knees and upper legs", ["knee"], upper, "none yet (glue after folding, step 4)",
+    add("Knees and upper legs", ["knee", "knee_mirrored"], upper, "none yet (glue after folding, step 4)",
         "Push an upper leg rod into the downward socket of each top corner and put a knee on its lower end, arm "
-        "sockets pointing inwards to the centre.")
+        f"sockets pointing inwards to the centre{aside('knee')}.")
     add("Fold the sides", [], lower, f"leg sockets (top corners, knees, bottom corners): {GLUE_CA}",
         "Push a lower leg rod into each knee. Stand the top ring over the bottom ring, then fold each side inwards "
         "at the knees (the hourglass) and push the lower legs into the bottom corners one corner at a time. "
-        f"Each knee sits {spec.frame.knee_inset:g} mm inside its corner.")
+        + ("The sides are straight (frame.knee_inset 0): each knee sits on the line between its two corners."
+           if spec.frame.knee_inset == 0 else f"Each knee sits {spec.frame.knee_inset:g} mm inside its corner." if square else
+           f"Each knee sits {spec.frame.knee_inset * 2 ** 0.5:.1f} mm in from its corner, towards its core link."))
     arms = rods_by_role.get("arm", [])
     add("Arms and motor mounts", ["motor_mount"], arms, f"knee end of each arm rod only: {GLUE_CA}; motor mounts: none",
         "Clip a motor mount onto each pair of arm rods (the two rods of one arm run parallel, "

@@ -41,7 +41,7 @@ def print_check(result: CheckResult, console: Console) -> None:
     if result.drop is not None:
         print_drop(result.drop, console)
     f = getattr(result, "flight", None)
-    if f is not None:  # issue 13: docs/flight.md
+    if f is not None:  # docs/flight.md
         console.print(f"Flight ({f.table}): thrust-to-weight {f.thrust_to_weight:.2f}, hover at {f.hover_throttle * 100:.0f} % "
                       f"throttle, {f.hover_current_a:.1f} A, {f.hover_time_min:.1f} min on {f.usable_mah:.0f} mAh usable")
     if result.problems:

@@ -76,7 +76,7 @@ def plot_drop_response(result: "DropResult", path: Path | str) -> Path:
     ax_x.axhline(result.clearance_mm, color="k", linestyle="--", linewidth=1,
                  label=f"clearance {result.clearance_mm:g} mm")
     ax_x.set_ylabel("payload displacement x (mm)")
-    # Two lines: on one line the title ran past the 800 px figure and was cut off (issue 14).
+    # Two lines: on one line the title runs past the 800 px figure and is cut off.
     ax_x.set_title(
         f"Drop response: m = {result.mass_kg:.4g} kg, c = {result.c_n_s_per_m:.4g} N s/m, k = {result.k_n_per_m:.4g} N/m\n"
         f"zeta = {result.damping_ratio:.3f}; max safe height {result.max_safe_height_cm:.1f} cm"

@@ -2,9 +2,8 @@
 
 CPython's cyclic collector walks every tracked object in its oldest generation on each full
 collection. A CAD process holds ~400 000 of them once CadQuery, trimesh and VTK are imported,
-nearly all of them module-level objects that live as long as the process. Measured on this 2-core
-machine: the CAD server's imports ran 4 full collections (0.22 s of its 2.0 s), and a cold
-`build` process 4 more (0.23 s), each walking the same imported objects again.
+nearly all of them module-level objects that live as long as the process, and each full
+collection during the imports walks them all again (docs/build.md has what that cost).
 
 `imports_frozen()` turns the collector off while a block imports (imports make few cycles) and
 then moves every object alive into the permanent generation (`gc.freeze`), which no collection

@@ -1,7 +1,7 @@
 """A CAD process that outlives one build, so the next build's parts start warm.
 
 Every build that changes a part used to start its CAD workers from nothing: a forkserver that
-imports CadQuery (1.8 s of the 2-core machine's time, at the head of the critical path of a
+imports CadQuery (seconds of the 2-core machine's time, at the head of the critical path of a
 one-part change). `cogniframe build` now keeps that process: the first build starts a *CAD
 server* (CadQuery, trimesh and the part builders imported, the joint FE's modules too when that
 build solves a joint); later builds connect to it and get their workers by `fork` from it, warm,
@@ -173,7 +173,7 @@ def prestart(stack: str = "", idle_s: float | None = None) -> Early | None:
     """Start this environment's server now, unless one answers; `connect(early=...)` then uses it
     (the joint FE's modules are preloaded: the build does not know yet whether it solves a joint).
     Starting it here instead of once the build knows its parts moves the server's ~2 s of imports,
-    the head of a cold build's critical path, ~0.3 s earlier, onto the core the CLI leaves idle."""
+    the head of a cold build's critical path, earlier, onto the core the CLI leaves idle."""
     key = server_key(stack)
     root = folder()
     authkey = _authkey(root, key, create=False)

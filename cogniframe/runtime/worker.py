@@ -4,7 +4,7 @@ package whose import does something on purpose; nothing else imports it.
 
 What it does, in that process only:
 - makes `vtk` lazy. OCP's IVtkOCC binding (imported by CadQuery) imports the whole `vtk` package,
-  0.8 s of the 2.6 s CadQuery import, for CadQuery's VTK display helpers, which a worker never
+  a third of the CadQuery import, for CadQuery's VTK display helpers, which a worker never
   calls. The stand-in module imports the real `vtkmodules.all` the first time anything reads an
   attribute of it, so a use still works, only later.
 - imports CadQuery, trimesh and the part builders, so each worker starts with them loaded,
@@ -12,13 +12,12 @@ What it does, in that process only:
   worker's collection walks them again.
 - runs OpenCascade's algorithms on the calling thread only (below).
 - lets the forkserver end without tearing OpenCascade down. It ends when the build does, and its
-  interpreter's teardown took 1.2 s more, holding the build's stdout and stderr open all along: a
-  build piped into another program (`| tee`, a benchmark, CI) seemed to run 1.2 s longer. It has
-  no files or buffers to flush, so it leaves with `os._exit` once its exit handlers have run.
-  (Its forked workers leave by `os._exit` already.)
+  interpreter's teardown would hold the build's stdout and stderr open for another second: a
+  build piped into another program (`| tee`, a benchmark, CI) would seem to run that much longer.
+  It has no files or buffers to flush, so it leaves with `os._exit` once its exit handlers have
+  run. (Its forked workers leave by `os._exit` already.)
 
-Measured on this 2-core machine: forkserver ready in 1.7 s instead of 2.6 s (3.5 s when the joint
-FE's gmsh and scikit-fem were preloaded with it on every build; now only when a joint needs them).
+docs/build.md ("Who gets the cores") has what each of these measured.
 """
 
 from __future__ import annotations
@@ -60,9 +59,9 @@ with imports_frozen():  # the forks start with nothing for the collector to walk
 
 # OpenCascade's own thread pool, which CadQuery's booleans (SetRunParallel) and the tessellation
 # use, with the calling thread only: the build runs one worker per core already, and the pool's
-# threads (one per core in each worker) only fought the other worker and PrusaSlicer for the same
-# cores. Measured on the 11 parts of the carbon preset, one process: 2.57 -> 2.21 s CPU, the same
-# STL bytes. Set before any fork, it starts no thread (nothing a fork could leave half-held).
+# threads (one per core in each worker) only fight the other worker and PrusaSlicer for the same
+# cores, for the same STL bytes. Set before any fork, it starts no thread (nothing a fork could
+# leave half-held).
 from OCP.OSD import OSD_ThreadPool  # noqa: E402
 
 OSD_ThreadPool.DefaultPool_s(1).Init(1)

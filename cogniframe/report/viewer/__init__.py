@@ -3,7 +3,7 @@
 Data-driven: `viewer_section(items)` takes `ViewerItem`s (a mesh in its own frame, a 4x4 world
 matrix and the metadata shown on click: name, kind part|rod|vitamin, material, mass, quantity,
 plate, colour, note). `design_items` makes them for the printed parts (one per copy) and the rods;
-any other stage (the vitamins of issue 13) adds its own items to the list.
+any other stage (the vitamins, say) adds its own items to the list.
 
 Everything is inline, so the report works offline as one file and makes no network request:
 three.js (vendored in this folder, see README.md) and the viewer's own `viewer.js` go in
