@@ -1,4 +1,4 @@
-"""Command line: thin wrappers over pipeline.py. Exit codes: 0 ok/PASS, 1 FAIL, 2 bad input."""
+"""Command line: thin wrappers over the Python API (api/) and pipeline.py. Exit codes: 0 ok/PASS, 1 FAIL, 2 bad input."""
 
 from __future__ import annotations
 
@@ -37,15 +37,12 @@ def check(params: ParamsArg,
     if hit is not None:  # same params, same code: the stored answer (imports neither pydantic nor numpy)
         sys.stdout.write(hit[0])
         raise typer.Exit(hit[1])
-    from . import pipeline
-    from . import spec as spec_mod
+    from . import api, pipeline
 
-    spec = spec_mod.load(params)
-    from .runtime.blas import one_blas_thread
-
+    design = api.load(params)
     # a new joint geometry's solid FE takes seconds: say what it is doing
-    with _progress_to_stderr(), spec.blamed(), one_blas_thread():  # as `build` computes it: same numbers
-        result = pipeline.check(spec)
+    with _progress_to_stderr():
+        result = design.check().result  # blamed, one BLAS thread: as `build` computes it, same numbers
     if plots is not None and result.drop is not None:
         from .outdir import claim_file
         from .report import drop_plots
@@ -113,12 +110,12 @@ def build(params: ParamsArg,
         from .runtime.heap import imports_frozen
 
         with imports_frozen():
-            from .build import run_build
-            from . import spec as spec_mod
+            from . import build as _build  # noqa: F401  (its imports, frozen with the others)
+            from . import api
 
-        spec = spec_mod.load(params)
-        result = run_build(spec, params, out, jobs=jobs, use_cache=not no_cache, console=Console(stderr=True),
-                           gcode=gcode, server=use_server, early=early)
+        design = api._load(params, validate=False)  # run_build validates the frame and parts, as before
+        result = design.build(out, jobs=jobs, use_cache=not no_cache, console=Console(stderr=True), gcode=gcode,
+                              server=use_server, early=early).raw
     finally:
         if early is not None:
             early.release()  # unless the build connected to it: bad params, nothing to build, Ctrl-C
@@ -153,13 +150,14 @@ def schema() -> None:
 
 
 def _register_commands() -> None:
-    from .commands import explore, fab, maker, physics, server
+    from .commands import explore, fab, maker, physics, server, studio
 
     physics.register(app)
     fab.register(app)
     maker.register(app)
     explore.register(app)
     server.register(app)
+    studio.register(app)
 
 
 _register_commands()

@@ -1,0 +1,148 @@
+"""Set dotted keys in a params file's YAML text, changing nothing else.
+
+`set_values(text, {"rods.diameter": 4.0})` returns the text with only that value replaced: its
+comments, key order, blank lines, quoting and indentation stay byte for byte, so what the
+studio's Save writes (and what an error message's line numbers refer to) is the user's file with
+the edited values, not a re-serialised copy. A round trip through ruamel.yaml keeps comments but
+rewrites other things (`null` becomes an empty value, list indentation moves), so the edit is
+made on the text at the span PyYAML's composer reports for the value:
+
+- a value already in the file: its span is replaced (a quoted string keeps its quotes);
+- an empty value (`key:` with nothing after it): the new value is written after the colon;
+- a key not in the file: a line is added after the last line of its section, at the section's
+  indentation (missing sections in between are added as nested lines); in a flow mapping
+  (`{name: ..., mass: 6}`) it is added before the closing brace;
+- a key under a value that is not a mapping (`camera: null`, then `camera.tilt_deg`): that value
+  becomes a flow mapping holding the key.
+
+Values are written in YAML flow style (`[120, 120, 120]`, `null`, `true`, `'1404'`). A list index
+past the end of a list is a `KeyError` (a value cannot be appended to a list this way).
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any, Mapping
+
+import yaml
+from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
+
+
+def set_values(text: str, values: Mapping[str, Any]) -> str:
+    """`text` with each dotted key set to its value, in order."""
+    for key, value in values.items():
+        text = set_value(text, key, value)
+    return text
+
+
+def render(value: Any) -> str:
+    """One value as YAML flow text (a single line)."""
+    value = _plain(value)
+    out = yaml.safe_dump(value, default_flow_style=True, width=1 << 30, allow_unicode=True, sort_keys=False)
+    for tail in ("\n...\n", "\n"):
+        if out.endswith(tail):
+            out = out[: -len(tail)]
+            break
+    return out
+
+
+def _plain(value: Any) -> Any:
+    """Plain Python values for the YAML dumper (numpy scalars, tuples)."""
+    if hasattr(value, "item") and not isinstance(value, (str, bytes)) and getattr(value, "shape", None) == ():
+        return value.item()
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v) for k, v in value.items()}
+    return value
+
+
+def set_value(text: str, key: str, value: Any) -> str:
+    parts = key.split(".")
+    if not key or any(p == "" for p in parts):
+        raise KeyError(f"{key!r} is not a dotted key such as rods.diameter")
+    root = yaml.compose(text) if text.strip() else None
+    if root is None:  # an empty file (or only comments): the key goes at the end
+        return _append_lines(text, len(text), 0, parts, value)
+    node: Node = root
+    key_node: Node | None = None
+    for i, part in enumerate(parts):
+        last = i == len(parts) - 1
+        if isinstance(node, MappingNode):
+            found = next(((k, v) for k, v in node.value if isinstance(k, ScalarNode) and k.value == part), None)
+            if found is None:
+                return _insert(text, node, parts[i:], value)
+            key_node, node = found
+        elif isinstance(node, SequenceNode) and part.isdigit():
+            index = int(part)
+            if index >= len(node.value):
+                raise KeyError(f"{'.'.join(parts[:i])} has {len(node.value)} entries; there is no entry {index}")
+            key_node, node = None, node.value[index]
+        else:  # a scalar (null, a number) where a section is wanted: it becomes a flow mapping
+            return _replace(text, node, key_node, _nested(parts[i:], value))
+        if last:
+            return _replace(text, node, key_node, value)
+    raise AssertionError("unreachable")
+
+
+def _nested(parts: list[str], value: Any) -> dict:
+    out: Any = value
+    for p in reversed(parts):
+        out = {p: out}
+    return out
+
+
+def _empty(node: Node) -> bool:
+    return isinstance(node, ScalarNode) and node.start_mark.index == node.end_mark.index
+
+
+def _content_end(node: Node) -> int:
+    """Index just past the last character of `node`'s own text (a block collection's end mark
+    lies at the next token, past blank lines and comments)."""
+    if isinstance(node, MappingNode) and not node.flow_style and node.value:
+        k, v = node.value[-1]
+        return k.end_mark.index if _empty(v) else _content_end(v)
+    if isinstance(node, SequenceNode) and not node.flow_style and node.value:
+        return _content_end(node.value[-1])
+    return node.end_mark.index
+
+
+def _replace(text: str, node: Node, key_node: Node | None, value: Any) -> str:
+    if _empty(node):  # `key:` with no value: write it after the colon
+        if key_node is None:
+            raise KeyError("an empty list entry cannot be set")
+        colon = text.index(":", key_node.end_mark.index)
+        return text[: colon + 1] + " " + render(value) + text[colon + 1:]
+    start, end = node.start_mark.index, _content_end(node)
+    new = render(value)
+    if isinstance(node, ScalarNode) and isinstance(value, str) and node.style in ('"', "'"):
+        new = json.dumps(value, ensure_ascii=False) if node.style == '"' else "'" + value.replace("'", "''") + "'"
+    return text[:start] + new + text[end:]
+
+
+def _insert(text: str, mapping: MappingNode, parts: list[str], value: Any) -> str:
+    if mapping.flow_style:
+        close = mapping.end_mark.index - 1
+        while close > mapping.start_mark.index and text[close] != "}":
+            close -= 1
+        inner = text[mapping.start_mark.index + 1: close].strip()
+        entry = f"{parts[0]}: {render(_nested(parts[1:], value) if len(parts) > 1 else value)}"
+        return text[:close] + (", " if inner else "") + entry + text[close:]
+    indent = mapping.value[0][0].start_mark.column if mapping.value else 0
+    end = _content_end(mapping)
+    newline = text.find("\n", end)
+    return _append_lines(text, len(text) if newline < 0 else newline, indent, parts, value)
+
+
+def _append_lines(text: str, at: int, indent: int, parts: list[str], value: Any) -> str:
+    """Lines for `parts: value` (one per level, two more spaces a level) inserted as new lines at
+    `at` (the end of a line, or the end of the text)."""
+    lines = [" " * (indent + 2 * i) + f"{p}:" for i, p in enumerate(parts)]
+    lines[-1] += " " + render(value)
+    block = "\n".join(lines)
+    before, after = text[:at], text[at:]
+    if at == len(text):
+        if before and not before.endswith("\n"):
+            before += "\n"
+        return before + block + "\n"
+    return before + "\n" + block + after
