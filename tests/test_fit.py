@@ -31,7 +31,7 @@ from cogniframe.analysis.fit import (
 from cogniframe.errors import UserError
 
 DATA = Path(__file__).resolve().parents[1] / "examples"  # shipped in the repo (examples/droptests/README.md)
-G = 9.81
+from cogniframe.analysis.constants import G  # noqa: E402
 M = 0.241
 
 

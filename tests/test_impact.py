@@ -22,7 +22,7 @@ from cogniframe.analysis.impact import (
 )
 
 M, C, K = 0.241, 46.0, 7040.0  # the paper's carbon build
-G = 9.81
+from cogniframe.analysis.constants import G  # noqa: E402
 
 
 def rel(a: float, b: float) -> float:

@@ -22,9 +22,8 @@ import math
 from dataclasses import dataclass
 
 from ..spec import Spec
+from .constants import G, RHO_AIR
 
-G = 9.80665
-RHO_AIR = 1.225  # kg/m^3, sea level, 15 C
 CELL_V = 3.7  # nominal LiPo cell voltage
 FOM_ETA = 0.30  # figure of merit (~0.5) x motor + ESC efficiency (~0.6) for small props, momentum cross-check
 BEC_EFFICIENCY = 0.85  # 5 V regulator feeding the avionics

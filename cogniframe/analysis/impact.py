@@ -3,7 +3,7 @@
     m x'' + c x' + k x = m g,   x(0) = 0,   x'(0) = sqrt(2 g h)
 
 x is the payload's displacement towards the ground after the frame touches it (m), m the total
-mass (kg), c the damping (N s/m), k the stiffness (N/m), h the drop height (m), g = 9.81 m/s^2.
+mass (kg), c the damping (N s/m), k the stiffness (N/m), h the drop height (m), g = 9.81 m/s^2 (analysis/constants.py).
 The model holds until x reaches the clearance (16 mm on the carbon build: the battery holder
 touches the ground). Units inside are SI; every public result field names its unit.
 
@@ -23,8 +23,7 @@ from typing import Iterable
 
 import numpy as np
 
-G = 9.81
-"""Gravity (m/s^2); the paper's value, also used to convert m/s^2 to G."""
+from .constants import G  # also converts m/s^2 to G
 
 PAPER_CLEARANCE_MM = 16.0
 """Battery-holder underside above the ground plane on the carbon build (mm)."""

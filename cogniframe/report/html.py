@@ -18,6 +18,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Mapping, Sequence
 
+from ..analysis.constants import G
+
 if TYPE_CHECKING:
     from ..export.plates import PlateFile
     from ..export.slicer import SliceReport
@@ -115,7 +117,7 @@ def plot_stiffness(drop: Mapping, path: Path) -> Path:
     xs = [h["x_max_mm"] for h in drop["heights"]]
     x_end = max([clear * 1.3] + [x * 1.05 for x in xs])
     ax.plot([0, x_end], [0, k * x_end / 1000], color="tab:blue", label=f"k = {k:.0f} N/m ({drop['k_source']})")
-    w = drop["mass_kg"] * 9.80665
+    w = drop["mass_kg"] * G
     ax.axhline(w, color="0.5", linestyle=":", label=f"payload weight {w:.2f} N")
     ax.axvline(clear, color="k", linestyle="--", linewidth=1, label=f"clearance {clear:.1f} mm")
     for h in drop["heights"]:
