@@ -31,12 +31,13 @@ class _NoWarmup:
 
 
 def build_parts(spec, design, out: Path, *, fe: bool = False, server: bool | None = None,
-                on_step: Callable[[str, int, int], None] | None = None,
+                on_step: Callable[..., None] | None = None,
                 log: Callable[[str], None] | None = None) -> dict[str, dict]:
     """Make every printed part's STL and STEP in `out` through the build graph (cached steps);
     with `fe`, also solve the joints' FE (the `estimate` step). Returns each part step's value
-    (its file names, volume, `print_from_local`, ...) by part name. `on_step(task, done, total)`
-    after each step."""
+    (its file names, volume, `print_from_local`, ...) by part name. `on_step(task, done, total,
+    part_values)` after each step; `part_values()` gives the values once every part step is done
+    (the files are in `out` then, while the FE may still run)."""
     from .. import stack
     from ..build import graph, steps
     from ..build.context import BuildContext
@@ -50,14 +51,14 @@ def build_parts(spec, design, out: Path, *, fe: bool = False, server: bool | Non
              if t.name.startswith("part:") or (fe and t.name == "estimate")]
     done = [0]
 
-    def finished(record) -> None:
-        done[0] += 1
-        if on_step is not None:
-            on_step(record.task, done[0], len(tasks))
-
     with BuildRuntime(os.cpu_count() or 1, fe=fe, server=cad_server.wanted(server), stack=fingerprint, log=log) as rt:
         ctx = BuildContext(out, {"spec": spec, "design": design, "cad": rt.cad, "warm": _NoWarmup(), "log": log},
                            stack=fingerprint, use_cache=True)
+
+        def finished(record) -> None:
+            done[0] += 1
+            if on_step is not None:
+                on_step(record.task, done[0], len(tasks), lambda: {p.name: ctx.part_value(p.name) for p in design.parts})
         if fe or any(graph.will_run(t, ctx) for t in tasks if t.name.startswith("part:")):
             rt.cad.start_server()
         graph.run(tasks, ctx, on_done=finished, on_error=rt.cancel)

@@ -28,6 +28,9 @@ import yaml
 from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
 
+_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml: the same marks (in characters), 15x faster
+
+
 def set_values(text: str, values: Mapping[str, Any]) -> str:
     """`text` with each dotted key set to its value, in order."""
     for key, value in values.items():
@@ -61,7 +64,7 @@ def set_value(text: str, key: str, value: Any) -> str:
     parts = key.split(".")
     if not key or any(p == "" for p in parts):
         raise KeyError(f"{key!r} is not a dotted key such as rods.diameter")
-    root = yaml.compose(text) if text.strip() else None
+    root = yaml.compose(text, Loader=_LOADER) if text.strip() else None
     if root is None:  # an empty file (or only comments): the key goes at the end
         return _append_lines(text, len(text), 0, parts, value)
     node: Node = root
@@ -139,6 +142,8 @@ def _append_lines(text: str, at: int, indent: int, parts: list[str], value: Any)
     `at` (the end of a line, or the end of the text)."""
     lines = [" " * (indent + 2 * i) + f"{p}:" for i, p in enumerate(parts)]
     lines[-1] += " " + render(value)
+    if indent == 0 and len(parts) > 1 and text.strip():
+        lines.insert(0, "")  # a new top-level section: a blank line before it, as the presets have
     block = "\n".join(lines)
     before, after = text[:at], text[at:]
     if at == len(text):

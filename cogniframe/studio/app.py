@@ -156,6 +156,8 @@ def create_app(session: Session, loop_holder: dict | None = None) -> Starlette:
         for event in session.replay():
             queue.put_nowait(event)
         clients.add(queue)
+        if session.overrides:  # a page (re)loaded shows the file: edits live in the page until saved
+            session.edit({}, replace=True)
 
         async def sender():
             while True:

@@ -72,8 +72,9 @@ class _Latest:
 
 class Session:
     def __init__(self, params: str | Path, publish: Callable[[Event], None] | None = None,
-                 server: bool | None = None, out_root: Path | None = None):
+                 server: bool | None = None, out_root: Path | None = None, view: bool = True):
         self.path = Path(params)
+        self.view = view  # False: no 3D view (no CAD); the joints' FE is still solved for the figures
         self.base = api.load(self.path)  # ParamsError: the CLI says so and exits 2
         self.server = server
         self.out_root = out_root  # None: out/<name>, as the CLI's build
@@ -87,6 +88,7 @@ class Session:
         self.last: dict[str, Event] = {}  # the newest event of each type, for a page that connects later
         self.scenes: dict[str, tuple[dict, bytes]] = {}
         self.scene_key: str | None = None  # the geometry the newest scene shows
+        self.requested_key: str | None = None  # the geometry the 3D view is being made for
         self.build_dir: Path | None = None
         self.building = False
         self.schema = None
@@ -193,7 +195,9 @@ class Session:
                       "ms": round(1000 * (time.perf_counter() - t0), 1)})
         key = geometry_key(d)
         with self.lock:
-            wanted = pending_fe or key != self.scene_key
+            wanted = pending_fe or key not in (self.scene_key, self.requested_key)
+            if wanted:
+                self.requested_key = key
         if wanted:
             self._geometry.put((seq, d, key, pending_fe))
 
@@ -208,40 +212,86 @@ class Session:
             if job is None:
                 return
             seq, d, key, fe = job
+            if not self.view:
+                if fe:
+                    self._solve_fe(d)
+                continue
             n += 1
             out = self.tmp / f"view-{n}"
             t0 = time.perf_counter()
             self.publish({"type": "progress", "task": "view", "done": 0, "total": 1, "fe": fe,
                           "text": "making the parts" + (" and solving the joints' FE" if fe else "")})
-            try:
-                def step(task: str, done: int, total: int) -> None:
-                    self.publish({"type": "progress", "task": "view", "done": done, "total": total, "fe": fe,
-                                  "text": f"{task} ({done}/{total})"})
+            n_parts = len(d.pipeline_design.parts)
+            parts_done: list[str] = []
+            shown: list[threading.Thread] = []
 
-                values = view.build_parts(d.spec, d.pipeline_design, out, fe=fe, server=self.server, on_step=step)
-                packed = pack(view.items(d.spec, d.pipeline_design, out, values))
+            def show_view(values: dict, d=d, out=out, key=key, seq=seq, t0=t0) -> None:
+                """The 3D view as soon as the parts are made (the joints' FE may still run)."""
+                try:
+                    packed = pack(view.items(d.spec, d.pipeline_design, out, values))
+                except Exception as e:  # noqa: BLE001
+                    traceback.print_exc()
+                    self._view_failed(key)
+                    self.publish({"type": "progress", "task": "view", "done": 1, "total": 1, "text": f"the 3D view failed: {e}",
+                                  "error": f"{type(e).__name__}: {e}"})
+                    return
+                with self.lock:
+                    self.scenes = {key: packed}  # only the newest is kept
+                    self.scene_key = key
+                    current = geometry_key(self.current) == key
+                if current:
+                    self.publish({"type": "scene", "seq": seq, "url": f"/scene/{key}.json", "key": key,
+                                  "objects": len(packed[0]["objects"]), "seconds": round(time.perf_counter() - t0, 2)})
+
+            def step(task: str, done: int, total: int, part_values=None) -> None:
+                self.publish({"type": "progress", "task": "view", "done": done, "total": total, "fe": fe,
+                              "text": f"{task} ({done}/{total})" + (": solving the joints' FE" if fe and done >= n_parts else "")})
+                if task.startswith("part:"):
+                    parts_done.append(task)
+                    if len(parts_done) == n_parts and part_values is not None:
+                        t = threading.Thread(target=show_view, args=(part_values(),), name="studio-view", daemon=True)
+                        shown.append(t)
+                        t.start()
+
+            try:
+                view.build_parts(d.spec, d.pipeline_design, out, fe=fe, server=self.server, on_step=step)
             except UserError as e:
+                self._view_failed(key)
                 self.publish({"type": "progress", "task": "view", "done": 1, "total": 1, "error": str(e), "text": str(e)})
                 continue
             except Exception as e:  # noqa: BLE001
                 traceback.print_exc()
+                self._view_failed(key)
                 self.publish({"type": "progress", "task": "view", "done": 1, "total": 1, "text": f"the 3D view failed: {e}",
                               "error": f"{type(e).__name__}: {e}"})
                 continue
             finally:
+                for t in shown:
+                    t.join()
                 shutil.rmtree(out, ignore_errors=True)
-            with self.lock:
-                self.scenes = {key: packed}  # only the newest is kept
-                self.scene_key = key
-                current = geometry_key(self.current) == key
-            if current:
-                self.publish({"type": "scene", "seq": seq, "url": f"/scene/{key}.json", "key": key,
-                              "objects": len(packed[0]["objects"]), "seconds": round(time.perf_counter() - t0, 2)})
             self.publish({"type": "progress", "task": "view", "done": 1, "total": 1, "text": "", "fe": False})
             if fe:  # the joints are in the cache now: the figures of the current design, FE this time
-                with self.lock:
-                    job2 = (self.seq, self.client, dict(self.overrides), None, time.perf_counter(), True)
-                self._edits.offer(job2)  # a queued edit already stands for the current design
+                self._after_fe()
+
+    def _solve_fe(self, d: api.Design) -> None:
+        self.publish({"type": "progress", "task": "fe", "done": 0, "total": 1, "text": "solving the joints' FE"})
+        try:
+            d.check()  # solves the new joints into the cache
+        except Exception as e:  # noqa: BLE001
+            self.publish({"type": "progress", "task": "fe", "done": 1, "total": 1, "text": "", "error": f"{type(e).__name__}: {e}"})
+            return
+        self.publish({"type": "progress", "task": "fe", "done": 1, "total": 1, "text": ""})
+        self._after_fe()
+
+    def _after_fe(self) -> None:
+        with self.lock:
+            job = (self.seq, self.client, dict(self.overrides), None, time.perf_counter(), True)
+        self._edits.offer(job)  # a queued edit already stands for the current design
+
+    def _view_failed(self, key: str) -> None:
+        with self.lock:
+            if self.requested_key == key:
+                self.requested_key = None  # the next edit tries again
 
     def scene(self, key: str) -> tuple[dict, bytes] | None:
         with self.lock:

@@ -43,7 +43,7 @@ function onEdit(ev) {
   changed[el.name] = fieldValue(el);
   lastEdited = el.name;
   clearTimeout(timer);
-  timer = setTimeout(send, el.type === "checkbox" || el.tagName === "SELECT" ? 0 : 60);
+  timer = setTimeout(send, el.type === "checkbox" || el.tagName === "SELECT" ? 0 : 30);  // typing: one check per pause
 }
 form.addEventListener("input", onEdit);
 form.addEventListener("change", onEdit);

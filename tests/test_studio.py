@@ -1,0 +1,454 @@
+"""`cogniframe studio`: the form from the schema, the session's edits, the server's guards, and the
+page in a real Chromium (Debian's /usr/bin/chromium via Playwright, as tests/test_viewer_browser.py).
+
+In the browser: an edit changes the figures (and how long that takes is measured: within 0.5 s
+when no joint needs its FE), a bad value gets the CLI's paragraph beside its field and the file
+is untouched, Save keeps the comments, the 3D view draws, a new joint geometry shows the fast
+model's figures at once and the FE's when solved, with a new 3D view, and Build offers the
+plates and the report. The server listens on 127.0.0.1 only.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import os
+import re
+import shutil
+import signal
+import socket
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+import cogniframe as cf
+from cogniframe import spec as spec_mod
+from cogniframe.studio import form
+
+ROOT = Path(__file__).resolve().parents[1]
+CARBON = ROOT / "params" / "carbon.yaml"
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+FLAGS = ["--headless=new", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+         "--disable-component-update", "--no-first-run", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
+
+
+# -- the form ---------------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def carbon_form():
+    d = cf.load(CARBON)
+    values = d.spec.model_dump(mode="json")
+    groups = form.build(spec_mod.json_schema(), values)
+    return d, groups, form.fields(groups), form.render(groups, values)
+
+
+def test_form_has_one_input_per_schema_value_named_by_its_key(carbon_form):
+    d, groups, fields, page = carbon_form
+    assert [g.key for g in groups] == ["", "materials", "frame", "rods", "joints", "core", "motors", "components",
+                                       "printer", "requirements", "model"]
+    for key, f in fields.items():
+        d.get(key)  # every input is a real dotted key of the design
+        assert f'name="{key}"' in page
+    for key in ("frame.height", "rods.diameter", "joints.wall", "core.battery.mass", "core.camera.tilt_deg",
+                "components.0.mass", "joints.fit_clearance.tpu_95a", "printer.bed", "model.stiffness_model", "name"):
+        assert key in fields, key
+    assert len(fields) > 80
+    h = fields["frame.height"]
+    assert (h.kind, h.unit, h.description, h.bounds) == ("number", "mm", "outside height, mm", ">= 50, <= 400")
+    assert re.search(r'name="frame.height"[^>]*value="120"', page)
+    assert fields["core.battery.cells"].kind == "integer" and fields["frame.struts"].kind == "boolean"
+    assert fields["model.stiffness_model"].options == ("fe", "analytic")
+    assert fields["printer.preset"].nullable and "" in fields["printer.preset"].options
+    assert fields["motors.max_thrust_g"].nullable and fields["motors.max_thrust_g"].unit == "g"
+    assert fields["requirements.design_drop_height_cm"].unit == "cm"
+    assert fields["printer.bed"].kind == "numbers" and fields["printer.bed"].length == 3
+    assert "carbon_rod" in fields["rods.material"].suggestions
+
+
+def test_field_parse():
+    f = {k: v for k, v in form.fields(form.build(spec_mod.json_schema(), cf.load(CARBON).spec.model_dump(mode="json"))).items()}
+    assert f["rods.diameter"].parse("4") == 4 and f["rods.diameter"].parse(" 4.25 ") == 4.25
+    assert f["rods.diameter"].parse("abc") == "abc"  # the validator says what is wrong with it
+    assert f["motors.max_thrust_g"].parse("") is None and f["motors.max_thrust_g"].parse("null") is None
+    assert f["printer.bed"].parse("180, 180, 180") == [180, 180, 180] and f["printer.bed"].parse("[1,2.5]") == [1, 2.5]
+    assert f["frame.struts"].parse(False) is False and f["name"].parse("x2") == "x2"
+    assert f["printer.preset"].parse("") is None and f["motors.model"].parse("1404") == "1404"
+
+
+# -- the session, without a browser ------------------------------------------------------------
+
+class Events:
+    def __init__(self):
+        self.items: list[dict] = []
+
+    def __call__(self, event):
+        self.items.append(event)
+
+    def wait(self, pred, timeout=120.0):
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            for e in list(self.items):
+                if pred(e):
+                    return e
+            time.sleep(0.02)
+        raise AssertionError(f"no such event in {[e['type'] for e in self.items]}")
+
+
+def test_session_checks_edits_refuses_bad_values_and_saves(tmp_path, monkeypatch):
+    from cogniframe.studio.session import Session
+
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(CARBON, tmp_path / "carbon.yaml")
+    original = (tmp_path / "carbon.yaml").read_bytes()
+    events = Events()
+    s = Session("carbon.yaml", publish=events, view=False)
+    try:
+        s.start()
+        first = events.wait(lambda e: e["type"] == "figures")
+        if first["pending_fe"]:  # the joints' FE not in the cache yet: the analytic figures at once, then the FE's
+            assert first["model"] == "analytic"
+            first = events.wait(lambda e: e["type"] == "figures" and e["after_fe"], timeout=600)
+        assert first["model"] == "fe" and not first["pending_fe"]
+        assert first["check"] == cf.load("carbon.yaml").check().to_dict()
+        s.edit({"core.battery.mass": "70"}, client=1, edited="core.battery.mass")
+        heavier = events.wait(lambda e: e["type"] == "figures" and e["client"] == 1)
+        assert heavier["check"]["mass"]["total_g"] == pytest.approx(first["check"]["mass"]["total_g"] + 12, abs=0.011)
+        assert heavier["model"] == "fe" and not heavier["pending_fe"] and heavier["ms"] < 2000
+        s.edit({"core.battery.mass": "70", "rods.diameter": "20"}, client=2, edited="rods.diameter")
+        bad = events.wait(lambda e: e["type"] == "invalid" and e["client"] == 2)
+        with pytest.raises(cf.ParamsError) as err:
+            cf.load("carbon.yaml").with_values({"core.battery.mass": 70, "rods.diameter": 20})
+        assert bad["message"] == str(err.value) and bad["key"] == "rods.diameter"
+        assert s.save()["type"] == "save-error"  # nothing is saved while a value is refused
+        assert (tmp_path / "carbon.yaml").read_bytes() == original
+        s.edit({"core.battery.mass": "70", "rods.diameter": "3.0"}, client=3)
+        events.wait(lambda e: e["type"] == "figures" and e["client"] == 3)
+        assert s.save()["type"] == "saved"
+        assert (tmp_path / "carbon.yaml").read_text(encoding="utf-8") == original.decode().replace(
+            "    mass: 58             # g", "    mass: 70             # g")
+        (tmp_path / "carbon.yaml").write_text(original.decode() + "# edited elsewhere\n", encoding="utf-8")
+        s.edit({"core.battery.mass": "71"}, client=4)
+        events.wait(lambda e: e["type"] == "figures" and e["client"] == 4)
+        refused = s.save()
+        assert refused["type"] == "save-error" and "changed on disk" in refused["message"]
+        assert (tmp_path / "carbon.yaml").read_text(encoding="utf-8").endswith("# edited elsewhere\n")
+    finally:
+        s.close()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["carbon.yaml"]  # nothing else written
+
+
+# -- the server: address, hosts, origins --------------------------------------------------------
+
+def _start_studio(folder: Path, params: str = "carbon.yaml", *extra: str):
+    proc = subprocess.Popen([sys.executable, "-m", "cogniframe", "studio", params, "--port", "0", "--no-browser", *extra],
+                            cwd=folder, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    line = proc.stdout.readline()
+    m = re.search(r"http://127\.0\.0\.1:(\d+)/", line)
+    if not m:
+        proc.kill()
+        raise AssertionError(f"no address in {line!r}; stderr: {proc.stderr.read()}")
+    port = int(m.group(1))
+    end = time.monotonic() + 60
+    while time.monotonic() < end:  # the port is bound before uvicorn starts: wait until it answers
+        try:
+            import urllib.request
+
+            with urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=5) as r:
+                if r.status == 200:
+                    break
+        except OSError:
+            time.sleep(0.1)
+    return proc, port
+
+
+def _stop(proc) -> tuple[int, str]:
+    proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(timeout=60)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+    return proc.returncode, proc.stderr.read()
+
+
+def _listening(port: int) -> list[str]:
+    """Local addresses (hex, as /proc/net/tcp[6] writes them) listening on `port`."""
+    out = []
+    for table in ("/proc/net/tcp", "/proc/net/tcp6"):
+        try:
+            rows = Path(table).read_text().splitlines()[1:]
+        except OSError:
+            continue
+        for row in rows:
+            cols = row.split()
+            addr, hexport = cols[1].split(":")
+            if int(hexport, 16) == port and cols[3] == "0A":  # LISTEN
+                out.append(addr)
+    return out
+
+
+def _other_addresses() -> list[str]:
+    found = set()
+    try:
+        for info in socket.getaddrinfo(socket.gethostname(), None, socket.AF_INET):
+            found.add(info[4][0])
+    except OSError:
+        pass
+    try:
+        s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        s.connect(("192.0.2.1", 9))  # no packet is sent: just which interface would be used
+        found.add(s.getsockname()[0])
+        s.close()
+    except OSError:
+        pass
+    return sorted(a for a in found if not a.startswith("127."))
+
+
+def test_listens_on_127_0_0_1_only_and_stops_on_ctrl_c(tmp_path):
+    shutil.copy(CARBON, tmp_path / "carbon.yaml")
+    proc, port = _start_studio(tmp_path)
+    try:
+        assert _listening(port) == ["0100007F"]  # 127.0.0.1, nothing on 0.0.0.0 or IPv6
+        for addr in _other_addresses():
+            with pytest.raises(OSError):
+                socket.create_connection((addr, port), timeout=2).close()
+        import urllib.error
+        import urllib.request
+
+        req = urllib.request.Request(f"http://127.0.0.1:{port}/", headers={"Host": "evil.example"})
+        with pytest.raises(urllib.error.HTTPError) as err:  # DNS rebinding: another site's name is refused
+            urllib.request.urlopen(req, timeout=10)
+        assert err.value.code == 400
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/viewer/three.module.min.js", timeout=10) as r:
+            assert r.status == 200 and len(r.read()) > 600_000
+        for bad in ("/viewer/__init__.py", "/files/../carbon.yaml", "/files/carbon.yaml", "/static/../app.py"):
+            with pytest.raises(urllib.error.HTTPError):
+                urllib.request.urlopen(f"http://127.0.0.1:{port}{bad}", timeout=10)
+        # the socket writes the params file and starts builds: only the studio's own pages may open it
+        from websockets.exceptions import InvalidStatus
+        from websockets.sync.client import connect
+
+        with pytest.raises(InvalidStatus):
+            connect(f"ws://127.0.0.1:{port}/ws", origin="http://evil.example", open_timeout=10).close()
+        with connect(f"ws://127.0.0.1:{port}/ws", origin=f"http://127.0.0.1:{port}", open_timeout=10) as ws:
+            event = json.loads(ws.recv(timeout=300))
+            while event["type"] != "figures":
+                event = json.loads(ws.recv(timeout=300))
+            assert event["check"]["name"] == "carbon"
+    finally:
+        code, err = _stop(proc)
+    assert code == 0 and "studio stopped" in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["carbon.yaml"]
+
+
+def test_bad_params_or_busy_port_exit_2(tmp_path, run_cli):
+    (tmp_path / "bad.yaml").write_text("rods:\n  diameter: 20\n", encoding="utf-8")
+    code, out, err = run_cli("studio", tmp_path / "bad.yaml", "--no-browser")
+    assert code == 2 and "rods.diameter (line 2)" in err and out == ""
+    busy = socket.socket()
+    busy.bind(("127.0.0.1", 0))
+    busy.listen(1)
+    try:
+        code, out, err = run_cli("studio", CARBON, "--port", str(busy.getsockname()[1]), "--no-browser")
+    finally:
+        busy.close()
+    assert code == 2 and "already listens" in err
+
+
+# -- in the browser ---------------------------------------------------------------------------
+
+def _browser_or_skip():
+    try:
+        from playwright.sync_api import sync_playwright  # noqa: F401
+    except ImportError:
+        if os.environ.get("CI"):
+            raise
+        pytest.skip("python playwright is not installed")
+    if not Path(CHROMIUM).is_file():
+        if os.environ.get("CI"):
+            pytest.fail(f"{CHROMIUM} missing: .ci/run must apt-get install chromium")
+        pytest.skip("chromium is not installed (apt-get install chromium)")
+
+
+@pytest.fixture(scope="module")
+def studio(tmp_path_factory):
+    """A running `cogniframe studio carbon.yaml` in a folder of its own, and a browser."""
+    _browser_or_skip()
+    from playwright.sync_api import sync_playwright
+
+    folder = tmp_path_factory.mktemp("studio")
+    shutil.copy(CARBON, folder / "carbon.yaml")
+    proc, port = _start_studio(folder)
+    try:
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+            try:
+                yield {"folder": folder, "port": port, "url": f"http://127.0.0.1:{port}/", "browser": browser, "proc": proc}
+            finally:
+                browser.close()
+    finally:
+        _stop(proc)
+
+
+@pytest.fixture
+def page(studio):
+    tab = studio["browser"].new_page(viewport={"width": 1400, "height": 1000})
+    requests, errors = [], []
+    tab.on("request", lambda r: requests.append(r.url))
+    tab.on("pageerror", lambda e: errors.append(str(e)))
+    tab.goto(studio["url"])
+    tab.wait_for_function("document.body.dataset.figuresSeq !== undefined", timeout=120_000)
+    yield tab
+    assert not errors, errors
+    allowed = (studio["url"], f"ws://127.0.0.1:{studio['port']}/", "blob:", "data:")
+    assert all(u.startswith(allowed) for u in requests), [u for u in requests if not u.startswith(allowed)]
+    tab.close()
+
+
+def _metric(tab, path: str) -> str:
+    return tab.text_content(f"#figures [data-metric='{path}'], .groups [data-metric='{path}']").strip()
+
+
+def _edit(tab, key: str, value: str, wait_figures: bool = True) -> dict:
+    """Type `value` into the field and wait for the figures of that edit; returns its latency record."""
+    n = tab.evaluate("window.cogniframeStudio.latencies.length")
+    tab.fill(f"[name='{key}']", value)
+    if wait_figures:
+        tab.wait_for_function(f"window.cogniframeStudio.latencies.length > {n}", timeout=60_000)
+        return tab.evaluate("window.cogniframeStudio.latencies.at(-1)")
+    return {}
+
+
+def _save(tab, studio) -> None:
+    tab.click("#save")
+    tab.wait_for_function("document.getElementById('status').textContent.startsWith('saved')", timeout=30_000)
+
+
+def test_an_edit_changes_the_figures_within_half_a_second(page, studio, capsys):
+    before = float(_metric(page, "mass.total_g"))
+    rec = _edit(page, "core.battery.mass", "70")
+    assert float(_metric(page, "mass.total_g")) == pytest.approx(before + 12, abs=0.11)
+    assert page.text_content(".verdict") == "FAIL"  # over 250 g
+    assert "over the 250 g limit" in page.text_content("#problems")
+    times = [rec["ms"]]
+    for grams in ("66", "59", "64", "58", "62", "58"):  # battery grams: no new geometry, no FE
+        times.append(_edit(page, "core.battery.mass", grams)["ms"])
+    assert float(_metric(page, "mass.total_g")) == pytest.approx(before, abs=0.11)
+    assert page.text_content(".verdict") == "PASS"
+    with capsys.disabled():
+        print(f"\nstudio: edit -> figures (no new geometry), ms: {[round(t) for t in times]}, median {statistics.median(times):.0f}")
+    assert statistics.median(times) < 500, times
+    _save(page, studio)  # back to the file as it was (same value)
+
+
+def test_a_bad_value_gets_the_cli_message_and_nothing_is_saved(page, studio, tmp_path, run_cli, monkeypatch):
+    params = studio["folder"] / "carbon.yaml"
+    before = hashlib.sha256(params.read_bytes()).hexdigest()
+    page.fill("[name='rods.diameter']", "20")
+    box = page.locator(".error[data-error-for='rods.diameter']")
+    box.wait_for(state="visible", timeout=30_000)
+    # the CLI's paragraph for the same file with that value typed in
+    shutil.copy(params, tmp_path / "carbon.yaml")
+    text = (tmp_path / "carbon.yaml").read_text(encoding="utf-8")
+    (tmp_path / "carbon.yaml").write_text(text.replace("  diameter: 3.0 ", "  diameter: 20  "), encoding="utf-8")
+    monkeypatch.chdir(tmp_path)
+    code, _, err = run_cli("check", "carbon.yaml")
+    assert code == 2 and box.text_content() == err.removeprefix("error: ").rstrip("\n")
+    assert page.get_attribute("[name='rods.diameter']", "aria-invalid") == "true"
+    assert page.is_disabled("#save")
+    page.evaluate("document.getElementById('save').disabled = false")
+    page.click("#save")  # even forced, the studio refuses
+    page.wait_for_function("document.getElementById('status').textContent.startsWith('not saved')", timeout=10_000)
+    assert hashlib.sha256(params.read_bytes()).hexdigest() == before
+    _edit(page, "rods.diameter", "3.0")
+    assert not box.is_visible()
+
+
+def test_save_keeps_the_comments(page, studio):
+    params = studio["folder"] / "carbon.yaml"
+    before = params.read_text(encoding="utf-8")
+    _edit(page, "core.battery.capacity_mah", "700")
+    assert page.is_enabled("#save")
+    _save(page, studio)
+    after = params.read_text(encoding="utf-8")
+    assert after == before.replace("    capacity_mah: 650    # the paper's 3S 650 mAh 75C pack",
+                                   "    capacity_mah: 700    # the paper's 3S 650 mAh 75C pack")
+    assert [l for l in after.splitlines() if "#" in l][:4] == [l for l in before.splitlines() if "#" in l][:4]
+    assert cf.load(params).get("core.battery.capacity_mah") == 700
+    _edit(page, "core.battery.capacity_mah", "650")
+    _save(page, studio)
+    assert params.read_text(encoding="utf-8") == before
+
+
+def _canvas_pixels(tab):
+    import numpy as np
+    from PIL import Image
+
+    tab.evaluate("document.querySelectorAll('.cf-bar, .cf-info').forEach(e => e.style.visibility = 'hidden')")
+    png = tab.locator("#cf-canvas").screenshot()
+    tab.evaluate("document.querySelectorAll('.cf-bar, .cf-info').forEach(e => e.style.visibility = '')")
+    img = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)[2:-2, 2:-2]
+    bg = np.array([0xf4, 0xf6, 0xf8])
+    drawn = (np.abs(img - bg).sum(axis=2) > 30).mean()
+    red = int(((img[..., 0] > 110) & (img[..., 1] < 80) & (img[..., 2] < 80)).sum())
+    return drawn, red
+
+
+def test_the_3d_view_draws(page):
+    page.wait_for_selector("#cf-viewer[data-ready='1']", timeout=300_000)
+    kinds = page.evaluate("window.cogniframeViewer.kinds")
+    assert kinds["part"] > 10 and kinds["rod"] == 28 and kinds["vitamin"] > 0
+    drawn, red = _canvas_pixels(page)
+    assert drawn > 0.04 and red > 1500, (drawn, red)
+
+
+@pytest.mark.slow
+def test_a_new_joint_geometry_shows_the_fast_model_then_the_fe_and_a_new_view(page, studio, capsys):
+    page.wait_for_selector("#cf-viewer[data-ready='1']", timeout=300_000)
+    scene = page.get_attribute("#cf-viewer", "data-scene")
+    k_fe = float(_metric(page, "stiffness.k_n_per_m"))
+    t0 = time.monotonic()
+    rec = _edit(page, "joints.wall", "1.5")  # thicker socket walls: five new joint shapes, their FE not solved yet
+    assert rec["pending_fe"] and page.get_attribute("#model", "data-model") == "analytic-pending"
+    assert "solving the joints' FE" in page.text_content("#model")
+    k_fast = float(_metric(page, "stiffness.k_n_per_m"))
+    page.wait_for_function("document.body.dataset.model === 'fe'", timeout=600_000)
+    t_fe = time.monotonic() - t0
+    k_new = float(_metric(page, "stiffness.k_n_per_m"))
+    page.wait_for_function(f"document.querySelector('#cf-viewer[data-ready=\"1\"]')?.dataset.scene !== {json.dumps(scene)}",
+                           timeout=600_000)
+    t_view = time.monotonic() - t0
+    with capsys.disabled():
+        print(f"\nstudio: new joint geometry: fast-model figures after {rec['ms']:.0f} ms (k {k_fast:.0f} N/m), "
+              f"FE figures after {t_fe:.1f} s (k {k_new:.0f} N/m, was {k_fe:.0f}), new 3D view after {t_view:.1f} s")
+    assert rec["ms"] < 1500
+    assert k_new != k_fe and k_new != k_fast  # the FE of the new walls, not the old one nor the screening model
+    drawn, red = _canvas_pixels(page)
+    assert drawn > 0.04 and red > 1500
+    expected = cf.load(studio["folder"] / "carbon.yaml").with_values({"joints.wall": 1.5}).check()
+    assert k_new == pytest.approx(expected.k_n_per_m, abs=0.5)
+    _edit(page, "joints.wall", "1.2")
+    page.wait_for_function("document.body.dataset.model === 'fe'", timeout=600_000)
+
+
+@pytest.mark.slow
+def test_build_offers_the_plates_and_the_report(page, studio):
+    page.click("#build")
+    page.wait_for_selector("#downloads a[href$='report.html']", timeout=900_000)
+    links = page.eval_on_selector_all("#downloads a", "as => as.map(a => a.getAttribute('href'))")
+    assert any(h.endswith(".3mf") for h in links) and "/files/report.html" in links
+    out = studio["folder"] / "out" / "carbon"
+    assert (out / "manifest.json").is_file() and (out / "report.html").is_file()
+    import urllib.request
+
+    plate = next(h for h in links if h.endswith(".3mf"))
+    with urllib.request.urlopen(studio["url"].rstrip("/") + plate, timeout=30) as r:
+        data = r.read()
+    assert data[:2] == b"PK" and data == (out / plate.removeprefix("/files/")).read_bytes()  # a 3MF is a zip
+    assert sorted(p.name for p in studio["folder"].iterdir()) == ["carbon.yaml", "out"]
