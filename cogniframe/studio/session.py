@@ -244,14 +244,19 @@ class Session:
                                   "objects": len(packed[0]["objects"]), "seconds": round(time.perf_counter() - t0, 2)})
 
             def step(task: str, done: int, total: int, part_values=None) -> None:
-                self.publish({"type": "progress", "task": "view", "done": done, "total": total, "fe": fe,
-                              "text": f"{task} ({done}/{total})" + (": solving the joints' FE" if fe and done >= n_parts else "")})
-                if task.startswith("part:"):
+                is_part = task.startswith("part:")
+                if is_part:
                     parts_done.append(task)
-                    if len(parts_done) == n_parts and part_values is not None:
-                        t = threading.Thread(target=show_view, args=(part_values(),), name="studio-view", daemon=True)
-                        shown.append(t)
-                        t.start()
+                all_parts = is_part and len(parts_done) == n_parts
+                what = f"made the {task.rsplit('/', 1)[-1]}" if is_part else "solved the joints' FE"
+                if fe and all_parts:
+                    what += "; solving the joints' FE"
+                self.publish({"type": "progress", "task": "view", "done": done, "total": total, "fe": fe,
+                              "text": f"{what} ({done}/{total})"})
+                if all_parts and part_values is not None:
+                    t = threading.Thread(target=show_view, args=(part_values(),), name="studio-view", daemon=True)
+                    shown.append(t)
+                    t.start()
 
             try:
                 view.build_parts(d.spec, d.pipeline_design, out, fe=fe, server=self.server, on_step=step)
