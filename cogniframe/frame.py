@@ -217,8 +217,9 @@ def build(spec: Spec) -> Frame:
     for k, (sx, sy) in CORNER_SIGN.items():
         pos[f"corner_top_{k}"] = ("corner_top", np.array([sx * hx, sy * hy, z_top]))
         pos[f"corner_bottom_{k}"] = ("corner_bottom", np.array([sx * hx, sy * hy, z_bot]))
-        pos[f"knee_{k}"] = ("knee", np.array([sx * (hx - f.knee_inset), sy * (hy - f.knee_inset), z_knee]))
-        pos[f"core_link_{k}"] = ("core_link", np.array([sx * a_link, sy * a_link, z_link]))
+        link = np.array([sx * a_link, sy * a_link, z_link])
+        pos[f"knee_{k}"] = ("knee", np.append(_knee_xy(np.array([sx * hx, sy * hy]), link[:2], f.knee_inset), z_knee))
+        pos[f"core_link_{k}"] = ("core_link", link)
 
     # (name, role, node a, node b, lateral offset vector applied to both ports)
     edges: list[tuple[str, str, str, str, np.ndarray]] = []
@@ -229,8 +230,7 @@ def build(spec: Spec) -> Frame:
     for k in CORNERS:
         edges.append((f"rod_leg_upper_{k}", "leg", f"corner_top_{k}", f"knee_{k}", zero))
         edges.append((f"rod_leg_lower_{k}", "leg", f"knee_{k}", f"corner_bottom_{k}", zero))
-        sx, sy = CORNER_SIGN[k]
-        lateral = np.array([-sy, sx, 0.0]) / math.sqrt(2)  # horizontal, perpendicular to the diagonal
+        lateral = _arm_lateral(pos[f"knee_{k}"][1], pos[f"core_link_{k}"][1])
         for i, s in ((1, 0.5), (2, -0.5)):
             edges.append((f"rod_arm_{k}_{i}", "arm", f"knee_{k}", f"core_link_{k}", lateral * s * f.arm_spacing))
         if f.struts:
@@ -278,6 +278,29 @@ def build(spec: Spec) -> Frame:
             f"the electronics on the core reach z = {max(b.hi[2] for b in core.boxes):.0f} mm, above the "
             f"top ring at {z_top:.0f} mm", "increase frame.height or lower core.battery_clearance")
     return frame
+
+
+def _knee_xy(corner: np.ndarray, link: np.ndarray, inset: float) -> np.ndarray:
+    """Plan position of a knee: `inset` in along x and y from its corner in a square box (on the
+    corner's 45 deg diagonal, towards the core link). In a rectangle the corner's core link is off
+    that diagonal, so the knee moves the same distance (inset x sqrt 2) straight towards the core
+    link: the corner, its legs, the knee, the arm and the strut then stay in one vertical plane,
+    as in a square, and every joint still prints flat with its sockets in that plane."""
+    d = link - corner
+    if abs(d[0]) == abs(d[1]):  # on the diagonal: the exact square-box numbers
+        return np.array([corner[0] + np.sign(d[0]) * inset, corner[1] + np.sign(d[1]) * inset])
+    return corner + d / math.hypot(d[0], d[1]) * (inset * math.sqrt(2))
+
+
+def _arm_lateral(knee: np.ndarray, link: np.ndarray) -> np.ndarray:
+    """Unit vector across an arm pair: horizontal and perpendicular to the arm in plan (knee to
+    core link), so the two rods lie `arm_spacing` apart whatever the box's aspect ratio. Its sign
+    is the old diagonal convention's: (-sy, sx) / sqrt 2 for a corner on the 45 deg diagonal
+    (every square box, where the arm runs along the diagonal; those numbers are kept exactly)."""
+    d = link[:2] - knee[:2]  # inwards, in plan
+    if abs(d[0]) == abs(d[1]):  # on the diagonal: the exact constant
+        return np.array([np.sign(d[1]), -np.sign(d[0]), 0.0]) / math.sqrt(2)
+    return np.array([d[1], -d[0], 0.0]) / math.hypot(d[0], d[1])
 
 
 def _node_seat(n: str, pos, edges, inc: list[int], spec: Spec) -> float:
@@ -364,7 +387,7 @@ def _motor(k: str, rods: dict[str, Rod], spec: Spec) -> Motor:
     pa = (np.asarray(r1.a.port) + np.asarray(r2.a.port)) / 2  # knee end
     pb = (np.asarray(r1.b.port) + np.asarray(r2.b.port)) / 2  # core end
     ra, rb = np.hypot(*pa[:2]), np.hypot(*pb[:2])
-    t = (ra - spec.motors.radius) / (ra - rb)
+    t = _radius_along(pa, pb, ra, rb, spec.motors.radius)
     if not 0.0 < t < 1.0:
         raise spec.error(
             "motors.radius",
@@ -378,6 +401,21 @@ def _motor(k: str, rods: dict[str, Rod], spec: Spec) -> Motor:
     seat_z = float(axis[2]) + spec.bore / 2 + spec.joints.wall + head + spec.joints.wall
     prop_z = seat_z + spec.motor.height
     return Motor(f"motor_{k}", k, (r1.name, r2.name), _t(axis), seat_z, prop_z, slope)
+
+
+def _radius_along(pa: np.ndarray, pb: np.ndarray, ra: float, rb: float, radius: float) -> float:
+    """Where along the arm centreline pa -> pb the motor axis is `radius` from the centre in plan
+    (0 at pa, 1 at pb; outside [0, 1] when it is off the arm). An arm that points at the centre
+    (a square box: on the diagonal) is linear in the radius; in a rectangle it passes beside the
+    centre (the knee is off the diagonal, the core link on it), so solve |pa + t (pb - pa)| = radius."""
+    u = pb[:2] - pa[:2]
+    if abs(float(pa[0] * pb[1] - pa[1] * pb[0])) <= 1e-9 * ra * rb:
+        return float((ra - radius) / (ra - rb))
+    a, b, c = float(u @ u), 2.0 * float(pa[:2] @ u), float(pa[:2] @ pa[:2]) - radius**2
+    disc = b * b - 4 * a * c
+    if disc < 0:
+        return math.inf  # the arm never comes that close to the centre
+    return (-b - math.sqrt(disc)) / (2 * a)  # the first crossing going inwards from the knee
 
 
 def prop_clearances(frame: Frame, spec: Spec) -> tuple[PropClearance, ...]:

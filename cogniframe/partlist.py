@@ -7,6 +7,16 @@ estimate of its volume and surface (used by `cogniframe check`, which must not i
 
 Local frames: a joint's local origin is its node; the prototype is the front-left (`fl`)
 instance and the others are the prototype rotated about z by `Placement.rotation_deg`.
+
+Rectangular boxes. A corner's sockets are the rotation of the fl corner's only when they are
+symmetric about the corner's 45 deg diagonal. In a square box they are (one part per kind); in a
+rectangle the arms (knee -> core link) and the struts (bottom corner -> core link) run off the
+diagonal, so the fr and rl corners are the MIRROR image of fl and rr (fl and rr are always a
+180 deg rotation apart: the box is symmetric about both centre planes). Which corners a part
+serves is tested on the frame graph itself (`_fit_error`): a kind whose fr corner is not the
+rotation of its fl corner gets a second part `<kind>_mirrored` (params kind + mirror, prototype
+fr) for fr and rl, as the core link always does. The motor mount is symmetric about its arm, so
+one part serves every corner, turned to the actual plan direction of each arm.
 """
 
 from __future__ import annotations
@@ -25,6 +35,9 @@ from .spec import Spec
 Vec = tuple[float, float, float]
 # Rotation about z taking the fl prototype to each corner (clockwise seen from above).
 CORNER_ROTATION = {"fl": 0.0, "fr": -90.0, "rr": -180.0, "rl": 90.0}
+# A corner's sockets coincide with the prototype's placed there when no port (mm) or direction
+# (unit vector) differs by more than this; sockets are stored rounded to 1e-6.
+FIT_TOL = 1e-5
 # Two socket directions count as parallel (an arm pair) when their dot product exceeds 1 - this;
 # directions are stored rounded to 6 decimals, so 1e-6 is too tight (~0.8 deg here).
 PARALLEL_TOL = 1e-4
@@ -108,9 +121,9 @@ class PartSpec:
 def build(spec: Spec, frame: Frame) -> tuple[PartSpec, ...]:
     """All distinct printed parts of the design, in a stable order."""
     parts = [
-        _joint(spec, frame, "corner_top", "corner_top"),
-        _joint(spec, frame, "corner_bottom", "corner_bottom"),
-        _joint(spec, frame, "knee", "knee"),
+        *_joints(spec, frame, "corner_top"),
+        *_joints(spec, frame, "corner_bottom"),
+        *_joints(spec, frame, "knee"),
         # The core links are chiral (printed on their side, D-section sleeves standing on the bed),
         # and the battery holder is a rectangle, not a square: a link rotated from fl to fr meets
         # the holder differently. So fr and rl get the mirror image of the fl/rr link.
@@ -141,21 +154,63 @@ def _t(v) -> Vec:
     return (round(float(v[0]), 6), round(float(v[1]), 6), round(float(v[2]), 6))
 
 
+def node_sockets(spec: Spec, frame: Frame, node: str) -> list[Socket]:
+    """The sockets of a joint node, in the frame's axes with the node at the origin (from the graph)."""
+    n = frame.nodes[node]
+    origin = np.asarray(n.pos)
+    sockets = []
+    for rname in n.rods:
+        rod = frame.rods[rname]
+        end = rod.end_at(node)
+        sockets.append(Socket(rname, _t(np.asarray(end.port) - origin), _t(rod.socket_direction(node)),
+                              end.seat, end.depth, round(spec.bore, 4)))
+    return sockets
+
+
+def _fit_error(sockets, rotation_deg: float, target) -> float:
+    """How far `sockets` turned about z by `rotation_deg` are from the sockets `target` (both in
+    their node's axes): the worst port (mm) + direction error of the best one-to-one matching,
+    inf when the counts or the seats, depths or bores differ."""
+    if len(sockets) != len(target):
+        return math.inf
+    left = list(target)
+    worst = 0.0
+    for s in sockets:
+        p, d = _rot_z(np.asarray(s.port, float), rotation_deg), _rot_z(np.asarray(s.direction, float), rotation_deg)
+        errs = [float(np.linalg.norm(p - np.asarray(t.port)) + np.linalg.norm(d - np.asarray(t.direction)))
+                if (t.seat, t.depth, t.bore) == (s.seat, s.depth, s.bore) else math.inf for t in left]
+        i = int(np.argmin(errs))
+        worst = max(worst, errs[i])
+        left.pop(i)
+    return worst
+
+
+def _joints(spec: Spec, frame: Frame, kind: str) -> list[PartSpec]:
+    """The part(s) of one joint kind: one for all four corners when each corner is the fl corner
+    turned about z (a square box), else the part for fl and rr and its mirror image
+    `<kind>_mirrored` for fr and rl (a rectangle: module docstring)."""
+    fl = node_sockets(spec, frame, f"{kind}_fl")
+    if all(_fit_error(fl, CORNER_ROTATION[k], node_sockets(spec, frame, f"{kind}_{k}")) <= FIT_TOL for k in CORNERS):
+        return [_joint(spec, frame, kind, kind)]
+    return [_joint(spec, frame, kind, kind, corners=("fl", "rr")),
+            _joint(spec, frame, f"{kind}_mirrored", kind, proto="fr", corners=("fr", "rl"))]
+
+
 def _joint(spec: Spec, frame: Frame, name: str, kind: str, proto: str = "fl", corners: tuple[str, ...] = CORNERS) -> PartSpec:
     """A joint part: the `proto` corner's node in its own axes, placed at `corners` by rotation about z.
-    A prototype other than fl is the mirror image of the fl part (its side normal is mirrored too)."""
+    A prototype other than fl is the mirror image of the fl part (its side normal is mirrored too).
+    Raises RuntimeError (a bug) if a placed copy's sockets miss the rods of its node."""
     corner = proto
     proto = frame.nodes[f"{kind}_{corner}"]
     origin = np.asarray(proto.pos)
-    sockets = []
-    for rname in proto.rods:
-        rod = frame.rods[rname]
-        end = rod.end_at(proto.name)
-        sockets.append(Socket(rname, _t(np.asarray(end.port) - origin), _t(rod.socket_direction(proto.name)),
-                              end.seat, end.depth, round(spec.bore, 4)))
+    sockets = node_sockets(spec, frame, proto.name)
     base = CORNER_ROTATION[corner]
     placements = tuple(Placement(f"{kind}_{k}", (CORNER_ROTATION[k] - base + 180.0) % 360.0 - 180.0,
                                  _t(frame.nodes[f"{kind}_{k}"].pos)) for k in corners)
+    for pl in placements:
+        err = _fit_error(sockets, pl.rotation_deg, node_sockets(spec, frame, pl.instance))
+        if err > FIT_TOL:
+            raise RuntimeError(f"part {name}: its sockets placed at {pl.instance} miss the frame's rods by {err:.3g} mm")
     hardware: tuple[HardwareLine, ...] = ()
     params: list[tuple[str, object]] = [("hinge_thickness", spec.joints.hinge_thickness)]
     if name != kind:
@@ -316,18 +371,52 @@ def _hull_area(pts: np.ndarray) -> float:
 
 # -- motor mount -----------------------------------------------------------------------------
 
-def _motor_mount(spec: Spec, frame: Frame) -> PartSpec:
-    m0 = frame.motors[0]
-    motor = spec.motor
-    r1, r2 = frame.rods[m0.arm[0]], frame.rods[m0.arm[1]]
-    axis = np.asarray(m0.axis)
-    # Rod axis points through the mount's local origin (the motor axis on the arm centreline).
-    rods_local = []
-    for r in (r1, r2):
+def mount_rods(frame: Frame, motor) -> list[tuple[Vec, Vec]]:
+    """(point, direction) of a motor's two arm rods, in the frame's axes with the motor axis point
+    at the origin: the point is where the rod axis passes nearest to it."""
+    axis = np.asarray(motor.axis)
+    out = []
+    for rn in motor.arm:
+        r = frame.rods[rn]
         p = r.start - axis
         d = r.axis
         t = -np.dot(p, d)
-        rods_local.append((_t(p + t * d), _t(d)))
+        out.append((_t(p + t * d), _t(d)))
+    return out
+
+
+def _rods_fit(rods, rotation_deg: float, target) -> float:
+    """Worst point + direction error of `rods` turned about z onto `target` (either pairing)."""
+    turned = [(_rot_z(np.asarray(p, float), rotation_deg), _rot_z(np.asarray(d, float), rotation_deg)) for p, d in rods]
+
+    def err(a, b) -> float:
+        return float(np.linalg.norm(a[0] - np.asarray(b[0])) + np.linalg.norm(a[1] - np.asarray(b[1])))
+
+    return min(max(err(turned[0], target[0]), err(turned[1], target[1])),
+               max(err(turned[0], target[1]), err(turned[1], target[0])))
+
+
+def _mount_rotation(frame: Frame, m0, m) -> float:
+    """The turn about z that puts the fl motor mount on motor `m`'s arm: the corner's rotation when
+    it fits (a square box), else the turn between the two arms' plan directions (a rectangle: the
+    mount is symmetric about its arm, so the mirrored arm takes the same part turned)."""
+    fl, target = mount_rods(frame, m0), mount_rods(frame, m)
+    if _rods_fit(fl, CORNER_ROTATION[m.corner], target) <= FIT_TOL:
+        return CORNER_ROTATION[m.corner]
+    d0, d = frame.rods[m0.arm[0]].axis, frame.rods[m.arm[0]].axis
+    deg = round((math.degrees(math.atan2(d[1], d[0]) - math.atan2(d0[1], d0[0])) + 180.0) % 360.0 - 180.0, 9)
+    err = _rods_fit(fl, deg, target)
+    if err > FIT_TOL:
+        raise RuntimeError(f"motor_mount: no turn of the fl mount fits the arm of {m.name} (error {err:.3g} mm)")
+    return deg
+
+
+def _motor_mount(spec: Spec, frame: Frame) -> PartSpec:
+    m0 = frame.motors[0]
+    motor = spec.motor
+    axis = np.asarray(m0.axis)
+    # Rod axis points through the mount's local origin (the motor axis on the arm centreline).
+    rods_local = mount_rods(frame, m0)
     screw = SCREWS[motor.screw]
     width = max(motor.bell_d + 4.0, spec.frame.arm_spacing + spec.bore + 2 * spec.joints.wall)
     thick = spec.joints.wall + 1.5
@@ -336,7 +425,7 @@ def _motor_mount(spec: Spec, frame: Frame) -> PartSpec:
     vol = width * width * thick + 2 * (math.pi / 4 * (od**2 - spec.bore**2) * clip_len)
     vol -= 4 * math.pi / 4 * screw.clearance_d**2 * thick + math.pi / 4 * (motor.shaft_boss_d + 1) ** 2 * thick
     est = Estimate(vol, 2 * width * width, 4 * width * thick + 2 * math.pi * od * clip_len, (width, width, thick + od))
-    placements = tuple(Placement(m.name, CORNER_ROTATION[m.corner], _t(m.axis)) for m in frame.motors)
+    placements = tuple(Placement(m.name, _mount_rotation(frame, m0, m), _t(m.axis)) for m in frame.motors)
     params = (("bolt_spacing", motor.bolt_spacing), ("screw", screw.name), ("screw_clearance", screw.clearance_d),
               ("shaft_hole", motor.shaft_boss_d + 1.0), ("bell_d", motor.bell_d), ("seat_z", round(m0.seat_z - axis[2], 4)),
               ("arm_rods", tuple(rods_local)), ("arm_slope_deg", round(m0.arm_slope_deg, 4)), ("width", width),

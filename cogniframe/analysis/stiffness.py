@@ -966,14 +966,14 @@ def _strain(spec, frame, parts, joints, mdl: Model, u: np.ndarray, eps_break: fl
     leg against the arms in the web, an upper bound) and the sockets (interface bearing)."""
     fe = mdl.fe
     idx = fe.index()
-    knee_part = next(p for p in joint_parts(parts) if p.name == "knee")
-    hi = hinged_socket(knee_part)
-    l_web, _, t_web = hinge_geometry(knee_part)
+    knees = {p.name: p for p in joint_parts(parts) if hinged_socket(p) is not None}  # knee (and knee_mirrored)
     eps_h = 0.0
     for inst, labs in mdl.joint_nodes.items():
-        if mdl.instance_part[inst] != "knee":
+        knee_part = knees.get(mdl.instance_part[inst])
+        if knee_part is None:
             continue
-        leg = labs[knee_part.sockets[hi].rod]
+        l_web, _, t_web = hinge_geometry(knee_part)
+        leg = labs[knee_part.sockets[hinged_socket(knee_part)].rod]
         arms = [n for l, n in labs.items() if "arm" in l]
         th_leg = u[6 * idx[leg] + 3:6 * idx[leg] + 6]
         th_arm = np.mean([u[6 * idx[n] + 3:6 * idx[n] + 6] for n in arms], axis=0)

@@ -45,6 +45,14 @@ from ..partlist import PARALLEL_TOL, PartSpec
 
 CHAMFER = 0.5  # mm, 45 deg, at every socket mouth
 HINGE_GAP = 0.8  # mm, slot each side of the knee's living hinge (two 0.4 mm lines wide)
+JOIN = 0.4  # mm, least overlap of the knee's rigid leg sleeve with the arm block, each way (one 0.4 mm line)
+# A knee or core-link socket is parallel to the bed below this slope (rad): the stored sockets'
+# 1e-6 rounding tilts a rectangle's by up to ~1e-6, which must not turn a D-section sleeve into a
+# degenerate sloped one (a square box's are level to ~1e-17).
+FLAT = 1e-5
+STACK_SNAP = 1e-3  # mm: the most two arm sleeves are moved to stack them (rounding noise is ~1e-5)
+VOID_MM3 = 1e-6  # a solid smaller than this is a boolean artifact, not a piece of the part
+TAB_CLEAR = 0.2  # mm: a core link's tab top never within this of a sleeve's top (no coincident top faces)
 SKIRT = 0.9  # web under a sloped sleeve, as a fraction of the sleeve OD (never tangent to it)
 JOINT_KINDS = ("corner_top", "corner_bottom", "knee", "core_link")
 
@@ -122,15 +130,17 @@ def kind_of(part: PartSpec) -> str:
 
 def _side_normal(part: PartSpec, dirs: np.ndarray) -> np.ndarray:
     """The lateral axis (vertical in print): normal to the legs' plane (knee) or to the arm and
-    strut (core link). In a square frame every socket lies in that plane; in a rectangular one the
-    arms tilt out of it by a few degrees and print as gently sloped sleeves."""
+    strut (core link). Every socket lies in that plane (frame.build keeps each corner's fold in the
+    vertical plane through the corner and its core link, in a rectangle too), and the arm pair is
+    offset across it, so the two arm sockets stack into one block."""
     arm = _arm_direction(part)
     others = [d for d in dirs if d @ arm < 1 - PARALLEL_TOL]
-    if len(others) >= 2:
-        w = np.cross(others[0], others[1])
-    elif others:
+    w = np.cross(others[0], others[1]) if len(others) >= 2 else np.zeros(3)
+    if others and np.linalg.norm(w) < 1e-6:
+        # one other socket, or two in one line (frame.knee_inset: 0, straight sides: the upper and
+        # lower legs are one vertical line; the knee's plane is then the legs' and the arms')
         w = np.cross(arm, others[0])
-    else:  # arm sockets only (frame.struts: false): lie the two arm sleeves side by side on the bed
+    elif not others:  # arm sockets only (frame.struts: false): lie the two arm sleeves side by side on the bed
         pair = [np.asarray(s.port, float) for s in part.sockets if np.asarray(s.direction) @ arm > 1 - PARALLEL_TOL]
         w = np.cross(arm, np.cross(arm, pair[1] - pair[0]))
     w /= np.linalg.norm(w)
@@ -230,7 +240,7 @@ def sleeve(s: PSocket, start: float, r: float, end: float | None = None):
     end = s.seat + s.depth if end is None else end
     dz = float(s.direction[2])
     length = end - start
-    if abs(dz) < 1e-9:
+    if abs(dz) < FLAT:
         return dsleeve(s.at(start), s.direction, length, s.port[2], r)
     if abs(dz) >= math.cos(math.radians(45)):
         return cylinder(s.at(start), s.direction, length, r)
@@ -270,10 +280,12 @@ def above_bed(shape, big: float = 2000.0):
 
 
 def finish(body, cutters):
-    """Cut the socket holes; return a single solid (raises if the part fell apart)."""
+    """Cut the socket holes; return a single solid (raises if the part fell apart). A solid of no
+    volume is not a piece: OCC's fuse of many pieces at once can leave one where surfaces only
+    touch (a rectangle's bottom corner: its strut off the diagonal, a 0 mm^3 solid on the hub)."""
     cq = _cq()
     shape = body.cut(fuse_all(cutters)).clean() if cutters else body.clean()
-    solids = shape.Solids()
+    solids = [x for x in shape.Solids() if x.Volume() > VOID_MM3]
     if len(solids) != 1:
         raise RuntimeError(f"joint geometry produced {len(solids)} solids instead of 1")
     return cq.Solid(solids[0].wrapped) if not isinstance(solids[0], cq.Solid) else solids[0]
@@ -332,8 +344,24 @@ def _groups(socks: list[PSocket]) -> tuple[list[PSocket], list[PSocket]]:
 
 
 def _block(arms: list[PSocket], r: float, start: float):
-    """The stacked arm sockets: each arm's sleeve stands on the bed, so together they make one block."""
-    return fuse_all([sleeve(s, start, r) for s in arms])
+    """The stacked arm sockets: each arm's sleeve stands on the bed, so together they make one block.
+    Every sleeve is built straight above or below the first arm's (`_stacked`)."""
+    return fuse_all([sleeve(_stacked(arms[0], s), start, r) for s in arms])
+
+
+def _stacked(a: PSocket, s: PSocket) -> PSocket:
+    """Arm socket `s` moved onto the vertical through arm `a`'s axis, along `a`. Sockets are stored
+    to 1e-6 mm: off a 45 deg diagonal (a rectangle) the rounding leaves the two arms of a pair up
+    to ~1e-5 mm apart sideways and along, steps between the two sleeves that became zero-area
+    faces, a failed boolean or a mesh the FE rejected. The sleeves only; the holes are cut where
+    the sockets are. A square box's pair is stacked to round-off (~1e-16) and kept as it is."""
+    off = s.port - a.port
+    stray = off - np.array([0.0, 0.0, off[2]])
+    if s is a or float(np.abs(stray).max()) <= 1e-9 and float(np.abs(s.direction - a.direction).max()) <= 1e-9:
+        return s
+    if float(np.abs(stray).max()) > STACK_SNAP:
+        raise ValueError(f"arm sockets {a.rod} and {s.rod} are not stacked in print ({stray} mm apart)")
+    return PSocket(a.port + np.array([0.0, 0.0, off[2]]), a.direction, s.seat, s.depth, s.bore, s.rod)
 
 
 def _footprint_rect(s: PSocket, start: float, end: float, half: float, grow: float = 0.0):
@@ -380,6 +408,32 @@ def knee_hinge(part: PartSpec) -> Hinge:
     return Hinge(c[:2] - e * 0.6, q[:2], np.array([-e[1], e[0]]), h, float(top), probe)
 
 
+def _rigid_leg_start(a: PSocket, s: PSocket, r: float, s_back: float, wall: float) -> float:
+    """Where the rigid (lower) leg's sleeve starts, along it from the port: at its back face
+    (seat - wall), unless that leaves the sleeve's inner back corner less than `JOIN` inside the arm
+    block's footprint (`a`: an arm socket, the block from `s_back` along the arm, r either side) --
+    then further back, just far enough. The leg joins the knee only through that overlap (the
+    hinged leg is cut free of both), and it shrinks as the leg leans back from the arms: with
+    2.3 mm rods (r 2.4) and a 91 mm frame the leg, at 107 deg to the arms, missed the block and the
+    knee fell apart in two. Pure numpy; in plan (every knee sleeve stands on the bed)."""
+    t0 = s.seat - wall
+    dx = horizontal(a.direction)
+    lat = np.array([-dx[1], dx[0], 0.0])
+    u = horizontal(s.direction)
+    n = np.array([-u[1], u[0], 0.0])
+    n = n if n @ dx >= 0 else -n  # across the leg, towards the arms
+    side = 1.0 if u @ lat >= 0 else -1.0  # which side of the arms the leg leaves on
+    p0 = (s.port - a.port) * np.array([1.0, 1.0, 0.0]) + n * r  # the inner back corner at t = 0
+    # each margin is c + k t (mm inside the block): along the arm past the block's back face, and
+    # across it inside the block's side
+    margins = [(float(p0 @ dx) - s_back - JOIN, float(u @ dx)), (r - side * float(p0 @ lat) - JOIN, -side * float(u @ lat))]
+    t = t0
+    for c, k in margins:
+        if c + k * t < 0 and k < 0:
+            t = min(t, -c / k)  # moving the start back raises this margin
+    return t
+
+
 def _knee(part: PartSpec, socks: list[PSocket], r: float):
     arms, legs = _groups(socks)
     a = arms[0]
@@ -389,6 +443,7 @@ def _knee(part: PartSpec, socks: list[PSocket], r: float):
     hinged = min(legs, key=lambda s: float(s.direction @ a.direction))
     rigid = [s for s in legs if s is not hinged]
     t_back = {id(s): s.seat - part.wall for s in legs}
+    t_back.update({id(s): _rigid_leg_start(a, s, r, s_back, part.wall) for s in rigid})
     rigid_solids = [sleeve(s, t_back[id(s)], r) for s in rigid]
     # Upper leg, freed from everything rigid by HINGE_GAP ...
     upper = sleeve(hinged, t_back[id(hinged)], r)
@@ -434,6 +489,13 @@ def _core_link(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarray):
         return (node + e_u * uu + e_v * vv)[:2]
 
     z_top = float(bolt[2] + r_tab)
+    near = [z for z in tops if abs(z_top - z) < TAB_CLEAR]
+    if near:
+        # The tab's top plane on a sleeve's round top (the bore = the screw clearance: 2.3 mm rods
+        # and M2, 2.4 mm both) made the hub's top plane, the tab's and the strut sleeve's tangent
+        # line coincide; OCC then meshed that top face with open edges (an STL that is not
+        # watertight). Lift the tab clear of it.
+        z_top = max(near) + TAB_CLEAR
     pieces.append(prism([tab_pt(-1.0, v0), tab_pt(u_len + r_tab, v0), tab_pt(u_len + r_tab, v0 + t), tab_pt(-1.0, v0 + t)],
                         0.0, z_top))
     # Hub: the convex hull of the sleeves' back faces and the root of the tab.
