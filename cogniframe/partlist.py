@@ -680,6 +680,15 @@ def _computer_mount(spec: Spec, frame: Frame) -> PartSpec:
                     (Placement("core", 0.0, _t((box.centre[0], box.centre[1], box.lo[2] - t / 2))),), (), t, est, params, hw)
 
 
+def infill_by_material(parts) -> dict[str, float]:
+    """The infill each material prints at (the slicer profile is per material): the densest of its
+    parts' (the joints and motor mounts solid, the core parts at `core.infill`)."""
+    out: dict[str, float] = {}
+    for p in parts:
+        out[p.material] = max(out.get(p.material, 0.0), p.infill)
+    return dict(sorted(out.items()))
+
+
 def _with_digest(p: PartSpec) -> PartSpec:
     payload = json.dumps([p.name, p.family, p.material, p.infill, [s.__dict__ for s in p.sockets], p.wall,
                           [list(map(str, kv)) for kv in p.params]], sort_keys=True, default=str)

@@ -44,7 +44,7 @@ class FrameSection(_M):
     width: Annotated[float, Field(ge=80, le=600, description="outside size along x (left-right), mm")] = 210
     depth: Annotated[float, Field(ge=80, le=600, description="outside size along y (front-rear), mm")] = 210
     height: Annotated[float, Field(ge=50, le=400, description="outside height, mm")] = 120
-    knee_inset: Annotated[float, Field(ge=0, le=80, description="how far each mid-height knee sits inside the corner, along x and along y, mm (the hourglass bow)")] = 12
+    knee_inset: Annotated[float, Field(ge=0, le=80, description="how far each mid-height knee sits inside the corner, mm (the hourglass bow): along x and along y in a square box; in a rectangle the same distance (x sqrt 2) towards its core link, so that each corner folds in one plane; 0 = straight sides")] = 12
     knee_height: Annotated[float, Field(gt=0.2, lt=0.8, description="knee height as a fraction of the frame height")] = 0.5
     arm_spacing: Annotated[float, Field(ge=6, le=40, description="centre distance between the two parallel rods of an arm, mm")] = 12
     struts: bool = Field(True, description="damping struts from the bottom corners to the core")
@@ -120,7 +120,7 @@ class MotorsSection(_M):
     radius: Annotated[float, Field(ge=20, le=300, description="motor axis distance from the frame centre, in plan, mm")] = 82
     prop_diameter: Annotated[float, Field(ge=25, le=260, description="propeller diameter, mm (3 in = 76.2)")] = 76.2
     prop_mass: Annotated[float, Field(ge=0, le=30, description="g each")] = 1.0
-    max_thrust_g: Annotated[float, Field(gt=0, le=5000, description="static thrust of one motor at full throttle, g (thrust load case); null = the motor class's typical value (1104 on 3S with 3025 props: 190 g; 1404 on 2S with 4 in props: 200 g)")] | None = None
+    max_thrust_g: Annotated[float, Field(gt=0, le=5000, description="static thrust of one motor at full throttle, g (thrust load case and thrust-to-weight); null = the flight tables' value for motors.model, kv, prop and the pack, else the motor class's typical value (1104 on 3S with 3025 props: 190 g; 1404 on 2S with 4 in props: 200 g)")] | None = None
     kv: Annotated[int, Field(ge=100, le=50000, description="motor KV (rpm per volt); null = the preset's")] | None = None
     prop: str | None = Field(None, description="propeller for the flight tables, e.g. 3025 or 4024; null = the one matching prop_diameter")
 

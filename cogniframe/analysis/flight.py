@@ -129,11 +129,22 @@ def propulsion(spec: Spec) -> Propulsion | None:
     return Propulsion(t, (cells / t.cells) ** 2)
 
 
-def max_thrust_g(spec: Spec) -> float | None:
-    """Full-throttle thrust of one motor (g) on the design's pack; None without a table. For the
-    physics branch (and thrust-to-weight)."""
+# Static thrust of one motor at full throttle, g, for a motor with no thrust table for its kv, prop
+# and pack: the makers' thrust tables of the class (1104 with a 3025 prop on 3S; 1404 with a 4 in
+# prop on 2S).
+MAX_THRUST_G_BY_MOTOR = {"1104": 190.0, "1404": 200.0}
+
+
+def max_thrust_g(spec: Spec) -> float:
+    """Full-throttle thrust of one motor (g): `motors.max_thrust_g` when the params give it, else the
+    thrust table for the motor, kv, prop and pack, else the motor class's typical value. The one
+    value the flight model (thrust-to-weight) and the thrust load case use."""
+    if spec.motors.max_thrust_g is not None:
+        return float(spec.motors.max_thrust_g)
     p = propulsion(spec)
-    return None if p is None else p.thrust_g(1.0)
+    if p is not None:
+        return p.thrust_g(1.0)
+    return MAX_THRUST_G_BY_MOTOR.get(spec.motors.model, 190.0)
 
 
 def momentum_hover_power_w(thrust_n: float, prop_diameter_mm: float, fom_eta: float = FOM_ETA) -> float:
@@ -186,7 +197,7 @@ def evaluate(spec: Spec, mass_g: float, rotors: int = 4) -> FlightResult | None:
         return None
     b = spec.core.battery
     v = b.cells * CELL_V
-    t_max = p.thrust_g(1.0)
+    t_max = max_thrust_g(spec)
     per_motor = mass_g / rotors
     throttle, i_motor = p.at_thrust(per_motor)
     if not math.isfinite(i_motor):  # cannot hover: report full throttle (thrust_to_weight < 1 fails the check)

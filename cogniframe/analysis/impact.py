@@ -3,7 +3,7 @@
     m x'' + c x' + k x = m g,   x(0) = 0,   x'(0) = sqrt(2 g h)
 
 x is the payload's displacement towards the ground after the frame touches it (m), m the total
-mass (kg), c the damping (N s/m), k the stiffness (N/m), h the drop height (m), g = 9.81 m/s^2 (analysis/constants.py).
+mass (kg), c the damping (N s/m), k the stiffness (N/m), h the drop height (m), g the gravity of analysis/constants.py.
 The model holds until x reaches the clearance (16 mm on the carbon build: the battery holder
 touches the ground). Units inside are SI; every public result field names its unit.
 

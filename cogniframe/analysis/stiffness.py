@@ -31,10 +31,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import framefe as ff
+from .constants import G, RHO_AIR
 
 PAPER_K_N_PER_M = 7040.0  # carbon build, static dynamometer test (static_stiffness_carbon.csv)
 DEFAULT_LOAD_N = 10.0  # the model is linear
-G = 9.81
 
 _RIGID_E_MPA = 1.0e6
 _RIGID_G_MPA = 4.0e5
@@ -43,22 +43,8 @@ _FLOOR_SPRING_N_PER_MM = 1.0e6
 # Propeller thrust coefficient C_T = T / (rho n^2 D^4) of small two-blade props (3-4 in) at
 # hover Reynolds numbers: about 0.10 (UIUC propeller database, small-prop static tests 0.08-0.12).
 PROP_CT = 0.10
-AIR_DENSITY = 1.225  # kg/m^3
 MODE_WARN_BAND = 0.15  # a mode within 15 % of the hover rotor frequency is flagged
 N_MODES = 8
-# Static thrust of one motor at full throttle, g, when the params give none (motors.max_thrust_g):
-# 1104 7500KV with a 3025 prop on 3S ~ 190 g; 1404 3000KV with a 4 in prop on 2S ~ 200 g (makers'
-# thrust tables for these classes; the whole-aircraft issue replaces this with flight data).
-MAX_THRUST_G_BY_MOTOR = {"1104": 190.0, "1404": 200.0}
-
-
-def max_thrust_g(spec) -> float:
-    given = getattr(spec.motors, "max_thrust_g", None)
-    if given is not None:
-        return float(given)
-    return MAX_THRUST_G_BY_MOTOR.get(spec.motors.model, 190.0)
-
-
 # -- the model ---------------------------------------------------------------------------------
 
 @dataclass
@@ -150,7 +136,7 @@ def masses_g(spec, frame, parts, total_mass_g: float | None) -> dict:
     joints = {p.name: p.estimate.volume * tpu.density_g_mm3 for p in joint_parts(parts)}
     mount = next((p for p in parts if p.family == "motor_mount"), None)
     motor_each = spec.motor.mass_g + spec.motors.prop_mass + (mount.estimate.volume * tpu.density_g_mm3 if mount else 0.0)
-    fixed = rods + 4 * sum(joints.values()) + 4 * motor_each
+    fixed = rods + sum(p.qty * joints[p.name] for p in joint_parts(parts)) + 4 * motor_each
     total = total_mass_g if total_mass_g is not None else fixed + 150.0
     return {"rods": rods, "joints": joints, "motor_each": motor_each, "payload": max(total - fixed, 1.0), "total": total}
 
@@ -629,7 +615,7 @@ def hover_rotor_hz(spec, total_mass_g: float) -> float:
     """Rotor speed at hover, rev/s: thrust per rotor T = m g / 4 = C_T rho n^2 D^4."""
     t = total_mass_g / 1000.0 * G / 4
     d = spec.motors.prop_diameter / 1000.0
-    return math.sqrt(t / (PROP_CT * AIR_DENSITY * d**4))
+    return math.sqrt(t / (PROP_CT * RHO_AIR * d**4))
 
 
 def euler_load(length: float, ei: float, k_rot_a: float, k_rot_b: float, n_el: int = 8) -> float:
@@ -840,6 +826,8 @@ def _wall_case(spec, frame, mdl: Model, K, masses, zeta: float) -> dict:
 def _thrust_case(spec, frame, parts, joints, masses, play=None, full: tuple | None = None) -> dict:
     """Full thrust on every motor, the battery holder clamped; the frame whole and the arms alone.
     ``full``: (model, assembled K) of the whole frame with ``play`` if already built."""
+    from .flight import max_thrust_g
+
     thrust_g = max_thrust_g(spec)
     thrust_n = thrust_g * G / 1000.0
     out = {"max_thrust_g": thrust_g}

@@ -54,10 +54,9 @@ def make_previews(ctx, material: str) -> Made:
     return Made(tuple(files))
 
 def _infill(ctx, material: str) -> float:
-    infill = {}
-    for p in ctx.design.parts:
-        infill[p.material] = max(infill.get(p.material, 0.0), p.infill)
-    return infill.get(material, ctx.spec.core.infill)
+    from ..partlist import infill_by_material
+
+    return infill_by_material(ctx.design.parts)[material]
 
 def _profile(ctx, material: str) -> str:
     from ..export import slicer
@@ -105,9 +104,9 @@ def make_slice(ctx, material: str) -> Made:
     return Made((f"plates/{material}.ini", *kept), {"slicer": version, "plates": plates})
 
 
-PLATES = Step("plates:{material}", ("part:{material}/*",), make_plates, plates_key, ("export/plates.py", "export/slicer.py"),
+PLATES = Step("plates:{material}", ("part:{material}/*",), make_plates, plates_key, ("export/plates.py", "export/slicer.py", "partlist.py"),
               reads="each part's STL hash and qty, bed, margin, print settings")
-SLICE = Step("slice:{material}", ("plates:{material}",), make_slice, slice_key, ("export/slicer.py",), "wait",
+SLICE = Step("slice:{material}", ("plates:{material}",), make_slice, slice_key, ("export/slicer.py", "partlist.py"), "wait",
              reads="plate files, profile, PrusaSlicer version (each plate on its own key)")
 PREVIEWS = Step("previews:{material}", ("plates:{material}",), make_previews, previews_key, ("export/plates.py",),
                 reads="plate layouts")

@@ -53,10 +53,9 @@ def _slice_locked(params, spec, folder: Path, plate_dir: Path, plates, slicer, p
                         f"(Debian/Ubuntu: apt-get install prusa-slicer) or open the 3MF files in {plate_dir} in its GUI.")
     d = pipeline.design(spec)
     estimated, source = _estimated_grams(folder, spec, d, mass_mod)
-    infill: dict[str, float] = {}
-    for p in d.parts:
-        infill[p.material] = max(infill.get(p.material, 0.0), p.infill)
-    report = slicer.slice_plates(plates, spec, estimated, infill=infill, exe=exe)
+    from cogniframe.partlist import infill_by_material
+
+    report = slicer.slice_plates(plates, spec, estimated, infill=infill_by_material(d.parts), exe=exe)
     assert report is not None  # exe was found
 
     con = Console()

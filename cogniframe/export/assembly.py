@@ -189,7 +189,7 @@ def glb_bytes(shapes: dict, nodes: Sequence[tuple[str, str, np.ndarray]]) -> byt
             + struct.pack("<I4s", len(blob), b"BIN\0") + bytes(blob))
 
 
-# -- issue 13: the clash check over everything in the assembly --------------------------------
+# -- the clash check over everything in the assembly --------------------------------
 
 def rod_mesh(rod, sections: int = 48):
     import trimesh

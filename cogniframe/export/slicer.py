@@ -182,10 +182,11 @@ def project_configs(spec: Spec, infill: Mapping[str, float] | None = None) -> di
 
 
 def default_infill(spec: Spec) -> dict[str, float]:
-    """Infill by material: the joints solid (the paper's 100 %), the core at `core.infill`."""
-    out = {spec.core.material: spec.core.infill}
-    out[spec.joints.material] = 1.0
-    return out
+    """Infill by material, as the design's parts print (`partlist.infill_by_material`)."""
+    from ..frame import build as frame
+    from ..partlist import build as parts, infill_by_material
+
+    return infill_by_material(parts(spec, frame(spec)))
 
 
 # -- results ---------------------------------------------------------------------------------

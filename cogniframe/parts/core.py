@@ -87,7 +87,7 @@ def build_holder(part: PartSpec) -> Built:
 
 
 
-# -- issue 13: the holder's openings, the sensor mount / spacer, the camera mount ------------
+# -- the holder's openings, the sensor mount / spacer, the camera mount ------------
 
 def _prism_xz(pts_yz, x0: float, x1: float):
     """A prism through a side wall: polygon in (y, z), extruded along x from x0 to x1."""
