@@ -412,8 +412,10 @@ class _Lines:
 
 
 def geometry_key(d: api.Design) -> str:
-    """What the 3D view shows: each part's CAD inputs and placements, the rods, the bought parts
-    and the bed (a change elsewhere, a battery's grams, needs no new view)."""
+    """What the 3D view shows: each part's CAD inputs and placements, the rods, the bought parts'
+    shapes and the bed. A change elsewhere needs no new view (which would also reset its camera):
+    grams, a motor's KV, the battery's cells and capacity (they are only in the click panel's
+    text, which follows at the next change of shape)."""
     from ..export.part_files import geometry_digest
 
     pd = d.pipeline_design
@@ -421,7 +423,8 @@ def geometry_key(d: api.Design) -> str:
     parts = [[p.name, geometry_digest(p), [[list(map(float, pl.origin)), pl.rotation_deg] for pl in p.placements]] for p in pd.parts]
     rods = [[r.name, [float(x) for x in r.start], [float(x) for x in r.end], float(r.diameter)] for r in pd.frame.rods.values()]
     battery = spec.core.battery
-    vitamins = [spec.motors.model_dump(mode="json"), [c.vitamin for c in spec.components],  # not their grams
+    vitamins = [spec.motors.model_dump(mode="json", exclude={"kv", "mass", "max_thrust_g", "prop_mass"}),
+                [c.vitamin for c in spec.components],  # not their grams
                 [battery.length, battery.width, battery.height, battery.connector], spec.core.stack_pattern,
                 spec.core.model_dump(mode="json", include={"camera", "flow_sensor", "computer"})]
     payload = [parts, rods, vitamins, [float(b) for b in spec.printer.bed]]
