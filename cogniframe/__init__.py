@@ -15,7 +15,7 @@ import types as _types
 
 __version__ = "0.1.0"
 
-__all__ = ["BuildResult", "CheckResult", "Design", "ParamsError", "UserError", "load", "sweep", "__version__"]
+__all__ = ["BuildResult", "CheckResult", "Design", "ParamsError", "UserError", "__version__", "load", "sweep"]
 
 _API = {"load": "api", "Design": "api", "CheckResult": "api", "BuildResult": "api", "ParamsError": "api",
         "UserError": "errors"}

@@ -23,8 +23,9 @@ import copy
 import os
 import re
 import tempfile
+from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Mapping
+from typing import TYPE_CHECKING, Any
 
 from ..errors import UserError
 
@@ -70,7 +71,7 @@ class Design:
     """One validated design: its params (`spec`), the YAML text they come from, and where that
     text lives. Immutable: `with_values` returns a new Design."""
 
-    def __init__(self, spec: "Spec", text: str, source: str, path: Path | None, design: "pipeline.Design | None" = None):
+    def __init__(self, spec: Spec, text: str, source: str, path: Path | None, design: pipeline.Design | None = None):
         self._spec = spec
         self._text = text
         self._source = source
@@ -79,7 +80,7 @@ class Design:
 
     # what it is
     @property
-    def spec(self) -> "Spec":
+    def spec(self) -> Spec:
         """The validated params (`cogniframe.spec.Spec`, a frozen pydantic model)."""
         return self._spec
 
@@ -103,7 +104,7 @@ class Design:
         return self._source
 
     @property
-    def pipeline_design(self) -> "pipeline.Design":
+    def pipeline_design(self) -> pipeline.Design:
         """Frame graph, part list and cut list (`pipeline.Design`): what the checks and the CAD use."""
         if self._design is None:
             from .. import pipeline
@@ -114,6 +115,12 @@ class Design:
             except UserError as e:
                 raise _params_error(e, self._source) from None
         return self._design
+
+    def validate(self) -> Design:
+        """Check that the frame and its parts can exist (a part that fits no bed, a propeller that
+        hits the cage): ParamsError otherwise. `load` and `with_values` do it."""
+        self.pipeline_design  # noqa: B018 (made on first use, which validates)
+        return self
 
     @property
     def modified(self) -> bool:
@@ -141,7 +148,7 @@ class Design:
         return f"<cogniframe.Design {self.name!r} from {self._source}{' (edited)' if self.modified else ''}>"
 
     # changing it
-    def with_values(self, values: Mapping[str, Any]) -> "Design":
+    def with_values(self, values: Mapping[str, Any]) -> Design:
         """A new Design with the dotted keys set (`{"rods.diameter": 4.0, "joints.wall": 1.6}`),
         validated as `cogniframe check` validates the file that `save` would write (the schema,
         the cross-field rules and the frame and part geometry). The original is unchanged.
@@ -170,7 +177,7 @@ class Design:
         return target
 
     # using it
-    def check(self) -> "CheckResult":
+    def check(self) -> CheckResult:
         """Mass budget, stiffness, crash model, flight and PASS/FAIL: `cogniframe check`. The first
         check of a new joint geometry runs its solid FE (seconds; cached after)."""
         from .. import pipeline
@@ -194,7 +201,7 @@ class Design:
 
         return has_unsolved(self._spec, joint_parts(self.pipeline_design.parts))
 
-    def with_fast_model(self) -> "Design":
+    def with_fast_model(self) -> Design:
         """This design with `model.stiffness_model: analytic` (the joints' closed forms, milliseconds):
         the screening model the studio shows while a joint's FE is solved."""
         from .. import spec as spec_mod
@@ -205,7 +212,7 @@ class Design:
         return Design(fast, self._text, self._source, self._path, self._design)
 
     def build(self, out: str | Path | None = None, *, jobs: int | None = None, use_cache: bool = True,
-              gcode: bool = False, server: bool | None = None, console=None, early=None) -> "BuildResult":
+              gcode: bool = False, server: bool | None = None, console=None, early=None) -> BuildResult:
         """`cogniframe build`: every part, plate, the assembly, the report, into `out` (default
         out/<name>). The CLI's rules hold: only a folder cogniframe made is replaced, whole, and
         only when the build succeeded. `server`: CAD workers from the CAD server (None: the CLI's
@@ -277,7 +284,7 @@ def _load(path: str | Path, validate: bool = True) -> Design:
     text = spec_mod.decode(Path(path).read_bytes(), Path(path))
     d = Design(spec, text, source, Path(path))
     if validate:
-        d.pipeline_design
+        d.validate()
     return d
 
 
@@ -297,7 +304,7 @@ def from_text(text: str, source: str = "<params>", path: Path | None = None) -> 
     except UserError as e:
         raise _params_error(e, source) from None
     d = Design(spec, text, source, path)
-    d.pipeline_design  # the frame and parts must exist (a part that does not fit the bed, ...)
+    d.validate()  # the frame and parts must exist (a part that does not fit the bed, ...)
     return d
 
 
@@ -326,7 +333,7 @@ class CheckResult:
     """What `cogniframe check` finds. The figures are read from `to_dict()` (the `check --json`
     object), so they equal the CLI's JSON exactly. `result` is the pipeline's own object."""
 
-    def __init__(self, result: "pipeline.CheckResult"):
+    def __init__(self, result: pipeline.CheckResult):
         self.result = result
         self._json: dict | None = None
 
@@ -441,9 +448,9 @@ class BuildResult:
 
 # -- sweeps -----------------------------------------------------------------------------------
 
-def sweep(sweep_file_or_dict: "str | Path | Mapping[str, Any]", scheduler: str | None = None, *,
+def sweep(sweep_file_or_dict: str | Path | Mapping[str, Any], scheduler: str | None = None, *,
           out: str | Path | None = None, workers: int | None = None,
-          progress: Callable[[Any], None] | None = None) -> "pandas.DataFrame":
+          progress: Callable[[Any], None] | None = None) -> pandas.DataFrame:
     """`cogniframe sweep` from Python: every design of the sweep checked on Dask; one row per
     design (the columns of results.parquet, docs/sweeps.md). A sweep file writes its folder as
     the CLI does (`out`, default out/sweeps/<file name>: results.parquet, plots, summary; resumable).

@@ -18,8 +18,8 @@ import json
 import os
 import secrets
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 
 class _NoWarmup:
@@ -137,9 +137,9 @@ def inline_html(meta: dict, buf: bytes, title: str = "3D view") -> str:
         f'<div class="cf-bar">{toggles}<button type="button" class="cf-reset">reset view</button></div>',
         '<div class="cf-info">The 3D view needs JavaScript and WebGL (in Jupyter: a trusted notebook).</div>',
         "</div>",
-        f'<p class="cf-help">{html.escape(title)}: drag to rotate, scroll to zoom, right-drag to pan; click a part. '
-        f'{counts["part"]} part copies, {counts["rod"]} rods, {counts["vitamin"]} bought parts. '
-        f'three.js r{THREE_VERSION.split(".")[1]} (MIT licence) is embedded.</p>',
+        (f'<p class="cf-help">{html.escape(title)}: drag to rotate, scroll to zoom, right-drag to pan; click a part. '
+         f'{counts["part"]} part copies, {counts["rod"]} rods, {counts["vitamin"]} bought parts. '
+         f'three.js r{THREE_VERSION.split(".")[1]} (MIT licence) is embedded.</p>'),
         f'<script type="text/plain" id="{uid}-three">{code["three.module.min.js"]}</script>',
         f'<script type="text/plain" id="{uid}-orbit">{code["OrbitControls.js"]}</script>',
         f'<script type="text/plain" id="{uid}-viewer-js">{code["viewer.js"]}</script>',

@@ -27,8 +27,9 @@ import tempfile
 import threading
 import time
 import traceback
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 from .. import api
 from ..errors import UserError
@@ -243,7 +244,8 @@ class Session:
                     self.publish({"type": "scene", "seq": seq, "url": f"/scene/{key}.json", "key": key,
                                   "objects": len(packed[0]["objects"]), "seconds": round(time.perf_counter() - t0, 2)})
 
-            def step(task: str, done: int, total: int, part_values=None) -> None:
+            def step(task: str, done: int, total: int, part_values=None, parts_done=parts_done, n_parts=n_parts,
+                     fe=fe, shown=shown, show_view=show_view) -> None:
                 is_part = task.startswith("part:")
                 if is_part:
                     parts_done.append(task)
