@@ -253,3 +253,28 @@ def test_build_of_the_example_is_watertight_and_clash_checked(tmp_path):
     assert result.check.verdict == check["verdict"] and not [c for c in check["problems"] if "clash" in c]
     bom = (out / "bom.md").read_text()
     assert "knee_mirrored" in bom and "corner_bottom_mirrored" in bom
+
+
+def test_the_wall_case_is_the_worst_of_the_four_side_faces():
+    """A rectangle's long and short sides meet a wall differently: every face is tried and the
+    one allowing the lowest speed is reported, with its name."""
+    from cogniframe import pipeline
+    from cogniframe import spec as spec_mod
+    from cogniframe.analysis import stiffness as st
+
+    spec = spec_mod.load(Path(__file__).resolve().parents[1] / "examples" / "rect-240x180.yaml")
+    data = spec.model_dump(mode="json")
+    data["model"]["stiffness_model"] = "analytic"
+    spec = spec_mod.from_dict(data)
+    d = pipeline.design(spec)
+    joints = st.joint_models(spec, d.parts, "analytic")
+    masses = st.masses_g(spec, d.frame, d.parts, 245.0)
+    mdl = st.build_model(spec, d.frame, d.parts, joints, masses=masses)
+    K = mdl.fe.stiffness(sparse=True)
+    faces = [st._wall_face(spec, d.frame, mdl, K, masses, 0.558, a, s) for a, s in st.WALL_FACES]
+    worst = st._wall_case(spec, d.frame, mdl, K, masses, 0.558)
+    assert worst["max_wall_speed_m_s"] == min(f["max_wall_speed_m_s"] for f in faces)
+    assert {f["face"] for f in faces} == {"+x (right)", "-x (left)", "+y (front)", "-y (rear)"}
+    long_side = next(f for f in faces if f["face"] == "+x (right)")
+    short_side = next(f for f in faces if f["face"] == "+y (front)")
+    assert long_side["k_lateral_n_per_m"] != pytest.approx(short_side["k_lateral_n_per_m"], rel=0.01)

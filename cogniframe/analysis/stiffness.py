@@ -726,7 +726,7 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
     d_pay = -u[_dof(fe, mdl.payload, 2)]
     k = 1000.0 * DEFAULT_LOAD_N / d_pay
 
-    # 2. wall: the +x side face against a wall (joints on that face held, sticking contact)
+    # 2. wall: each side face against a wall (joints on that face held, sticking contact); the worst
     wall = _wall_case(spec, frame, mdl, K0, masses, damping_ratio)
 
     # 3. thrust
@@ -784,11 +784,29 @@ def _end_rot(mdl: Model, frame, rn: str, tag: str) -> float:
     return js.socket_rotational_stiffness(lab)
 
 
+# The side faces a wall can meet: (axis, sign), +x first (the worst face is reported; on a tie, to
+# round-off, the first).
+WALL_FACES = ((0, 1), (0, -1), (1, 1), (1, -1))
+FACE_NAMES = {(0, 1): "+x (right)", (0, -1): "-x (left)", (1, 1): "+y (front)", (1, -1): "-y (rear)"}
+
+
 def _wall_case(spec, frame, mdl: Model, K, masses, zeta: float) -> dict:
-    """The +x side face against a wall; ``K``: the model's assembled stiffness (no supports)."""
+    """Each side face against a wall, in turn; the face that allows the lowest wall speed.
+    ``K``: the model's assembled stiffness (no supports)."""
+    cases = [_wall_face(spec, frame, mdl, K, masses, zeta, axis, sign) for axis, sign in WALL_FACES]
+    best = cases[0]
+    for c in cases[1:]:
+        if c["max_wall_speed_m_s"] < best["max_wall_speed_m_s"] * (1 - _TIE):
+            best = c
+    return best
+
+
+def _wall_face(spec, frame, mdl: Model, K, masses, zeta: float, axis: int, sign: int) -> dict:
+    """The side face at ``sign`` along ``axis`` against a wall (its corner joints held, sticking
+    contact), the payload pushed towards it."""
     fe = mdl.fe
-    x_wall = spec.frame.width / 2
-    side = [inst for inst in mdl.joint_nodes if inst.startswith("corner_") and frame.nodes[inst].pos[0] > 0]
+    half = (spec.frame.width if axis == 0 else spec.frame.depth) / 2
+    side = [inst for inst in mdl.joint_nodes if inst.startswith("corner_") and sign * frame.nodes[inst].pos[axis] > 0]
     fixed = np.zeros(K.shape[0], dtype=bool)
     idx = fe.index()
     for inst in side:
@@ -796,22 +814,22 @@ def _wall_case(spec, frame, mdl: Model, K, masses, zeta: float) -> dict:
             fixed[6 * idx[n]:6 * idx[n] + 3] = True
     fixed = _drop_unconnected(K, fixed)
     f = np.zeros(K.shape[0])
-    f[_dof(fe, mdl.payload, 0)] = DEFAULT_LOAD_N
+    f[_dof(fe, mdl.payload, axis)] = sign * DEFAULT_LOAD_N
     u = ff.solve(K, f, fixed)
-    d_pay = u[_dof(fe, mdl.payload, 0)]
+    d_pay = sign * u[_dof(fe, mdl.payload, axis)]
     k_lat = 1000.0 * DEFAULT_LOAD_N / d_pay
     # what reaches the wall first, per mm of payload travel
     radius = spec.motors.prop_diameter / 2
     limits = []
     for m in frame.motors:
-        if m.axis[0] <= 0:
+        if sign * m.axis[axis] <= 0:
             continue
-        gap = x_wall - (m.axis[0] + radius)
-        ratio = u[_dof(fe, m.name, 0)] / d_pay
+        gap = half - (sign * m.axis[axis] + radius)
+        ratio = sign * u[_dof(fe, m.name, axis)] / d_pay
         if ratio > 0:
             limits.append((gap / ratio, f"propeller of {m.name}", gap))
-    core_hi = max(b.hi[0] for b in frame.core.boxes)
-    gap_core = x_wall - core_hi
+    core_out = max((b.hi[axis] if sign > 0 else -b.lo[axis]) for b in frame.core.boxes)
+    gap_core = half - core_out
     limits.append((gap_core, "core", gap_core))
     # the first to reach the wall; symmetric motors tie (to round-off): the first by name, so
     # the answer does not hang on the solver's last digits
@@ -820,7 +838,7 @@ def _wall_case(spec, frame, mdl: Model, K, masses, zeta: float) -> dict:
     w0 = math.sqrt(k_lat / (masses["total"] / 1000.0))
     v_max = travel / 1000.0 * w0 / _damped_peak_factor(zeta)
     return {"k_lateral_n_per_m": k_lat, "max_wall_speed_m_s": v_max, "limited_by": what, "payload_travel_mm": travel,
-            "gap_mm": gap, "damping_ratio": zeta}
+            "gap_mm": gap, "damping_ratio": zeta, "face": FACE_NAMES[(axis, sign)]}
 
 
 def _thrust_case(spec, frame, parts, joints, masses, play=None, full: tuple | None = None) -> dict:
