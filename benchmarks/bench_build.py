@@ -39,8 +39,14 @@ built_names = []
 import cogniframe.export.part_files as b
 real = b.build_part_files
 b.build_part_files = lambda p, *a: built_names.append(p.name) or real(p, *a)
-jobs = None if sys.argv[5] == "auto" else int(sys.argv[5])
-built = build_parts(spec, fr, parts, Path(sys.argv[2]), jobs=jobs, cache_dir=Path(sys.argv[3]))
+jobs = 1 if sys.argv[5] == "auto" else int(sys.argv[5])
+from cogniframe.runtime.pools import cad_workers
+
+if jobs > 1:
+    with cad_workers(jobs) as submit:
+        built = build_parts(spec, fr, parts, Path(sys.argv[2]), submit=submit, cache_dir=Path(sys.argv[3]))
+else:
+    built = build_parts(spec, fr, parts, Path(sys.argv[2]), cache_dir=Path(sys.argv[3]))
 t2 = time.perf_counter()
 assembly = 0.0
 if sys.argv[6] == "1":

@@ -487,7 +487,7 @@ def test_tilted_camera_mount_prints_without_support_and_carries_the_camera(tilt,
     s = spec_mod.from_dict(data)
     fr = frame_mod.build(s)
     part = next(p for p in partlist.build(s, fr) if p.name == "front_camera_mount")
-    (b,) = build_parts(s, fr, [part], tmp_path, jobs=1)
+    (b,) = build_parts(s, fr, [part], tmp_path)
     m = load_stl(tmp_path / b.stl)
     assert m.is_watertight and m.body_count == 1 and m.bounds[0, 2] == pytest.approx(0.0, abs=1e-6)
     assert overhangs(m)["fraction"] < 0.01

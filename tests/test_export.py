@@ -34,7 +34,7 @@ def test_same_params_give_byte_identical_stl_and_step(preset, tmp_path):
 
     first = built_preset(preset)
     spec, fr, parts = first.spec, first.frame, tuple(first.parts.values())
-    again = build_parts(spec, fr, parts, tmp_path, jobs=1)
+    again = build_parts(spec, fr, parts, tmp_path)
     for b in again:
         a = first.built[b.name]
         assert _sha(tmp_path / b.stl) == _sha(first.out / a.stl), b.name
@@ -46,7 +46,10 @@ def test_parallel_build_gives_the_same_bytes(tmp_path):
 
     first = built_preset("carbon")
     parts = tuple(first.parts.values())[:4]
-    again = build_parts(first.spec, first.frame, parts, tmp_path, jobs=2)
+    from cogniframe.runtime.pools import cad_workers
+
+    with cad_workers(2) as submit:
+        again = build_parts(first.spec, first.frame, parts, tmp_path, submit=submit)
     for b in again:
         assert _sha(tmp_path / b.stl) == _sha(first.out / first.built[b.name].stl)
         assert _sha(tmp_path / b.step) == _sha(first.out / first.built[b.name].step)
@@ -83,10 +86,10 @@ def test_cache_hit_is_fast_identical_and_reports_progress(tmp_path):
 
     spec, fr, parts = _design()
     cache = tmp_path / "cache"
-    build_parts(spec, fr, parts, tmp_path / "a", jobs=1, cache_dir=cache)
+    build_parts(spec, fr, parts, tmp_path / "a", cache_dir=cache)
     seen = []
     t = time.perf_counter()
-    again = build_parts(spec, fr, parts, tmp_path / "b", jobs=1, cache_dir=cache, progress=seen.append)
+    again = build_parts(spec, fr, parts, tmp_path / "b", cache_dir=cache, progress=seen.append)
     elapsed = time.perf_counter() - t
     assert elapsed < 2.0
     assert sorted(seen) == sorted(p.name for p in parts)
@@ -100,20 +103,22 @@ def test_only_changed_parts_are_rebuilt(tmp_path, monkeypatch):
 
     cache = tmp_path / "cache"
     spec, fr, parts = _design()
-    build_mod.build_parts(spec, fr, parts, tmp_path / "a", jobs=1, cache_dir=cache)
+    build_mod.build_parts(spec, fr, parts, tmp_path / "a", cache_dir=cache)
     rebuilt = []
     real = build_mod.build_part_files
     monkeypatch.setattr(build_mod, "build_part_files", lambda p, *a: rebuilt.append(p.name) or real(p, *a))
     # rod material: no printed part changes
     spec2, fr2, parts2 = _design(rods__material="bamboo")
-    build_mod.build_parts(spec2, fr2, parts2, tmp_path / "b", jobs=1, cache_dir=cache)
+    build_mod.build_parts(spec2, fr2, parts2, tmp_path / "b", cache_dir=cache)
     assert rebuilt == []
-    # frame width: the joints whose socket angles change, and only those
+    # frame width: the joints whose socket angles change (a rectangle's fr/rl copies become
+    # mirrored parts of their own), and only those
     spec3, fr3, parts3 = _design(frame__width=230)
-    build_mod.build_parts(spec3, fr3, parts3, tmp_path / "c", jobs=1, cache_dir=cache)
-    changed = {p.name for p, q in zip(parts, parts3) if p.digest != q.digest}
+    build_mod.build_parts(spec3, fr3, parts3, tmp_path / "c", cache_dir=cache)
+    before = {p.name: p.digest for p in parts}
+    changed = {q.name for q in parts3 if before.get(q.name) != q.digest}
     assert set(rebuilt) == changed and changed
-    assert "core_plate" not in changed
+    assert "core_plate" not in changed and "knee_mirrored" in changed
 
 
 def test_assembly_has_every_part_copy_and_rod_named_and_coloured(tmp_path):

@@ -43,7 +43,7 @@ def built_preset(name: str):
     frame = frame_mod.build(spec)
     parts = partlist.build(spec, frame)
     out = Path(tempfile.mkdtemp(prefix=f"cogniframe-test-{name}-"))
-    built = build_parts(spec, frame, parts, out, jobs=1)
+    built = build_parts(spec, frame, parts, out)
     meshes = {b.name: load_stl(out / b.stl) for b in built}
     return SimpleNamespace(spec=spec, frame=frame, parts={p.name: p for p in parts}, built={b.name: b for b in built},
                            out=out, meshes=meshes)
@@ -178,7 +178,7 @@ def test_part_larger_than_the_bed_is_a_user_error(tmp_path):
     frame = frame_mod.build(spec)
     parts = [p for p in partlist.build(spec, frame) if p.name == "computer_mount"]
     with pytest.raises(UserError) as e:
-        build_parts(spec, frame, parts, tmp_path, jobs=1)
+        build_parts(spec, frame, parts, tmp_path)
     msg = str(e.value)
     assert "computer_mount" in msg and "65.0 x 30.0" in msg and "60 x 60 x 60" in msg
     assert "printer.bed" in msg and "core.computer.hole_spacing" in msg
@@ -191,7 +191,7 @@ def test_part_that_fits_only_turned_is_turned(tmp_path):
     spec = spec_mod.from_dict({"printer": {"bed": [40, 70, 60]}})
     frame = frame_mod.build(spec)
     parts = [p for p in partlist.build(spec, frame) if p.name == "computer_mount"]
-    (b,) = build_parts(spec, frame, parts, tmp_path, jobs=1)
+    (b,) = build_parts(spec, frame, parts, tmp_path)
     m = load_stl(tmp_path / b.stl)
     assert m.extents[0] <= 40 and m.extents[1] <= 70
     # the turn is part of print_from_local: the Pi holes still land where the transform says
@@ -273,7 +273,7 @@ def test_frame_without_struts_builds_and_fails_the_drop_check(tmp_path):
     r = pipeline.check(s)
     link = next(p for p in r.design.parts if p.name == "core_link")
     assert len(link.sockets) == 2
-    built = build_parts(s, r.design.frame, [link], tmp_path, jobs=1)
+    built = build_parts(s, r.design.frame, [link], tmp_path)
     mesh = load_stl(tmp_path / built[0].stl)
     assert mesh.is_watertight and mesh.volume == pytest.approx(built[0].volume_mm3, rel=1e-3)
     # arm-only links: the estimate's print plane is the one across the arm pair (as the CAD's), ~8 % high

@@ -152,10 +152,10 @@ def test_a_plate_that_fails_its_check_stops_the_slicer_started_beside_it(tmp_pat
 def test_the_slicer_runs_behind_the_build(tmp_path):
     """PrusaSlicer (here a stand-in that writes down its nice value, then its G-code) runs
     BACKGROUND_NICE steps nicer than the build: its threads then leave the build's main thread go
-    first (`runtime.pools.behind_the_build`)."""
+    first (the build passes `runtime.pools.behind_the_build` as `started`)."""
     import os
 
-    from cogniframe.runtime.pools import BACKGROUND_NICE
+    from cogniframe.runtime.pools import BACKGROUND_NICE, behind_the_build
 
     ok = _box(10, 10, 5)
     ok.apply_translation([10, 10, 0])
@@ -169,7 +169,8 @@ def test_the_slicer_runs_behind_the_build(tmp_path):
     fake.chmod(0o755)
     ini = tmp_path / "abs.ini"
     ini.write_text("layer_height = 0.2\n")
-    got = slicer.slice_plate(plate, ini, (120, 120, 120), exe=str(fake), gcode=tmp_path / "abs_1.gcode")
+    got = slicer.slice_plate(plate, ini, (120, 120, 120), exe=str(fake), gcode=tmp_path / "abs_1.gcode",
+                             started=behind_the_build)
     assert (got.grams, got.time_s) == (0.5, 60.0)
     assert int(seen.read_text()) == min(19, os.nice(0) + BACKGROUND_NICE)
 

@@ -145,11 +145,15 @@ def test_parallel_joint_fe_equals_serial(tmp_path, monkeypatch):
     # the pool (forkserver workers) and this process solve the same joints to the same numbers
     s, f, p = _design(_variant(joints={"socket_depth": 9}))
     two = [x for x in st.joint_parts(p) if x.name in ("corner_top", "knee")]
+    from cogniframe.runtime.pools import joint_fe_workers
+
     out = {}
     for jobs in (1, 2):
         monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / f"cache{jobs}"))
-        assert JS.solve_missing(s, two, jobs=jobs) == {}
-        assert JS.solve_missing(s, two, jobs=jobs) == {}  # now cached: nothing to solve
+        with joint_fe_workers(jobs) as submit:
+            assert (submit is None) == (jobs == 1)
+            assert JS.solve_missing(s, two, submit=submit) == {}
+            assert JS.solve_missing(s, two, submit=submit) == {}  # now cached: nothing to solve
         out[jobs] = {x.name: JS.joint_stiffness(s, x, "fe").matrix for x in two}
     for name in out[1]:
         assert np.array_equal(out[1][name], out[2][name]), name
@@ -485,7 +489,7 @@ def test_solve_missing_solves_four_joint_FEs_and_derives_the_mirror(tmp_path, mo
     monkeypatch.setattr(JS, "fe_joint", _fake_fe(calls))
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "a"))
     with caplog.at_level(logging.INFO, logger="cogniframe.progress"):
-        assert JS.solve_missing(s, joints, jobs=1) == {}
+        assert JS.solve_missing(s, joints, submit=None) == {}
     assert sorted(calls) == sorted(["corner_top", "corner_bottom", "knee", "core_link"])  # 4 FE, not 5
     assert "core_link_mirrored derived by reflection from core_link" in caplog.text
     a = JS.joint_stiffness(s, m, "fe", factor=1.0)
@@ -497,10 +501,10 @@ def test_solve_missing_solves_four_joint_FEs_and_derives_the_mirror(tmp_path, mo
     # original already cached by an earlier call
     calls.clear()
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "b"))
-    assert JS.solve_missing(s, joints[::-1], jobs=1) == {}
+    assert JS.solve_missing(s, joints[::-1], submit=None) == {}
     b = JS.joint_stiffness(s, m, "fe", factor=1.0)
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "c"))
-    assert JS.solve_missing(s, [o], jobs=1) == {} and JS.solve_missing(s, joints, jobs=1) == {}
+    assert JS.solve_missing(s, [o], submit=None) == {} and JS.solve_missing(s, joints, submit=None) == {}
     c = JS.joint_stiffness(s, m, "fe", factor=1.0)
     assert np.array_equal(a.matrix, b.matrix) and np.array_equal(a.matrix, c.matrix)
     assert calls.count("core_link_mirrored") == 0
@@ -545,12 +549,12 @@ def test_a_mirror_that_is_not_an_exact_image_is_solved_by_FE(tmp_path, monkeypat
     calls = []
     monkeypatch.setattr(JS, "fe_joint", _fake_fe(calls))
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path))
-    assert JS.solve_missing(s, [o, bad], jobs=1) == {}
+    assert JS.solve_missing(s, [o, bad], submit=None) == {}
     assert sorted(calls) == ["core_link", "core_link_mirrored"]
     # the mirror without its original in the set: neither solved nor cached there (the cache
     # would then depend on which subset came first); joint_stiffness solves it, uncached
     calls.clear()
-    assert JS.solve_missing(s, [m], jobs=1) == {} and calls == []
+    assert JS.solve_missing(s, [m], submit=None) == {} and calls == []
     JS.joint_stiffness(s, m, "fe")
     JS.joint_stiffness(s, m, "fe")
     assert calls == ["core_link_mirrored", "core_link_mirrored"]
@@ -585,19 +589,20 @@ def test_the_joint_fe_meshes_the_shape_the_part_build_shared_to_the_same_bits(tm
     FE then meshes that text instead of building the CAD again, and gets the same matrix, bit for
     bit, as from its own CAD."""
     from cogniframe.export import part_files as export_build
+    from cogniframe.parts import shapes
     from cogniframe.parts import joint as joint_cad
 
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))
     s, f, p = _design(_variant())
     part = next(x for x in st.joint_parts(p) if x.name == "corner_top")
     own = JS.fe_joint(s, part, 1.0).matrix  # nothing shared yet: built here
-    assert export_build.shared_brep(part) is None
+    assert shapes.shared_brep(part) is None
     out = tmp_path / "out"
     out.mkdir()
     meta = export_build.build_part_files(part, tuple(s.printer.bed), str(out), share_shape=True)
     assert (out / meta["stl"]).is_file()
-    shared = export_build.shared_brep(part)
-    assert shared == export_build.brep_text(joint_cad.build(part).shape)  # the un-turned shape, as the FE builds it
+    shared = shapes.shared_brep(part)
+    assert shared == shapes.brep_text(joint_cad.build(part).shape)  # the un-turned shape, as the FE builds it
     assert "CASCADE Topology" in shared
 
     def no_cad(part):
@@ -607,12 +612,12 @@ def test_the_joint_fe_meshes_the_shape_the_part_build_shared_to_the_same_bits(tm
     assert np.array_equal(JS.fe_joint(s, part, 1.0).matrix, own)
     # a part whose CAD inputs differ has another key: nothing shared for it
     other = next(x for x in st.joint_parts(p) if x.name == "knee")
-    assert export_build.shape_key(other) != export_build.shape_key(part) and export_build.shared_brep(other) is None
+    assert shapes.shape_key(other) != shapes.shape_key(part) and shapes.shared_brep(other) is None
     # a damaged shared file is a miss: the FE builds the CAD itself and gets the same bits
     monkeypatch.undo()
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))
     from cogniframe import cache
 
-    cache.store_text(export_build.SHAPE_KIND, export_build.shape_key(part), shared[: len(shared) // 3], ".brep")
-    assert export_build.shared_brep(part) != shared
+    cache.store_text(shapes.SHAPE_KIND, shapes.shape_key(part), shared[: len(shared) // 3], ".brep")
+    assert shapes.shared_brep(part) != shared
     assert np.array_equal(JS.fe_joint(s, part, 1.0).matrix, own)

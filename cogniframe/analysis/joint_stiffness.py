@@ -39,7 +39,6 @@ import hashlib
 import json
 import logging
 import math
-import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -313,15 +312,15 @@ def fe_joint(spec, part, factor: float | None = None, mesh_mm: float | None = No
     With one BLAS thread wherever it runs (a pool worker, a fork, this process): the thread count
     changes the order of the dense sums, and the cached numbers must be the same bits whichever
     path solved them."""
-    from ..runtime.blas import one_blas_thread
+    from threadpoolctl import threadpool_limits
 
-    with one_blas_thread():
+    with threadpool_limits(limits=1, user_api="blas"):
         return _fe_joint(spec, part, factor, mesh_mm)
 
 
 def _fe_joint(spec, part, factor: float | None, mesh_mm: float | None) -> JointStiffness:
     from . import joint_fe
-    from ..export.part_files import brep_text, shared_brep
+    from ..parts.shapes import brep_text, shared_brep
     from ..parts import joint as joint_cad
 
     t0 = time.perf_counter()
@@ -599,25 +598,20 @@ def has_unsolved(spec, parts, mesh_mm: float | None = None) -> bool:
     return any(cache.load_json("joint", geometry_key(spec, p, "fe", 1.0, mesh_mm)) is None for p in parts)
 
 
-def solve_missing(spec, parts, mesh_mm: float | None = None, jobs: int | None = None, submit=None) -> dict[str, str]:
-    """Solve and cache the FE of every joint in ``parts`` whose geometry is not cached yet, in
-    parallel worker processes when more than one is missing (one per core by default, ``jobs``
-    or ``COGNIFRAME_JOBS`` to cap). Returns {part name: error} of the joints the mesher or the
-    tie selection could not handle (nothing cached for them).
+def solve_missing(spec, parts, mesh_mm: float | None = None, submit=None) -> dict[str, str]:
+    """Solve and cache the FE of every joint in ``parts`` whose geometry is not cached yet: on the
+    caller's worker processes (``submit(fn, *args) -> Future``: `runtime.pools.joint_fe_workers`
+    for `check`, the CAD workers in a build), or here one after another when ``submit`` is None
+    (in a Dask worker, whose cores the cluster schedules) or the workers fail. Returns
+    {part name: error} of the joints the mesher or the tie selection could not handle (nothing
+    cached for them).
 
     A mirrored joint whose original is in ``parts`` is not solved: once the original is solved
     (or found in the cache) its super-element is reflected (`reflection`, `reflect_unit`) and
     cached under the mirror's key -- always from the original, never the reverse, so the bits
     are the same whatever the order or the cache held. If the two are not exact mirror images,
     or the original fails, the mirror is solved by FE like any other joint. A mirror without its
-    original in ``parts`` is not solved here (nor cached by `joint_stiffness`).
-
-    Measured on 2 cores, carbon preset, 5 new joints: serial 11 s (CadQuery import 2.3 s + the
-    five FE), 2 workers 7-8 s wall for the whole check; with the mirror reflected (4 FE) the
-    whole cold check takes ~1.8 s less CPU and ~3 s less wall (the two workers end together).
-    The pool: `runtime.pools.fe_pool`, or the caller's `submit(fn, *args) -> Future` (the build's CAD workers).
-    Inside a daemonic process or a Dask worker the joints are solved serially, and if the pool
-    breaks, the rest too."""
+    original in ``parts`` is not solved here (nor cached by `joint_stiffness`)."""
     from .. import cache
 
     mesh_mm = FE_MESH_MM if mesh_mm is None else mesh_mm
@@ -644,7 +638,7 @@ def solve_missing(spec, parts, mesh_mm: float | None = None, jobs: int | None = 
         seen.add(key)
     if not todo and not derive:
         return {}
-    failed = _solve(spec, todo, mesh_mm, jobs, submit)
+    failed = _solve(spec, todo, mesh_mm, submit)
     # the mirrors, after their originals (solved above or cached before)
     for p, key, o, okey, P, order in derive:
         hit = cache.load_json("joint", okey)
@@ -658,24 +652,17 @@ def solve_missing(spec, parts, mesh_mm: float | None = None, jobs: int | None = 
                 progress_log.info("joint FE: %s derived by reflection from %s", p.name, o.name)
                 continue
         # the original failed (or its unit did not fit): solve the mirror itself
-        failed.update(_solve(spec, [(p, key)], mesh_mm, 1))
+        failed.update(_solve(spec, [(p, key)], mesh_mm))
     return failed
 
 
-def _solve(spec, todo, mesh_mm: float, jobs: int | None, submit=None) -> dict[str, str]:
+def _solve(spec, todo, mesh_mm: float, submit=None) -> dict[str, str]:
     """The FE of `todo` [(part, key)], cached; {part name: error} of those that failed.
-    `submit`: the caller's workers (`solve_missing`)."""
-    import multiprocessing as mp
-
+    `submit(fn, *args) -> Future`: the caller's worker processes; None: here, one after another."""
     from .. import cache
 
     if not todo:
         return {}
-    if jobs is None:
-        from ..runtime.pools import in_dask_worker
-
-        jobs = int(os.environ.get("COGNIFRAME_JOBS") or 0) or (1 if in_dask_worker() else (os.cpu_count() or 1))
-    jobs = max(1, min(int(jobs), len(todo)))
     keys = {p.name: key for p, key in todo}
     t0 = time.perf_counter()
     done = 0
@@ -693,30 +680,21 @@ def _solve(spec, todo, mesh_mm: float, jobs: int | None, submit=None) -> dict[st
             progress_log.info("joint FE %d/%d: %s failed (%s)", done, len(todo), name, err)
 
     pending = list(todo)
-    if submit is not None or (jobs > 1 and not mp.current_process().daemon):
-        from concurrent.futures import as_completed
-        from concurrent.futures.process import BrokenProcessPool
-        from contextlib import ExitStack
+    if submit is not None:
+        from concurrent.futures import BrokenExecutor, as_completed
 
-        from ..runtime.pools import fe_pool
-        from ..runtime.server import BrokenServer
-
-        progress_log.info("joint FE: %d new joint geometries on %s", len(todo),
-                          "the build's CAD workers" if submit is not None else f"{jobs} processes")
+        progress_log.info("joint FE: %d new joint geometries on the caller's worker processes", len(todo))
         try:
-            with ExitStack() as owned:  # the pool made here is shut down here; the caller's is not
-                run = submit or owned.enter_context(fe_pool(jobs)).submit
-                # the biggest first (by the closed-form volume: the mesh is of a fixed size, so
-                # its DOFs and the factorization grow with it), so that the last job to start is
-                # a small one and the workers end together (longest-processing-time-first)
-                biggest_first = sorted(todo, key=lambda t: -t[0].estimate.volume)
-                futures = {run(_fe_unit, spec, p, mesh_mm): p.name for p, _ in biggest_first}
-                for fut in as_completed(futures):
-                    finished(*fut.result())
-                    pending = [x for x in pending if x[0].name != futures[fut]]
-        except (BrokenProcessPool, BrokenServer):
-            # a worker could not start or died (e.g. a script without `if __name__ == "__main__":`
-            # when the pool must use forkserver): the rest is solved here, serially
+            # the biggest first (by the closed-form volume: the mesh is of a fixed size, so its
+            # DOFs and the factorization grow with it), so that the last job to start is a small
+            # one and the workers end together (longest-processing-time-first)
+            biggest_first = sorted(todo, key=lambda t: -t[0].estimate.volume)
+            futures = {submit(_fe_unit, spec, p, mesh_mm): p.name for p, _ in biggest_first}
+            for fut in as_completed(futures):
+                finished(*fut.result())
+                pending = [x for x in pending if x[0].name != futures[fut]]
+        except BrokenExecutor:
+            # a worker could not start or died: the rest is solved here, one after another
             progress_log.info("joint FE: worker processes failed; solving %d joint(s) in this process", len(pending))
     for p, _ in pending:
         finished(*_fe_unit(spec, p, mesh_mm))

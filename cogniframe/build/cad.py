@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 
 from ..cache import file_sha256
-from ..export.part_files import PART_CODE
+from ..parts.shapes import PART_CODE
 from ..runtime.pools import JOB_ORDER
 from .graph import Made, Step
 
@@ -21,7 +21,7 @@ def make_part(ctx, material: str, part: str) -> Made:
 
     ctx.warm_imports()  # in a thread, while the CAD workers start and build
     spec = ctx.part(part)
-    # a joint whose FE this build solves: its shape goes to the FE job too (`export.part_files.shared_brep`)
+    # a joint whose FE this build solves: its shape goes to the FE job too (`parts.shapes.shared_brep`)
     made = ctx.cad.submit(build_part_files, spec, ctx.bed, str(ctx.out), ctx.cad.fe and spec.family == "joint",
                           priority=JOB_ORDER["part"])
     meta = made.result()

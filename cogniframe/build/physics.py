@@ -13,13 +13,21 @@ def estimate(ctx) -> Made:
     joint models, each cached on disk by its own inputs) while the CAD pool builds the parts; the
     mass-dependent load cases wait for the CAD volumes (`physics`)."""
     spec = ctx.spec
-    if ctx.cad.server and spec.model.stiffness_model == "fe":
-        # new joint FEs on the CAD server's workers, after the parts (JOB_ORDER); the frame
-        # model below then reads every joint from the cache
+    if spec.model.stiffness_model == "fe":
+        # new joint FEs first, in parallel; the frame model below then reads every joint from the
+        # cache. On the CAD server's workers after the parts (JOB_ORDER); a build's own process
+        # pool runs its jobs in order, so there the FEs get workers of their own
         from ..analysis.joint_stiffness import solve_missing
         from ..analysis.stiffness import joint_parts
 
-        solve_missing(spec, joint_parts(ctx.design.parts), submit=lambda fn, *a: ctx.cad.submit(fn, *a, priority=JOB_ORDER["joint FE"]))
+        if ctx.cad.server:
+            solve_missing(spec, joint_parts(ctx.design.parts),
+                          submit=lambda fn, *a: ctx.cad.submit(fn, *a, priority=JOB_ORDER["joint FE"]))
+        else:
+            from ..runtime.pools import joint_fe_workers
+
+            with joint_fe_workers() as submit:
+                solve_missing(spec, joint_parts(ctx.design.parts), submit=submit)
     if spec.model.k_n_per_m is None:
         from ..analysis.drop import predicted_k_n_per_m
 

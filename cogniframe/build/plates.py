@@ -78,6 +78,7 @@ def make_slice(ctx, material: str) -> Made:
     """Slice this material's plates (G-code in a temp folder: it is not byte-stable; keep the numbers,
     and with `build --gcode` the G-code too, as plates/<plate>.gcode)."""
     from ..export import slicer
+    from ..runtime.pools import behind_the_build  # PrusaSlicer runs behind the build's main thread
 
     found = ctx.slicer.get()
     if not found:
@@ -93,10 +94,10 @@ def make_slice(ctx, material: str) -> Made:
             items = ctx.plate_items(v)
             if ctx.use_cache and not _keep_gcode(ctx):  # per plate: a plate whose bytes did not change is not sliced again
                 r = slicer._slice_cached(ctx.out / v["threemf"], ini, ctx.spec.printer.bed, exe, version,
-                                         where / f"{v['name']}.gcode", items=items)
+                                         where / f"{v['name']}.gcode", items=items, started=behind_the_build)
             else:
                 r = slicer.slice_plate(ctx.out / v["threemf"], ini, ctx.spec.printer.bed, exe,
-                                       gcode=where / f"{v['name']}.gcode", items=items)
+                                       gcode=where / f"{v['name']}.gcode", items=items, started=behind_the_build)
             plates.append({"plate": r.plate, "material": r.material, "grams": r.grams, "time_s": r.time_s,
                            "objects": [list(o) for o in r.objects]})
             if _keep_gcode(ctx):

@@ -244,7 +244,8 @@ def check_clashes(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: 
 
 def assembly_key(spec: Spec, frame, parts: Sequence[PartSpec], built) -> str:
     """Hash of everything the assembly files depend on (part geometry by digest, placements, rods)."""
-    from .part_files import CAD_VERSION, cache_key
+    from ..parts.shapes import CAD_VERSION
+    from .part_files import cache_key
 
     bed = tuple(float(b) for b in spec.printer.bed)
     by_name = {b.name: b for b in built}

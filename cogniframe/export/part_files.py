@@ -1,6 +1,6 @@
 """Build every distinct printed part: CAD in print orientation -> STL + STEP + metrics.
 
-`build_parts(spec, frame, parts, out_dir, jobs=None, cache_dir=None, progress=None)` writes
+`build_parts(spec, frame, parts, out_dir, submit=None, cache_dir=None, progress=None)` writes
 `stl/<material>/<part>.stl` and `step/<part>.step` under `out_dir` and returns one `BuiltPart` per
 part, in the order given.
 
@@ -8,11 +8,8 @@ part, in the order given.
   each file's sha256 is kept and checked on every read), keyed by `geometry_digest(part)` (every part
   field the CAD reads), the source of the CAD code (PART_CODE), the mesh tolerances and the bed.
   A rebuild with nothing changed only copies files and never imports CadQuery.
-* Parallel: jobs > 1 uses a process pool started with `forkserver` (CadQuery preloaded in the
-  server, so workers start warm) or `spawn` where forkserver is missing. Never `fork`: a fork after
-  any OCC operation can deadlock (stack-notes). jobs=None builds serially up to AUTO_SERIAL_MAX parts
-  (a worker's CadQuery import costs more than the parts it would build) and otherwise uses
-  min(cpu count, parts to build) workers.
+* Parallel: on the caller's worker processes, `submit(fn, *args) -> Future` (for example
+  `runtime.pools.cad_workers(n)`); here, one part after another, when `submit` is None.
 * Every part must fit `spec.printer.bed`; a part that fits only turned 90 deg on the bed is turned
   (its `print_from_local` includes the turn); otherwise UserError names the part, its size, the bed
   and the key that drives the size.
@@ -22,7 +19,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from concurrent.futures import as_completed
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,11 +28,9 @@ import numpy as np
 
 from ..errors import UserError
 from ..partlist import PartSpec
+from ..parts.shapes import CAD_VERSION, PART_CODE, SHAPE_KIND, brep_text, geometry_digest, shape_key
 from ..spec import Spec
 
-# Bump when any part's CAD changes shape: it is part of every cache key.
-CAD_VERSION = "cad-2025.3"
-AUTO_SERIAL_MAX = 12  # jobs=None builds up to this many parts in-process
 
 
 @dataclass(frozen=True)
@@ -75,25 +69,6 @@ def step_relpath(part: PartSpec) -> str:
 LINEAR_TOL, ANGULAR_TOL = 0.02, 0.15
 
 
-# Everything the part CAD and its files are made by: editing any of these invalidates the part cache.
-PART_CODE = ("parts/*.py", "export/part_files.py", "export/mesh.py", "export/step.py", "partlist.py")  # joint.py reads PARALLEL_TOL
-
-
-# PartSpec fields the CAD does not read (where copies go, the mass model's inputs, the BOM): a change
-# to them must not rebuild the part. Every other field, including any added later, is in the key.
-NOT_CAD = ("placements", "estimate", "hardware", "group", "infill", "digest")
-
-
-def geometry_digest(part: PartSpec) -> str:
-    """Hash of every PartSpec field the part's CAD and file names can depend on."""
-    import dataclasses
-
-    from ..cache import fingerprint
-
-    data = {f.name: getattr(part, f.name) for f in dataclasses.fields(part) if f.name not in NOT_CAD}
-    return hashlib.sha256(fingerprint(data).encode()).hexdigest()[:24]
-
-
 def cache_key(part: PartSpec, bed) -> str:
     from ..cache import code_hash
 
@@ -104,45 +79,8 @@ def cache_key(part: PartSpec, bed) -> str:
 
 # -- a part's shape, shared with the joint FE ---------------------------------------------------
 
-SHAPE_KIND = "shapes"  # cache folder of the shared BREP texts
 
-
-def shape_key(part: PartSpec) -> str:
-    """Key of the shape `registry.build(part)` makes (before any turn on the bed): the part's CAD
-    inputs, the CAD code and CadQuery's and OpenCascade's versions."""
-    from ..cache import code_hash
-    from ..stack import installed
-
-    stack = installed()  # looked up once per process
-    versions = [stack["cadquery"], stack["cadquery-ocp"]]
-    payload = json.dumps([geometry_digest(part), CAD_VERSION, code_hash(*PART_CODE), versions])
-    return hashlib.sha256(payload.encode()).hexdigest()[:24]
-
-
-def brep_text(shape) -> str:
-    """The shape as OpenCascade BREP text (CadQuery's `exportBrep`)."""
-    import tempfile
-
-    fd, path = tempfile.mkstemp(suffix=".brep")
-    os.close(fd)
-    try:
-        shape.exportBrep(path)
-        return Path(path).read_text()
-    finally:
-        os.unlink(path)
-
-
-def shared_brep(part: PartSpec) -> str | None:
-    """The BREP text of `part`'s shape when a part build of this build (or an earlier one) stored
-    it (`build_part_files(share_shape=True)`), else None. The joint FE meshes it instead of
-    building the same CAD again (0.1-0.35 s a joint): the text is what building it here gives,
-    so the mesh and the stiffness are the same bits either way (tested)."""
-    from ..cache import load_text
-
-    return load_text(SHAPE_KIND, shape_key(part), ".brep")
-
-
-def build_parts(spec: Spec, frame, parts: Sequence[PartSpec], out_dir: str | Path, jobs: int | None = None,
+def build_parts(spec: Spec, frame, parts: Sequence[PartSpec], out_dir: str | Path, submit=None,
                 cache_dir: str | Path | None = None, progress: Callable[[str], None] | None = None) -> tuple[BuiltPart, ...]:
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)  # here, not in the workers (they never recreate a removed folder)
@@ -157,35 +95,21 @@ def build_parts(spec: Spec, frame, parts: Sequence[PartSpec], out_dir: str | Pat
                 progress(p.name)
         else:
             todo.append(p)
-    n_jobs = _jobs(jobs, len(todo))
-    if n_jobs <= 1:
+    if submit is None:
         for p in todo:
             results[p.name] = build_part_files(p, bed, str(out_dir))
             _cache_put(p, bed, out_dir, cache_dir, results[p.name])
             if progress:
                 progress(p.name)
     elif todo:
-        from ..runtime.pools import make_pool
-
-        with make_pool(n_jobs) as pool:
-            futures = {pool.submit(build_part_files, p, bed, str(out_dir)): p for p in todo}
-            for fut in as_completed(futures):
-                p = futures[fut]
-                results[p.name] = fut.result()
-                _cache_put(p, bed, out_dir, cache_dir, results[p.name])
-                if progress:
-                    progress(p.name)
+        futures = {submit(build_part_files, p, bed, str(out_dir)): p for p in todo}
+        for fut in as_completed(futures):
+            p = futures[fut]
+            results[p.name] = fut.result()
+            _cache_put(p, bed, out_dir, cache_dir, results[p.name])
+            if progress:
+                progress(p.name)
     return tuple(_built(p, results[p.name]) for p in parts)
-
-
-def _jobs(jobs: int | None, n: int) -> int:
-    if n <= 0:
-        return 0
-    if jobs is None:
-        # A worker pays a CadQuery import (seconds) before its first part; a part takes a fraction
-        # of a second: a pool of its own pays off only for many parts.
-        return 1 if n <= AUTO_SERIAL_MAX else max(1, min(os.cpu_count() or 1, n))
-    return max(1, min(int(jobs), n))
 
 
 def _built(p: PartSpec, m: dict) -> BuiltPart:

@@ -456,9 +456,11 @@ def _explain_failure(plate: Path, rc: int, output: str) -> str:
 # -- slicing ---------------------------------------------------------------------------------
 
 def slice_plate(plate: Path | str, profile: Path | str, bed: Sequence[float], exe: str | None = None,
-                gcode: Path | str | None = None, timeout_s: float = TIMEOUT_S, items=None) -> PlateSlice:
+                gcode: Path | str | None = None, timeout_s: float = TIMEOUT_S, items=None,
+                started: Callable[[int], None] | None = None) -> PlateSlice:
     """Check and slice one plate with a profile .ini; returns grams and time from the G-code.
-    `items`: the plate's contents as read back (`load_plate_objects`), when known."""
+    `items`: the plate's contents as read back (`load_plate_objects`), when known. `started(pid)`
+    is called the moment PrusaSlicer starts, before it has loaded (a build lowers its priority)."""
     plate = Path(plate)
     exe = exe or find_slicer()
     if exe is None:
@@ -471,11 +473,8 @@ def slice_plate(plate: Path | str, profile: Path | str, bed: Sequence[float], ex
     # PrusaSlicer starts first and the plate is checked while it loads (reading the 3MF back,
     # 0.2-0.5 s, was at the head of the slicing); a plate that fails the check stops it
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    # behind the build's main thread, before PrusaSlicer has loaded and started its threads (they
-    # inherit it): `runtime.pools.behind_the_build`
-    from ..runtime.pools import behind_the_build
-
-    behind_the_build(proc.pid)
+    if started is not None:  # before PrusaSlicer has started its threads (they inherit its priority)
+        started(proc.pid)
     try:
         objs = check_plate(plate, bed, items=items)
         out, err = proc.communicate(timeout=timeout_s)
@@ -545,7 +544,7 @@ def slice_plates(plates: Sequence[Path | str], spec: Spec, estimated_g: Mapping[
 
 
 def _slice_cached(plate: Path, profile: Path, bed: Sequence[float], exe: str, version: str, gcode: Path,
-                  items=None) -> PlateSlice:
+                  items=None, started: Callable[[int], None] | None = None) -> PlateSlice:
     """slice_plate, reusing the numbers of an identical earlier run.
 
     Keyed by the plate's bytes, the profile and the slicer's version: the same plate always
@@ -563,7 +562,7 @@ def _slice_cached(plate: Path, profile: Path, bed: Sequence[float], exe: str, ve
         check_plate(plate, bed, items=items)
         return PlateSlice(plate.stem, hit["material"], plate, gcode, hit["grams"], hit["time_s"],
                           tuple((n, v) for n, v in hit["objects"]), 0.0)
-    r = slice_plate(plate, profile, bed, exe, gcode=gcode, items=items)
+    r = slice_plate(plate, profile, bed, exe, gcode=gcode, items=items, started=started)
     cache.store_json("slice", key, {"material": r.material, "grams": r.grams, "time_s": r.time_s,
                                     "objects": [list(o) for o in r.objects]})
     return r

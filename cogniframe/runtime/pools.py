@@ -12,6 +12,7 @@ the previews and renders, is the critical path in a build's second half).
 
 from __future__ import annotations
 
+import contextlib
 import os
 import threading
 from concurrent.futures import ProcessPoolExecutor
@@ -140,6 +141,14 @@ class _ProcessPool(ProcessPoolExecutor):
                 pass
 
 
+@contextlib.contextmanager
+def cad_workers(workers: int, fe: bool = False):
+    """`submit(fn, *args) -> Future` on a process pool of `workers` CAD workers for the block
+    (`make_pool`), for work outside a build (`export.part_files.build_parts`)."""
+    with make_pool(workers, fe) as pool:
+        yield pool.submit
+
+
 def make_pool(workers: int, fe: bool = True) -> ProcessPoolExecutor:
     """A process pool for CadQuery work: forkserver with CadQuery preloaded (workers start warm), or
     spawn where forkserver is missing; never fork (a fork after any OCC operation can deadlock).
@@ -151,18 +160,42 @@ def make_pool(workers: int, fe: bool = True) -> ProcessPoolExecutor:
                         initargs=(os.getpid(),))
 
 
-def fe_pool(jobs: int) -> ProcessPoolExecutor:
-    """Worker processes for the joint FE of `check`. `fork` when this process is single-threaded
-    and has not loaded OpenCascade (no re-import of the main module, nothing to preload); otherwise
-    the forkserver pool (a fork after OCC work or beside running threads can deadlock). Both die
-    with this process."""
+@contextlib.contextmanager
+def joint_fe_workers(jobs: int | None = None):
+    """`submit(fn, *args) -> Future` on worker processes for the joint FE of `check`, started on
+    the first submit and shut down when the block ends; None where the joints are better solved
+    in this process: one job (`jobs`, else COGNIFRAME_JOBS, else the core count), a daemonic
+    process (it cannot have children), or a Dask worker (the cluster schedules its cores).
+
+    The workers are `fork`s when this process is single-threaded and has not loaded OpenCascade
+    (no re-import of the main module, nothing to preload); otherwise the forkserver pool (a fork
+    after OCC work or beside running threads can deadlock). Both die with this process."""
     import multiprocessing as mp
     import sys
 
-    if "OCP" not in sys.modules and threading.active_count() == 1 and "fork" in mp.get_all_start_methods():
-        return _ProcessPool(max_workers=jobs, mp_context=mp.get_context("fork"), initializer=die_with_build,
-                            initargs=(os.getpid(),))
-    return make_pool(jobs)
+    if jobs is None:
+        jobs = int(os.environ.get("COGNIFRAME_JOBS") or 0) or (1 if in_dask_worker() else (os.cpu_count() or 1))
+    if jobs <= 1 or mp.current_process().daemon:
+        yield None
+        return
+    pool = []
+    lock = threading.Lock()
+
+    def submit(fn, *args):
+        with lock:
+            if not pool:
+                if "OCP" not in sys.modules and threading.active_count() == 1 and "fork" in mp.get_all_start_methods():
+                    pool.append(_ProcessPool(max_workers=jobs, mp_context=mp.get_context("fork"),
+                                             initializer=die_with_build, initargs=(os.getpid(),)))
+                else:
+                    pool.append(make_pool(jobs))
+        return pool[0].submit(fn, *args)
+
+    try:
+        yield submit
+    finally:
+        for p in pool:
+            p.shutdown(wait=True, cancel_futures=True)
 
 
 def in_dask_worker() -> bool:

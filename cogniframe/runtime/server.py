@@ -44,7 +44,7 @@ import queue
 import sys
 import threading
 import time
-from concurrent.futures import Future
+from concurrent.futures import BrokenExecutor, Future
 from pathlib import Path
 
 ENV = "COGNIFRAME_CAD_SERVER"  # "0": never use a server
@@ -237,7 +237,7 @@ def connect(workers: int, stack: str = "", fe: bool = False, idle_s: float | Non
     return ServerPool(key, authkey, workers)
 
 
-class BrokenServer(RuntimeError):
+class BrokenServer(BrokenExecutor):
     """A worker of the CAD server ended while it ran a job (it crashed or was killed)."""
 
 

@@ -483,7 +483,7 @@ def cad_check(params: dict, design_id: str) -> dict:
     spec = spec_mod.from_dict(params, source=f"design {design_id}")
     d = pipeline.design(spec)
     with tempfile.TemporaryDirectory(prefix="cogniframe-cad-") as tmp:
-        built = build_parts(spec, d.frame, d.parts, tmp, jobs=1)
+        built = build_parts(spec, d.frame, d.parts, tmp)
         clash = check_clashes(spec, d.frame, d.parts, built, tmp)
     bed = tuple(float(b) for b in spec.printer.bed)
     failures = []
