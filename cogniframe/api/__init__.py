@@ -183,9 +183,17 @@ class Design:
         from .. import pipeline
         from ..runtime.blas import one_blas_thread
 
+        from ..runtime.pools import joint_fe_workers
+
         d = self.pipeline_design
         try:
             with self._spec.blamed(), one_blas_thread():  # as `build` computes it: same numbers
+                if self.needs_fe():  # new joint geometries: their FE on worker processes first
+                    from ..analysis.joint_stiffness import solve_missing
+                    from ..analysis.stiffness import joint_parts
+
+                    with joint_fe_workers() as submit:
+                        solve_missing(self._spec, joint_parts(d.parts), submit=submit)
                 result = pipeline.check(self._spec, design_=d)
         except UserError as e:
             raise _params_error(e, self._source) from None

@@ -418,7 +418,7 @@ def geometry_key(d: api.Design) -> str:
     shapes and the bed. A change elsewhere needs no new view (which would also reset its camera):
     grams, a motor's KV, the battery's cells and capacity (they are only in the click panel's
     text, which follows at the next change of shape)."""
-    from ..export.part_files import geometry_digest
+    from ..parts.shapes import geometry_digest
 
     pd = d.pipeline_design
     spec = d.spec
