@@ -51,7 +51,7 @@ t2 = time.perf_counter()
 assembly = 0.0
 if sys.argv[6] == "1":
     from cogniframe.export.assembly import write_assembly
-    write_assembly(spec, fr, parts, built, Path(sys.argv[2]), cache_dir=Path(sys.argv[3]))
+    write_assembly(spec, fr, parts, built, Path(sys.argv[2]))
     assembly = time.perf_counter() - t2
 print(json.dumps({"design_s": t1 - t0, "parts_s": t2 - t1, "assembly_s": assembly, "rebuilt": built_names,
                   "total_s": time.perf_counter() - t0}))

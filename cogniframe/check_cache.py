@@ -19,14 +19,14 @@ import os
 import sys
 from pathlib import Path
 
-STACK = ("numpy", "scipy", "pydantic", "pydantic_core", "yaml", "Pynite", "rich")
+CHECK_LIBRARIES = ("numpy", "scipy", "pydantic", "pydantic_core", "yaml", "Pynite", "rich")
 
 
 def _stack() -> list:
     from importlib.util import find_spec
 
     out = []
-    for name in STACK:
+    for name in CHECK_LIBRARIES:
         try:
             spec = find_spec(name)
             origin = spec.origin if spec is not None else None

@@ -101,9 +101,9 @@ def build(params: ParamsArg,
 
     use_server = cad_server.wanted(server)
     if use_server:  # first thing: the server's imports then overlap this process's own and the validation
-        from .stack import fingerprint
+        from .stack import versions
 
-        early = cad_server.prestart(fingerprint())
+        early = cad_server.prestart(versions())
     else:
         early = None
     try:
@@ -150,9 +150,9 @@ def schema() -> None:
 
 
 def _register_commands() -> None:
-    from .commands import explore, fab, maker, physics, server, studio
+    from .commands import explore, fab, impact, maker, server, studio
 
-    physics.register(app)
+    impact.register(app)
     fab.register(app)
     maker.register(app)
     explore.register(app)

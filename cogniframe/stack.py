@@ -1,6 +1,6 @@
 """The installed library versions that shape cogniframe's output bytes.
 
-`installed()` goes in every build's manifest and key; `fingerprint()` (those and a few more) in
+`installed()` goes in every build's manifest and key; `versions()` (those and a few more) in
 every step's cache key and in the CAD server's key. Light on purpose (importlib.metadata only):
 `cogniframe build` computes the server's key first thing, to start the server while it validates
 the params (`runtime.server.prestart`).
@@ -15,9 +15,9 @@ from importlib import metadata
 from . import __version__
 
 # listed in the manifest
-STACK = ("cadquery", "cadquery-ocp", "trimesh", "manifold3d", "numpy", "scipy", "pynitefea", "pyvista", "vtk", "matplotlib")
+LIBRARIES = ("cadquery", "cadquery-ocp", "trimesh", "manifold3d", "numpy", "scipy", "pynitefea", "pyvista", "vtk", "matplotlib")
 # also in every step's key
-EXTRA_STACK = ("rectpack", "pillow", "lxml", "networkx", "rich")
+EXTRA_LIBRARIES = ("rectpack", "pillow", "lxml", "networkx", "rich")
 
 
 @functools.cache
@@ -33,10 +33,10 @@ def _lookup(dists: tuple[str, ...]) -> tuple[tuple[str, str | None], ...]:
 
 
 def installed() -> dict:
-    """{"cogniframe": version, library: version or None} for STACK."""
-    return {"cogniframe": __version__, **dict(_lookup(STACK))}
+    """{"cogniframe": version, library: version or None} for LIBRARIES."""
+    return {"cogniframe": __version__, **dict(_lookup(LIBRARIES))}
 
 
-def fingerprint() -> str:
-    """Versions of everything that shapes the output bytes (STACK and EXTRA_STACK), as JSON."""
-    return json.dumps({**installed(), **dict(_lookup(EXTRA_STACK))}, sort_keys=True)
+def versions() -> str:
+    """Versions of everything that shapes the output bytes (LIBRARIES and EXTRA_LIBRARIES), as JSON."""
+    return json.dumps({**installed(), **dict(_lookup(EXTRA_LIBRARIES))}, sort_keys=True)

@@ -195,24 +195,6 @@ def test_mesh_tolerances_agree_with_the_cache_key():
     assert (build.LINEAR_TOL, build.ANGULAR_TOL) == (mesh.LINEAR_TOL, mesh.ANGULAR_TOL)
 
 
-def test_assembly_cache_gives_the_same_files(tmp_path):
-    from cogniframe.export.assembly import write_assembly
-
-    d = built_preset("carbon")
-    args = (d.spec, d.frame, tuple(d.parts.values()), tuple(d.built.values()))
-    import shutil
-
-    for sub in ("a", "b"):
-        (tmp_path / sub).mkdir()
-        shutil.copytree(d.out / "step", tmp_path / sub / "step")
-        shutil.copytree(d.out / "stl", tmp_path / sub / "stl")  # the GLB is made from the STLs
-    s1, g1 = write_assembly(*args, tmp_path / "a", cache_dir=tmp_path / "cache")
-    t = time.perf_counter()
-    s2, g2 = write_assembly(*args, tmp_path / "b", cache_dir=tmp_path / "cache")
-    assert time.perf_counter() - t < 0.5
-    assert _sha(s1) == _sha(s2) and _sha(g1) == _sha(g2)
-
-
 def test_glb_rod_cylinder_is_a_closed_prism_of_the_polygon_area():
     """The GLB's rods: a closed, outward-facing 48-gon prism from start to end; its volume is the
     polygon's area (n/2 r^2 sin(2 pi / n)) times the length, whatever the axis direction."""

@@ -130,7 +130,7 @@ def test_builds_through_the_cad_server_give_the_same_bytes(warm, tmp_path, monke
 
     from cogniframe.cli import main
     from cogniframe.runtime import server as cad_server
-    from cogniframe.stack import fingerprint as stack_fingerprint
+    from cogniframe.stack import versions as stack_versions
 
     _, params, first = warm
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))
@@ -140,7 +140,7 @@ def test_builds_through_the_cad_server_give_the_same_bytes(warm, tmp_path, monke
     monkeypatch.setattr(cad_server, "prestart", lambda *a, **k: early.append(real(*a, **k)) or early[-1])
     try:
         assert main(["build", str(params), "-o", str(tmp_path / "served"), "--jobs", "2"]) == 0
-        pid = cad_server.running(stack_fingerprint())
+        pid = cad_server.running(stack_versions())
         assert pid is not None and f"started a CAD server (pid {pid})" in capsys.readouterr().err
         assert len(early) == 1 and early[0].adopted and early[0].proc.pid == pid
         # its joint FEs were solved there (4, and the mirrored core link derived): a cache of its own
@@ -149,9 +149,9 @@ def test_builds_through_the_cad_server_give_the_same_bytes(warm, tmp_path, monke
         changed = _params(tmp_path / "params", ("motors.bolt_spacing", 9.7))
         again = _build(changed, tmp_path / "served", slicer=False, server=True, console=Console(file=io.StringIO()))
         assert _ran(again) == _part_change("motor_mount")
-        assert cad_server.running(stack_fingerprint()) == pid  # the same server, warm
+        assert cad_server.running(stack_versions()) == pid  # the same server, warm
     finally:
-        cad_server.stop(stack_fingerprint())
+        cad_server.stop(stack_versions())
     _build(changed, tmp_path / "cold", slicer=False, use_cache=False)
     assert _files(tmp_path / "served") == _files(tmp_path / "cold")
 

@@ -45,15 +45,15 @@ def build_parts(spec, design, out: Path, *, fe: bool = False, server: bool | Non
     from ..runtime import server as cad_server
 
     out.mkdir(parents=True, exist_ok=True)
-    fingerprint = stack.fingerprint()
+    versions = stack.versions()
     log = log or (lambda message: None)
     tasks = [t for t in graph.expand(steps.STEPS, steps.rows(design))
              if t.name.startswith("part:") or (fe and t.name == "estimate")]
     done = [0]
 
-    with BuildRuntime(os.cpu_count() or 1, fe=fe, server=cad_server.wanted(server), stack=fingerprint, log=log) as rt:
+    with BuildRuntime(os.cpu_count() or 1, fe=fe, server=cad_server.wanted(server), stack=versions, log=log) as rt:
         ctx = BuildContext(out, {"spec": spec, "design": design, "cad": rt.cad, "warm": _NoWarmup(), "log": log},
-                           stack=fingerprint, use_cache=True)
+                           stack=versions, use_cache=True)
 
         def finished(record) -> None:
             done[0] += 1

@@ -90,16 +90,16 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
 
     design = pipeline.design(spec) if design is None else design
     log = lambda m: console.print(m, markup=False, highlight=False)  # noqa: E731
-    fingerprint = stack.fingerprint()
+    versions = stack.versions()
     from ..report.renders import ensure_headless
     from ..runtime import BuildRuntime
 
     ensure_headless()  # before any thread starts: the environment is not changed while one starts a process
     slicer = Slicer(log)
     with BuildRuntime(jobs or os.cpu_count() or 1, fe=needs_joint_fe(spec, design), server=server,
-                      stack=fingerprint, log=log, early=early, warm_before=slicer.get) as rt:
+                      stack=versions, log=log, early=early, warm_before=slicer.get) as rt:
         ctx = BuildContext(out, {"spec": spec, "design": design, "cad": rt.cad, "warm": rt.warm, "slicer": slicer,
-                                        "log": log, "gcode": gcode}, stack=fingerprint, use_cache=use_cache)
+                                        "log": log, "gcode": gcode}, stack=versions, use_cache=use_cache)
         tasks = graph.expand(steps.STEPS, steps.rows(design))
         if rt.cad.fe or any(graph.will_run(t, ctx) for t in tasks if t.name.startswith("part:")):
             rt.cad.start_server()  # now, beside the set-up below, not when the first part step submits

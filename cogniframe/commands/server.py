@@ -14,9 +14,9 @@ server_app = typer.Typer(help="The CAD server that keeps CadQuery loaded between
 
 
 def _stack() -> str:
-    from cogniframe.stack import fingerprint
+    from cogniframe.stack import versions
 
-    return fingerprint()
+    return versions()
 
 
 @server_app.command("status")

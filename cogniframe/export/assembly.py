@@ -14,7 +14,6 @@ material: TPU red, ABS/PLA (any other filament) dark grey, rods black.
 
 from __future__ import annotations
 
-import hashlib
 import json
 from pathlib import Path
 from typing import Sequence
@@ -242,21 +241,6 @@ def check_clashes(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: 
                        ignore=own_motor_pairs(frame), memo=store)
 
 
-def assembly_key(spec: Spec, frame, parts: Sequence[PartSpec], built) -> str:
-    """Hash of everything the assembly files depend on (part geometry by digest, placements, rods)."""
-    from ..parts.shapes import CAD_VERSION
-    from .part_files import cache_key
-
-    bed = tuple(float(b) for b in spec.printer.bed)
-    by_name = {b.name: b for b in built}
-    payload = [CAD_VERSION, spec.name,
-               [[cache_key(p, bed), p.material, [(pl.instance, pl.rotation_deg, pl.origin) for pl in p.placements],
-                 np.round(np.asarray(by_name[p.name].print_from_local, float), 9).tolist()] for p in parts],
-               [[r.name, np.round(r.start, 9).tolist(), np.round(r.end, 9).tolist(), r.diameter] for r in frame.rods.values()],
-               _vitamin_key(spec, frame)]
-    return hashlib.sha256(json.dumps(payload, default=float).encode()).hexdigest()[:24]
-
-
 def _vitamin_key(spec: Spec, frame) -> list:
     from ..vitamins import vitamins
 
@@ -264,25 +248,14 @@ def _vitamin_key(spec: Spec, frame) -> list:
             for v in vitamins(spec, frame)]
 
 
-def write_assembly(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path,
-                   cache_dir: str | Path | None = None) -> tuple[Path, Path]:
-    """Write out_dir/assembly.step (deterministic) and out_dir/assembly.glb.
-
-    With `cache_dir`, identical inputs copy the files from a verified cache entry (no CadQuery import).
-    """
-    out_dir = Path(out_dir)
-    step, glb = out_dir / "assembly.step", out_dir / "assembly.glb"
-    key = assembly_key(spec, frame, parts, built) if cache_dir is not None else None
-    if key is not None:
-        from .. import cache
-
-        if cache.get_files("assembly", key, out_dir, root=Path(cache_dir)) is not None:
-            return step, glb
+def write_assembly(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path) -> tuple[Path, Path]:
+    """Write out_dir/assembly.step (deterministic) and out_dir/assembly.glb (the build makes them
+    as two cached steps of their own: build/cad.py)."""
     from .mesh import load_stl
 
+    out_dir = Path(out_dir)
+    step, glb = out_dir / "assembly.step", out_dir / "assembly.glb"
     write_assembly_step(spec, frame, parts, built, out_dir)
     write_glb(spec, frame, parts, {b.name: load_stl(out_dir / b.stl) for b in built},
               {b.name: b.print_from_local for b in built}, glb)
-    if key is not None:
-        cache.put_files("assembly", key, out_dir, ["assembly.step", "assembly.glb"], None, root=Path(cache_dir))
     return step, glb

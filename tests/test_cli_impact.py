@@ -13,7 +13,7 @@ from ruamel.yaml import YAML
 from typer.testing import CliRunner
 
 from cogniframe.analysis.fit import model_accel_g
-from cogniframe.commands.physics import register
+from cogniframe.commands.impact import register
 from cogniframe.errors import UserError
 
 DROPS = Path(__file__).resolve().parents[1] / "examples" / "droptests"  # shipped with the project
