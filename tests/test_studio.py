@@ -420,6 +420,7 @@ def test_the_3d_view_draws(page):
 @pytest.mark.slow
 def test_a_new_joint_geometry_shows_the_fast_model_then_the_fe_and_a_new_view(page, studio, capsys):
     page.wait_for_selector("#cf-viewer[data-ready='1']", timeout=300_000)
+    page.wait_for_function("document.body.dataset.model === 'fe'", timeout=600_000)
     scene = page.get_attribute("#cf-viewer", "data-scene")
     k_fe = float(_metric(page, "stiffness.k_n_per_m"))
     t0 = time.monotonic()
