@@ -182,6 +182,16 @@ def sources_hash(root: Path, patterns) -> str:
     return h.hexdigest()[:16]
 
 
+def key(inputs, code: tuple[str, ...] = (), stack: str = "") -> str:
+    """The one recipe for a cache key: the sha256 of what the result is made from: `inputs` (plain
+    data, dataclasses, numpy values: `fingerprint`), the cogniframe source files that make it
+    (`code`: globs relative to the package, `code_hash`) and the library versions (`stack`)."""
+    import hashlib
+
+    payload = fingerprint([inputs, code_hash(*code) if code else "", stack])
+    return hashlib.sha256(payload.encode()).hexdigest()[:32]
+
+
 def fingerprint(obj) -> str:
     """Deterministic JSON of plain data, dataclasses and numpy values (for keys)."""
     import dataclasses

@@ -65,16 +65,14 @@ def quick(argv: list[str]) -> int | None:
 
 def key(params: Path, variant: dict) -> str | None:
     """Cache key of one check answer; None when the params file cannot be read (the check reports it)."""
-    from .cache import code_hash
+    from . import cache
 
     try:
         data = Path(params).read_bytes()
     except OSError:
         return None
-    h = hashlib.sha256(data)
-    h.update(json.dumps([Path(params).stem, code_hash("**/*.py"), sys.version, _stack(), variant],
-                        sort_keys=True).encode())
-    return h.hexdigest()[:32]
+    return cache.key([hashlib.sha256(data).hexdigest(), Path(params).stem, sys.version, variant], ("**/*.py",),
+                     json.dumps(_stack(), sort_keys=True))
 
 
 def load(k: str | None) -> tuple[str, int] | None:

@@ -147,9 +147,9 @@ def _mesh_hash(mesh) -> str:
 
 
 def _pair_key(ka: str, kb: str, margin: float | None) -> str:
-    import hashlib
+    from .. import cache
 
-    return hashlib.sha256(f"{ka}/{kb}/{margin!r}".encode()).hexdigest()[:32]
+    return cache.key([ka, kb, margin])
 
 
 def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_margin: float = 5.0,

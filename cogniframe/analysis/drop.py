@@ -11,18 +11,17 @@ a hash of exactly its inputs and of the source of the modules that compute it, s
 from __future__ import annotations
 
 import copy
-import hashlib
 import json
-from pathlib import Path
 
 from .. import cache
 from ..frame import Frame
 from ..spec import Spec
 from . import impact
 
-_MODULES = ("cogniframe.analysis.stiffness", "cogniframe.analysis.impact_nl", "cogniframe.analysis.impact", "cogniframe.analysis.framefe", "cogniframe.analysis.joint_stiffness",
-            "cogniframe.analysis.joint_fe", "cogniframe.frame", "cogniframe.partlist", "cogniframe.parts.joint",
-            "cogniframe.materials", "cogniframe.spec")
+# the sources the frame model, the load cases and the peaks are made by (their cache keys)
+_MODULES = ("analysis/stiffness.py", "analysis/impact_nl.py", "analysis/impact.py", "analysis/framefe.py",
+            "analysis/joint_stiffness.py", "analysis/joint_fe.py", "analysis/flight.py", "analysis/constants.py",
+            "frame.py", "partlist.py", "parts/joint.py", "materials.py", "spec.py")
 
 
 class Session:
@@ -121,7 +120,6 @@ def _stiffness_key(spec: Spec, *extra, scope: str = "k") -> str:
     """Cache key: a hash of the inputs and of the source of every module the model reads (library
     moduli live in materials.py, the bore in spec.py). ``scope="k"``: only what the frame model
     reads (`_k_inputs`); ``"all"``: every section the load cases and peaks may read."""
-    from importlib.util import find_spec
 
     data = spec.model_dump(mode="json")
     if scope == "k":
@@ -129,10 +127,9 @@ def _stiffness_key(spec: Spec, *extra, scope: str = "k") -> str:
     else:
         inputs = {s: data[s] for s in ("materials", "frame", "rods", "joints", "core", "motors", "printer")}
     inputs["stiffness_model"] = data["model"].get("stiffness_model", "fe")
-    h = hashlib.sha256(json.dumps([inputs, extra], sort_keys=True, default=str).encode())
-    for mod in _MODULES:
-        h.update(Path(find_spec(mod).origin).read_bytes())
-    return h.hexdigest()[:24]
+    from .. import cache
+
+    return cache.key([inputs, extra], _MODULES)
 
 
 def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropResult, session: Session | None = None) -> dict:

@@ -35,13 +35,10 @@ is given, the mirror's super-element is not solved again: it is the original's, 
 
 from __future__ import annotations
 
-import hashlib
-import json
 import logging
 import math
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -545,12 +542,10 @@ def geometry_key(spec, part, method: str, factor: float | None, mesh_mm: float) 
     the interface (clearance, layer height), materials, method, and this module's source."""
     itf = interface(spec, factor)
     # the FE takes the rods as rigid: their modulus does not enter (the closed forms are not cached)
+    from .. import cache
+
     data = [_CACHE_VERSION, part.digest, method, itf.e, itf.g, itf.h, spec.rods.diameter, mesh_mm, FE_CURVATURE]
-    h = hashlib.sha256(json.dumps(data, default=str).encode())
-    for mod in ("joint_stiffness.py", "joint_fe.py"):
-        h.update((Path(__file__).parent / mod).read_bytes())
-    h.update((Path(__file__).parents[1] / "parts" / "joint.py").read_bytes())
-    return h.hexdigest()[:24]
+    return cache.key(data, ("analysis/joint_stiffness.py", "analysis/joint_fe.py", "parts/joint.py"))
 
 
 def joint_stiffness(spec, part, method: str = "fe", factor: float | None = None,

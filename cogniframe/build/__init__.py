@@ -8,7 +8,6 @@ cogniframe did not make is never touched (outdir.py: lock, ownership check, atom
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import time
@@ -19,7 +18,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from .. import outdir, pipeline, stack
-from ..cache import code_hash, file_sha256
+from ..cache import file_sha256
 from ..spec import Spec
 
 
@@ -57,12 +56,9 @@ def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None 
 
 def build_key(spec: Spec, params_path: Path) -> str:
     """Everything a build's bytes depend on: the params, the installed stack and cogniframe's code."""
-    h = hashlib.sha256()
-    h.update(Path(params_path).read_bytes())
-    h.update(spec.digest().encode())
-    h.update(json.dumps(stack.installed(), sort_keys=True).encode())
-    h.update(code_hash("**/*.py").encode())  # read once per process: the CAD server's key hashed it already
-    return h.hexdigest()
+    from .. import cache
+
+    return cache.key([file_sha256(Path(params_path)), spec.digest()], ("**/*.py",), json.dumps(stack.installed(), sort_keys=True))
 
 
 def _up_to_date(final: Path, key: str) -> bool:

@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import contextlib
 import fnmatch
-import hashlib
 import json
 import string
 import threading
@@ -45,7 +44,6 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping, Sequence
 
 from .. import cache
-from ..cache import fingerprint
 
 
 @dataclass(frozen=True)
@@ -148,9 +146,7 @@ def task_key(task: Task, ctx: Context) -> str | None:
     inputs = task.step.key(ctx, **task.vars)
     if inputs is None:
         return None
-    payload = [task.step.name, dict(task.vars), inputs, cache.code_hash(*task.step.code) if task.step.code else "",
-               ctx.stack]
-    return hashlib.sha256(fingerprint(payload).encode()).hexdigest()[:32]
+    return cache.key([task.step.name, dict(task.vars), inputs], task.step.code, ctx.stack)
 
 
 def will_run(task: Task, ctx: Context) -> bool:

@@ -17,8 +17,6 @@ part, in the order given.
 
 from __future__ import annotations
 
-import hashlib
-import json
 from concurrent.futures import as_completed
 from dataclasses import dataclass
 from pathlib import Path
@@ -70,11 +68,9 @@ LINEAR_TOL, ANGULAR_TOL = 0.02, 0.15
 
 
 def cache_key(part: PartSpec, bed) -> str:
-    from ..cache import code_hash
+    from .. import cache
 
-    payload = json.dumps([geometry_digest(part), CAD_VERSION, code_hash(*PART_CODE), LINEAR_TOL, ANGULAR_TOL,
-                          [float(b) for b in bed]])
-    return hashlib.sha256(payload.encode()).hexdigest()[:24]
+    return cache.key([geometry_digest(part), CAD_VERSION, LINEAR_TOL, ANGULAR_TOL, [float(b) for b in bed]], PART_CODE)
 
 
 # -- a part's shape, shared with the joint FE ---------------------------------------------------

@@ -293,7 +293,7 @@ def known_version(exe: str) -> str:
         st = os.stat(real)
     except OSError:
         return slicer_version(exe)
-    key = hashlib.sha256(f"{real}|{st.st_size}|{st.st_mtime_ns}".encode()).hexdigest()[:24]
+    key = cache.key([real, st.st_size, st.st_mtime_ns])
     hit = cache.load_json("slicer-version", key)
     if hit is not None and isinstance(hit.get("version"), str):
         return hit["version"]
@@ -553,10 +553,8 @@ def _slice_cached(plate: Path, profile: Path, bed: Sequence[float], exe: str, ve
     """
     from .. import cache
 
-    h = hashlib.sha256()
-    for chunk in (plate.read_bytes(), profile.read_bytes(), version.encode(), repr(tuple(bed)).encode()):
-        h.update(chunk)
-    key = h.hexdigest()[:24]
+    key = cache.key([hashlib.sha256(plate.read_bytes()).hexdigest(), hashlib.sha256(profile.read_bytes()).hexdigest(),
+                     version, [float(b) for b in bed]])
     hit = cache.load_json("slice", key)
     if hit is not None:
         check_plate(plate, bed, items=items)

@@ -8,8 +8,6 @@ same shape instead of building the CAD again.
 
 from __future__ import annotations
 
-import hashlib
-import json
 import os
 from pathlib import Path
 
@@ -32,10 +30,9 @@ def geometry_digest(part: PartSpec) -> str:
     """Hash of every PartSpec field the part's CAD and file names can depend on."""
     import dataclasses
 
-    from ..cache import fingerprint
+    from .. import cache
 
-    data = {f.name: getattr(part, f.name) for f in dataclasses.fields(part) if f.name not in NOT_CAD}
-    return hashlib.sha256(fingerprint(data).encode()).hexdigest()[:24]
+    return cache.key({f.name: getattr(part, f.name) for f in dataclasses.fields(part) if f.name not in NOT_CAD})
 
 
 SHAPE_KIND = "shapes"  # cache folder of the shared BREP texts
@@ -44,13 +41,11 @@ SHAPE_KIND = "shapes"  # cache folder of the shared BREP texts
 def shape_key(part: PartSpec) -> str:
     """Key of the shape `registry.build(part)` makes (before any turn on the bed): the part's CAD
     inputs, the CAD code and CadQuery's and OpenCascade's versions."""
-    from ..cache import code_hash
+    from .. import cache
     from ..stack import installed
 
     stack = installed()  # looked up once per process
-    versions = [stack["cadquery"], stack["cadquery-ocp"]]
-    payload = json.dumps([geometry_digest(part), CAD_VERSION, code_hash(*PART_CODE), versions])
-    return hashlib.sha256(payload.encode()).hexdigest()[:24]
+    return cache.key([geometry_digest(part), CAD_VERSION], PART_CODE, f"{stack['cadquery']}/{stack['cadquery-ocp']}")
 
 
 def brep_text(shape) -> str:

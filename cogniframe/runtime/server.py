@@ -36,7 +36,6 @@ installed cogniframe where the build imported the checkout it runs in), then `ma
 
 from __future__ import annotations
 
-import hashlib
 import itertools
 import json
 import os
@@ -77,11 +76,10 @@ def server_key(stack: str = "", root: Path | None = None) -> str:
     """Hash of everything a worker's results could depend on besides its arguments: interpreter,
     import path, cogniframe's source, the library versions (`stack`), the environment variables
     that matter, and the cache folder (which holds the server's key)."""
-    from ..cache import code_hash
+    from .. import cache
 
     env = {k: v for k, v in os.environ.items() if k.startswith(_ENV_PREFIXES) and k != ENV}
-    payload = [sys.executable, sys.path, code_hash("**/*.py"), stack, sorted(env.items()), str(root or folder())]
-    return hashlib.sha256(json.dumps(payload).encode()).hexdigest()[:32]
+    return cache.key([sys.executable, sys.path, sorted(env.items()), str(root or folder())], ("**/*.py",), stack)
 
 
 def address(key: str) -> str:

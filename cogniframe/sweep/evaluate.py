@@ -198,14 +198,10 @@ def _worker_address() -> str:
 
 def code_digest() -> str:
     """Hash of the modules a design's evaluation runs (cogniframe/*.py, analysis/, this file)."""
-    from pathlib import Path
 
-    root = Path(__file__).resolve().parents[1]
-    h = hashlib.sha256()
-    for p in sorted([*root.glob("*.py"), *(root / "analysis").glob("*.py"), Path(__file__)]):
-        h.update(p.name.encode())
-        h.update(p.read_bytes())
-    return h.hexdigest()[:12]
+    from ..cache import code_hash
+
+    return code_hash("*.py", "analysis/*.py", "sweep/evaluate.py")[:12]
 
 
 def warm_up() -> str:
