@@ -51,6 +51,7 @@ def main(argv: list[str] | None = None) -> int:
         from cogniframe import partlist
         from cogniframe import spec as spec_mod
         from cogniframe.analysis import joint_stiffness as JS
+        from cogniframe.analysis import load_cases as lc
         from cogniframe.analysis import stiffness as st
 
         s = spec_mod.load(args.params)
@@ -66,7 +67,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"closed-form joints (all five), median:         {_median(lambda: st.joint_models(s, parts, 'analytic'), args.repeat) * 1e3:7.1f} ms")
         print(f"frame k, FE joints cached, median:             {_median(lambda: st.predict_stiffness(s, f, parts, joints=joints), args.repeat) * 1e3:7.1f} ms")
         print(f"frame k, closed-form joints, median:           {_median(lambda: st.predict_stiffness(s, f, parts, joints=an), args.repeat) * 1e3:7.1f} ms")
-        print(f"all load cases (joints cached), median:        {_median(lambda: st.load_cases(s, f, parts, 240.0, joints=joints, design_force_n=95.0), max(1, args.repeat // 2)):7.2f} s")
+        print(f"all load cases (joints cached), median:        {_median(lambda: lc.load_cases(s, f, parts, 240.0, joints=joints, design_force_n=95.0), max(1, args.repeat // 2)):7.2f} s")
         if not args.skip_cold:
             _check_process(args.params, env)
         print(f"cached `check` process, median:                {statistics.median(_check_process(args.params, env) for _ in range(args.repeat)):7.2f} s")

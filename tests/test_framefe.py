@@ -1,7 +1,7 @@
 """The frame FE's fast paths against closed forms and dense references.
 
-`framefe` assembles every beam at once and solves sparse; `stiffness.lowest_eigenvalues` finds
-the modes by shift-inverted Lanczos with an inertia check; `stiffness.euler_loads` solves all
+`framefe` assembles every beam at once and solves sparse; `framefe.lowest_eigenvalues` finds
+the modes by shift-inverted Lanczos with an inertia check; `framefe.euler_loads` solves all
 rods' buckling problems in one batch. Each is checked here against theory and against the
 plain dense computation on the same matrices.
 """
@@ -115,7 +115,7 @@ def test_free_free_rod_modes_match_4730_and_7853_both_planes():
     L = 300.0
     K, M = _free_free_rod(length=L)
     assert K.shape[0] > 200  # the sparse path, not the small-problem dense one
-    w = st.lowest_eigenvalues(K, M, 12)
+    w = ff.lowest_eigenvalues(K, M, 12)
     hz = np.sqrt(np.abs(w)) / (2 * math.pi)
     a, i_, _ = ff.circle_section(D)
     base = math.sqrt(E * i_ / (RHO * a * L**4)) / (2 * math.pi)
@@ -140,13 +140,13 @@ def test_lowest_eigenvalues_equal_the_dense_solver_on_the_carbon_frame(monkeypat
     def no_fallback(*a, **k):
         raise AssertionError("the sparse solver fell back to dense on the carbon frame")
 
-    monkeypatch.setattr(st, "_dense_lowest", no_fallback)
-    w = st.lowest_eigenvalues(K.tocsc(), M.tocsc(), 14)
+    monkeypatch.setattr(ff, "_dense_lowest", no_fallback)
+    w = ff.lowest_eigenvalues(K.tocsc(), M.tocsc(), 14)
     assert np.abs(w[6:] - ref[6:]).max() <= 1e-6 * ref[6]
     assert np.abs(w[:6]).max() <= 1e-6 * ref[6]
     # Sylvester's inertia: the count below any point between modes is the modes' count
     for i in (6, 9, 13):
-        assert st._count_below(K, M, 0.5 * (ref[i] + ref[i + 1]) if i < 13 else ref[13] * 1.0001) == i + 1
+        assert ff._count_below(K, M, 0.5 * (ref[i] + ref[i + 1]) if i < 13 else ref[13] * 1.0001) == i + 1
 
 
 def test_a_missed_mode_is_caught_and_answered_densely(monkeypatch):
@@ -161,7 +161,7 @@ def test_a_missed_mode_is_caught_and_answered_densely(monkeypatch):
 
     monkeypatch.setattr(scipy.sparse.linalg, "eigsh", lossy)
     K, M = _free_free_rod()
-    w = st.lowest_eigenvalues(K, M, 12)
+    w = ff.lowest_eigenvalues(K, M, 12)
     assert w[7] == pytest.approx(w[6], rel=1e-8)  # the pair is whole again
 
 
@@ -175,16 +175,16 @@ def test_euler_loads_match_the_elastically_restrained_column(c):
     else:
         u = brentq(lambda x: math.tan(x / 2) + x * ei / (c * L), math.pi + 1e-9, 2 * math.pi - 1e-9)
     expect = (u / L) ** 2 * ei
-    assert st.euler_load(L, ei, c, c) == pytest.approx(expect, rel=2e-3)  # 8 elements
-    assert st.euler_load(L, ei, c, c, n_el=32) == pytest.approx(expect, rel=1e-5)
+    assert ff.euler_load(L, ei, c, c) == pytest.approx(expect, rel=2e-3)  # 8 elements
+    assert ff.euler_load(L, ei, c, c, n_el=32) == pytest.approx(expect, rel=1e-5)
 
 
 def test_euler_loads_batch_equals_one_by_one():
     ls, ka, kb = [40.0, 80.0, 61.5, 80.0], [0.0, 3000.0, 1e5, 50.0], [10.0, 3000.0, 0.0, 7e4]
     ei = E * ff.circle_section(D)[1]
-    batch = st.euler_loads(ls, ei, ka, kb)
+    batch = ff.euler_loads(ls, ei, ka, kb)
     for i in range(4):
-        assert batch[i] == pytest.approx(st.euler_load(ls[i], ei, ka[i], kb[i]), rel=1e-12)
+        assert batch[i] == pytest.approx(ff.euler_load(ls[i], ei, ka[i], kb[i]), rel=1e-12)
     # unequal end springs lie between the pinned-pinned and the fixed-fixed column
     assert all(math.pi**2 * ei / l**2 * 0.999 < p < 4 * math.pi**2 * ei / l**2 * 1.001 for l, p in zip(ls, batch))
 

@@ -10,7 +10,6 @@ import pytest
 from cogniframe.analysis import framefe as ff
 from cogniframe.analysis import joint_fe as J
 from cogniframe.analysis import joint_stiffness as JS
-from cogniframe.analysis import stiffness as st
 
 
 def _two_end_ties(length, ref0, ref1, e, at=lambda c: c[0]):
@@ -197,11 +196,11 @@ def test_cantilever_first_two_modes_match_1875_and_4694():
 
 def test_euler_buckling_of_a_pinned_rod_pi2_EI_over_L2():
     L, ei = 100.0, 125_000.0 * math.pi * 3**4 / 64
-    assert st.euler_load(L, ei, 0.0, 0.0) == pytest.approx(math.pi**2 * ei / L**2, rel=0.02)
+    assert ff.euler_load(L, ei, 0.0, 0.0) == pytest.approx(math.pi**2 * ei / L**2, rel=0.02)
     # clamped ends (stiff rotational springs): 4 pi^2 EI / L^2
-    assert st.euler_load(L, ei, 1e12, 1e12) == pytest.approx(4 * math.pi**2 * ei / L**2, rel=0.02)
+    assert ff.euler_load(L, ei, 1e12, 1e12) == pytest.approx(4 * math.pi**2 * ei / L**2, rel=0.02)
     # a TPU socket's restraint lies in between and raises the load
-    mid = st.euler_load(L, ei, 3000.0, 3000.0)
+    mid = ff.euler_load(L, ei, 3000.0, 3000.0)
     assert math.pi**2 * ei / L**2 < mid < 4 * math.pi**2 * ei / L**2
 
 

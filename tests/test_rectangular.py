@@ -260,6 +260,7 @@ def test_the_wall_case_is_the_worst_of_the_four_side_faces():
     one allowing the lowest speed is reported, with its name."""
     from cogniframe import pipeline
     from cogniframe import spec as spec_mod
+    from cogniframe.analysis import load_cases as lc
     from cogniframe.analysis import stiffness as st
 
     spec = spec_mod.load(Path(__file__).resolve().parents[1] / "examples" / "rect-240x180.yaml")
@@ -271,8 +272,8 @@ def test_the_wall_case_is_the_worst_of_the_four_side_faces():
     masses = st.masses_g(spec, d.frame, d.parts, 245.0)
     mdl = st.build_model(spec, d.frame, d.parts, joints, masses=masses)
     K = mdl.fe.stiffness(sparse=True)
-    faces = [st._wall_face(spec, d.frame, mdl, K, masses, 0.558, a, s) for a, s in st.WALL_FACES]
-    worst = st._wall_case(spec, d.frame, mdl, K, masses, 0.558)
+    faces = [lc._wall_face(spec, d.frame, mdl, K, masses, 0.558, a, s) for a, s in lc.WALL_FACES]
+    worst = lc._wall_case(spec, d.frame, mdl, K, masses, 0.558)
     assert worst["max_wall_speed_m_s"] == min(f["max_wall_speed_m_s"] for f in faces)
     assert {f["face"] for f in faces} == {"+x (right)", "-x (left)", "+y (front)", "-y (rear)"}
     long_side = next(f for f in faces if f["face"] == "+x (right)")

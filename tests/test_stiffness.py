@@ -16,6 +16,7 @@ from cogniframe import frame as frame_mod
 from cogniframe import partlist
 from cogniframe import spec as spec_mod
 from cogniframe.analysis import joint_stiffness as JS
+from cogniframe.analysis import load_cases as lc
 from cogniframe.analysis import stiffness as st
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -191,7 +192,7 @@ def test_removing_the_struts_lowers_k_fe(carbon_fe):
 def _first_mode(s, method="analytic") -> float:
     s, f, p = _design(s)
     joints = st.joint_models(s, p, method)
-    return st._modes(s, f, p, joints, st.masses_g(s, f, p, 241.0))[0]
+    return lc._modes(s, f, p, joints, st.masses_g(s, f, p, 241.0))[0]
 
 
 @pytest.mark.parametrize("sections_lo, sections_hi", [
@@ -220,7 +221,7 @@ def test_analytic_and_fe_joints_agree_on_k_within_a_factor_2(carbon_fe):
 @pytest.fixture(scope="module")
 def carbon_cases(carbon_fe):
     s, f, p, joints = carbon_fe
-    return st.load_cases(s, f, p, 241.0, joints=joints, design_force_n=95.0)
+    return lc.load_cases(s, f, p, 241.0, joints=joints, design_force_n=95.0)
 
 
 def test_play_springs_vanish_for_an_interference_fit(carbon_fe):
@@ -243,7 +244,7 @@ def test_load_cases_fields_and_physics(carbon_cases):
 
 def test_buckling_axial_force_is_linear_in_the_design_force(carbon_fe, carbon_cases):
     s, f, p, joints = carbon_fe
-    double = st.load_cases(s, f, p, 241.0, joints=joints, design_force_n=190.0)
+    double = lc.load_cases(s, f, p, 241.0, joints=joints, design_force_n=190.0)
     a, b = carbon_cases.buckling, double.buckling
     # linear but for the fit's play (a secant at each force): close to half
     assert b["min_margin"] == pytest.approx(a["min_margin"] / 2, rel=0.02)
@@ -364,12 +365,12 @@ def test_load_cases_take_the_secant_play_springs_and_agree_with_k():
     joints = st.joint_models(s, p, "analytic")
     k, play = st.secant_k_and_play(s, f, p, joints)
     assert k == st.secant_k(s, f, p, joints) == st.predict_stiffness(s, f, p, joints=joints, design_force_n=st.PLAY_REFERENCE_N).k_n_per_m
-    own = st.load_cases(s, f, p, 241.0, joints=joints, design_force_n=95.0)
-    given = st.load_cases(s, f, p, 241.0, joints=joints, design_force_n=95.0, play=play)
+    own = lc.load_cases(s, f, p, 241.0, joints=joints, design_force_n=95.0)
+    given = lc.load_cases(s, f, p, 241.0, joints=joints, design_force_n=95.0, play=play)
     _assert_close(given.to_dict(), own.to_dict())  # the same model, nodes in another order
     assert own.k_n_per_m == pytest.approx(k, rel=1e-12)
     # play={} means "no play" (an interference fit), not "compute it"
-    none = st.load_cases(s, f, p, 241.0, joints=joints, design_force_n=95.0, play={})
+    none = lc.load_cases(s, f, p, 241.0, joints=joints, design_force_n=95.0, play={})
     assert none.k_n_per_m > own.k_n_per_m
 
 

@@ -133,7 +133,7 @@ def _stiffness_key(spec: Spec, *extra, scope: str = "k") -> str:
 
 
 def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropResult, session: Session | None = None) -> dict:
-    """`check --json`'s `stiffness` section: every load case of `stiffness.load_cases`, cached.
+    """`check --json`'s `stiffness` section: every load case of `load_cases.load_cases`, cached.
 
     The design drop's force is the spring force at its maximum compression, k x_max (the
     strike clearance caps x_max: beyond it the battery holder carries the rest)."""
@@ -148,7 +148,7 @@ def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropR
     hit = cache.load_json("cases", key)
     if hit is not None:
         return hit
-    from .stiffness import load_cases as cases
+    from .load_cases import load_cases as cases
 
     session = session or Session(spec, frame)
     play, solved = None, None

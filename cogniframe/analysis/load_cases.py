@@ -1,0 +1,324 @@
+"""The frame's load cases, for `check`: the payload case's k comes from the frame model
+(stiffness.py); here the wall, full thrust, free vibration modes, Euler buckling of every rod and
+the TPU strain, all at the design drop (docs/stiffness-model.md).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import framefe as ff
+from .constants import G, RHO_AIR
+from .framefe import euler_loads, lowest_eigenvalues
+from .stiffness import (DEFAULT_LOAD_N, PLAY_REFERENCE_N, Model, SecantSolution, _across, _dof, _drop_unconnected,
+                        _play, _solve_payload, build_model, joint_models,
+                        joint_parts, masses_g, mouth, socket_loads)
+
+_TIE = 1e-6  # relative: results this close are equal (symmetric members; the solver's round-off)
+
+
+# Propeller thrust coefficient C_T = T / (rho n^2 D^4) of small two-blade props (3-4 in) at
+# hover Reynolds numbers: about 0.10 (UIUC propeller database, small-prop static tests 0.08-0.12).
+PROP_CT = 0.10
+
+
+MODE_WARN_BAND = 0.15  # a mode within 15 % of the hover rotor frequency is flagged
+
+
+N_MODES = 8
+
+
+def _damped_peak_factor(zeta: float) -> float:
+    """x_max * w0 / v0 for a damped oscillator started at x = 0 with speed v0 (no other force)."""
+    if zeta <= 0:
+        return 1.0
+    if zeta < 1:
+        s = math.sqrt(1 - zeta * zeta)
+        return math.exp(-zeta / s * math.atan2(s, zeta))
+    if zeta == 1:
+        return math.exp(-1.0)
+    s = math.sqrt(zeta * zeta - 1)
+    return math.exp(-zeta / s * math.atanh(s / zeta))
+
+
+def hover_rotor_hz(spec, total_mass_g: float) -> float:
+    """Rotor speed at hover, rev/s: thrust per rotor T = m g / 4 = C_T rho n^2 D^4."""
+    t = total_mass_g / 1000.0 * G / 4
+    d = spec.motors.prop_diameter / 1000.0
+    return math.sqrt(t / (PROP_CT * RHO_AIR * d**4))
+
+
+@dataclass(frozen=True)
+class LoadCases:
+    """Everything `check --json` reports under `stiffness` (units in the names)."""
+
+    k_n_per_m: float
+    joint_model: str
+    tpu_factor: float
+    k_lateral_n_per_m: float
+    wall: dict
+    thrust: dict
+    modes_hz: tuple[float, ...]
+    hover_rotor_hz: float
+    mode_near_rotor: dict | None
+    buckling: dict
+    strain: dict
+    joints: dict
+    seconds: float
+
+    def to_dict(self) -> dict:
+        return {
+            "k_n_per_m": self.k_n_per_m, "joint_model": self.joint_model, "tpu_modulus_factor": self.tpu_factor,
+            "k_lateral_n_per_m": self.k_lateral_n_per_m, "wall": self.wall, "thrust": self.thrust,
+            "modes_hz": list(self.modes_hz), "hover_rotor_hz": self.hover_rotor_hz, "mode_near_rotor": self.mode_near_rotor,
+            "min_buckling_margin": self.buckling["min_margin"], "critical_rod": self.buckling["critical_rod"],
+            "buckling": self.buckling["rods"],
+            "strain": self.strain, "joints": self.joints,
+        }
+
+
+def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "fe", damping_ratio: float = 0.558,
+               design_force_n: float | None = None, joints: dict | None = None, play: dict | None = None,
+               solved: SecantSolution | None = None) -> LoadCases:
+    """All load cases of the design (see the module docstring). ``design_force_n``: the spring
+    force at the design drop's maximum compression (k x_max), for buckling and strain. ``play``:
+    the play springs at PLAY_REFERENCE_N if already known (`secant_k_and_play`; {} = no play),
+    else iterated here; ``solved``: the secant's solution with those springs (`secant_solution`),
+    whose payload case is this one's.
+
+    The payload, wall and full-thrust cases share one model and one assembled K (they differ in
+    supports and loads only); the arms-only thrust case and the modes (rods in 4 elements, with
+    masses) build their own."""
+    from .joint_stiffness import TPU_ELONGATION_AT_BREAK, hinge_geometry, hinged_socket, interface
+
+    t0 = time.perf_counter()
+    joints = joints if joints is not None else joint_models(spec, parts, joint_model)
+    from .joint_stiffness import TPU_PRINTED_MODULUS_FACTOR
+
+    masses = masses_g(spec, frame, parts, total_mass_g)
+
+    # 1. payload vertical
+    f_design = design_force_n if design_force_n is not None else 95.0
+    if solved is not None:
+        play, mdl, K0, u = solved.play or None, solved.model, solved.K, solved.u
+    else:
+        mdl = None
+        if play is None:
+            play, mdl = _play(spec, frame, parts, joints, PLAY_REFERENCE_N)
+        play = play or None
+        if mdl is None:
+            mdl = build_model(spec, frame, parts, joints, play=play)
+        K0 = mdl.fe.stiffness(sparse=True)
+        mdl, _, u = _solve_payload(spec, frame, parts, joints, play=play, mdl=mdl, K0=K0)
+    fe = mdl.fe
+    d_pay = -u[_dof(fe, mdl.payload, 2)]
+    k = 1000.0 * DEFAULT_LOAD_N / d_pay
+
+    # 2. wall: each side face against a wall (joints on that face held, sticking contact); the worst
+    wall = _wall_case(spec, frame, mdl, K0, masses, damping_ratio)
+
+    # 3. thrust
+    thrust = _thrust_case(spec, frame, parts, joints, masses, play, full=(mdl, K0))
+
+    # 4. modes (free flight)
+    modes = _modes(spec, frame, parts, joints, masses, play=play)
+    n_rot = hover_rotor_hz(spec, total_mass_g)
+    near = None
+    for i, fhz in enumerate(modes):
+        if abs(fhz - n_rot) <= MODE_WARN_BAND * n_rot:
+            near = {"mode": i + 1, "hz": fhz, "rotor_hz": n_rot}
+            break
+
+    # 5. buckling at the design drop
+    scale = f_design / DEFAULT_LOAD_N
+    axial = fe.axial_forces(u)
+    by_rod: dict[str, list[float]] = {}
+    for b in fe.beams:
+        if b.group:
+            by_rod.setdefault(b.group, []).append(axial[b.name])
+    rod_mat = spec.material(spec.rods.material)
+    ei = rod_mat.e_mpa * math.pi * spec.rods.diameter**4 / 64
+    names = list(frame.rods)
+    lengths = [float(np.linalg.norm(mouth(frame.rods[rn], "b") - mouth(frame.rods[rn], "a"))) for rn in names]
+    p_crs = euler_loads(lengths, ei, [_end_rot(mdl, frame, rn, "a") for rn in names],
+                        [_end_rot(mdl, frame, rn, "b") for rn in names])
+    rods_out = []
+    for rn, length, p_cr in zip(names, lengths, p_crs):
+        n_ax = min(by_rod[rn]) * scale  # most compressive segment
+        p_cr = float(p_cr)
+        margin = p_cr / -n_ax if n_ax < 0 else math.inf
+        rods_out.append({"rod": rn, "length_mm": round(length, 2), "axial_n": round(n_ax, 3), "euler_n": round(p_cr, 2),
+                         "margin": round(margin, 3) if math.isfinite(margin) else None})
+    finite = [x for x in rods_out if x["margin"] is not None]
+    worst = min(finite, key=lambda x: x["margin"]) if finite else None
+    buckling = {"design_force_n": round(f_design, 2), "min_margin": worst["margin"] if worst else None,
+                "critical_rod": worst["rod"] if worst else None,
+                "rods": sorted(rods_out, key=lambda x: (x["margin"] is None, x["margin"] or 0.0))}
+
+    # 6. TPU strain at the design drop
+    strain = _strain(spec, frame, parts, joints, mdl, u * scale, TPU_ELONGATION_AT_BREAK, interface(spec), hinged_socket, hinge_geometry)
+
+    jinfo = {name: {"method": js.method, "dofs": js.n_dofs} for name, js in joints.items()}  # no timings: byte-stable output
+    return LoadCases(k, joint_model, TPU_PRINTED_MODULUS_FACTOR, wall["k_lateral_n_per_m"], wall, thrust, tuple(modes), n_rot, near,
+                     buckling, strain, jinfo, time.perf_counter() - t0)
+
+
+def _end_rot(mdl: Model, frame, rn: str, tag: str) -> float:
+    r = frame.rods[rn]
+    end = r.a if tag == "a" else r.b
+    js = mdl.joints[mdl.instance_part[end.node]]
+    node = mdl.rod_nodes[rn][0 if tag == "a" else 1]
+    lab = next(l for l, n in mdl.joint_nodes[end.node].items() if n in (node, node + ":sock"))
+    return js.socket_rotational_stiffness(lab)
+
+
+# The side faces a wall can meet: (axis, sign), +x first (the worst face is reported; on a tie, to
+# round-off, the first).
+WALL_FACES = ((0, 1), (0, -1), (1, 1), (1, -1))
+
+
+FACE_NAMES = {(0, 1): "+x (right)", (0, -1): "-x (left)", (1, 1): "+y (front)", (1, -1): "-y (rear)"}
+
+
+def _wall_case(spec, frame, mdl: Model, K, masses, zeta: float) -> dict:
+    """Each side face against a wall, in turn; the face that allows the lowest wall speed.
+    ``K``: the model's assembled stiffness (no supports)."""
+    cases = [_wall_face(spec, frame, mdl, K, masses, zeta, axis, sign) for axis, sign in WALL_FACES]
+    best = cases[0]
+    for c in cases[1:]:
+        if c["max_wall_speed_m_s"] < best["max_wall_speed_m_s"] * (1 - _TIE):
+            best = c
+    return best
+
+
+def _wall_face(spec, frame, mdl: Model, K, masses, zeta: float, axis: int, sign: int) -> dict:
+    """The side face at ``sign`` along ``axis`` against a wall (its corner joints held, sticking
+    contact), the payload pushed towards it."""
+    fe = mdl.fe
+    half = (spec.frame.width if axis == 0 else spec.frame.depth) / 2
+    side = [inst for inst in mdl.joint_nodes if inst.startswith("corner_") and sign * frame.nodes[inst].pos[axis] > 0]
+    fixed = np.zeros(K.shape[0], dtype=bool)
+    idx = fe.index()
+    for inst in side:
+        for n in mdl.joint_nodes[inst].values():
+            fixed[6 * idx[n]:6 * idx[n] + 3] = True
+    fixed = _drop_unconnected(K, fixed)
+    f = np.zeros(K.shape[0])
+    f[_dof(fe, mdl.payload, axis)] = sign * DEFAULT_LOAD_N
+    u = ff.solve(K, f, fixed)
+    d_pay = sign * u[_dof(fe, mdl.payload, axis)]
+    k_lat = 1000.0 * DEFAULT_LOAD_N / d_pay
+    # what reaches the wall first, per mm of payload travel
+    radius = spec.motors.prop_diameter / 2
+    limits = []
+    for m in frame.motors:
+        if sign * m.axis[axis] <= 0:
+            continue
+        gap = half - (sign * m.axis[axis] + radius)
+        ratio = sign * u[_dof(fe, m.name, axis)] / d_pay
+        if ratio > 0:
+            limits.append((gap / ratio, f"propeller of {m.name}", gap))
+    core_out = max((b.hi[axis] if sign > 0 else -b.lo[axis]) for b in frame.core.boxes)
+    gap_core = half - core_out
+    limits.append((gap_core, "core", gap_core))
+    # the first to reach the wall; symmetric motors tie (to round-off): the first by name, so
+    # the answer does not hang on the solver's last digits
+    t_min = min(x[0] for x in limits)
+    travel, what, gap = min((x for x in limits if x[0] <= t_min + _TIE * abs(t_min)), key=lambda x: x[1])
+    w0 = math.sqrt(k_lat / (masses["total"] / 1000.0))
+    v_max = travel / 1000.0 * w0 / _damped_peak_factor(zeta)
+    return {"k_lateral_n_per_m": k_lat, "max_wall_speed_m_s": v_max, "limited_by": what, "payload_travel_mm": travel,
+            "gap_mm": gap, "damping_ratio": zeta, "face": FACE_NAMES[(axis, sign)]}
+
+
+def _thrust_case(spec, frame, parts, joints, masses, play=None, full: tuple | None = None) -> dict:
+    """Full thrust on every motor, the battery holder clamped; the frame whole and the arms alone.
+    ``full``: (model, assembled K) of the whole frame with ``play`` if already built."""
+    from .flight import max_thrust_g
+
+    thrust_g = max_thrust_g(spec)
+    thrust_n = thrust_g * G / 1000.0
+    out = {"max_thrust_g": thrust_g}
+    for label, roles in (("full", None), ("arms_only", ("arm",))):
+        if label == "full" and full is not None:
+            mdl, K = full
+        else:
+            mdl = build_model(spec, frame, parts, joints, only_roles=roles, play=play)
+            K = mdl.fe.stiffness(sparse=True)
+        fe = mdl.fe
+        idx = fe.index()
+        fixed = np.zeros(K.shape[0], dtype=bool)
+        i = 6 * idx[mdl.payload]
+        fixed[i:i + 6] = True
+        fixed = _drop_unconnected(K, fixed)
+        f = np.zeros(K.shape[0])
+        for m in mdl.motors:
+            f[6 * idx[m] + 2] = thrust_n
+        u = ff.solve(K, f, fixed)
+        dz = [u[6 * idx[m] + 2] for m in mdl.motors]
+        tilt = [math.degrees(math.hypot(u[6 * idx[m] + 3], u[6 * idx[m] + 4])) for m in mdl.motors]
+        if label == "full":
+            out["motor_deflection_mm_per_n"] = float(np.mean(dz)) / thrust_n
+            out["motor_tilt_deg"] = float(np.max(tilt))
+            out["motor_deflection_mm"] = float(np.mean(dz))
+        else:
+            # per newton only: at full thrust the linear model would tilt the bare arms by ~130 deg,
+            # far outside its small-rotation range (the arms alone are nearly a mechanism)
+            out["arms_only_motor_deflection_mm_per_n"] = float(np.mean(dz)) / thrust_n
+            out["arms_only_motor_tilt_deg_per_n"] = float(np.max(tilt)) / thrust_n
+    out["exoskeleton_stiffening"] = out["arms_only_motor_deflection_mm_per_n"] / out["motor_deflection_mm_per_n"]
+    return out
+
+
+def _modes(spec, frame, parts, joints, masses, n: int = N_MODES, rod_segments: int = 4, play=None) -> list[float]:
+    """The first n elastic natural frequencies in free flight (Hz, rounded to 0.01)."""
+    from scipy.sparse import diags
+
+    mdl = build_model(spec, frame, parts, joints, rod_segments=rod_segments, masses=masses, play=play)
+    fe = mdl.fe
+    K = fe.stiffness(sparse=True)
+    M = fe.mass(sparse=True)
+    keep = np.abs(K.diagonal()) > 1e-12
+    if not keep.all():
+        K, M = K[keep][:, keep].tocsc(), M[keep][:, keep].tocsc()
+    # massless DOFs (rigid-link ends) get a tiny inertia so M is positive definite
+    M = (M + diags(np.where(M.diagonal() <= 0, 1e-12, 0.0))).tocsc()
+    w2 = lowest_eigenvalues(K, M, 6 + n)
+    hz = [math.sqrt(max(x, 0.0)) / (2 * math.pi) for x in w2]
+    elastic = hz[6:]  # free flight: six rigid-body modes first
+    return [round(x, 2) for x in elastic]
+
+
+def _strain(spec, frame, parts, joints, mdl: Model, u: np.ndarray, eps_break: float, itf, hinged_socket, hinge_geometry) -> dict:
+    """Peak TPU strain at the design drop: the knee hinge (all the relative rotation of the hinged
+    leg against the arms in the web, an upper bound) and the sockets (interface bearing)."""
+    fe = mdl.fe
+    idx = fe.index()
+    knees = {p.name: p for p in joint_parts(parts) if hinged_socket(p) is not None}  # knee (and knee_mirrored)
+    eps_h = 0.0
+    for inst, labs in mdl.joint_nodes.items():
+        knee_part = knees.get(mdl.instance_part[inst])
+        if knee_part is None:
+            continue
+        l_web, _, t_web = hinge_geometry(knee_part)
+        leg = labs[knee_part.sockets[hinged_socket(knee_part)].rod]
+        arms = [n for l, n in labs.items() if "arm" in l]
+        th_leg = u[6 * idx[leg] + 3:6 * idx[leg] + 6]
+        th_arm = np.mean([u[6 * idx[n] + 3:6 * idx[n] + 6] for n in arms], axis=0)
+        eps_h = max(eps_h, t_web / 2 * float(np.linalg.norm(th_leg - th_arm)) / l_web)
+    # sockets: the super-element's force on each rod body, as bearing over the socket depth
+    sl = socket_loads(fe, frame, u)
+    v, mm = _across(sl.forces, sl.axes), _across(sl.moments, sl.axes)
+    L = np.array([e.depth for e in sl.ends])
+    # rigid rod on a linear (Winkler) bearing over L, loads at the mouth: peak line load
+    q = v / L + 6 * (mm + v * L / 2) / L**2
+    eps = q / spec.rods.diameter / itf.e
+    eps_s = float(eps.max()) if eps.size else 0.0
+    # symmetric sockets tie (to round-off): the first by name
+    where = min((f"{e.node}/{rn}" for x, e, rn in zip(eps, sl.ends, sl.rods) if x >= eps_s * (1 - _TIE) and x > 0), default=None)
+    return {"hinge": round(eps_h, 4), "socket": round(eps_s, 4), "socket_at": where, "elongation_at_break": eps_break,
+            "peak": round(max(eps_h, eps_s), 4), "ratio_to_break": round(max(eps_h, eps_s) / eps_break, 4)}
