@@ -61,7 +61,8 @@ def breakdown(n: int = 12) -> dict[str, float]:
     and of a whole `check` + row of another new design."""
     import yaml
 
-    from cogniframe import cutlist, frame, partlist, pipeline
+    from cogniframe import cutlist, frame, partlist
+    from cogniframe.analysis import verdict
     from cogniframe import spec as spec_mod
     from cogniframe.analysis import drop, flight, mass
     from cogniframe.sweep import evaluate as ev
@@ -87,7 +88,7 @@ def breakdown(n: int = 12) -> dict[str, float]:
         drop.peak_prediction(s, budget.total_g, dr, budget.groups["exoskeleton"]); flight.evaluate(s, budget.total_g)
         marks.append(clock())
         other = ev.apply_overrides(base, {"frame.height": 106 + 2.31 * i})
-        ev.outputs(pipeline.check_dict(pipeline.check(spec_mod.from_dict(other)))); marks.append(clock())
+        ev.outputs(verdict.check_dict(verdict.check(spec_mod.from_dict(other)))); marks.append(clock())
         if i:  # the first pays imports
             for k, a, b in zip(names, marks, marks[1:]):
                 t[k].append(b - a)

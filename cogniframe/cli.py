@@ -1,4 +1,4 @@
-"""Command line: thin wrappers over the Python API (api/) and pipeline.py. Exit codes: 0 ok/PASS, 1 FAIL, 2 bad input."""
+"""Command line: thin wrappers over the Python API (api/). Exit codes: 0 ok/PASS, 1 FAIL, 2 bad input."""
 
 from __future__ import annotations
 
@@ -37,7 +37,8 @@ def check(params: ParamsArg,
     if hit is not None:  # same params, same code: the stored answer (imports neither pydantic nor numpy)
         sys.stdout.write(hit[0])
         raise typer.Exit(hit[1])
-    from . import api, pipeline
+    from . import api
+    from .analysis import verdict
 
     design = api.load(params)
     # a new joint geometry's solid FE takes seconds: say what it is doing
@@ -53,7 +54,7 @@ def check(params: ParamsArg,
         drop_plots.plot_drop_response(result.drop, plots / "drop_response.png")
         drop_plots.plot_energy_split(result.drop, plots / "energy_split.png")
     if json_out:
-        text = json.dumps(pipeline.check_dict(result), indent=2) + "\n"
+        text = json.dumps(verdict.check_dict(result), indent=2) + "\n"
     else:
         from .report.console import print_check
 

@@ -255,3 +255,7 @@ def record(folder: Path, added: list[Path]) -> None:
     tmp = path.with_name(f".{MANIFEST}.{os.getpid()}.tmp")
     tmp.write_text(json.dumps(m, indent=2) + "\n", encoding="utf-8")
     tmp.replace(path)
+
+
+def output_dir(spec, out: Path | None) -> Path:
+    return out if out is not None else Path("out") / spec.name

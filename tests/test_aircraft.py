@@ -11,7 +11,8 @@ import pytest
 import trimesh
 
 from cogniframe import frame as frame_mod
-from cogniframe import partlist, pipeline
+from cogniframe import partlist
+from cogniframe.analysis import verdict
 from cogniframe import spec as spec_mod
 from cogniframe.errors import UserError
 from test_parts import PRESETS, ROOT, built_preset
@@ -83,7 +84,7 @@ def test_mirror_pairs_of_core_links_are_mirror_images(preset):
 
 def test_moving_one_part_into_another_is_a_fail_naming_both(scenes):
     """Negative control: the battery holder raised 3 mm into the sensor mount and plate; a rod moved
-    under a propeller. The check names both solids, the overlap and the gap; pipeline.check FAILs."""
+    under a propeller. The check names both solids, the overlap and the gap; verdict.check FAILs."""
     from cogniframe.analysis import clash
     from cogniframe.export.assembly import own_motor_pairs
 
@@ -106,7 +107,7 @@ def test_moving_one_part_into_another_is_a_fail_naming_both(scenes):
     assert (m.a, m.b, m.kind) == ("propeller_fl", "rod_test", "prop_margin")
     assert m.gap_mm == pytest.approx(3.0, abs=0.1) and m.volume_mm3 == 0
     # the check turns clashes into FAIL problems
-    result = pipeline.check(d.spec, clash=r)
+    result = verdict.check(d.spec, clash=r)
     assert result.verdict == "FAIL" and any("battery_holder" in p and "sensor_mount" in p for p in result.problems)
 
 
@@ -117,7 +118,7 @@ def test_every_vitamin_has_its_mass_in_exactly_one_budget_line(preset):
     from cogniframe.vitamins import vitamins
 
     spec = spec_mod.load(ROOT / "params" / f"{preset}.yaml")
-    res = pipeline.check(spec)
+    res = verdict.check(spec)
     items = {i.name: i for i in res.mass.items}
     vits = vitamins(spec, res.design.frame)
     for v in vits:
@@ -353,14 +354,14 @@ def test_bamboo_hover_time_is_near_the_reported_17_min():
     is within 15 % (it cannot be exact: the table is representative, the real pack's usable
     fraction, sag, wind and manoeuvring are not modelled)."""
     spec = spec_mod.load(ROOT / "params" / "bamboo.yaml")
-    f = pipeline.check(spec).flight
+    f = verdict.check(spec).flight
     assert f.hover_time_min == pytest.approx(17.0, rel=0.15)
 
 
 @pytest.mark.parametrize("preset", PRESETS)
 def test_hover_power_matches_momentum_theory_with_a_figure_of_merit(preset):
     """Table hover power against T^1.5 / sqrt(2 rho A) / (FM x eta) with FM x eta = 0.30: within 20 %."""
-    f = pipeline.check(spec_mod.load(ROOT / "params" / f"{preset}.yaml")).flight
+    f = verdict.check(spec_mod.load(ROOT / "params" / f"{preset}.yaml")).flight
     assert f.hover_power_w == pytest.approx(f.momentum_hover_power_w, rel=0.20)
 
 
@@ -509,7 +510,7 @@ def test_vitamins_are_items_of_the_report_3d_view():
     from cogniframe.vitamins import vitamins
 
     spec = spec_mod.load(ROOT / "params" / "carbon.yaml")
-    res = pipeline.check(spec)
+    res = verdict.check(spec)
     items = vitamin_viewer_items(spec, res.design.frame, res.mass)
     vits = vitamins(spec, res.design.frame)
     assert [i.name for i in items] == [v.name for v in vits] and {i.kind for i in items} == {"vitamin"}

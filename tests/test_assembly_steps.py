@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from cogniframe import pipeline
+from cogniframe import design as design_mod
 from cogniframe import spec as spec_mod
 from cogniframe.report.assembly_steps import assembly_steps, copy_labels, to_markdown
 
@@ -22,7 +22,7 @@ def _design(name: str, **overrides):
         for k in path:
             cur = cur[k]
         cur[key] = value
-    return pipeline.design(spec_mod.from_dict(data))
+    return design_mod.design(spec_mod.from_dict(data))
 
 
 @pytest.mark.parametrize("name,overrides", [

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from cogniframe import pipeline
+from cogniframe.analysis import verdict
 from cogniframe.analysis.mass import MassItem
 from cogniframe.export.slicer import MaterialCheck, PlateSlice, SliceReport
 from cogniframe.report import bom as bom_mod
@@ -21,7 +21,7 @@ def checked(request):
     from cogniframe import spec as spec_mod
 
     root = Path(__file__).resolve().parents[1]
-    return pipeline.check(spec_mod.load(root / "params" / f"{request.param}.yaml"))
+    return verdict.check(spec_mod.load(root / "params" / f"{request.param}.yaml"))
 
 
 def test_total_equals_the_mass_budget(checked):

@@ -97,12 +97,12 @@ def test_bad_params_leave_the_output_untouched(run_cli, tmp_path):
 
 
 def test_failure_mid_build_leaves_no_partial_folder(tmp_path, monkeypatch):
-    import cogniframe.build as b
+    from cogniframe.analysis import verdict
 
     def boom(*a, **k):
         raise RuntimeError("simulated failure after the parts were built")
 
-    monkeypatch.setattr(b.pipeline, "check_dict", boom)
+    monkeypatch.setattr(verdict, "check_dict", boom)
     params = ROOT / "params" / "bamboo.yaml"
     with pytest.raises(RuntimeError):
         run_build(spec_mod.load(params), params, tmp_path / "bamboo", jobs=1)

@@ -36,10 +36,10 @@ def test_a_part_that_fails_in_a_worker_is_the_reported_cause_and_nothing_is_left
     tag = f"cogniframe-test-{uuid.uuid4().hex}"
     code = textwrap.dedent(f"""
         import sys
-        from cogniframe import pipeline
+        from cogniframe import design as design_mod
         from cogniframe.cli import main
         # let the design through the analytic bed check, so that the CAD workers find it
-        pipeline._check_printer_fit = lambda spec, parts: None
+        design_mod._check_printer_fit = lambda spec, parts: None
         sys.exit(main(["build", {str(params)!r}, "-o", {str(tmp_path / 'out')!r}, "--no-server", "--jobs", "2"]))
     """)
     env = {**os.environ, "COGNIFRAME_TEST_TAG": tag, "COGNIFRAME_CACHE": str(tmp_path / "cache")}

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 import yaml
 
-from cogniframe import pipeline
+from cogniframe import design as design_mod
 from cogniframe import spec as spec_mod
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -34,7 +34,7 @@ def _variant(base: str, **changes) -> spec_mod.Spec:
 
 
 def _joints(spec, names=None):
-    return [p for p in pipeline.design(spec).parts if p.family == "joint" and (names is None or p.name in names)]
+    return [p for p in design_mod.design(spec).parts if p.family == "joint" and (names is None or p.name in names)]
 
 
 # -- straight sides ----------------------------------------------------------------------------

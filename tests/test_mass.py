@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from cogniframe import pipeline
+from cogniframe.analysis import verdict
 from cogniframe.analysis import mass
 from cogniframe.spec import PrinterSection
 
@@ -28,29 +28,29 @@ def test_shell_never_exceeds_volume():
 
 
 def test_groups_add_up(preset):
-    b = pipeline.check(preset).mass
+    b = verdict.check(preset).mass
     assert sum(b.groups.values()) == pytest.approx(b.total_g)
     assert b.margin_g == pytest.approx(b.limit_g - b.total_g)
     assert b.groups["battery"] == preset.core.battery.mass
 
 
 def test_carbon_matches_the_papers_table(carbon):
-    b = pipeline.check(carbon).mass
+    b = verdict.check(carbon).mass
     assert b.groups["exoskeleton"] == pytest.approx(62, rel=0.10)  # rods + TPU joints
     assert b.by_material["abs"] == pytest.approx(25, rel=0.10)  # central ABS parts
     assert b.total_g == pytest.approx(236, rel=0.05)
 
 
 def test_bamboo_is_under_250(bamboo):
-    b = pipeline.check(bamboo).mass
+    b = verdict.check(bamboo).mass
     assert b.total_g < 250
     assert b.by_material["bamboo"] == pytest.approx(18, rel=0.15)
 
 
 def test_cad_geometry_overrides_estimate(carbon):
-    base = pipeline.check(carbon).mass
+    base = verdict.check(carbon).mass
     g = {"knee": mass.PartGeometry(2000.0, 100.0, 100.0, "cad")}
-    b = pipeline.check(carbon, geometry=g).mass
+    b = verdict.check(carbon, geometry=g).mass
     knee = next(i for i in b.items if i.name == "knee")
     assert knee.source == "cad" and knee.mass_g_each == pytest.approx(2000 * 1.22e-3)
     assert b.total_g != base.total_g

@@ -7,21 +7,22 @@ from pathlib import Path
 
 import pytest
 
-from cogniframe import pipeline
+from cogniframe import design as design_mod
+from cogniframe.analysis import verdict
 from cogniframe import spec as spec_mod
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_the_thrust_load_case_and_the_flight_model_use_the_same_maximum_thrust(carbon):
-    d = pipeline.check_dict(pipeline.check(carbon))
+    d = verdict.check_dict(verdict.check(carbon))
     assert d["stiffness"]["thrust"]["max_thrust_g"] == d["flight"]["max_thrust_g_per_motor"] == 175.0
 
 
 def test_a_given_maximum_thrust_is_what_both_use(carbon):
     data = carbon.model_dump(mode="json")
     data["motors"]["max_thrust_g"] = 150.0
-    d = pipeline.check_dict(pipeline.check(spec_mod.from_dict(data)))
+    d = verdict.check_dict(verdict.check(spec_mod.from_dict(data)))
     assert d["stiffness"]["thrust"]["max_thrust_g"] == d["flight"]["max_thrust_g_per_motor"] == 150.0
     assert d["flight"]["thrust_to_weight"] == pytest.approx(4 * 150.0 / d["mass"]["total_g"], abs=0.01)
 
@@ -38,7 +39,7 @@ def test_the_dynamic_cases_count_each_joint_copy_once(carbon):
     has copies (the presets' five joint parts have 20 copies, not 4 each)."""
     from cogniframe.analysis.stiffness import joint_parts, masses_g
 
-    d = pipeline.design(carbon)
+    d = design_mod.design(carbon)
     m = masses_g(carbon, d.frame, d.parts, 240.0)
     joints = sum(p.qty * m["joints"][p.name] for p in joint_parts(d.parts))
     assert sum(p.qty for p in joint_parts(d.parts)) == 16
@@ -49,5 +50,5 @@ def test_infill_per_material_has_one_source(carbon):
     from cogniframe.export import slicer
     from cogniframe.partlist import infill_by_material
 
-    d = pipeline.design(carbon)
+    d = design_mod.design(carbon)
     assert infill_by_material(d.parts) == slicer.default_infill(carbon) == {"abs": 0.1, "tpu_95a": 1.0}

@@ -263,14 +263,15 @@ def test_frame_without_struts_builds_and_fails_the_drop_check(tmp_path):
     and the model must say what it means (the struts carry the payload)."""
     import yaml
 
-    from cogniframe import pipeline, spec as spec_mod
+    from cogniframe import spec as spec_mod
+    from cogniframe.analysis import verdict
     from cogniframe.export.part_files import build_parts
     from cogniframe.export.mesh import load_stl
 
     data = yaml.safe_load((ROOT / "params" / "carbon.yaml").read_text())
     data["frame"]["struts"] = False
     s = spec_mod.from_dict(data)
-    r = pipeline.check(s)
+    r = verdict.check(s)
     link = next(p for p in r.design.parts if p.name == "core_link")
     assert len(link.sockets) == 2
     built = build_parts(s, r.design.frame, [link], tmp_path)

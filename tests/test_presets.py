@@ -67,14 +67,14 @@ def test_180mm_printer_packs_the_carbon_parts_on_fewer_plates_than_120mm(tmp_pat
     fewest possible; the bed size shows once a maker prints a frame plus a spare set of parts."""
     import trimesh
 
-    from cogniframe import pipeline
+    from cogniframe import design as design_mod
     from cogniframe.cache import cache_dir
     from cogniframe.export.part_files import build_parts
     from cogniframe.export.plates import PlateItem, pack_plates
 
     small = spec_mod.from_dict({**yaml.safe_load((ROOT / "params/carbon.yaml").read_text()), "printer": {"preset": "monoprice_mini_v2"}})
     big = spec_mod.from_dict({**yaml.safe_load((ROOT / "params/carbon.yaml").read_text()), "printer": {"preset": "prusa_mini"}})
-    d = pipeline.design(small)
+    d = design_mod.design(small)
     built = build_parts(small, d.frame, d.parts, tmp_path, cache_dir=cache_dir())
     meshes = {b.name: trimesh.load(tmp_path / b.stl, force="mesh") for b in built}
 

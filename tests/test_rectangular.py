@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 import yaml
 
-from cogniframe import pipeline
+from cogniframe import design as design_mod
 from cogniframe import spec as spec_mod
 from cogniframe.partlist import CORNER_ROTATION
 
@@ -36,19 +36,19 @@ def _variant(base: str, **frame) -> spec_mod.Spec:
 
 @pytest.fixture(scope="module")
 def rect():
-    return pipeline.design(spec_mod.load(EXAMPLE))
+    return design_mod.design(spec_mod.load(EXAMPLE))
 
 
 @pytest.fixture(scope="module", params=["rect-240x180", "212x210", "180x240", "carbon", "bamboo"])
 def any_box(request):
     """The example, near-square and portrait rectangles, and the square presets."""
     if request.param == "rect-240x180":
-        return pipeline.design(spec_mod.load(EXAMPLE))
+        return design_mod.design(spec_mod.load(EXAMPLE))
     if request.param == "212x210":
-        return pipeline.design(_variant("carbon", width=212))
+        return design_mod.design(_variant("carbon", width=212))
     if request.param == "180x240":
-        return pipeline.design(_variant("carbon", width=180, depth=240))
-    return pipeline.design(spec_mod.load(ROOT / "params" / f"{request.param}.yaml"))
+        return design_mod.design(_variant("carbon", width=180, depth=240))
+    return design_mod.design(spec_mod.load(ROOT / "params" / f"{request.param}.yaml"))
 
 
 def _rz(deg: float) -> np.ndarray:
@@ -178,7 +178,7 @@ def test_every_motor_mount_clips_its_own_arm_rods(any_box):
 
 
 def test_square_boxes_keep_one_part_per_kind_turned_to_each_corner(preset):
-    parts = {p.name: p for p in pipeline.design(preset).parts}
+    parts = {p.name: p for p in design_mod.design(preset).parts}
     assert not any(n.endswith("_mirrored") and n != "core_link_mirrored" for n in parts)
     for kind in ("corner_top", "corner_bottom", "knee"):
         assert [pl.rotation_deg for pl in parts[kind].placements] == [CORNER_ROTATION[k] for k in ("fl", "fr", "rr", "rl")]
@@ -258,7 +258,7 @@ def test_build_of_the_example_is_watertight_and_clash_checked(tmp_path):
 def test_the_wall_case_is_the_worst_of_the_four_side_faces():
     """A rectangle's long and short sides meet a wall differently: every face is tried and the
     one allowing the lowest speed is reported, with its name."""
-    from cogniframe import pipeline
+    from cogniframe import design as design_mod
     from cogniframe import spec as spec_mod
     from cogniframe.analysis import load_cases as lc
     from cogniframe.analysis import stiffness as st
@@ -267,7 +267,7 @@ def test_the_wall_case_is_the_worst_of_the_four_side_faces():
     data = spec.model_dump(mode="json")
     data["model"]["stiffness_model"] = "analytic"
     spec = spec_mod.from_dict(data)
-    d = pipeline.design(spec)
+    d = design_mod.design(spec)
     joints = st.joint_models(spec, d.parts, "analytic")
     masses = st.masses_g(spec, d.frame, d.parts, 245.0)
     mdl = st.build_model(spec, d.frame, d.parts, joints, masses=masses)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from cogniframe import pipeline
+from cogniframe import design as design_mod
 from cogniframe import spec as spec_mod
 from cogniframe.report import renders
 
@@ -22,7 +22,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 @pytest.fixture(scope="module")
 def scene():
-    d = pipeline.design(spec_mod.load(ROOT / "params" / "carbon.yaml"))
+    d = design_mod.design(spec_mod.load(ROOT / "params" / "carbon.yaml"))
     meshes = {}
     for p in d.parts:
         if p.family in ("joint", "motor_mount"):
@@ -107,9 +107,10 @@ def test_same_scene_same_bytes(scene, tmp_path):
 _RENDER_IN_CHILD = """
 import sys
 from pathlib import Path
-from cogniframe import pipeline, spec as spec_mod
+from cogniframe import spec as spec_mod
+from cogniframe import design as design_mod
 from cogniframe.report import renders
-d = pipeline.design(spec_mod.load(Path(sys.argv[1])))
+d = design_mod.design(spec_mod.load(Path(sys.argv[1])))
 renders.render_assembly([], renders.rod_segments(d.frame), sys.argv[2], views=("iso",))
 """
 

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from cogniframe import pipeline
+from cogniframe.analysis import verdict
 from cogniframe import spec as spec_mod
 from cogniframe.export.plates import PlateItem, pack_plates, write_plates
 from cogniframe.export.slicer import MaterialCheck, PlateSlice, SliceReport
@@ -90,7 +90,7 @@ def _box(x, y, z):
 def written(request, tmp_path_factory):
     out = tmp_path_factory.mktemp("report") / request.param
     spec = spec_mod.load(ROOT / "params" / f"{request.param}.yaml")
-    result = pipeline.check(spec)
+    result = verdict.check(spec)
     d = result.design
     items = [PlateItem(p.name, p.material, p.qty, _box(*(min(v, 60.0) for v in p.estimate.envelope))) for p in d.parts]
     plates = write_plates(pack_plates(items, spec.printer.bed, spec.printer.margin), out / "plates")
@@ -117,7 +117,7 @@ def written(request, tmp_path_factory):
 
 def test_numbers_equal_check_json(written):
     result, _, _, _, page, *_ = written
-    cd = pipeline.check_dict(result)
+    cd = verdict.check_dict(result)
     for key in ("mass.total_g", "mass.limit_g", "mass.margin_g", "drop.k_n_per_m", "drop.max_safe_height_cm",
                 "drop.clearance_mm"):
         assert key in page.keys, key
@@ -177,7 +177,7 @@ def test_every_table_is_present(written):
 def test_markdown_twin(written):
     result, out, _, md_path, *_ = written
     md = md_path.read_text(encoding="utf-8")
-    cd = pipeline.check_dict(result)
+    cd = verdict.check_dict(result)
     assert md.startswith(f"# cogniframe report: {cd['name']}")
     assert f"all-up weight {cd['mass']['total_g']:.2f} g" in md
     assert f"max safe drop {cd['drop']['max_safe_height_cm']:.1f} cm" in md
@@ -234,8 +234,8 @@ def _text_outside(fig) -> list[str]:
 def test_no_figure_clips_its_title(preset, monkeypatch, tmp_path):
     from cogniframe.report import drop_plots
 
-    result = pipeline.check(spec_mod.load(ROOT / "params" / f"{preset}.yaml"))
-    cd = pipeline.check_dict(result)
+    result = verdict.check(spec_mod.load(ROOT / "params" / f"{preset}.yaml"))
+    cd = verdict.check_dict(result)
     figs = []
     real_save = drop_plots._save
     monkeypatch.setattr(drop_plots, "_save", lambda fig, path: (figs.append(fig), real_save(fig, path))[1])
@@ -284,7 +284,7 @@ def test_viewer_section_under_the_verdicts(tmp_path):
     from cogniframe.report.viewer import design_items
 
     spec = spec_mod.load(ROOT / "params" / "carbon.yaml")
-    result = pipeline.check(spec)
+    result = verdict.check(spec)
     d = result.design
     meshes = {p.name: _box(*(min(v, 60.0) for v in p.estimate.envelope)) for p in d.parts}
     plates = write_plates(pack_plates([PlateItem(p.name, p.material, p.qty, meshes[p.name]) for p in d.parts],

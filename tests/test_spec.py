@@ -171,7 +171,7 @@ def test_lookup_lists_valid_choices():
 
 
 def test_check_does_not_import_cadquery():
-    code = "import sys, cogniframe.cli, cogniframe.pipeline as p, cogniframe.spec as s; " \
+    code = "import sys, cogniframe.cli, cogniframe.analysis.verdict as p, cogniframe.spec as s; " \
            "p.check(s.load('params/carbon.yaml')); print('cadquery' in sys.modules, 'OCP' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=PARAMS.parent, check=True)
     assert out.stdout.strip() == "False False"

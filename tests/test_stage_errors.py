@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from cogniframe import pipeline
+from cogniframe import design as design_mod
 from cogniframe import spec as spec_mod
 from cogniframe.build import run_build
 from cogniframe.errors import UserError
@@ -18,7 +18,7 @@ def test_cad_stage_error_names_file_key_and_line(tmp_path, monkeypatch):
     params.write_text("name: small_bed\nprinter:\n  bed: [45, 45, 45]\n")
     spec = spec_mod.load(params)
     # Let the design through the analytic bed check so that the CAD stage is the one that finds it.
-    monkeypatch.setattr(pipeline, "_check_printer_fit", lambda spec, parts: None)
+    monkeypatch.setattr(design_mod, "_check_printer_fit", lambda spec, parts: None)
     with pytest.raises(UserError) as e:
         run_build(spec, params, tmp_path / "out", jobs=1)
     msg = str(e.value)
@@ -30,7 +30,7 @@ def test_stage_error_for_a_key_left_at_its_default_says_so(tmp_path):
     params = tmp_path / "bigprops.yaml"
     params.write_text("motors:\n  radius: 40\n")
     with pytest.raises(UserError) as e:
-        pipeline.design(spec_mod.load(params))
+        design_mod.design(spec_mod.load(params))
     assert str(e.value).startswith(f"{params}: motors.prop_diameter (not set in the file: its default applies): ")
 
 

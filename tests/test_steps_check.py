@@ -11,7 +11,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
-HEAVY = ("pydantic", "numpy", "yaml", "typer", "cogniframe.spec", "cogniframe.pipeline")
+HEAVY = ("pydantic", "numpy", "yaml", "typer", "cogniframe.spec", "cogniframe.analysis.verdict")
 
 
 def _check(params: Path, cache: Path, *extra: str) -> tuple[str, list[str], int]:

@@ -11,7 +11,8 @@ from pathlib import Path
 import pytest
 import trimesh
 
-from cogniframe import pipeline, spec as spec_mod
+from cogniframe import spec as spec_mod
+from cogniframe import design as design_mod
 from cogniframe.build import context as steps
 from cogniframe.export import plates as pl
 from cogniframe.export import slicer
@@ -40,7 +41,7 @@ def _ctx(out: Path, plates: list[pl.Plate], use_cache: bool = True):
         def get(self):
             return ("prusa-slicer", "PrusaSlicer-test")
 
-    ctx = steps.BuildContext(out, {"spec": spec, "design": pipeline.design(spec), "slicer": FakeSlicer(), "gcode": False},
+    ctx = steps.BuildContext(out, {"spec": spec, "design": design_mod.design(spec), "slicer": FakeSlicer(), "gcode": False},
                              use_cache=use_cache)
     ctx.values["plates:tpu_95a"] = value
     return ctx

@@ -49,10 +49,10 @@ def carbon_fe():
 
 
 def _mass(s) -> float:
-    from cogniframe import pipeline
+    from cogniframe import design as design_mod
     from cogniframe.analysis import mass
 
-    d = pipeline.design(s)
+    d = design_mod.design(s)
     return mass.budget(s, d.frame, d.cut, d.parts).total_g
 
 
@@ -325,16 +325,16 @@ def test_k_key_ignores_what_only_weighs_and_follows_the_geometry():
 
 def test_a_battery_mass_change_reuses_the_cached_k(tmp_path, monkeypatch):
     # issue 11: a heavier battery re-runs the drop and the load cases, not the frame's k
-    from cogniframe import pipeline
+    from cogniframe.analysis import verdict
 
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path))
-    light = pipeline.check(spec_mod.from_dict(_data()))
+    light = verdict.check(spec_mod.from_dict(_data()))
 
     def no_resolve(*a, **k):
         raise AssertionError("k solved again for a mass-only change")
 
     monkeypatch.setattr(st, "secant_k_and_play", no_resolve)
-    heavy = pipeline.check(spec_mod.from_dict(_data(core__battery__mass=90)))
+    heavy = verdict.check(spec_mod.from_dict(_data(core__battery__mass=90)))
     assert heavy.drop.k_n_per_m == light.drop.k_n_per_m
     assert heavy.mass.total_g == pytest.approx(light.mass.total_g + 32, abs=1e-6)
     # more mass on the same K: no mode rises (Rayleigh's monotonicity; modes are rounded to

@@ -319,7 +319,7 @@ def test_cad_of_a_design_is_built_and_verified_on_a_worker(tcp_cluster):
     back verified (watertight single shells on the bed, clash-free); the base preset's parts all pass."""
     from distributed import Client
 
-    from cogniframe import pipeline
+    from cogniframe import design as design_mod
     from cogniframe import spec as spec_mod
     from cogniframe.sweep import optimize as opt
 
@@ -328,7 +328,7 @@ def test_cad_of_a_design_is_built_and_verified_on_a_worker(tcp_cluster):
     row["design_id"] = "base"
     with Client(tcp_cluster) as client:
         (got,) = opt.build_cad(client, sweep, [row])
-    n_parts = len(pipeline.design(spec_mod.from_dict(sweep.base_data)).parts)
+    n_parts = len(design_mod.design(spec_mod.from_dict(sweep.base_data)).parts)
     assert got["ok"] and got["failures"] == [] and got["parts"] == n_parts
     assert got["worker"].startswith("tcp://127.0.0.1:") and got["volume_mm3"] > 10_000
     # the build's clash check ran on the worker: parts, rods, vitamins and propeller discs, no clash

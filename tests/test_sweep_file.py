@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import yaml
 
-from cogniframe import pipeline
+from cogniframe.analysis import verdict
 from cogniframe import spec as spec_mod
 from cogniframe.errors import UserError
 from cogniframe.sweep import evaluate as ev
@@ -146,7 +146,7 @@ def test_row_matches_check_json_of_the_same_params(tmp_path):
     row = ev.evaluate_one(base, {"frame.height": 130.0}, 60, "here")
     data = yaml.safe_load(CARBON.read_text())
     data["frame"]["height"] = 130.0
-    d = pipeline.check_dict(pipeline.check(spec_mod.from_dict(data)))
+    d = verdict.check_dict(verdict.check(spec_mod.from_dict(data)))
     assert row["verdict"] == d["verdict"] and row["frame.height"] == 130.0
     assert row["mass_g"] == d["mass"]["total_g"] and row["k_n_per_m"] == d["drop"]["k_n_per_m"]
     assert row["max_safe_drop_cm"] == d["drop"]["max_safe_height_cm"]

@@ -20,7 +20,8 @@ import numpy as np
 import pytest
 import trimesh
 
-from cogniframe import pipeline
+from cogniframe import design as design_mod
+from cogniframe.analysis import verdict
 from cogniframe import spec as spec_mod
 from cogniframe.analysis.mass import PartGeometry
 from cogniframe.export.plates import PlateItem, pack_plates, write_plates
@@ -55,10 +56,10 @@ def carbon_report(tmp_path_factory):
     out = tmp_path_factory.mktemp("viewer") / "carbon"
     out.mkdir()
     spec = spec_mod.load(ROOT / "params" / "carbon.yaml")
-    d = pipeline.design(spec)
+    d = design_mod.design(spec)
     built = build_parts(spec, d.frame, d.parts, out, cache_dir=cache_dir())
     meshes = {b.name: trimesh.load(out / b.stl, force="mesh") for b in built}
-    result = pipeline.check(spec, {b.name: PartGeometry(b.volume_mm3, b.area_h_mm2, b.area_v_mm2, "cad") for b in built})
+    result = verdict.check(spec, {b.name: PartGeometry(b.volume_mm3, b.area_h_mm2, b.area_v_mm2, "cad") for b in built})
     plates = write_plates(pack_plates([PlateItem(b.name, b.material, b.qty, meshes[b.name]) for b in built],
                                       spec.printer.bed, spec.printer.margin), out / "plates")
     items = design_items(d, meshes, {b.name: b.print_from_local for b in built}, result.mass, plates)
@@ -190,7 +191,7 @@ def test_click_on_a_part_shows_its_data(carbon_report, page_factory, name):
 def test_vitamins_from_the_item_list_show_and_toggle(page_factory, tmp_path):
     """Data-driven: a `vitamin` item (as issue 13 will add) appears, is clickable, and hides."""
     spec = spec_mod.load(ROOT / "params" / "carbon.yaml")
-    result = pipeline.check(spec)
+    result = verdict.check(spec)
     battery = trimesh.creation.box((70, 35, 15))
     items = [ViewerItem("battery", "vitamin", "LiPo 2S", 58.0, 1, "", "#2060c0", battery, np.eye(4), note="vitamin"),
              ViewerItem("motor_fl", "vitamin", "motor 1104", 6.0, 4, "", "#8a8a8a",

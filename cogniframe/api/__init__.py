@@ -32,7 +32,8 @@ from ..errors import UserError
 if TYPE_CHECKING:  # pragma: no cover
     import pandas
 
-    from .. import pipeline
+    from .. import design as design_mod
+    from ..analysis import verdict
     from ..spec import Spec
 
 __all__ = ["BuildResult", "CheckResult", "Design", "ParamsError", "load", "sweep"]
@@ -71,7 +72,7 @@ class Design:
     """One validated design: its params (`spec`), the YAML text they come from, and where that
     text lives. Immutable: `with_values` returns a new Design."""
 
-    def __init__(self, spec: Spec, text: str, source: str, path: Path | None, design: pipeline.Design | None = None):
+    def __init__(self, spec: Spec, text: str, source: str, path: Path | None, design: design_mod.Design | None = None):
         self._spec = spec
         self._text = text
         self._source = source
@@ -104,14 +105,14 @@ class Design:
         return self._source
 
     @property
-    def pipeline_design(self) -> pipeline.Design:
-        """Frame graph, part list and cut list (`pipeline.Design`): what the checks and the CAD use."""
+    def pipeline_design(self) -> design_mod.Design:
+        """Frame graph, part list and cut list (`design_mod.Design`): what the checks and the CAD use."""
         if self._design is None:
-            from .. import pipeline
+            from .. import design as design_mod
 
             try:
                 with self._spec.blamed():
-                    self._design = pipeline.design(self._spec)
+                    self._design = design_mod.design(self._spec)
             except UserError as e:
                 raise _params_error(e, self._source) from None
         return self._design
@@ -180,7 +181,7 @@ class Design:
     def check(self) -> CheckResult:
         """Mass budget, stiffness, crash model, flight and PASS/FAIL: `cogniframe check`. The first
         check of a new joint geometry runs its solid FE (seconds; cached after)."""
-        from .. import pipeline
+        from ..analysis import verdict
         from ..runtime.blas import one_blas_thread
 
         from ..runtime.pools import joint_fe_workers
@@ -194,7 +195,7 @@ class Design:
 
                     with joint_fe_workers() as submit:
                         solve_missing(self._spec, joint_parts(d.parts), submit=submit)
-                result = pipeline.check(self._spec, design_=d)
+                result = verdict.check(self._spec, design_=d)
         except UserError as e:
             raise _params_error(e, self._source) from None
         return CheckResult(result)
@@ -341,16 +342,16 @@ class CheckResult:
     """What `cogniframe check` finds. The figures are read from `to_dict()` (the `check --json`
     object), so they equal the CLI's JSON exactly. `result` is the pipeline's own object."""
 
-    def __init__(self, result: pipeline.CheckResult):
+    def __init__(self, result: verdict.CheckResult):
         self.result = result
         self._json: dict | None = None
 
     @property
     def _dict(self) -> dict:
         if self._json is None:
-            from .. import pipeline
+            from ..analysis import verdict
 
-            self._json = pipeline.check_dict(self.result)
+            self._json = verdict.check_dict(self.result)
         return self._json
 
     def to_dict(self) -> dict:

@@ -17,7 +17,9 @@ from pathlib import Path
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-from .. import outdir, pipeline, stack
+from .. import outdir, stack
+from .. import design as design_mod
+from ..analysis import verdict
 from ..cache import file_sha256
 from ..spec import Spec
 
@@ -27,7 +29,7 @@ class BuildResult:
     out_dir: Path
     files: int
     verdict: str
-    check: pipeline.CheckResult | None  # None when the folder was already up to date
+    check: verdict.CheckResult | None  # None when the folder was already up to date
     built: tuple
     steps: tuple = ()  # (step, "ran" | "cached" | "always") in the order they finished; () when up to date
 
@@ -40,8 +42,8 @@ def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None 
     releases it (`Early.release`) when the build did not connect to it."""
     console = console or Console(stderr=True)
     with spec.blamed():
-        design = pipeline.design(spec)  # a design that cannot exist is refused before any folder is touched
-    final = pipeline.output_dir(spec, out)
+        design = design_mod.design(spec)  # a design that cannot exist is refused before any folder is touched
+    final = outdir.output_dir(spec, out)
     key = build_key(spec, params_path) + ("+gcode" if gcode else "")  # a --gcode build differs
     if use_cache and _up_to_date(final, key):
         verdict = json.loads((final / "check.json").read_text())["verdict"]
@@ -75,7 +77,7 @@ def _up_to_date(final: Path, key: str) -> bool:
 
 
 def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_cache: bool, console: Console,
-                key: str, gcode: bool = False, design: pipeline.Design | None = None, server: bool = False,
+                key: str, gcode: bool = False, design: design_mod.Design | None = None, server: bool = False,
                 early=None):
     """Run the build graph (steps.py) into `out`, then write the manifest. `gcode`: keep the
     sliced G-code per plate (`build --gcode`; read by build.plates.make_slice).
@@ -84,7 +86,7 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
     from . import graph, steps
     from .context import BuildContext, Slicer, needs_joint_fe
 
-    design = pipeline.design(spec) if design is None else design
+    design = design_mod.design(spec) if design is None else design
     log = lambda m: console.print(m, markup=False, highlight=False)  # noqa: E731
     versions = stack.versions()
     from ..report.renders import ensure_headless

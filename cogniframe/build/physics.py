@@ -48,9 +48,9 @@ def _geometry(ctx) -> dict:
 def budget(ctx) -> Made:
     """The mass budget with the CAD volumes and the drop model: milliseconds once k is known; what
     the mass and drop figures draw, so they need not wait for the load cases."""
-    from .. import pipeline
+    from ..analysis import verdict
 
-    design, mass, drop, session = pipeline.mass_and_drop(ctx.spec, _geometry(ctx), ctx.design)
+    design, mass, drop, session = verdict.mass_and_drop(ctx.spec, _geometry(ctx), ctx.design)
     return Made((), {"mass": mass, "drop": drop, "session": session})
 
 
@@ -58,21 +58,22 @@ def physics(ctx) -> Made:
     """The check's load cases, peak prediction and flight for the CAD mass: `check` takes this
     result as it is. A thread of its own: LAPACK holds no GIL, so the main thread's plates,
     figures and renders go on meanwhile."""
-    from .. import pipeline
+    from ..analysis import verdict
 
     b = ctx["budget"]
-    return Made((), pipeline.complete(ctx.spec, ctx.design, b["mass"], b["drop"], b["session"]))
+    return Made((), verdict.complete(ctx.spec, ctx.design, b["mass"], b["drop"], b["session"]))
 
 
 def check(ctx) -> Made:
     import json
 
-    from .. import cutlist, pipeline
+    from .. import cutlist
+    from ..analysis import verdict
     from ..analysis import clash
 
-    result = pipeline.with_clash(ctx["physics"], clash.from_dict(ctx["clash"]))
+    result = verdict.with_clash(ctx["physics"], clash.from_dict(ctx["clash"]))
     out = ctx.out
-    files = {"check.json": json.dumps(pipeline.check_dict(result), indent=2) + "\n",
+    files = {"check.json": json.dumps(verdict.check_dict(result), indent=2) + "\n",
              "cutlist.csv": cutlist.to_csv(ctx.design.cut), "cutlist.md": cutlist.to_markdown(ctx.design.cut),
              "mass.md": mass_markdown(result)}
     for rel, text in files.items():

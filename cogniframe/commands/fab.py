@@ -23,13 +23,14 @@ def slice_cmd(
     out: Annotated[Optional[Path], typer.Option("-o", "--out", help="build folder (default out/<name>)")] = None,
 ) -> None:
     """Slice the print plates of a build folder with PrusaSlicer: grams and print time per plate."""
-    from cogniframe import pipeline
+    from cogniframe import design as design_mod
+    from cogniframe import outdir
     from cogniframe import spec as spec_mod
     from cogniframe.analysis import mass as mass_mod
     from cogniframe.export import slicer
 
     spec = spec_mod.load(params)
-    folder = pipeline.output_dir(spec, out)
+    folder = outdir.output_dir(spec, out)
     plate_dir = folder / "plates"
     plates = sorted(plate_dir.glob("*.3mf")) if plate_dir.is_dir() else []
     if not plates:
@@ -40,10 +41,10 @@ def slice_cmd(
                         f"`slice` will not write into it. Fix: run `cogniframe build {params}"
                         + (f" -o {out}" if out is not None else "") + "` to make one.")
     with outdir.lock(folder):
-        _slice_locked(params, spec, folder, plate_dir, plates, slicer, pipeline, mass_mod)
+        _slice_locked(params, spec, folder, plate_dir, plates, slicer, design_mod, mass_mod)
 
 
-def _slice_locked(params, spec, folder: Path, plate_dir: Path, plates, slicer, pipeline, mass_mod) -> None:
+def _slice_locked(params, spec, folder: Path, plate_dir: Path, plates, slicer, design_mod, mass_mod) -> None:
     from rich.console import Console
     from rich.table import Table
 
@@ -51,7 +52,7 @@ def _slice_locked(params, spec, folder: Path, plate_dir: Path, plates, slicer, p
     if exe is None:
         raise UserError(f"{slicer.SLICER} is not on PATH, so the plates cannot be sliced. Fix: install PrusaSlicer "
                         f"(Debian/Ubuntu: apt-get install prusa-slicer) or open the 3MF files in {plate_dir} in its GUI.")
-    d = pipeline.design(spec)
+    d = design_mod.design(spec)
     estimated, source = _estimated_grams(folder, spec, d, mass_mod)
     from cogniframe.partlist import infill_by_material
 

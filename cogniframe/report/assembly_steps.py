@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Sequence
 
 if TYPE_CHECKING:
     from ..partlist import PartSpec
-    from ..pipeline import Design
+    from ..design import Design
 
 CORNER_WORDS = {"fl": "front-left", "fr": "front-right", "rr": "rear-right", "rl": "rear-left"}
 GLUE_CA = "one drop of thin CA glue at each socket mouth once the rod is fully seated"

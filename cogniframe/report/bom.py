@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Mapping, Sequence
 if TYPE_CHECKING:
     from ..analysis.mass import MassBudget
     from ..export.slicer import SliceReport
-    from ..pipeline import Design
+    from ..design import Design
     from ..spec import Spec
 
 from .assembly_steps import copy_labels

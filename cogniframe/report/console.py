@@ -5,7 +5,7 @@ from __future__ import annotations
 from rich.console import Console
 from rich.table import Table
 
-from ..pipeline import CheckResult
+from ..analysis.verdict import CheckResult
 
 
 def print_check(result: CheckResult, console: Console) -> None:

@@ -1,6 +1,6 @@
 """report.html (self-contained, images embedded as base64 PNG) and report.md (images beside it).
 
-Every number about the design comes from `pipeline.check_dict(result)`, the same dict that
+Every number about the design comes from `verdict.check_dict(result)`, the same dict that
 `cogniframe check --json` prints, formatted with fixed rounding (see `FORMATS`); key figures
 carry a `data-key` attribute (`mass.total_g`, `drop.k_n_per_m` ...) so tests and scripts can
 read them back. Sections: verdicts, the interactive 3D view (`report/viewer/`), mass budget (+ chart), stiffness and drop model (+ plots),
@@ -23,7 +23,7 @@ from ..analysis.constants import G
 if TYPE_CHECKING:
     from ..export.plates import PlateFile
     from ..export.slicer import SliceReport
-    from ..pipeline import CheckResult
+    from ..analysis.verdict import CheckResult
     from .assembly_steps import Step
     from .bom import BomLine
     from .viewer import ViewerItem
@@ -134,7 +134,7 @@ def plot_stiffness(drop: Mapping, path: Path) -> Path:
 
 def draw_figures(result: "CheckResult", files: Path) -> dict[str, list[tuple[str, Path]]]:
     """Draw the report's charts into `files` (FIGURES: section -> (caption, file name))."""
-    from ..pipeline import check_dict
+    from ..analysis.verdict import check_dict
 
     cd = check_dict(result)
     files = Path(files)
@@ -351,7 +351,7 @@ def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str
     interactive 3D view right under the verdicts (HTML only). `viewer_html`: that section already
     made (`viewer.viewer_section`; the build caches it as a step), instead of `viewer_items`.
     Returns (html, md)."""
-    from ..pipeline import check_dict
+    from ..analysis.verdict import check_dict
 
     out_dir = Path(out_dir)
     files = out_dir / FILES_DIR

@@ -57,17 +57,17 @@ def check_row(params: dict, source: str, text: str | None = None) -> dict:
 
     `text` is the base file's text: messages then give a key's line in the base file (the varied
     keys sit on the same lines), and never call a key the base sets "not set in the file"."""
-    from .. import pipeline
+    from ..analysis import verdict
     from .. import spec as spec_mod
     from ..errors import UserError
 
     try:
         spec = spec_mod.from_dict(params, source=source, text=text)
         with spec.blamed():  # a later stage's error gains the key's line, as in `cogniframe check`
-            result = pipeline.check(spec)
+            result = verdict.check(spec)
     except UserError as e:
         return {"verdict": "INVALID", "problems": "", "error": str(e)}
-    return outputs(pipeline.check_dict(result))
+    return outputs(verdict.check_dict(result))
 
 
 def outputs(d: dict) -> dict:
@@ -208,7 +208,7 @@ def warm_up() -> str:
     """Run on every worker (client.run) before the clock starts: import the pipeline and what the
     frame model imports on first use (scipy's sparse LU and eigensolver, dense eigh), and return
     the worker's code hash (the client refuses workers running other code)."""
-    from .. import pipeline  # noqa: F401
+    from ..analysis import verdict  # noqa: F401
     from ..analysis import drop, framefe, impact, stiffness  # noqa: F401
 
     import scipy.linalg  # noqa: F401

@@ -474,14 +474,14 @@ def cad_check(params: dict, design_id: str) -> dict:
     vitamins, propeller margins: analysis/clash.py)."""
     import tempfile
 
-    from .. import pipeline
+    from .. import design as design_mod
     from .. import spec as spec_mod
     from ..export.assembly import check_clashes
     from ..export.part_files import build_parts, fits
 
     t0 = time.perf_counter()
     spec = spec_mod.from_dict(params, source=f"design {design_id}")
-    d = pipeline.design(spec)
+    d = design_mod.design(spec)
     with tempfile.TemporaryDirectory(prefix="cogniframe-cad-") as tmp:
         built = build_parts(spec, d.frame, d.parts, tmp)
         clash = check_clashes(spec, d.frame, d.parts, built, tmp)

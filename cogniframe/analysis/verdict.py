@@ -1,31 +1,16 @@
-"""The stages in order. Reads like a table of contents; each stage lives in its own module.
+"""The verdict of `check`: the mass budget, the drop model, the load cases, peaks and flight for a
+design, the requirements they must meet (PASS or FAIL with the problems), and `check --json`.
 
-    spec -> frame -> partlist -> cutlist -> mass -> (stiffness, drop) -> verdict     `check`
-    ... -> parts (CAD) -> export (STL/STEP/assembly) -> mass with CAD volumes -> files  `build`
-
-CadQuery is only imported by `build` (through export/), so `check` stays fast.
+    design -> mass budget -> drop model -> load cases, peaks, flight -> problems -> verdict
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from pathlib import Path
 
-from . import cutlist as cutlist_mod
-from . import frame as frame_mod
-from . import partlist as partlist_mod
-from .analysis import mass as mass_mod
-from .spec import Spec
-
-
-@dataclass(frozen=True)
-class Design:
-    """Everything derived from the params without CAD."""
-
-    spec: Spec
-    frame: frame_mod.Frame
-    parts: tuple[partlist_mod.PartSpec, ...]
-    cut: cutlist_mod.CutList
+from ..design import Design, design
+from ..spec import Spec
+from . import mass as mass_mod
 
 
 @dataclass(frozen=True)
@@ -43,63 +28,37 @@ class CheckResult:
     def verdict(self) -> str:
         return "FAIL" if self.problems else "PASS"
 
-
-def design(spec: Spec) -> Design:
-    frame = frame_mod.build(spec)
-    parts = partlist_mod.build(spec, frame)
-    _check_printer_fit(spec, parts)
-    cut = cutlist_mod.build(spec, frame)
-    return Design(spec, frame, parts, cut)
-
-
-def _check_printer_fit(spec: Spec, parts) -> None:
-    """Every printed part's print-orientation envelope must fit the bed (it may turn on the bed)."""
-    bx, by, bz = spec.printer.bed
-    for p in parts:
-        ex, ey, ez = p.estimate.envelope
-        if max(ex, ey) > max(bx, by) or min(ex, ey) > min(bx, by) or ez > bz:
-            raise spec.error(
-                "printer.bed",
-                f"the {p.name} ({ex:.0f} x {ey:.0f} x {ez:.0f} mm as printed) does not fit the "
-                f"{bx:g} x {by:g} x {bz:g} mm bed", "set printer.bed to your printer's build volume, "
-                "or shrink the part (for the battery holder: core.battery; for the core plate: core.plate_size)")
-
-
 def check(spec: Spec, geometry: dict | None = None, clash=None, design_: Design | None = None) -> CheckResult:
     """Mass budget, crash margin, flight and requirements; `geometry` = CAD volumes when known,
     `clash` = the build's clash check (analysis.clash.ClashResult) when known, `design_` = this
     spec's design when the caller has it."""
     return with_clash(complete(spec, *mass_and_drop(spec, geometry, design_)), clash)
 
-
 def mass_and_drop(spec: Spec, geometry: dict | None = None, design_: Design | None = None):
     """The first, cheap part of `check`: (design, mass budget, drop model, frame session): what the
     build's mass and drop figures draw while the load cases are still being solved."""
     d = design(spec) if design_ is None else design_
     budget = mass_mod.budget(spec, d.frame, d.cut, d.parts, geometry)
-    from .analysis import drop as drop_mod
+    from . import drop as drop_mod
 
     session = drop_mod.Session(spec, d.frame, d.parts)  # the frame model, solved at most once per check
     return d, budget, _drop(spec, d, budget, session), session
-
 
 def complete(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=None) -> CheckResult:
     """The rest of `check` for that mass budget and drop model: load cases, peaks, flight and the
     verdict (no clash check: `with_clash` adds the build's)."""
     stiffness, peak = _physics(spec, d, budget, drop, session)
-    from .analysis import flight as flight_mod
+    from . import flight as flight_mod
 
     flight = flight_mod.evaluate(spec, budget.total_g)
     problems = _problems(spec, budget, drop) + _physics_problems(spec, stiffness, peak) + _aircraft_problems(spec, flight)
     return CheckResult(d, budget, drop, tuple(problems), stiffness, peak, flight)
-
 
 def with_clash(result: CheckResult, clash) -> CheckResult:
     """`result` with the build's clash check: its clashes are FAIL problems, after the others."""
     if clash is None:
         return result
     return replace(result, problems=result.problems + tuple(clash.messages()), clash=clash)
-
 
 def _aircraft_problems(spec: Spec, flight) -> list[str]:
     """Thrust-to-weight below requirements.min_thrust_to_weight."""
@@ -110,23 +69,20 @@ def _aircraft_problems(spec: Spec, flight) -> list[str]:
                    f"{flight.mass_g:.0f} g; choose stronger motors, bigger props, more cells or a lighter design")
     return out
 
-
 def _drop(spec: Spec, d: Design, budget: mass_mod.MassBudget, session=None):
-    from .analysis import drop as drop_mod
+    from . import drop as drop_mod
 
     return drop_mod.evaluate_design(spec, d.frame, budget.total_g, session)
 
-
 def _physics(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=None):
     """The frame's load cases and the predicted peak deceleration (both cached on disk)."""
-    from .analysis import drop as drop_mod
+    from . import drop as drop_mod
 
     if drop is None:
         return None, None
     cases = drop_mod.load_cases(spec, d.frame, budget.total_g, drop, session)
     peak = drop_mod.peak_prediction(spec, budget.total_g, drop, budget.groups["exoskeleton"])
     return cases, peak
-
 
 def _physics_problems(spec: Spec, stiffness: dict | None, peak: dict | None) -> list[str]:
     out = []
@@ -153,7 +109,6 @@ def _physics_problems(spec: Spec, stiffness: dict | None, peak: dict | None) -> 
                        f"({peak['model']}) is above requirements.max_peak_g = {req.max_peak_g:g} G")
     return out
 
-
 def _problems(spec: Spec, budget: mass_mod.MassBudget, drop) -> list[str]:
     out = []
     if budget.total_g > spec.requirements.mass_limit:
@@ -163,7 +118,6 @@ def _problems(spec: Spec, budget: mass_mod.MassBudget, drop) -> list[str]:
         out.append(f"design drop height {spec.requirements.design_drop_height_cm:g} cm exceeds the max safe drop height "
                    f"{drop.max_safe_height_cm:.1f} cm: the battery holder would hit the ground (requirements.design_drop_height_cm)")
     return out
-
 
 def check_dict(result: CheckResult) -> dict:
     """The stable JSON of `cogniframe check --json`."""
@@ -193,7 +147,3 @@ def check_dict(result: CheckResult) -> dict:
     if result.clash is not None:
         out["clash"] = result.clash.to_dict()
     return out
-
-
-def output_dir(spec: Spec, out: Path | None) -> Path:
-    return out if out is not None else Path("out") / spec.name
