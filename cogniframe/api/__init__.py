@@ -105,7 +105,7 @@ class Design:
         return self._source
 
     @property
-    def pipeline_design(self) -> design_mod.Design:
+    def derived(self) -> design_mod.Design:
         """Frame graph, part list and cut list (`design_mod.Design`): what the checks and the CAD use."""
         if self._design is None:
             from .. import design as design_mod
@@ -120,7 +120,7 @@ class Design:
     def validate(self) -> Design:
         """Check that the frame and its parts can exist (a part that fits no bed, a propeller that
         hits the cage): ParamsError otherwise. `load` and `with_values` do it."""
-        self.pipeline_design  # noqa: B018 (made on first use, which validates)
+        self.derived  # noqa: B018 (made on first use, which validates)
         return self
 
     @property
@@ -186,11 +186,11 @@ class Design:
 
         from ..runtime.pools import joint_fe_workers
 
-        d = self.pipeline_design
+        d = self.derived
         try:
             with self._spec.blamed(), one_blas_thread():  # as `build` computes it: same numbers
                 if self.needs_fe():  # new joint geometries: their FE on worker processes first
-                    from ..analysis.joint_stiffness import solve_missing
+                    from ..analysis.joints import solve_missing
                     from ..analysis.stiffness import joint_parts
 
                     with joint_fe_workers() as submit:
@@ -205,10 +205,10 @@ class Design:
         the cache yet, with `model.stiffness_model: fe`): seconds instead of a tenth of one."""
         if self._spec.model.stiffness_model != "fe":
             return False
-        from ..analysis.joint_stiffness import has_unsolved
+        from ..analysis.joints import has_unsolved
         from ..analysis.stiffness import joint_parts
 
-        return has_unsolved(self._spec, joint_parts(self.pipeline_design.parts))
+        return has_unsolved(self._spec, joint_parts(self.derived.parts))
 
     def with_fast_model(self) -> Design:
         """This design with `model.stiffness_model: analytic` (the joints' closed forms, milliseconds):
@@ -340,7 +340,7 @@ def write_text_atomic(path: Path, text: str) -> None:
 
 class CheckResult:
     """What `cogniframe check` finds. The figures are read from `to_dict()` (the `check --json`
-    object), so they equal the CLI's JSON exactly. `result` is the pipeline's own object."""
+    object), so they equal the CLI's JSON exactly. `result` is the check's own object (`analysis.verdict.CheckResult`)."""
 
     def __init__(self, result: verdict.CheckResult):
         self.result = result

@@ -222,14 +222,14 @@ class Session:
             t0 = time.perf_counter()
             self.publish({"type": "progress", "task": "view", "done": 0, "total": 1, "fe": fe,
                           "text": "making the parts" + (" and solving the joints' FE" if fe else "")})
-            n_parts = len(d.pipeline_design.parts)
+            n_parts = len(d.derived.parts)
             parts_done: list[str] = []
             shown: list[threading.Thread] = []
 
             def show_view(values: dict, d=d, out=out, key=key, seq=seq, t0=t0) -> None:
                 """The 3D view as soon as the parts are made (the joints' FE may still run)."""
                 try:
-                    packed = pack(view.items(d.spec, d.pipeline_design, out, values))
+                    packed = pack(view.items(d.spec, d.derived, out, values))
                 except Exception as e:  # noqa: BLE001
                     traceback.print_exc()
                     self._view_failed(key)
@@ -261,7 +261,7 @@ class Session:
                     t.start()
 
             try:
-                view.build_parts(d.spec, d.pipeline_design, out, fe=fe, server=self.server, on_step=step)
+                view.build_parts(d.spec, d.derived, out, fe=fe, server=self.server, on_step=step)
             except UserError as e:
                 self._view_failed(key)
                 self.publish({"type": "progress", "task": "view", "done": 1, "total": 1, "error": str(e), "text": str(e)})
@@ -420,7 +420,7 @@ def geometry_key(d: api.Design) -> str:
     text, which follows at the next change of shape)."""
     from ..parts.shapes import geometry_digest
 
-    pd = d.pipeline_design
+    pd = d.derived
     spec = d.spec
     parts = [[p.name, geometry_digest(p), [[list(map(float, pl.origin)), pl.rotation_deg] for pl in p.placements]] for p in pd.parts]
     rods = [[r.name, [float(x) for x in r.start], [float(x) for x in r.end], float(r.diameter)] for r in pd.frame.rods.values()]
