@@ -63,6 +63,8 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     import numpy as np
 
+    from cogniframe.analysis import droplogs as L
+
     from cogniframe.analysis import fit as F
     from cogniframe.analysis.impact import evaluate
     print(f"import numpy/scipy/fit       {time.perf_counter() - t0:8.3f} s")
@@ -74,10 +76,10 @@ def main(argv: list[str] | None = None) -> int:
         return 1
 
     t0 = time.perf_counter()
-    heights = [F.load_height([p], h) for h, p in folders.items()]
+    heights = [L.load_height([p], h) for h, p in folders.items()]
     n_trials = sum(len(h.paths) for h in heights)
     print(f"read + trim {n_trials} trials       {time.perf_counter() - t0:8.3f} s (cold)")
-    dt, _ = _median_time(lambda: [F.load_height([p], h) for h, p in folders.items()], 3)
+    dt, _ = _median_time(lambda: [L.load_height([p], h) for h, p in folders.items()], 3)
     print(f"read + trim {n_trials} trials       {dt:8.3f} s (warm, median of 3)")
 
     dt, res = _median_time(lambda: F.fit_drop_tests(heights, 0.241), args.repeat)
@@ -88,7 +90,7 @@ def main(argv: list[str] | None = None) -> int:
     # Timing only: tile the trials to ~300 (same heights), the size the brief asks about.
     def tile(h):
         half = len(h.paths) // 2
-        return F.HeightData(h.height_cm, h.paths + h.paths[:half],
+        return L.HeightData(h.height_cm, h.paths + h.paths[:half],
                             np.concatenate([h.a_g, h.a_g[:half]]),
                             np.concatenate([h.peak_index, h.peak_index[:half]]))
 

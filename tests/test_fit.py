@@ -13,21 +13,10 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.signal import lsim
 
-from cogniframe.analysis.fit import (
-    HeightData,
-    LoggerCalibration,
-    Trial,
-    collect_files,
-    drop_loss,
-    fit_drop_tests,
-    fit_static_stiffness,
-    impact_start,
-    load_height,
-    load_trials,
-    prepare_height,
-    read_csv_trial,
-    read_logger_bin,
-)
+from cogniframe.analysis.droplogs import (HeightData, LoggerCalibration, Trial, collect_files, impact_start, load_height,
+                                          load_trials, prepare_height, read_csv_trial, read_logger_bin)
+
+from cogniframe.analysis.fit import drop_loss, fit_drop_tests, fit_static_stiffness
 from cogniframe.errors import UserError
 
 DATA = Path(__file__).resolve().parents[1] / "examples"  # shipped in the repo (examples/droptests/README.md)

@@ -9,6 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cogniframe.analysis import droplogs as L
+
 from cogniframe.analysis import fit as F
 from cogniframe.analysis import impact_nl as N
 from cogniframe.analysis.impact import G, impact_velocity
@@ -50,7 +52,7 @@ def test_two_mass_momentum_and_contact_only_pushes():
 
 @pytest.fixture(scope="module")
 def validation():
-    h50 = F.load_height([DROPS / "SoftBottom_50cm"], 50)
+    h50 = L.load_height([DROPS / "SoftBottom_50cm"], 50)
     kv = F.fit_drop_tests([h50], 0.241)
     nl = F.fit_nonlinear([h50], 0.241, N.PAPER_EXO_MASS_KG)
     pred = {

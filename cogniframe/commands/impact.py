@@ -250,6 +250,7 @@ def fit(
     clearance_mm: Annotated[float, typer.Option("--clearance-mm", help="Battery-holder clearance for the strike flag of --predict, mm.")] = 16.0,
 ) -> None:
     """Fit damping c and stiffness k to accelerometer drop tests with the paper's procedure."""
+    from cogniframe.analysis import droplogs as L
     from cogniframe.analysis import fit as F
 
     from cogniframe.analysis import impact_nl
@@ -287,7 +288,7 @@ def fit(
     groups: dict[float, list[Path]] = {}
     for h, p in pairs:
         groups.setdefault(h, []).append(p)
-    collected = {h: F.collect_files(ps) for h, ps in groups.items()}
+    collected = {h: L.collect_files(ps) for h, ps in groups.items()}
     total = sum(len(files) for files, _ in collected.values())
 
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
@@ -297,8 +298,8 @@ def fit(
                   console=_stderr(), transient=True) as progress:
         task = progress.add_task("read", total=total)
         for h, (files, skipped) in sorted(collected.items()):
-            trials, bad = F.load_trials(files, on_file=lambda _p: progress.advance(task))
-            heights_data.append(F.prepare_height(
+            trials, bad = L.load_trials(files, on_file=lambda _p: progress.advance(task))
+            heights_data.append(L.prepare_height(
                 trials, h, skipped=skipped + bad, source=", ".join(map(str, groups[h]))))
 
     lowpass = None if no_lowpass else lowpass_rad_per_s
