@@ -1,4 +1,4 @@
-"""CPU seconds of the joint FE's condensation (`joint_fe.condense`) per distinct joint, split into
+"""CPU seconds of the joint FE's condensation (`solid_fe.condense`) per distinct joint, split into
 assembly, METIS order, the lower triangle and the CHOLMOD factorization + solve; one BLAS thread, as the build.
 
     python benchmarks/bench_joint_fe.py [params/carbon.yaml] [--runs 3]
@@ -29,14 +29,15 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
 
     from cogniframe import frame, partlist, spec
-    from cogniframe.analysis import joint_fe, joint_stiffness, stiffness
+    from cogniframe.analysis import joints, stiffness
+    from cogniframe.analysis.joints import solid_fe
     from cogniframe.runtime.blas import one_blas_thread
 
     s = spec.load(args.params)
     f = frame.build(s)
     parts = partlist.build(s, f)
     inputs = {}
-    real = joint_fe.condense
+    real = solid_fe.condense
 
     def keep(points, tets, e, nu, ties):  # the mesh and ties of the joint being solved
         inputs["args"] = (points, tets, e, nu, ties)
@@ -56,29 +57,29 @@ def main(argv: list[str] | None = None) -> int:
     total = 0.0
     print(f"{'joint':<16} {'DOF':>7} {'condense s':>11}  " + "  ".join(f"{p.strip('_'):>14}" for p in PHASES))
     for p in stiffness.joint_parts(parts):
-        if joint_stiffness.is_mirror(p):
+        if joints.is_mirror(p):
             continue
-        joint_fe.condense = keep
+        solid_fe.condense = keep
         try:
-            joint_stiffness.fe_joint(s, p, 1.0)
+            joints.fe_joint(s, p, 1.0)
         finally:
-            joint_fe.condense = real
-        originals = {n: getattr(joint_fe, n) for n in PHASES}
+            solid_fe.condense = real
+        originals = {n: getattr(solid_fe, n) for n in PHASES}
         for n, fn in originals.items():
-            setattr(joint_fe, n, timed(n, fn))
+            setattr(solid_fe, n, timed(n, fn))
         runs, phases = [], {n: [] for n in PHASES}
         try:
             with one_blas_thread():
                 for _ in range(args.runs):
                     times.clear()
                     t0 = time.process_time()
-                    c = joint_fe.condense(*inputs["args"])
+                    c = solid_fe.condense(*inputs["args"])
                     runs.append(time.process_time() - t0)
                     for n in PHASES:
                         phases[n].append(times.get(n, 0.0))
         finally:
             for n, fn in originals.items():
-                setattr(joint_fe, n, fn)
+                setattr(solid_fe, n, fn)
         med = statistics.median(runs)
         total += med
         print(f"{p.name:<16} {c.n_dofs:>7} {med:>11.3f}  " + "  ".join(f"{statistics.median(phases[n]):>14.3f}" for n in PHASES))

@@ -50,7 +50,7 @@ def main(argv: list[str] | None = None) -> int:
         from cogniframe import frame as frame_mod
         from cogniframe import partlist
         from cogniframe import spec as spec_mod
-        from cogniframe.analysis import joint_stiffness as JS
+        from cogniframe.analysis import joints as JS
         from cogniframe.analysis import load_cases as lc
         from cogniframe.analysis import stiffness as st
 

@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from cogniframe.analysis import framefe as ff
-from cogniframe.analysis import joint_fe as J
-from cogniframe.analysis import joint_stiffness as JS
+from cogniframe.analysis.joints import closed_forms, meshing
+from cogniframe.analysis.joints import solid_fe as J
+from cogniframe.analysis.joints.fe import FE_MESH_MM
 
 
 def _two_end_ties(length, ref0, ref1, e, at=lambda c: c[0]):
@@ -27,7 +28,7 @@ def _tip(C) -> np.ndarray:
 
 def test_solid_cantilever_block_matches_timoshenko_PL3_over_3EI_plus_shear():
     L, b, h, e, nu = 40.0, 4.0, 4.0, 26.0, 0.3
-    p, t = J.mesh_occ(lambda occ: occ.addBox(0, 0, 0, L, b, h), 2.0)
+    p, t = meshing.mesh_occ(lambda occ: occ.addBox(0, 0, 0, L, b, h), 2.0)
     C = J.condense(p, t, e, nu, _two_end_ties(L, (0, b / 2, h / 2), (L, b / 2, h / 2), e))
     i, g, a = b * h**3 / 12, e / (2 * (1 + nu)), b * h
     theory = 1 / (L**3 / (3 * e * i) + L / (5 / 6 * g * a))
@@ -41,7 +42,7 @@ def test_tie_selection_sees_outward_normals_every_face_of_a_box_whole():
     # the whole face: skfem's facet vertices are sorted by number, so an unoriented normal points
     # either way and such a selection took about half of the facets.
     L, b, h, e = 12.0, 6.0, 4.0, 26.0
-    p, t = J.mesh_occ(lambda occ: occ.addBox(0, 0, 0, L, b, h), 1.0)
+    p, t = meshing.mesh_occ(lambda occ: occ.addBox(0, 0, 0, L, b, h), 1.0)
     ties = [J.Tie("bottom", lambda c, n: n[2] < -0.99, (L / 2, b / 2, 0.0), e, e),
             J.Tie("end", lambda c, n: n[0] > 0.99, (L, b / 2, h / 2), e, e),
             J.Tie("side", lambda c, n: n[1] < -0.99, (L / 2, 0.0, h / 2), e, e)]
@@ -60,7 +61,7 @@ def _sleeve(L, od, id_):
 def test_solid_straight_sleeve_matches_tube_beam_theory():
     # the socket sleeve alone: a TPU tube clamped at one end, loaded at the other
     L, od, id_, e, nu = 24.0, 5.5, 3.1, 7.5, 0.48
-    p, t = J.mesh_occ(_sleeve(L, od, id_), 1.0)
+    p, t = meshing.mesh_occ(_sleeve(L, od, id_), 1.0)
     C = J.condense(p, t, e, nu, _two_end_ties(L, (0, 0, 0), (L, 0, 0), e))
     i = math.pi * (od**4 - id_**4) / 64
     a = math.pi * (od**2 - id_**2) / 4
@@ -83,7 +84,7 @@ def _socket_stiffness(mesh_mm: float) -> np.ndarray:
         hole = occ.addCylinder(L - depth, 0, 0, depth + 1, 0, 0, bore / 2)
         occ.cut([(3, outer)], [(3, hole)])
 
-    p, t = J.mesh_occ(build, mesh_mm)
+    p, t = meshing.mesh_occ(build, mesh_mm)
     bottom = L - depth
 
     def rod(c, n):
@@ -98,10 +99,10 @@ def _socket_stiffness(mesh_mm: float) -> np.ndarray:
 
 
 def test_joint_fe_mesh_convergence_under_2_percent():
-    # the production mesh (joint_stiffness.FE_MESH_MM = 1.5 mm) against a 1.5x finer one: axial,
+    # the production mesh (FE_MESH_MM = 1.5 mm) against a 1.5x finer one: axial,
     # lateral and rocking change < 1 %. Torsion of the rod in its socket converges slower (the
     # faceted bore): 2.9 % from 1.5 to 1.0 mm, 1.0 % from 1.0 to 0.8 mm; it barely enters k.
-    coarse, fine = _socket_stiffness(JS.FE_MESH_MM), _socket_stiffness(JS.FE_MESH_MM / 1.5)
+    coarse, fine = _socket_stiffness(FE_MESH_MM), _socket_stiffness(FE_MESH_MM / 1.5)
     for i in (0, 1, 2, 4, 5):
         assert fine[i, i] == pytest.approx(coarse[i, i], rel=0.02)
     assert fine[3, 3] == pytest.approx(coarse[3, 3], rel=0.05)
@@ -137,7 +138,7 @@ def _bef_numeric(length, ei, k, n=200):
 
 @pytest.mark.parametrize("length, ei, k", [(8.0, 5.0e5, 40.0), (8.0, 6.0e4, 400.0), (60.0, 5.0e3, 200.0)])
 def test_beam_on_elastic_foundation_matches_hetenyi_closed_form(length, ei, k):
-    closed = JS.bef_end_flexibility(length, ei, k)
+    closed = closed_forms.bef_end_flexibility(length, ei, k)
     numeric = _bef_numeric(length, ei, k)
     assert closed[0, 0] == pytest.approx(numeric[0, 0], rel=0.005)
     assert closed[1, 1] == pytest.approx(numeric[1, 1], rel=0.005)
@@ -146,10 +147,10 @@ def test_beam_on_elastic_foundation_matches_hetenyi_closed_form(length, ei, k):
 
 def test_hetenyi_limits_rigid_and_semi_infinite():
     k, ei = 50.0, 1e3
-    rigid = JS.bef_end_flexibility(1e-2, 1e12, k)
+    rigid = closed_forms.bef_end_flexibility(1e-2, 1e12, k)
     assert rigid[0, 0] == pytest.approx(4 / (k * 1e-2), rel=1e-3)  # rigid rod: 4 / (k L)
     lam = (k / (4 * ei)) ** 0.25
-    long = JS.bef_end_flexibility(40 / lam, ei, k)
+    long = closed_forms.bef_end_flexibility(40 / lam, ei, k)
     assert long[0, 0] == pytest.approx(2 * lam / k, rel=1e-6)  # semi-infinite: 2 lambda / k
     assert long[1, 1] == pytest.approx(4 * lam**3 / k, rel=1e-6)
 
@@ -205,12 +206,10 @@ def test_euler_buckling_of_a_pinned_rod_pi2_EI_over_L2():
 
 
 def test_cholesky_inverse_form_matches_a_dense_solve_and_refuses_an_indefinite_matrix():
-    """`joint_fe._inverse_form` (CHOLMOD LL^T, one forward solve): B^T A^-1 B of a sparse SPD
+    """`solid_fe._inverse_form` (CHOLMOD LL^T, one forward solve): B^T A^-1 B of a sparse SPD
     matrix (a 1D Laplacian plus a diagonal) equals numpy's dense solve; an indefinite matrix is a
     RuntimeError (the joint then falls back to its closed form), not a wrong answer."""
     import scipy.sparse as sp
-
-    from cogniframe.analysis import joint_fe
 
     n = 60
     A = sp.diags([-np.ones(n - 1), 2.5 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1], format="csc")
@@ -219,9 +218,9 @@ def test_cholesky_inverse_form_matches_a_dense_solve_and_refuses_an_indefinite_m
         t = sp.tril(M).tocoo()
         return t.data, t.row, t.col, M.shape[0]
 
-    assert np.allclose(joint_fe._inverse_form(lower(A), B), B.T @ np.linalg.solve(A.toarray(), B), rtol=1e-12, atol=1e-12)
+    assert np.allclose(J._inverse_form(lower(A), B), B.T @ np.linalg.solve(A.toarray(), B), rtol=1e-12, atol=1e-12)
     with pytest.raises(RuntimeError, match="not positive definite"):
-        joint_fe._inverse_form(lower(sp.diags([1.0, -1.0, 2.0], 0, format="csc")), np.ones((3, 1)))
+        J._inverse_form(lower(sp.diags([1.0, -1.0, 2.0], 0, format="csc")), np.ones((3, 1)))
 
 
 def test_lower_triplets_are_the_lower_triangle_of_the_permuted_symmetric_matrix():

@@ -1,4 +1,4 @@
-"""The joint FE's block assembly (`joint_fe.assemble`) against scikit-fem's own BilinearForm /
+"""The joint FE's block assembly (`solid_fe.assemble`) against scikit-fem's own BilinearForm /
 LinearForm assembly of the same forms, and the condensation against a dense reference."""
 
 from __future__ import annotations
@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cogniframe.analysis import joint_fe as J
+from cogniframe.analysis.joints import meshing
+from cogniframe.analysis.joints import solid_fe as J
 
 E, NU = 26.0, 0.45
 L, B, H = 6.0, 4.0, 3.0
@@ -22,7 +23,7 @@ def _ties():
 
 @pytest.fixture(scope="module")
 def box():
-    return J.mesh_occ(lambda occ: occ.addBox(0, 0, 0, L, B, H), 1.5)
+    return meshing.mesh_occ(lambda occ: occ.addBox(0, 0, 0, L, B, H), 1.5)
 
 
 def _reference(points, tets):

@@ -188,7 +188,7 @@ def test_square_boxes_keep_one_part_per_kind_turned_to_each_corner(preset):
 def test_rectangle_mirrored_parts_are_exact_mirror_images(rect):
     """The fr/rl parts are the fl/rr ones reflected (x -> -x): the joint FE reflects their
     super-element instead of meshing them again, and the CAD prints their mirror image."""
-    from cogniframe.analysis.joint_stiffness import mirror_original
+    from cogniframe.analysis.joints import mirror_original
 
     parts = {p.name: p for p in rect.parts}
     for kind in JOINT_KINDS:

@@ -15,7 +15,8 @@ import yaml
 from cogniframe import frame as frame_mod
 from cogniframe import partlist
 from cogniframe import spec as spec_mod
-from cogniframe.analysis import joint_stiffness as JS
+from cogniframe.analysis import joints as JS
+from cogniframe.analysis.joints import mirror
 from cogniframe.analysis import load_cases as lc
 from cogniframe.analysis import stiffness as st
 
@@ -263,7 +264,7 @@ def test_symmetry_four_corners_behave_alike(carbon_fe):
 
 
 def test_module_imports_no_heavy_library():
-    code = ("import sys, cogniframe.analysis.drop, cogniframe.analysis.stiffness, cogniframe.analysis.joint_stiffness; "
+    code = ("import sys, cogniframe.analysis.drop, cogniframe.analysis.stiffness, cogniframe.analysis.joints; "
             "bad = [m for m in ('cadquery', 'OCP', 'gmsh', 'skfem', 'Pynite', 'scipy.optimize') if m in sys.modules]; "
             "assert not bad, bad")
     subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)
@@ -410,7 +411,7 @@ def _fake_fe(calls):
 def test_reflection_maps_the_core_link_onto_its_mirror_by_geometry_not_order():
     s, f, p = _design(spec_mod.load(CARBON))
     o, m = _mirror_pair(p)
-    P, order = JS.reflection(o, m)
+    P, order = mirror.reflection(o, m)
     # fl -> fr: x -> -x; the mirror swaps the two arms (its arm 1 is the image of arm 2)
     assert np.array_equal(P, np.diag([-1.0, 1.0, 1.0])) and order == (1, 0, 2)
     for j, i in enumerate(order):
@@ -419,13 +420,13 @@ def test_reflection_maps_the_core_link_onto_its_mirror_by_geometry_not_order():
     from dataclasses import replace
 
     shuffled = replace(m, sockets=m.sockets[::-1])
-    assert JS.reflection(o, shuffled)[1] == order[::-1]
+    assert mirror.reflection(o, shuffled)[1] == order[::-1]
     # not an image: a bolt hole elsewhere, or a deeper socket -> ValueError (the caller solves the FE)
     moved = replace(m, params=tuple((k, (-7.25, 7.25, 0.0) if k == "bolt_hole" else v) for k, v in m.params))
     deeper = replace(m, sockets=(replace(m.sockets[0], depth=9.0),) + m.sockets[1:])
     for bad in (moved, deeper):
         with pytest.raises(ValueError):
-            JS.reflection(o, bad)
+            mirror.reflection(o, bad)
 
 
 def test_reflected_closed_form_joint_equals_the_closed_forms_of_the_mirror_exactly():
@@ -434,9 +435,9 @@ def test_reflected_closed_form_joint_equals_the_closed_forms_of_the_mirror_exact
     for preset in ("carbon", "bamboo"):
         s, f, p = _design(spec_mod.load(ROOT / "params" / f"{preset}.yaml"))
         o, m = _mirror_pair(p)
-        P, order = JS.reflection(o, m)
+        P, order = mirror.reflection(o, m)
         a, b = JS.analytic_joint(s, o), JS.analytic_joint(s, m)
-        d = JS.reflect_unit(a, m, P, order, [x.rod for x in o.sockets])
+        d = mirror.reflect_unit(a, m, P, order, [x.rod for x in o.sockets])
         assert d.labels == b.labels and np.allclose(d.refs, b.refs, rtol=0, atol=1e-12)
         assert np.allclose(d.matrix, b.matrix, rtol=0, atol=1e-12 * np.abs(b.matrix).max())
 
@@ -491,8 +492,8 @@ def test_solve_missing_solves_four_joint_FEs_and_derives_the_mirror(tmp_path, mo
     assert sorted(calls) == sorted(["corner_top", "corner_bottom", "knee", "core_link"])  # 4 FE, not 5
     assert "core_link_mirrored derived by reflection from core_link" in caplog.text
     a = JS.joint_stiffness(s, m, "fe", factor=1.0)
-    P, order = JS.reflection(o, m)
-    r = JS.reflect_unit(JS.joint_stiffness(s, o, "fe", factor=1.0), m, P, order, [x.rod for x in o.sockets])
+    P, order = mirror.reflection(o, m)
+    r = mirror.reflect_unit(JS.joint_stiffness(s, o, "fe", factor=1.0), m, P, order, [x.rod for x in o.sockets])
     assert (a.labels, a.refs, a.K) == (r.labels, r.refs, r.K)
     assert a.labels[:3] == tuple(x.rod for x in m.sockets) and a.labels[3] == "body"
     # the same bits whatever the order and the cache held: the mirror listed first, or the

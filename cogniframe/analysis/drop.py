@@ -1,7 +1,7 @@
 """The design's crash prediction: stiffness (predicted or measured), damping, clearance -> drop model;
 and the frame's other load cases (wall, thrust, modes, buckling, strain) and peak deceleration.
 
-Glue between the frame model (`stiffness`, joints from `joint_stiffness`), the paper's impact
+Glue between the frame model (`stiffness`, joints from `joints`), the paper's impact
 model (`impact`), the peak-deceleration model (`impact_nl`) and the params' `model:` section;
 the mass is the all-up weight from the mass budget. Every expensive result is cached on disk by
 a hash of exactly its inputs and of the source of the modules that compute it, so a repeated
@@ -20,7 +20,7 @@ from . import impact
 
 # the sources the frame model, the load cases and the peaks are made by (their cache keys)
 _MODULES = ("analysis/stiffness.py", "analysis/impact_nl.py", "analysis/impact.py", "analysis/framefe.py",
-            "analysis/joint_stiffness.py", "analysis/joint_fe.py", "analysis/flight.py", "analysis/constants.py",
+            "analysis/joints/*.py", "analysis/flight.py", "analysis/constants.py",
             "frame.py", "partlist.py", "parts/joint.py", "materials.py", "spec.py")
 
 

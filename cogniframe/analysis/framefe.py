@@ -1,7 +1,7 @@
 """A small 3D frame finite-element assembler (numpy only): stiffness, mass and geometric stiffness.
 
 Why not PyNite for the frame: the joints are now general 6x6 (or 6n x 6n) condensed stiffness
-matrices from the joint models (`joint_stiffness`), which PyNite cannot take (its springs are
+matrices from the joint models (`joints`), which PyNite cannot take (its springs are
 axial only), and the modal and buckling load cases need the assembled K, M and K_G, which PyNite
 does not expose. The element here is the textbook 3D Euler-Bernoulli beam (12 DOF: u, v, w,
 rx, ry, rz at each end), with the consistent mass matrix and the geometric stiffness of an axial

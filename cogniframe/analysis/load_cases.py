@@ -93,11 +93,11 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
     The payload, wall and full-thrust cases share one model and one assembled K (they differ in
     supports and loads only); the arms-only thrust case and the modes (rods in 4 elements, with
     masses) build their own."""
-    from .joint_stiffness import TPU_ELONGATION_AT_BREAK, hinge_geometry, hinged_socket, interface
+    from .joints import TPU_ELONGATION_AT_BREAK, hinge_geometry, hinged_socket, interface
 
     t0 = time.perf_counter()
     joints = joints if joints is not None else joint_models(spec, parts, joint_model)
-    from .joint_stiffness import TPU_PRINTED_MODULUS_FACTOR
+    from .joints import TPU_PRINTED_MODULUS_FACTOR
 
     masses = masses_g(spec, frame, parts, total_mass_g)
 

@@ -8,7 +8,7 @@ The model (docs/stiffness-model.md):
 - every rod is an Euler-Bernoulli beam of its free span, mouth to mouth (the part inside a
   socket belongs to the joint model); arm rods are split at the motor mounts, which tie the two
   rods of an arm to the motor node rigidly;
-- every distinct printed joint is a super-element from `joint_stiffness` (solid FE of its CAD
+- every distinct printed joint is a super-element from `joints` (solid FE of its CAD
   by default, closed forms with ``joint_model="analytic"``): a stiffness over the rigid bodies of
   the rods in its sockets (at their mouths) and, for the feet and core links, a support body at
   the joint centre. The prototype's matrix is rotated to each of the four corners;
@@ -69,7 +69,7 @@ def joint_parts(parts) -> list:
 
 def joint_models(spec, parts, method: str = "fe", factor: float | None = None) -> dict:
     """The super-element of every distinct joint (cached FE, or closed forms)."""
-    from .joint_stiffness import joint_stiffness, solve_missing
+    from .joints import joint_stiffness, solve_missing
 
     out = {}
     # new geometries first, all at once (in parallel); then every joint comes from the cache
@@ -82,7 +82,7 @@ def joint_models(spec, parts, method: str = "fe", factor: float | None = None) -
             except RuntimeError:
                 if method != "fe":
                     raise
-        # a solid the mesher cannot handle (reported by gmsh/joint_fe as RuntimeError, or a bore
+        # a solid the mesher cannot handle (reported by gmsh/the joint FE as RuntimeError, or a bore
         # whose surface was not found): the closed forms for this joint rather than failing the
         # whole check; the method is reported per joint
         out[p.name] = joint_stiffness(spec, p, "analytic", factor)
@@ -489,7 +489,7 @@ def predict_stiffness(spec, frame, parts=None, *, joint_model: str = "fe", facto
                       design_force_n: float | None = None) -> StiffnessResult:
     """Payload vertical stiffness of the design; with ``design_force_n`` the secant stiffness at
     that force, the fit's play included (`play_springs`)."""
-    from .joint_stiffness import TPU_PRINTED_MODULUS_FACTOR
+    from .joints import TPU_PRINTED_MODULUS_FACTOR
 
     if not (load_n > 0 and math.isfinite(load_n)):
         raise ValueError(f"load_n must be a positive number, got {load_n}")

@@ -83,7 +83,7 @@ def needs_joint_fe(spec, design) -> bool:
     in the joint cache yet (a few milliseconds: the cache keys are hashes of the parts' inputs)."""
     if spec.model.stiffness_model != "fe":
         return False
-    from ..analysis.joint_stiffness import has_unsolved
+    from ..analysis.joints import has_unsolved
     from ..analysis.stiffness import joint_parts
 
     return has_unsolved(spec, joint_parts(design.parts))

@@ -17,7 +17,7 @@ def estimate(ctx) -> Made:
         # new joint FEs first, in parallel; the frame model below then reads every joint from the
         # cache. On the CAD server's workers after the parts (JOB_ORDER); a build's own process
         # pool runs its jobs in order, so there the FEs get workers of their own
-        from ..analysis.joint_stiffness import solve_missing
+        from ..analysis.joints import solve_missing
         from ..analysis.stiffness import joint_parts
 
         if ctx.cad.server:

@@ -201,7 +201,7 @@ def code_digest() -> str:
 
     from ..cache import code_hash
 
-    return code_hash("*.py", "analysis/*.py", "sweep/evaluate.py")[:12]
+    return code_hash("*.py", "analysis/*.py", "analysis/joints/*.py", "sweep/evaluate.py")[:12]
 
 
 def warm_up() -> str:

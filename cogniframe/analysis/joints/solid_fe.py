@@ -1,12 +1,12 @@
-"""Solid finite elements of a printed joint: gmsh tetrahedra, scikit-fem quadratic (P2) elasticity.
+"""Solid finite elements of a printed joint: scikit-fem quadratic (P2) elasticity, condensed.
 
-A joint is meshed from its solid (the very CAD `cogniframe build` prints, read through a BREP
-file, or a gmsh OCC primitive in the benchmarks), assembled as 3D linear elasticity with
-10-node tetrahedra, and condensed onto a few rigid *reference bodies*:
+A joint's tetrahedral mesh (`meshing`: the very CAD `cogniframe build` prints, or a gmsh OCC
+primitive in the tests and benchmarks) is assembled as 3D linear elasticity with 10-node
+tetrahedra and condensed onto a few rigid *reference bodies*:
 
 - every socket's rod, a rigid body tied to the bore wall and the socket bottom by an elastic
   interface layer (normal stiffness E / h_i and tangential G / h_i per unit area; h_i is the
-  fit's radial clearance plus the printed surface roughness, see `joint_stiffness`);
+  fit's radial clearance plus the printed surface roughness, see `model.interface`);
 - optionally the joint's support (the foot pad on the floor, the core link's bolted tab), tied
   stiffly.
 
@@ -14,14 +14,12 @@ Static condensation K_c = K_rr - K_ru K_uu^-1 K_ur gives a 6n x 6n stiffness ove
 reference bodies (each referenced at a point of our choice), with the 6 rigid-body modes of the
 joint as its null space. The frame model (`stiffness`) takes it as a super-element.
 
-gmsh and scikit-fem are imported inside the functions: `cogniframe check` never loads them when
-the joint results are cached.
+scikit-fem, METIS and CHOLMOD are imported inside the functions: `cogniframe check` never loads
+them when the joint results are cached.
 """
 
 from __future__ import annotations
 
-import os
-import tempfile
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,66 +50,6 @@ class Condensed:
     n_elements: int
     n_dofs: int
     tied_area: tuple[float, ...]  # mm^2 per tie (a check that the selection found its surface)
-
-
-# -- meshing --------------------------------------------------------------------------------
-
-def _gmsh():
-    import gmsh
-
-    if not gmsh.isInitialized():
-        # interruptible=False: gmsh would otherwise replace the SIGINT handler (Ctrl-C must stay the CLI's)
-        gmsh.initialize(["-noenv"], readConfigFiles=False, interruptible=False)
-    gmsh.option.setNumber("General.Terminal", 0)
-    gmsh.option.setNumber("General.NumThreads", 1)
-    gmsh.option.setNumber("Mesh.MaxNumThreads3D", 1)
-    gmsh.option.setNumber("Mesh.RandomSeed", 1)
-    return gmsh
-
-
-def mesh_occ(build, h: float, name: str = "part", curvature: int = 12) -> tuple[np.ndarray, np.ndarray]:
-    """Mesh the volume that ``build(gmsh.model.occ)`` creates; returns (points (3, N), tets (4, M))."""
-    gmsh = _gmsh()
-    gmsh.model.add(name)
-    try:
-        build(gmsh.model.occ)
-        gmsh.model.occ.synchronize()
-        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
-        gmsh.option.setNumber("Mesh.MeshSizeMin", h / 3)
-        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", curvature)
-        gmsh.option.setNumber("Mesh.Algorithm3D", 1)
-        gmsh.option.setNumber("Mesh.Optimize", 1)
-        try:
-            gmsh.model.mesh.generate(3)
-        except Exception as exc:  # gmsh raises bare Exception
-            raise RuntimeError(f"gmsh could not mesh {name}: {exc}") from None
-        tags, coords, _ = gmsh.model.mesh.getNodes()
-        etypes, _, enodes = gmsh.model.mesh.getElements(3)
-        tet = [enodes[i] for i, t in enumerate(etypes) if t == 4]
-        if not tet:
-            raise RuntimeError(f"gmsh produced no tetrahedra for {name}")
-        conn = np.concatenate(tet).astype(np.int64).reshape(-1, 4)
-    finally:
-        gmsh.model.remove()
-    pos = np.zeros(int(tags.max()) + 1, dtype=np.int64)
-    pos[tags.astype(np.int64)] = np.arange(tags.size)
-    pts = coords.reshape(-1, 3).T
-    t = pos[conn].T
-    used = np.unique(t)
-    remap = np.full(pts.shape[1], -1, dtype=np.int64)
-    remap[used] = np.arange(used.size)
-    return np.ascontiguousarray(pts[:, used]), np.ascontiguousarray(remap[t])
-
-
-def mesh_brep_text(brep: str, h: float, curvature: int = 12) -> tuple[np.ndarray, np.ndarray]:
-    """Mesh a solid given as OCC BREP text (what CadQuery's ``exportBrep`` writes)."""
-    fd, path = tempfile.mkstemp(suffix=".brep")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(brep)
-        return mesh_occ(lambda occ: occ.importShapes(path), h, "joint", curvature)
-    finally:
-        os.unlink(path)
 
 
 # -- elasticity and condensation ------------------------------------------------------------

@@ -1,0 +1,113 @@
+"""The solid-FE joint super-element (``method="fe"``, the default): the part's own CAD solid,
+meshed and condensed onto its rods and support.
+
+The solid is exactly what is printed (`parts/joint.py`: D-section sleeves, hub, foot pad, the
+knee's slotted living hinge); `meshing` turns it into gmsh tetrahedra and `solid_fe` condenses
+scikit-fem quadratic elasticity onto rigid bodies. This module picks those bodies' surfaces:
+each rod is tied to its bore wall and socket bottom through the elastic interface layer
+(`model.interface`); the support body is tied stiffly to the pad (floor) or to the bolt hole and
+the tab's underside (core plate). It also holds the mesh settings, which are part of the joint
+cache key.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from .model import JointStiffness, _block_rot, _has_body, interface, joint_kind
+
+FE_CURVATURE = 8  # elements per full circle on curved faces (bores)
+FE_MESH_MM = 1.5  # tetrahedron size in the joint FE (converged to < 2 %: tests/test_joint_fe.py)
+_TIE_STIFF = 1.0e4  # support ties (floor, bolt): per unit area, x E, effectively rigid
+
+
+def _nu(e: float, g: float) -> float:
+    return float(min(max(e / (2 * g) - 1, 0.0), 0.499))
+
+
+def fe_joint(spec, part, factor: float | None = None, mesh_mm: float | None = None) -> JointStiffness:
+    """Super-element from the solid FE of the part's CAD (see the module docstring).
+
+    With one BLAS thread wherever it runs (a pool worker, a fork, this process): the thread count
+    changes the order of the dense sums, and the cached numbers must be the same bits whichever
+    path solved them."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _fe_joint(spec, part, factor, mesh_mm)
+
+
+def _fe_joint(spec, part, factor: float | None, mesh_mm: float | None) -> JointStiffness:
+    from . import meshing, solid_fe
+    from ...parts.shapes import brep_text, shared_brep
+    from ...parts import joint as joint_cad
+
+    t0 = time.perf_counter()
+    mesh_mm = FE_MESH_MM if mesh_mm is None else mesh_mm
+    itf = interface(spec, factor)
+    m = joint_cad.print_from_local(part)
+    # the shape the build's part step stored (the same text), else built here
+    shared = shared_brep(part)
+    try:
+        pts, tets = meshing.mesh_brep_text(shared or brep_text(joint_cad.build(part).shape), mesh_mm, FE_CURVATURE)
+    except RuntimeError:
+        if shared is None:
+            raise
+        # a damaged cache file is a miss, never an error
+        pts, tets = meshing.mesh_brep_text(brep_text(joint_cad.build(part).shape), mesh_mm, FE_CURVATURE)
+    R, o = m[:3, :3], m[:3, 3]
+    ties = []
+    refs_local = []
+    # facet centroids of the faceted bore lie up to the sagitta inside the true cylinder
+    tol = 0.1 + 0.5 * part.sockets[0].bore * (1 - math.cos(math.pi / FE_CURVATURE))
+    for s in part.sockets:
+        d = R @ np.asarray(s.direction, float)
+        bottom = R @ np.asarray(s.bottom(), float) + o
+        mouth_l = np.asarray(s.mouth(), float)
+        refs_local.append(tuple(float(v) for v in mouth_l))
+        rb = s.bore / 2
+        depth = s.depth - joint_cad.CHAMFER
+
+        def sel(c, n, d=d, bottom=bottom, rb=rb, depth=depth):
+            rel = c - bottom[:, None]
+            t = d @ rel
+            radial = np.linalg.norm(rel - np.outer(d, t), axis=0)
+            wall = (t > -tol) & (t < depth + tol) & (np.abs(radial - rb) < tol)
+            floor = (np.abs(t) < tol) & (radial < rb + tol) & (np.abs(d @ n) > 0.9)
+            return wall | floor
+
+        ties.append(solid_fe.Tie(s.rod, sel, tuple(R @ mouth_l + o), itf.e / itf.h, itf.g / itf.h))
+    labels = tuple(s.rod for s in part.sockets)
+    if joint_kind(part) == "corner_bottom":
+        ties.append(solid_fe.Tie("body", lambda c, n: (c[2] < 1e-3) & (np.abs(n[2]) > 0.99), tuple(o),
+                                 _TIE_STIFF * itf.e, _TIE_STIFF * itf.e))
+    elif joint_kind(part) == "core_link":
+        bolt = R @ np.asarray(part.param("bolt_hole"), float) + o
+        axis = R @ np.array([0.0, 0.0, 1.0])
+        r_hole = float(part.param("screw_clearance")) / 2
+        z0 = float(part.param("plate_top_z"))
+
+        def sel_bolt(c, n, bolt=bolt, axis=axis):
+            rel = c - bolt[:, None]
+            t = axis @ rel
+            radial = np.linalg.norm(rel - np.outer(axis, t), axis=0)
+            hole = np.abs(radial - r_hole) < tol
+            # the tab's underside on the plate: local z = plate_top_z, facing down (local -z)
+            zl = axis @ (c - o[:, None])
+            under = (np.abs(zl - z0) < 1e-3) & ((axis @ n) < -0.99)
+            return hole | under
+
+        ties.append(solid_fe.Tie("body", sel_bolt, tuple(o), _TIE_STIFF * itf.e, _TIE_STIFF * itf.e))
+    if _has_body(part):
+        labels += ("body",)
+    c = solid_fe.condense(pts, tets, itf.e, _nu(itf.e, itf.g), ties)
+    # back to the part's local frame: u_print = R u_local
+    T = np.kron(np.eye(len(ties)), _block_rot(R))
+    K = T.T @ c.K @ T
+    refs = refs_local + ([(0.0, 0.0, 0.0)] if _has_body(part) else [])
+    K = 0.5 * (K + K.T)
+    return JointStiffness(part.name, "fe", labels, tuple(refs), tuple(map(tuple, K.tolist())), c.n_dofs,
+                          time.perf_counter() - t0)
