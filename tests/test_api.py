@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import shutil
 import subprocess
 import sys
@@ -18,14 +17,13 @@ from pathlib import Path
 
 import pytest
 
+from browser import CHROMIUM, FLAGS, browser_or_skip
+
 import cogniframe as cf
 from cogniframe.api import yamledit
 
 ROOT = Path(__file__).resolve().parents[1]
 CARBON = ROOT / "params" / "carbon.yaml"
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
-FLAGS = ["--headless=new", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-         "--disable-component-update", "--no-first-run", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
 
 
 @pytest.fixture(scope="module")
@@ -217,17 +215,6 @@ def test_build_writes_the_cli_folder_under_its_rules(tmp_path, carbon):
 
 # -- the 3D view in Jupyter -------------------------------------------------------------------
 
-def _browser_or_skip():
-    try:
-        from playwright.sync_api import sync_playwright  # noqa: F401
-    except ImportError:
-        if os.environ.get("CI"):
-            raise
-        pytest.skip("python playwright is not installed")
-    if not Path(CHROMIUM).is_file():
-        if os.environ.get("CI"):
-            pytest.fail(f"{CHROMIUM} missing: .ci/run must apt-get install chromium")
-        pytest.skip("chromium is not installed (apt-get install chromium)")
 
 
 @pytest.mark.slow
@@ -239,7 +226,7 @@ def test_repr_html_draws_the_design_offline(carbon, tmp_path):
     assert again != fragment  # ids of its own: two views can sit in one notebook
     page = tmp_path / "notebook.html"
     page.write_text(f"<!doctype html><html><body>{fragment}<hr>{again}</body></html>", encoding="utf-8")
-    _browser_or_skip()
+    browser_or_skip()
     import io
 
     import numpy as np

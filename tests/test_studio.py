@@ -26,15 +26,14 @@ from pathlib import Path
 
 import pytest
 
+from browser import CHROMIUM, FLAGS, browser_or_skip
+
 import cogniframe as cf
 from cogniframe import spec as spec_mod
 from cogniframe.studio import form
 
 ROOT = Path(__file__).resolve().parents[1]
 CARBON = ROOT / "params" / "carbon.yaml"
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
-FLAGS = ["--headless=new", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-         "--disable-component-update", "--no-first-run", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
 
 
 # -- the form ---------------------------------------------------------------------------------
@@ -263,23 +262,12 @@ def test_bad_params_or_busy_port_exit_2(tmp_path, run_cli):
 
 # -- in the browser ---------------------------------------------------------------------------
 
-def _browser_or_skip():
-    try:
-        from playwright.sync_api import sync_playwright  # noqa: F401
-    except ImportError:
-        if os.environ.get("CI"):
-            raise
-        pytest.skip("python playwright is not installed")
-    if not Path(CHROMIUM).is_file():
-        if os.environ.get("CI"):
-            pytest.fail(f"{CHROMIUM} missing: .ci/run must apt-get install chromium")
-        pytest.skip("chromium is not installed (apt-get install chromium)")
 
 
 @pytest.fixture(scope="module")
 def studio(tmp_path_factory):
     """A running `cogniframe studio carbon.yaml` in a folder of its own, and a browser."""
-    _browser_or_skip()
+    browser_or_skip()
     from playwright.sync_api import sync_playwright
 
     folder = tmp_path_factory.mktemp("studio")

@@ -11,13 +11,13 @@ CI (`CI` set) they fail instead, so the check cannot silently vanish.
 from __future__ import annotations
 
 import io
-import os
 import re
-import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
+
+from browser import CHROMIUM, FLAGS, browser_or_skip
 import trimesh
 
 from cogniframe import design as design_mod
@@ -29,22 +29,8 @@ from cogniframe.report import html as report
 from cogniframe.report.viewer import BACKGROUND, ViewerItem, design_items
 
 ROOT = Path(__file__).resolve().parents[1]
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
-FLAGS = ["--headless=new", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-         "--disable-component-update", "--no-first-run", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
 
 
-def _browser_or_skip():
-    try:
-        from playwright.sync_api import sync_playwright  # noqa: F401
-    except ImportError:
-        if os.environ.get("CI"):
-            raise
-        pytest.skip("python playwright is not installed")
-    if not Path(CHROMIUM).is_file():
-        if os.environ.get("CI"):
-            pytest.fail(f"{CHROMIUM} missing: .ci/run must apt-get install chromium")
-        pytest.skip("chromium is not installed (apt-get install chromium)")
 
 
 @pytest.fixture(scope="module")
@@ -93,7 +79,7 @@ def test_html_loads_nothing_from_the_network(carbon_report):
 
 @pytest.fixture(scope="module")
 def page_factory():
-    _browser_or_skip()
+    browser_or_skip()
     from playwright.sync_api import sync_playwright
 
     with sync_playwright() as p:
