@@ -31,7 +31,7 @@ def main(argv: list[str] | None = None) -> int:
     from cogniframe import frame, partlist, spec
     from cogniframe.analysis import joints, stiffness
     from cogniframe.analysis.joints import solid_fe
-    from cogniframe.runtime.blas import one_blas_thread
+    from cogniframe.analysis.numerics import one_blas_thread
 
     s = spec.load(args.params)
     f = frame.build(s)

@@ -106,12 +106,11 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
     if solved is not None:
         play, mdl, K0, u = solved.play or None, solved.model, solved.K, solved.u
     else:
-        mdl = None
         if play is None:
-            play, mdl = _play(spec, frame, parts, joints, PLAY_REFERENCE_N)
+            play = _play(spec, frame, parts, joints, PLAY_REFERENCE_N)[0]
         play = play or None
-        if mdl is None:
-            mdl = build_model(spec, frame, parts, joints, play=play)
+        # built afresh with the final springs, as `secant_solution` builds it: the same bits of k
+        mdl = build_model(spec, frame, parts, joints, play=play)
         K0 = mdl.fe.stiffness(sparse=True)
         mdl, _, u = _solve_payload(spec, frame, parts, joints, play=play, mdl=mdl, K0=K0)
     fe = mdl.fe

@@ -499,8 +499,9 @@ def predict_stiffness(spec, frame, parts=None, *, joint_model: str = "fe", facto
 
         parts = partlist.build(spec, frame)
     joints = joints if joints is not None else joint_models(spec, parts, joint_model, factor)
-    play, mdl = _play(spec, frame, parts, joints, design_force_n) if design_force_n else ({}, None)
-    mdl, K, u = _solve_payload(spec, frame, parts, joints, feet, load_n, play or None, mdl=mdl)
+    play = _play(spec, frame, parts, joints, design_force_n)[0] if design_force_n else {}
+    # built afresh with the final springs, as `secant_solution` and the load cases build it
+    mdl, K, u = _solve_payload(spec, frame, parts, joints, feet, load_n, play or None)
     fe = mdl.fe
     d = -u[_dof(fe, mdl.payload, 2)]
     if not (d > 0 and math.isfinite(d)):
@@ -560,9 +561,10 @@ class SecantSolution:
 
 
 def secant_solution(spec, frame, parts, joints) -> SecantSolution:
-    play, mdl = _play(spec, frame, parts, joints, PLAY_REFERENCE_N)
-    if mdl is None:
-        mdl = build_model(spec, frame, parts, joints)
+    play, _ = _play(spec, frame, parts, joints, PLAY_REFERENCE_N)
+    # the model built afresh with the final play springs, as the load cases build it from the
+    # cached springs: the same assembly, so k has the same bits whether or not the cache held it
+    mdl = build_model(spec, frame, parts, joints, play=play or None)
     K0 = mdl.fe.stiffness(sparse=True)
     mdl, _, u = _solve_payload(spec, frame, parts, joints, play=play or None, mdl=mdl, K0=K0)
     d = -u[_dof(mdl.fe, mdl.payload, 2)]

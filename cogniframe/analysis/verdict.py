@@ -11,9 +11,11 @@ from dataclasses import dataclass, replace
 from ..design import Design, design
 from ..spec import Spec
 from . import mass as mass_mod
+from .numerics import one_blas_thread
 
 
 @dataclass(frozen=True)
+
 class CheckResult:
     design: Design
     mass: mass_mod.MassBudget
@@ -28,11 +30,13 @@ class CheckResult:
     def verdict(self) -> str:
         return "FAIL" if self.problems else "PASS"
 
+
 def check(spec: Spec, geometry: dict | None = None, clash=None, design_: Design | None = None) -> CheckResult:
     """Mass budget, crash margin, flight and requirements; `geometry` = CAD volumes when known,
     `clash` = the build's clash check (analysis.clash.ClashResult) when known, `design_` = this
     spec's design when the caller has it."""
     return with_clash(complete(spec, *mass_and_drop(spec, geometry, design_)), clash)
+
 
 def mass_and_drop(spec: Spec, geometry: dict | None = None, design_: Design | None = None):
     """The first, cheap part of `check`: (design, mass budget, drop model, frame session): what the
@@ -42,23 +46,29 @@ def mass_and_drop(spec: Spec, geometry: dict | None = None, design_: Design | No
     from . import drop as drop_mod
 
     session = drop_mod.Session(spec, d.frame, d.parts)  # the frame model, solved at most once per check
-    return d, budget, _drop(spec, d, budget, session), session
+    with one_blas_thread():  # the same bits whoever calls, on any machine (and in the disk caches)
+        drop = _drop(spec, d, budget, session)
+    return d, budget, drop, session
+
 
 def complete(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=None) -> CheckResult:
     """The rest of `check` for that mass budget and drop model: load cases, peaks, flight and the
     verdict (no clash check: `with_clash` adds the build's)."""
-    stiffness, peak = _physics(spec, d, budget, drop, session)
+    with one_blas_thread():
+        stiffness, peak = _physics(spec, d, budget, drop, session)
     from . import flight as flight_mod
 
     flight = flight_mod.evaluate(spec, budget.total_g)
     problems = _problems(spec, budget, drop) + _physics_problems(spec, stiffness, peak) + _aircraft_problems(spec, flight)
     return CheckResult(d, budget, drop, tuple(problems), stiffness, peak, flight)
 
+
 def with_clash(result: CheckResult, clash) -> CheckResult:
     """`result` with the build's clash check: its clashes are FAIL problems, after the others."""
     if clash is None:
         return result
     return replace(result, problems=result.problems + tuple(clash.messages()), clash=clash)
+
 
 def _aircraft_problems(spec: Spec, flight) -> list[str]:
     """Thrust-to-weight below requirements.min_thrust_to_weight."""
@@ -69,10 +79,12 @@ def _aircraft_problems(spec: Spec, flight) -> list[str]:
                    f"{flight.mass_g:.0f} g; choose stronger motors, bigger props, more cells or a lighter design")
     return out
 
+
 def _drop(spec: Spec, d: Design, budget: mass_mod.MassBudget, session=None):
     from . import drop as drop_mod
 
     return drop_mod.evaluate_design(spec, d.frame, budget.total_g, session)
+
 
 def _physics(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=None):
     """The frame's load cases and the predicted peak deceleration (both cached on disk)."""
@@ -83,6 +95,7 @@ def _physics(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=N
     cases = drop_mod.load_cases(spec, d.frame, budget.total_g, drop, session)
     peak = drop_mod.peak_prediction(spec, budget.total_g, drop, budget.groups["exoskeleton"])
     return cases, peak
+
 
 def _physics_problems(spec: Spec, stiffness: dict | None, peak: dict | None) -> list[str]:
     out = []
@@ -109,6 +122,7 @@ def _physics_problems(spec: Spec, stiffness: dict | None, peak: dict | None) -> 
                        f"({peak['model']}) is above requirements.max_peak_g = {req.max_peak_g:g} G")
     return out
 
+
 def _problems(spec: Spec, budget: mass_mod.MassBudget, drop) -> list[str]:
     out = []
     if budget.total_g > spec.requirements.mass_limit:
@@ -118,6 +132,7 @@ def _problems(spec: Spec, budget: mass_mod.MassBudget, drop) -> list[str]:
         out.append(f"design drop height {spec.requirements.design_drop_height_cm:g} cm exceeds the max safe drop height "
                    f"{drop.max_safe_height_cm:.1f} cm: the battery holder would hit the ground (requirements.design_drop_height_cm)")
     return out
+
 
 def check_dict(result: CheckResult) -> dict:
     """The stable JSON of `cogniframe check --json`."""

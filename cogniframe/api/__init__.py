@@ -182,7 +182,7 @@ class Design:
         """Mass budget, stiffness, crash model, flight and PASS/FAIL: `cogniframe check`. The first
         check of a new joint geometry runs its solid FE (seconds; cached after)."""
         from ..analysis import verdict
-        from ..runtime.blas import one_blas_thread
+        from ..analysis.numerics import one_blas_thread
 
         from ..runtime.pools import joint_fe_workers
 

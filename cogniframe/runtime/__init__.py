@@ -16,11 +16,12 @@ The stages and the build steps never start a process or a thread themselves; the
   reported: the first error is), and the build ends when the steps under way have; nothing is written to the output.
 - **Workers die with the build** and run nicer than it (`pools.behind_the_build`); the CAD server
   (`server`) outlives builds on purpose and serves only builds of the same code and environment.
-- **BLAS runs one thread per process** while the build computes (`blas.one_blas_thread`).
+- **BLAS runs one thread per process** while the build computes (`analysis.numerics.one_blas_thread`).
 
 Modules: `pools` (the CAD pool, process pools, worker start-up and priority), `server` (the CAD
 server kept between builds), `worker` (the CAD workers' bootstrap), `warm` (idle-time imports),
-`heap` (the collector around big imports), `blas` (BLAS threads).
+`heap` (the collector around big imports). The BLAS rule lives with the numbers it keeps stable
+(`analysis.numerics`).
 """
 
 from __future__ import annotations
@@ -51,7 +52,7 @@ class BuildRuntime(contextlib.AbstractContextManager):
         self.warm.stop_soon()
 
     def __enter__(self):
-        from .blas import one_blas_thread
+        from ..analysis.numerics import one_blas_thread
 
         self._blas = one_blas_thread()
         self._blas.__enter__()

@@ -34,10 +34,9 @@ def fe_joint(spec, part, factor: float | None = None, mesh_mm: float | None = No
     With one BLAS thread wherever it runs (a pool worker, a fork, this process): the thread count
     changes the order of the dense sums, and the cached numbers must be the same bits whichever
     path solved them."""
-    import scipy.linalg  # noqa: F401 - loads scipy's own OpenBLAS first, so that the limit reaches it too
-    from threadpoolctl import threadpool_limits
+    from ..numerics import one_blas_thread
 
-    with threadpool_limits(limits=1, user_api="blas"):
+    with one_blas_thread():
         return _fe_joint(spec, part, factor, mesh_mm)
 
 

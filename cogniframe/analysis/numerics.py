@@ -1,4 +1,4 @@
-"""One BLAS thread per process while cogniframe computes (threadpoolctl).
+"""One BLAS thread while cogniframe computes (threadpoolctl): the same numbers on any machine.
 
 The frame's matrices are small (a few hundred to a few thousand unknowns): OpenBLAS's threads
 save little on them and, on a machine with as many busy processes as cores (the build runs the
@@ -13,15 +13,32 @@ OpenBLAS: scipy.linalg is imported first so that both are) and restores them on 
 from __future__ import annotations
 
 import contextlib
+import threading
+
+
+# The BLAS thread count is the process's, not a thread's: while any thread of this process is
+# inside `one_blas_thread`, the limit holds; the last one out restores the libraries' own.
+_LOCK = threading.Lock()
+_USERS = [0, None]  # threads inside, the limiter that restores on the last exit
 
 
 @contextlib.contextmanager
 def one_blas_thread():
     try:
         import scipy.linalg  # noqa: F401 - loads scipy's own OpenBLAS, so the limit reaches it too
-        from threadpoolctl import threadpool_limits
+        from threadpoolctl import ThreadpoolController
     except ImportError:  # no threadpoolctl: run with the libraries' defaults
         yield
         return
-    with threadpool_limits(limits=1, user_api="blas"):
+    with _LOCK:
+        if _USERS[0] == 0:
+            _USERS[1] = ThreadpoolController().limit(limits=1, user_api="blas")
+        _USERS[0] += 1
+    try:
         yield
+    finally:
+        with _LOCK:
+            _USERS[0] -= 1
+            if _USERS[0] == 0:
+                _USERS[1].restore_original_limits()
+                _USERS[1] = None
