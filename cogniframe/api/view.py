@@ -95,7 +95,7 @@ def scene(spec, design, *, server: bool | None = None, on_step=None, log=None) -
 
 def design_html(d) -> str:
     """The design's 3D view as one self-contained HTML fragment (for Jupyter's `_repr_html_`)."""
-    meta, buf = scene(d.spec, d.pipeline_design)
+    meta, buf = scene(d.spec, d.derived)
     return inline_html(meta, buf, title=f"{d.name}: 3D view")
 
 
