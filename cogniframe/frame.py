@@ -304,7 +304,8 @@ def _arm_lateral(knee: np.ndarray, link: np.ndarray) -> np.ndarray:
 
 
 def _node_seat(n: str, pos, edges, inc: list[int], spec: Spec) -> float:
-    """Socket-bottom distance at a joint: the spec's seat, raised so no two bores meet."""
+    """Socket-bottom distance at a joint: the spec's seat, raised so no two bores meet, and at a
+    knee so that its living hinge has room (`_hinge_seat`)."""
     j = spec.joints
     dirs, ports = [], []
     p0 = pos[n][1]
@@ -324,7 +325,27 @@ def _node_seat(n: str, pos, edges, inc: list[int], spec: Spec) -> float:
             half = math.acos(cosang) / 2
             if half > 1e-6:
                 need = max(need, r / math.tan(half))
+    if pos[n][0] == "knee":
+        need = max(need, _hinge_seat(dirs, [edges[i][1] for i in inc], j.wall))
     return round(need, 2)
+
+
+def _hinge_seat(dirs: list[np.ndarray], roles: list[str], wall: float) -> float:
+    """The least seat at a knee that leaves its living hinge room. The knee's arm block and the
+    hinged leg's sleeve (the leg at the larger angle to the arms, parts/joint.py) both start at
+    seat - wall from the knee centre, and the leg is freed from the block by a `HINGE_GAP` slot;
+    the hinge web runs from the centre of the leg's back face to the block's back face. That
+    centre lies (seat - wall) (1 - cos angle) behind the block's back face: it must clear the
+    slot and as much again, or the slot cuts off the end of the leg the web holds and the knee
+    prints in two pieces (the seat at its minimum, or walls thick for the seat: joints.seat 0,
+    or joints.wall 2.9 mm with the presets' 3 mm seat). The presets need 2.3 mm."""
+    from .parts.joint import HINGE_GAP  # pure numpy; the joint CAD owns the slot width
+
+    arm = next(d for d, role in zip(dirs, roles) if role == "arm")
+    legs = [float(d @ arm) for d, role in zip(dirs, roles) if role == "leg"]
+    if not legs:
+        return 0.0
+    return wall + 2 * HINGE_GAP / max(1.0 - min(legs), 1e-6)
 
 
 STACK_H = 16.0  # FC + 4-in-1 ESC on 8 mm standoffs, mm

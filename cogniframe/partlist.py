@@ -411,6 +411,9 @@ def _mount_rotation(frame: Frame, m0, m) -> float:
     return deg
 
 
+MOUNT_CLEAR = 0.2  # mm: the motor seat's sides stand this far outside its clip sleeves
+
+
 def _motor_mount(spec: Spec, frame: Frame) -> PartSpec:
     m0 = frame.motors[0]
     motor = spec.motor
@@ -418,7 +421,12 @@ def _motor_mount(spec: Spec, frame: Frame) -> PartSpec:
     # Rod axis points through the mount's local origin (the motor axis on the arm centreline).
     rods_local = mount_rods(frame, m0)
     screw = SCREWS[motor.screw]
-    width = max(motor.bell_d + 4.0, spec.frame.arm_spacing + spec.bore + 2 * spec.joints.wall)
+    # The seat carries the bell, reaches MOUNT_CLEAR past the arm pair's clips (flush with them, its
+    # sides were tangent to the clip sleeves: 1 mm rods 26.4 mm apart gave a 1e-9 mm^2 sliver face and
+    # an STL with a hole) and holds the motor's bolt pattern with a wall outside each hole (bolts near
+    # its edge cut its corners off: motors.bolt_spacing 20 mm).
+    width = max(motor.bell_d + 4.0, spec.frame.arm_spacing + spec.bore + 2 * spec.joints.wall + 2 * MOUNT_CLEAR,
+                motor.bolt_spacing + screw.clearance_d + 2 * spec.joints.wall)
     thick = spec.joints.wall + 1.5
     clip_len = width
     od = spec.bore + 2 * spec.joints.wall
@@ -614,6 +622,7 @@ def _sensor_mount(spec: Spec, frame: Frame) -> PartSpec:
 
 
 CAMERA_WALL = 1.6  # camera mount upright thickness, mm
+CAMERA_SPINE = 3.0  # mm: the camera mount's base keeps at least this either side of its centre line up to the upright
 
 
 def camera_mount_geometry(spec: Spec, frame: Frame) -> dict:
@@ -643,7 +652,9 @@ def _camera_mount(spec: Spec, frame: Frame) -> PartSpec:
     g = camera_mount_geometry(spec, frame)
     screw = SCREWS[c.stack_screw]
     w, yf, yb, bt, wall, height = g["width"], g["y_front"], g["y_back"], g["base_t"], g["wall"], g["height"]
-    corner = max(0.0, w / 2 - (g["corner_cut"] - (yf - wall))) ** 2 / 2  # each front corner cut off the base (behind the upright)
+    k = g["corner_cut"] - (yf - wall)  # where each front corner cut (behind the upright) meets the upright's back face, |x|
+    x0 = max(k, CAMERA_SPINE)  # never nearer the centre line (parts/core.py)
+    corner = (max(0.0, w / 2 - k) ** 2 - max(0.0, min(x0, w / 2) - k) ** 2) / 2  # area of each corner cut off the base
     bw, hy = min(w / 2 - 4.0, 6.0), min(5.0, (yf - yb) / 2 - 8.0)
     base_win = _hexagon_area(2 * bw, 2 * hy) if bw > 2.0 and hy > 1.0 and bw >= hy else 0.0
     up_win = _hexagon_area(height - 12.0, 10.0) if height - 6.0 > 10.0 and abs(g["tilt_deg"]) <= 5.0 else 0.0

@@ -8,6 +8,23 @@
   strut sleeve's top (bore 2.4 mm = M2 clearance) and its STL was not watertight.
 * rectangles: rounding of the stored sockets left the two arm sleeves ~1e-5 mm apart (zero-area
   faces the FE mesher rejected), and OCC's many-piece fuse left a 0 mm^3 solid on a bottom corner.
+
+Found by sweeping the schema (random designs and every geometry key across its bounds, one and two
+at a time, each part built and written as an STL):
+
+* a large joints.seat (d22: 174.1 x 155.4 x 111.6 box, seat 5.98): the knee's lower leg leaves
+  the knee square to the arms and the seat puts the arm block's back face beyond its sleeve;
+  `_rigid_leg_start` answered a start 51 mm behind the knee (its test looked at one side of the
+  block only) and the knee still printed in two. No start can join them: a hub does.
+* a small seat for the walls (joints.seat 0, or joints.wall 2.9 mm and more with the 3 mm seat):
+  the hinge slot cut off the end of the upper leg that the hinge web holds; the knee's seat is now
+  raised until the hinge has room (frame._hinge_seat).
+* the motor mount: two clip sleeves 2e-6 mm out of line (stored rods, a rectangle) fused into
+  slivers where thick walls overlap them; a level arm got a bare cylinder 0.5 mm above the seat;
+  a bolt pattern as wide as the seat cut its corners off; a seat only as wide as the clips (thin
+  rods, a wide arm pair) had its sides tangent to them.
+* the camera mount: a thick core plate brings the link bolts in until the base's two corner cuts
+  meet in front of the upright and cut it off.
 """
 
 from __future__ import annotations
@@ -25,12 +42,36 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _variant(base: str, **changes) -> spec_mod.Spec:
+    """A preset with keys changed: `joints__seat=6` (`joints__fit_clearance__tpu_95a` one level deeper)."""
     data = yaml.safe_load((ROOT / "params" / f"{base}.yaml").read_text(encoding="utf-8"))
     for key, value in changes.items():
-        section, field = key.split("__")
-        data[section][field] = value
+        *path, field = key.split("__")
+        node = data
+        for name in path:
+            node = node[name]
+        node[field] = value
     data["name"] = f"{base}-variant"
     return spec_mod.from_dict(data)
+
+
+def _parts(spec, names):
+    return [p for p in design_mod.design(spec).parts if p.name in names]
+
+
+def _one_watertight_solid(part):
+    """The part builds as one valid solid and its STL, written and read back, is closed (the
+    build's own check, export.mesh.write_stl)."""
+    import tempfile
+
+    from cogniframe.export.mesh import write_stl
+    from cogniframe.parts import registry
+
+    built = registry.build(part)  # the builders raise unless it is one solid
+    assert built.shape.isValid() and len(built.shape.Solids()) == 1, part.name
+    with tempfile.TemporaryDirectory() as tmp:
+        mesh = write_stl(built.shape, Path(tmp) / "part.stl", name=part.name)  # raises unless watertight
+    assert mesh.body_count == 1, part.name
+    return built
 
 
 def _joints(spec, names=None):
@@ -149,3 +190,162 @@ def test_rectangle_joints_have_no_sliver_faces(box):
         shape = registry.build(part).shape
         assert shape.isValid(), part.name
         assert min(f.Area() for f in shape.Faces()) > 1e-4, part.name
+
+
+# -- what the schema sweep found ------------------------------------------------------------------
+
+# d22 (tools' random designs): a small, tall box and a 5.98 mm seat
+D22 = {"frame__width": 174.1, "frame__depth": 155.4, "frame__height": 111.6, "joints__seat": 5.979,
+       "motors__radius": 60.7, "motors__prop_diameter": 56.4}
+
+
+def test_a_large_seat_joins_the_lower_leg_by_a_hub():
+    """Pure numpy: with the d22 seat no start of the lower leg's sleeve reaches the arm block
+    (`_rigid_leg_start` is None, where it used to answer 51 mm behind the knee), and the hub that
+    joins them overlaps both and stays clear of the hinge web and its slots."""
+    from cogniframe.parts.joint import (
+        HINGE_GAP,
+        _footprint_rect,
+        _groups,
+        _hull,
+        _knee_hub,
+        _rigid_leg_start,
+        knee_hinge,
+        map_sockets,
+        print_from_local,
+    )
+
+    for knee in _joints(_variant("carbon", **D22), ["knee", "knee_mirrored"]):
+        socks = map_sockets(knee, print_from_local(knee))
+        arms, legs = _groups(socks)
+        a = arms[0]
+        r = a.bore / 2 + knee.wall
+        s_back = a.seat - knee.wall
+        rigid = max(legs, key=lambda s: float(s.direction @ a.direction))
+        assert _rigid_leg_start(a, rigid, r, s_back, knee.wall) is None, knee.name
+        web = knee_hinge(knee)
+        hub = _knee_hub(a, rigid, r, s_back, knee.wall, web)
+        # it overlaps the block's back and the leg's back face (their hull is what it is cut from)
+        block = _hull(np.array(_footprint_rect(a, s_back, s_back + 1.0, r)))
+        leg = _footprint_rect(rigid, rigid.seat - knee.wall, rigid.seat - knee.wall + 1.0, r)
+        inside = [p for p in np.array(block) if _in_polygon(p, hub)]
+        assert inside, knee.name
+        assert any(_in_polygon(p, hub) for p in np.array(leg)), knee.name
+        # and keeps the web and the slot either side of it free
+        side = (hub - web.start) @ web.normal
+        assert np.all(side >= web.thickness / 2 + HINGE_GAP - 1e-9) or np.all(side <= -(web.thickness / 2 + HINGE_GAP) + 1e-9)
+
+
+def _in_polygon(p, poly) -> bool:
+    """Point in a convex polygon (either winding), boundary included."""
+    poly = np.asarray(poly)
+    def cross(u, v) -> float:
+        return float(u[0] * v[1] - u[1] * v[0])
+
+    sides = [cross(poly[(i + 1) % len(poly)] - poly[i], p - poly[i]) for i in range(len(poly))]
+    return all(c >= -1e-9 for c in sides) or all(c <= 1e-9 for c in sides)
+
+
+@pytest.mark.slow
+def test_d22_knees_build_in_one_piece():
+    """The reported case: `registry.build` raised "joint geometry produced 2 solids instead of 1"
+    for knee and knee_mirrored."""
+    for knee in _parts(_variant("carbon", **D22), ["knee", "knee_mirrored"]):
+        built = _one_watertight_solid(knee)
+        assert built.shape.Volume() > 1000
+
+
+@pytest.mark.parametrize("base", ["carbon", "bamboo"])
+@pytest.mark.parametrize("change", [{"joints__seat": 0.0}, {"joints__seat": 1.0}, {"joints__wall": 2.88},
+                                    {"joints__wall": 6.0}, {}])
+def test_knee_seat_leaves_the_hinge_room(base, change):
+    """Pure numpy: the hinged leg's back-face centre lies at least two slots (2 x HINGE_GAP)
+    behind the arm block's back face: the web crosses its slot and as much again. The presets'
+    3 mm seat already does and is kept."""
+    from cogniframe.parts.joint import (
+        HINGE_GAP,
+        _groups,
+        horizontal,
+        map_sockets,
+        print_from_local,
+    )
+
+    (knee,) = _joints(_variant(base, **change), ["knee"])
+    socks = map_sockets(knee, print_from_local(knee))
+    arms, legs = _groups(socks)
+    a = arms[0]
+    hinged = min(legs, key=lambda s: float(s.direction @ a.direction))
+    c = hinged.at(hinged.seat - knee.wall)
+    behind = (a.seat - knee.wall) - float((c - a.port) @ horizontal(a.direction))
+    assert behind >= 2 * HINGE_GAP - 0.01  # the seat is kept to 0.01 mm
+    if not change:
+        assert knee.sockets[0].seat == 3.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("base", ["carbon", "bamboo"])
+@pytest.mark.parametrize("change", [{"joints__seat": 0.0}, {"joints__wall": 2.88}, {"joints__wall": 6.0},
+                                    {"joints__seat": 12.0}, {"rods__diameter": 1.0}])
+def test_knees_build_across_seats_and_walls(base, change):
+    for knee in _parts(_variant(base, **change), ["knee"]):
+        _one_watertight_solid(knee)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("base, change", [
+    # a rectangle and thick walls: the clips overlap, their stored rods 2e-6 mm out of line
+    ("carbon", {"frame__width": 242.8, "frame__depth": 188.5, "frame__height": 143.8, "joints__wall": 5.767,
+                "core__spacer_thickness": 6.064, "motors__radius": 73.6, "motors__prop_diameter": 68.4}),
+    ("carbon", {"frame__width": 242.8, "frame__depth": 188.5, "frame__height": 143.8, "joints__wall": 5.5,
+                "motors__radius": 73.6, "motors__prop_diameter": 68.4}),
+    ("carbon", {"frame__arm_spacing": 26.4, "rods__diameter": 1.0}),  # the seat's sides were tangent to the clips
+    ("bamboo", {"frame__knee_height": 0.38}),  # the arm is level: no web under a bare cylinder
+    ("bamboo", {"motors__bolt_spacing": 19.992}),  # the bolt holes cut the seat's corners off
+    ("bamboo", {"motors__bolt_spacing": 40.0}),
+])
+def test_motor_mount_builds(base, change):
+    from cogniframe.partlist import MOUNT_CLEAR
+
+    spec = _variant(base, **change)
+    (mount,) = _parts(spec, ["motor_mount"])
+    _one_watertight_solid(mount)
+    width = float(mount.param("width"))
+    # the seat holds the bolt pattern with a wall outside each hole, and reaches past the clips
+    assert width >= float(mount.param("bolt_spacing")) + float(mount.param("screw_clearance")) + 2 * mount.wall
+    assert width >= spec.frame.arm_spacing + spec.bore + 2 * mount.wall + 2 * MOUNT_CLEAR - 1e-9
+
+
+def test_motor_mount_clips_are_built_on_one_line():
+    """Pure numpy: the second clip's rod is moved onto the line exactly parallel to the first (the
+    stored rods of a rectangle are 2e-6 mm out of line); the presets' pair is kept as it is."""
+    from cogniframe.parts.motor_mount import _parallel
+
+    rect = _variant("carbon", frame__width=242.8, frame__depth=188.5, frame__height=143.8, motors__radius=73.6,
+                    motors__prop_diameter=68.4)
+    for spec, moved in ((rect, True), (spec_mod.load(ROOT / "params" / "carbon.yaml"), False),
+                        (spec_mod.load(ROOT / "params" / "bamboo.yaml"), False)):
+        (mount,) = _parts(spec, ["motor_mount"])
+        rods = [(np.asarray(p, float), np.asarray(d, float) / np.linalg.norm(d)) for p, d in mount.param("arm_rods")]
+        clips = _parallel(rods)
+        assert (clips is not rods) == moved
+        (p0, d0), (p1, d1) = clips
+        assert float(np.abs(d1 - d0).max()) <= 1e-9 and abs(float((p1 - p0) @ d0)) <= 1e-9
+        assert np.linalg.norm(clips[1][0] - rods[1][0]) < 1e-5  # moved by the rounding only
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("thickness", [6.05, 8.0])
+def test_camera_mount_keeps_its_upright_on_a_thick_plate(thickness):
+    """core.plate_thickness 6.05 on the 40 mm carbon plate: the base's corner cuts met on the centre
+    line in front of the upright ("camera_mount geometry produced 2 solids instead of 1"); the base
+    keeps a spine 2 x CAMERA_SPINE wide."""
+    from cogniframe.partlist import CAMERA_SPINE
+
+    (mount,) = _parts(_variant("carbon", core__plate_thickness=thickness), ["front_camera_mount"])
+    built = _one_watertight_solid(mount)
+    # the spine: material on the centre line just behind the upright, through the base's thickness
+    yf, wall, bt = (float(mount.param(k)) for k in ("y_front", "wall", "base_t"))
+    import cadquery as cq
+
+    probe = cq.Solid.makeBox(2 * CAMERA_SPINE - 0.2, 0.5, bt - 0.2, cq.Vector(-CAMERA_SPINE + 0.1, yf - wall - 0.6, 0.1))
+    assert built.shape.intersect(probe).Volume() == pytest.approx(probe.Volume(), rel=1e-6)

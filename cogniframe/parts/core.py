@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import UserError
-from ..partlist import PartSpec
+from ..partlist import CAMERA_SPINE, PartSpec
 from .joint import Built, apply, transform
 
 MIN_SKIN = 0.8  # mm: thinner than two 0.4 mm lines does not print as a wall
@@ -213,9 +213,17 @@ def build_camera_mount(part: PartSpec) -> Built:
     tools = [cq.Solid.makeBox(4 * w, 4 * (yf - yb) + 4 * height, 4 * height, cq.Vector(-2 * w, -2 * (yf - yb) - height, -4 * height)),
              cq.Solid.makeBox(4 * w, 2 * height, bt + 1.0, cq.Vector(-2 * w, yf, -1.0))]
     cc = float(p["corner_cut"])
+    y_cut = yf - wall  # behind the upright only, so the upright never overhangs the cut
+    x0 = max(cc - y_cut, CAMERA_SPINE)  # where each cut starts across the base, from its centre line
     for sx in (-1.0, 1.0):  # front corners of the base, clear of the core links' tabs
-        y_cut = yf - wall  # behind the upright only, so the upright never overhangs the cut
-        tri = [(sx * (cc - y_cut), y_cut), (sx * (cc + 50.0), -50.0), (sx * (cc + 50.0), y_cut)]
+        if x0 == cc - y_cut:
+            tri = [(sx * (cc - y_cut), y_cut), (sx * (cc + 50.0), -50.0), (sx * (cc + 50.0), y_cut)]
+        else:
+            # A thick plate brings the link bolts in (partlist._link_hole) until the two 45 deg cuts
+            # would meet on the centre line in front of the upright's back face and cut the upright
+            # off the base (core.plate_thickness 6 mm on a 40 mm plate): each cut stops short of
+            # the centre line, leaving the base a spine 2 x CAMERA_SPINE wide up to the upright.
+            tri = [(sx * x0, y_cut), (sx * x0, cc - x0), (sx * (cc + 50.0), -50.0), (sx * (cc + 50.0), y_cut)]
         tools.append(_prism_xy(tri, -1.0, bt))
     hole_d = float(p["stack_hole_d"])
     tools += [cq.Solid.makeCylinder(hole_d / 2, bt + 2.0, cq.Vector(float(x), float(y), -1.0)) for x, y in p["stack_holes"]]

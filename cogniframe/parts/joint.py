@@ -30,8 +30,9 @@ upper-leg sleeve to the arm block, with a `HINGE_GAP` slot on both sides that fr
 everywhere else. Layer lines then run along the bend, the way printed living hinges survive. The
 lower leg leaves the knee almost at right angles to the arms and its socket shares a wall with the
 arm sockets (the seat is only `joints.seat` from the knee centre), so it stays solid with the arm
-block; the upper leg, which makes the larger angle with the arms and carries the fold, is the one
-hinged.
+block (where a large seat keeps their sleeves apart, a hub between their back faces joins them);
+the upper leg, which makes the larger angle with the arms and carries the fold, is the one hinged.
+frame.py raises the knee's seat until the slot leaves that leg's back end whole.
 """
 
 from __future__ import annotations
@@ -408,14 +409,18 @@ def knee_hinge(part: PartSpec) -> Hinge:
     return Hinge(c[:2] - e * 0.6, q[:2], np.array([-e[1], e[0]]), h, float(top), probe)
 
 
-def _rigid_leg_start(a: PSocket, s: PSocket, r: float, s_back: float, wall: float) -> float:
-    """Where the rigid (lower) leg's sleeve starts, along it from the port: at its back face
-    (seat - wall), unless that leaves the sleeve's inner back corner less than `JOIN` inside the arm
-    block's footprint (`a`: an arm socket, the block from `s_back` along the arm, r either side) --
-    then further back, just far enough. The leg joins the knee only through that overlap (the
-    hinged leg is cut free of both), and it shrinks as the leg leans back from the arms: with
-    2.3 mm rods (r 2.4) and a 91 mm frame the leg, at 107 deg to the arms, missed the block and the
-    knee fell apart in two. Pure numpy; in plan (every knee sleeve stands on the bed)."""
+def _rigid_leg_start(a: PSocket, s: PSocket, r: float, s_back: float, wall: float) -> float | None:
+    """Where the rigid (lower) leg's sleeve starts, along it from the port, so that it joins the arm
+    block (`a`: an arm socket, the block from `s_back` along the arm, r either side): at its back
+    face (seat - wall) when the sleeve's inner back corner lies `JOIN` inside the block's footprint
+    there; else further back, just far enough, but never behind the knee centre (t < 0). None when
+    no such start puts that corner inside the block on every side: the leg leaves the knee (nearly)
+    square to the arms and the seat puts the block's back face beyond the sleeve's reach (a large
+    `joints.seat`, d22: 5.98 mm seat, leg at 93 deg); the hub joins them then (`_knee_hub`). The
+    leg joins the knee only through that overlap (the hinged leg is cut free of both), and it
+    shrinks as the leg leans back from the arms: with 2.3 mm rods (r 2.4) and a 91 mm frame the
+    leg, at 107 deg to the arms, missed the block and the knee fell apart in two. Pure numpy; in
+    plan (every knee sleeve stands on the bed)."""
     t0 = s.seat - wall
     dx = horizontal(a.direction)
     lat = np.array([-dx[1], dx[0], 0.0])
@@ -425,13 +430,42 @@ def _rigid_leg_start(a: PSocket, s: PSocket, r: float, s_back: float, wall: floa
     side = 1.0 if u @ lat >= 0 else -1.0  # which side of the arms the leg leaves on
     p0 = (s.port - a.port) * np.array([1.0, 1.0, 0.0]) + n * r  # the inner back corner at t = 0
     # each margin is c + k t (mm inside the block): along the arm past the block's back face, and
-    # across it inside the block's side
-    margins = [(float(p0 @ dx) - s_back - JOIN, float(u @ dx)), (r - side * float(p0 @ lat) - JOIN, -side * float(u @ lat))]
+    # across it inside the block's side the leg leaves on, then inside its other side
+    margins = [(float(p0 @ dx) - s_back - JOIN, float(u @ dx)), (r - side * float(p0 @ lat) - JOIN, -side * float(u @ lat)),
+               (r + side * float(p0 @ lat) - JOIN, side * float(u @ lat))]
     t = t0
-    for c, k in margins:
+    for c, k in margins[:2]:
         if c + k * t < 0 and k < 0:
             t = min(t, -c / k)  # moving the start back raises this margin
+    if t < min(0.0, t0) or any(c + k * t < -1e-9 for c, k in margins):
+        return None
     return t
+
+
+def _knee_hub(a: PSocket, s: PSocket, r: float, s_back: float, wall: float, web: Hinge) -> np.ndarray:
+    """The rigid leg's hub in plan (xy polygon): the hull of its sleeve's back face and the arm
+    block's back face, cut back to `HINGE_GAP` from the hinge web's side (the web and the slots
+    either side of it stay as `knee_hinge` draws them). Only where no sleeve start joins the leg to
+    the block (`_rigid_leg_start` is None). Pure numpy."""
+    t0 = s.seat - wall
+    hull = np.array(_hull(np.array(_footprint_rect(a, s_back, s_back, r) + _footprint_rect(s, t0, t0, r))))
+    centre = s.at(t0)[:2]
+    sign = 1.0 if float((centre - web.start) @ web.normal) >= 0 else -1.0
+    keep = web.thickness / 2 + HINGE_GAP  # the kept side: sign * (p - web.start) . normal >= keep
+    return _clip(hull, sign * web.normal, keep + sign * float(web.start @ web.normal))
+
+
+def _clip(poly: np.ndarray, n: np.ndarray, c: float) -> np.ndarray:
+    """The part of convex polygon `poly` (xy, in order) where p . n >= c (one Sutherland-Hodgman pass)."""
+    out = []
+    for i in range(len(poly)):
+        p, q = poly[i], poly[(i + 1) % len(poly)]
+        fp, fq = float(p @ n) - c, float(q @ n) - c
+        if fp >= 0:
+            out.append(p)
+        if fp * fq < 0:
+            out.append(p + (q - p) * (fp / (fp - fq)))
+    return np.array(out)
 
 
 def _knee(part: PartSpec, socks: list[PSocket], r: float):
@@ -443,18 +477,32 @@ def _knee(part: PartSpec, socks: list[PSocket], r: float):
     hinged = min(legs, key=lambda s: float(s.direction @ a.direction))
     rigid = [s for s in legs if s is not hinged]
     t_back = {id(s): s.seat - part.wall for s in legs}
-    t_back.update({id(s): _rigid_leg_start(a, s, r, s_back, part.wall) for s in rigid})
-    rigid_solids = [sleeve(s, t_back[id(s)], r) for s in rigid]
+    web = knee_hinge(part)
+    hubs = []  # (plan polygon, top z) of each rigid leg that no sleeve start joins to the block
+    for s in rigid:
+        t = _rigid_leg_start(a, s, r, s_back, part.wall)
+        if t is None:
+            # from the bed to halfway up the leg sleeve's round top: a plane through neither its
+            # top line nor the seam of its flat sides (nor the arm block's)
+            hubs.append((_knee_hub(a, s, r, s_back, part.wall, web), _clear_of(float(s.port[2]) + r / 2, _levels(socks, r))))
+        else:
+            t_back[id(s)] = t
+    rigid_solids = [sleeve(s, t_back[id(s)], r) for s in rigid] + [prism(poly, 0.0, top) for poly, top in hubs]
     # Upper leg, freed from everything rigid by HINGE_GAP ...
     upper = sleeve(hinged, t_back[id(hinged)], r)
     clear = [prism(_footprint_rect(a, s_back, a.seat + a.depth, r, HINGE_GAP), -1.0, 1000.0)]
     clear += [prism(_footprint_rect(s, t_back[id(s)], s.seat + s.depth, r, HINGE_GAP), -1.0, 1000.0) for s in rigid]
+    clear += [prism(_hull(_grown(poly, HINGE_GAP)), -1.0, 1000.0) for poly, _ in hubs]
     upper = upper.cut(fuse_all(clear))
-    # ... and joined to the arm block by the hinge web: from the centre of the upper leg's back
-    # face straight to the arm block's back face.
-    web = knee_hinge(part)
+    # ... and joined to the arm block by the hinge web (`web`): from the centre of the upper leg's
+    # back face straight to the arm block's back face.
     body = above_bed(fuse_all([block, *rigid_solids, upper, box_along(web.start, web.end, web.thickness, 0.0, web.height)]))
     return finish(body, [socket_cutter(s) for s in socks])
+
+
+def _grown(pts: np.ndarray, by: float) -> np.ndarray:
+    """The corners of squares `2 by` wide around each point: their hull is the points' hull grown by at least `by`."""
+    return np.array([p + np.array([sx, sy]) * by for p in pts for sx in (-1.0, 1.0) for sy in (-1.0, 1.0)])
 
 
 def _core_link(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarray):
@@ -504,6 +552,21 @@ def _core_link(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarray):
     cq = _cq()
     bolt_hole = cq.Solid.makeCylinder(hole_d / 2, t + 2.0, vec(bolt + e_v * (v0 - 1.0)), vec(e_v))
     return finish(above_bed(fuse_all(pieces)), [socket_cutter(s) for s in socks] + [bolt_hole])
+
+
+def _clear_of(z: float, levels, gap: float = TAB_CLEAR) -> float:
+    """`z`, or the least height above it that is `gap` clear of every one of `levels` (moving up
+    past one level can bring it near the next)."""
+    for level in sorted(levels):
+        if abs(z - level) < gap:
+            z = level + gap
+    return z
+
+
+def _levels(socks: list[PSocket], r: float) -> list[float]:
+    """The heights where a level sleeve's surface turns (its axis: flat sides meet the round top)
+    or is tangent to a plane (its top line): a flat top there meets the sleeve along a line."""
+    return [float(s.port[2]) + dz for s in socks for dz in (0.0, r)]
 
 
 def _hull(pts: np.ndarray) -> list[np.ndarray]:

@@ -7,8 +7,9 @@ toward the core by `arm_slope_deg`.
 Printed upside down, the seat on the bed (z_print = seat_z - z_local). Pieces:
 * the seat plate, `width` square, aligned with the arm, `wall + 1.5` thick;
 * per rod, a clip sleeve (OD = bore + 2 wall) with a vertical web down to the seat, so nothing
-  hangs in print; it runs from where the seat leaves a full `wall` above the bore, down-slope for
-  `width`. Anything above the seat plane (the up-slope ends) is cut flat by the bed;
+  hangs in print (a level arm: a D-section sleeve, its flat sides down to the seat); it runs from
+  where the seat leaves a full `wall` above the bore, down-slope for `width`. Anything above the
+  seat plane (the up-slope ends) is cut flat by the bed;
 * through holes: each rod's bore (full length, so the rod slides through), the square motor bolt
   pattern (`bolt_spacing`, `screw_clearance`), and the centre hole `shaft_hole`.
 """
@@ -20,7 +21,35 @@ import math
 import numpy as np
 
 from ..partlist import PartSpec
-from .joint import FLIP_X, Built, above_bed, fuse_all, horizontal, prism, sloped_sleeve, transform, vec
+from .joint import (
+    FLIP_X,
+    STACK_SNAP,
+    Built,
+    above_bed,
+    dsleeve,
+    fuse_all,
+    horizontal,
+    prism,
+    sloped_sleeve,
+    transform,
+    vec,
+)
+
+
+def _parallel(rods):
+    """The rods the two clip sleeves are built on: the second moved onto the line exactly parallel
+    to the first, through the same cross-section. The part's rods are stored to 1e-6 mm: in a
+    rectangle the pair came out ~2e-6 mm apart along the arm, and where thick walls (joints.wall
+    4.6-6 mm) make the two sleeves overlap, their end caps and webs, 2e-6 mm out of plane, fused
+    into faces of 1e-6 mm^2 and an STL that was not watertight. The sleeves only: the bores are
+    cut where the rods are. A square box's pair is parallel to round-off and kept as it is."""
+    (p0, d0), (p1, d1) = rods
+    along = float((p1 - p0) @ d0)
+    if abs(along) <= 1e-9 and float(np.abs(d1 - d0).max()) <= 1e-9:
+        return rods
+    if abs(along) > STACK_SNAP or float(np.abs(d1 - d0).max()) > STACK_SNAP:
+        raise ValueError(f"motor mount rods are not a parallel pair ({along:g} mm apart along the arm)")
+    return [(p0, d0), (p1 - d0 * along, d0)]
 
 
 def print_from_local(part: PartSpec) -> np.ndarray:
@@ -39,6 +68,7 @@ def build(part: PartSpec) -> Built:
     r = bore / 2 + wall
     plate_t = min(wall + 1.5, seat_z)
     rods = [(np.asarray(p, float), np.asarray(d, float) / np.linalg.norm(d)) for p, d in part.param("arm_rods")]
+    clips = _parallel(rods)
     a_h = horizontal(rods[0][1])
     lat = np.array([-a_h[1], a_h[0], 0.0])
 
@@ -49,21 +79,27 @@ def build(part: PartSpec) -> Built:
     corners = [to_print(a_h * sa * half + lat * sl * half)[:2] for sa, sl in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
     pieces = [prism(corners, 0.0, plate_t)]
     cutters = []
-    for p, d in rods:
-        dz = float(d[2])
+    for (p, d), (pc, dc) in zip(rods, clips):
+        dz = float(dc[2])
         cos_a = math.sqrt(1 - dz * dz)
         rb = bore / 2 / max(cos_a, 1e-6)
         # Where the seat still leaves a full wall above the bore (going down-slope from there).
         if abs(dz) > 1e-9:
-            s_lo = (seat_z - wall - rb - p[2]) / dz
+            s_lo = (seat_z - wall - rb - pc[2]) / dz
             s_lo = min(max(s_lo, -half), 0.0) if dz < 0 else max(min(s_lo, half), 0.0) - width
         else:
-            s_lo = -half
-        start, dp = to_print(p + d * s_lo), rot @ d
+            s_lo = -half - float(pc @ dc)  # across the seat, its ends flush with the seat's edges
+        start, dp = to_print(pc + dc * s_lo), rot @ dc
         if dp[2] < 0:  # build the sleeve rising in print
-            start, dp = to_print(p + d * (s_lo + width)), -dp
-        pieces.append(sloped_sleeve(start, dp, width, r) if abs(dp[2]) > 1e-9 else
-                      cq.Solid.makeCylinder(r, width, vec(start), vec(dp)))
+            start, dp = to_print(pc + dc * (s_lo + width)), -dp
+        if abs(dp[2]) > 1e-9:
+            pieces.append(sloped_sleeve(start, dp, width, r))
+        else:
+            # A level arm (frame.knee_height puts the knee level with the core link): a D-section
+            # sleeve from the bed, as the joints' level sockets. A bare cylinder stood 0.5 mm
+            # above the seat plate there (bamboo, frame.knee_height 0.38), and the mount printed
+            # in three pieces.
+            pieces.append(dsleeve(start, dp, width, float(start[2]), r))
         through = 4 * width
         cutters.append(cq.Solid.makeCylinder(bore / 2, 2 * through, vec(to_print(p - d * through)), vec(rot @ d)))
     body = above_bed(fuse_all(pieces))
