@@ -19,6 +19,8 @@ at a time, each part built and written as an STL):
 * a small seat for the walls (joints.seat 0, or joints.wall 2.9 mm and more with the 3 mm seat):
   the hinge slot cut off the end of the upper leg that the hinge web holds; the knee's seat is now
   raised until the hinge has room (frame._hinge_seat).
+* a flat top level with a round sleeve top (the knee's hinge web, the core link's hub): OCC's
+  mesher left that face out of the STL now and then (bamboo, joints.fit_clearance 0.22).
 * the motor mount: two clip sleeves 2e-6 mm out of line (stored rods, a rectangle) fused into
   slivers where thick walls overlap them; a level arm got a bare cylinder 0.5 mm above the seat;
   a bolt pattern as wide as the seat cut its corners off; a seat only as wide as the clips (thin
@@ -289,6 +291,47 @@ def test_knee_seat_leaves_the_hinge_room(base, change):
 def test_knees_build_across_seats_and_walls(base, change):
     for knee in _parts(_variant(base, **change), ["knee"]):
         _one_watertight_solid(knee)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("change", [{"joints__fit_clearance__tpu_95a": v} for v in (0.12, 0.22, 0.38, 0.68, 0.76)]
+                         + [{"joints__wall": 5.48}])
+def test_core_link_hub_top_clears_the_strut_sleeve(change):
+    """The hub's top was level with the strut sleeve's round top (and, with 5.48 mm walls, 0.03 mm
+    above the upper arm's axis): one of the two links' STL had a hole where the top face was."""
+    from cogniframe.parts.joint import TAB_CLEAR, map_sockets, print_from_local
+
+    for link in _parts(_variant("bamboo", **change), ["core_link", "core_link_mirrored"]):
+        built = _one_watertight_solid(link)
+        socks = map_sockets(link, print_from_local(link))
+        r = socks[0].bore / 2 + link.wall
+        top = built.shape.BoundingBox().zmax
+        hub_top = max(f.Center().z for f in built.shape.Faces() if f.geomType() == "PLANE" and f.normalAt().z > 0.99
+                      and f.Center().z < top - 1e-6)
+        for s in socks:
+            for level in (s.port[2], s.port[2] + r):
+                assert abs(hub_top - level) >= TAB_CLEAR - 1e-6, (link.name, hub_top, level)
+
+
+@pytest.mark.slow
+def test_knee_web_top_clears_the_legs_top():
+    """carbon in a 153 x 190.6 x 168.2 box: the web's top, level with the upper leg's round top,
+    went missing from the knee's STL."""
+    from cogniframe.parts.joint import (
+        TAB_CLEAR,
+        knee_hinge,
+        map_sockets,
+        print_from_local,
+    )
+
+    spec = _variant("carbon", frame__width=153.0, frame__depth=190.6, frame__height=168.2, motors__radius=59.7,
+                    motors__prop_diameter=55.5)
+    for knee in _parts(spec, ["knee", "knee_mirrored"]):
+        _one_watertight_solid(knee)
+        socks = map_sockets(knee, print_from_local(knee))
+        r = socks[0].bore / 2 + knee.wall
+        web = knee_hinge(knee)
+        assert all(abs(web.height - z) >= TAB_CLEAR - 1e-9 for s in socks for z in (s.port[2], s.port[2] + r))
 
 
 @pytest.mark.slow

@@ -405,7 +405,10 @@ def knee_hinge(part: PartSpec) -> Hinge:
     q = a.port + d * (s_back + 0.6) + lat * off
     e = (q - c)[:2] / np.linalg.norm((q - c)[:2])
     probe = (a.port + d * (s_back - HINGE_GAP / 2) + lat * off)[:2]
-    top = max(s.port[2] for s in legs) + r
+    # The web stands on the bed up to just above the legs' top lines: a web top level with the
+    # hinged leg's round top touched it along a line, and OCC's mesher left that face out of the
+    # STL (carbon, 153 x 190.6 x 168.2 box). Clear of the arm block's levels too.
+    top = _clear_of(max(float(s.port[2]) for s in legs) + r, _levels(socks, r))
     return Hinge(c[:2] - e * 0.6, q[:2], np.array([-e[1], e[0]]), h, float(top), probe)
 
 
@@ -548,7 +551,11 @@ def _core_link(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarray):
                         0.0, z_top))
     # Hub: the convex hull of the sleeves' back faces and the root of the tab.
     backs += [tab_pt(0.5, v0), tab_pt(0.5, v0 + t)]
-    pieces.append(prism(_hull(np.array(backs)), 0.0, max(tops + [z_top])))
+    # The hub's top clears every sleeve's top line and axis: level with the strut sleeve's top it
+    # touched that round top along a line, and OCC's mesher left the hub's top face out of the STL
+    # (bamboo with joints.fit_clearance 0.22); 0.03 mm above the upper arm's axis it made faces
+    # of 1e-6 mm^2 (bamboo, joints.wall 5.48).
+    pieces.append(prism(_hull(np.array(backs)), 0.0, _clear_of(max(tops + [z_top]), _levels(socks, r))))
     cq = _cq()
     bolt_hole = cq.Solid.makeCylinder(hole_d / 2, t + 2.0, vec(bolt + e_v * (v0 - 1.0)), vec(e_v))
     return finish(above_bed(fuse_all(pieces)), [socket_cutter(s) for s in socks] + [bolt_hole])
