@@ -26,6 +26,9 @@ from .materials import SCREWS, STACK_PATTERNS
 from .spec import Spec
 
 CORNERS = ("fl", "fr", "rr", "rl")
+# The slot each side of a knee's living hinge (two 0.4 mm lines wide), mm: the knee CAD cuts it,
+# and the seat rule below keeps the hinge web clear of it.
+HINGE_GAP = 0.8
 # Sign of x and y for each corner.
 CORNER_SIGN = {"fl": (-1, 1), "fr": (1, 1), "rr": (1, -1), "rl": (-1, -1)}
 # Ring sides: (name, from corner, to corner), going clockwise seen from above.
@@ -339,8 +342,6 @@ def _hinge_seat(dirs: list[np.ndarray], roles: list[str], wall: float) -> float:
     slot and as much again, or the slot cuts off the end of the leg the web holds and the knee
     prints in two pieces (the seat at its minimum, or walls thick for the seat: joints.seat 0,
     or joints.wall 2.9 mm with the presets' 3 mm seat). The presets need 2.3 mm."""
-    from .parts.joint import HINGE_GAP  # pure numpy; the joint CAD owns the slot width
-
     arm = next(d for d, role in zip(dirs, roles) if role == "arm")
     legs = [float(d @ arm) for d, role in zip(dirs, roles) if role == "leg"]
     if not legs:

@@ -42,10 +42,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..frame import HINGE_GAP
 from ..partlist import PARALLEL_TOL, PartSpec
 
 CHAMFER = 0.5  # mm, 45 deg, at every socket mouth
-HINGE_GAP = 0.8  # mm, slot each side of the knee's living hinge (two 0.4 mm lines wide)
 JOIN = 0.4  # mm, least overlap of the knee's rigid leg sleeve with the arm block, each way (one 0.4 mm line)
 # A knee or core-link socket is parallel to the bed below this slope (rad): the stored sockets'
 # 1e-6 rounding tilts a rectangle's by up to ~1e-6, which must not turn a D-section sleeve into a
