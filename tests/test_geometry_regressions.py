@@ -21,9 +21,10 @@ at a time, each part built and written as an STL):
   raised until the hinge has room (frame._hinge_seat).
 * a flat top level with a round sleeve top (the knee's hinge web, the core link's hub): OCC's
   mesher left that face out of the STL now and then (bamboo, joints.fit_clearance 0.22).
-* the corner's hub had the sleeves' own radius with its axis through theirs (the degenerate
-  equal-radius intersection): OCC's fuse of all pieces at once dropped most of a bottom corner's
-  strut sleeve and still gave one watertight solid (8 of 249 random designs), or gave 0 solids.
+* the corner's hub had the sleeves' own radius with its axis through theirs, and every sleeve
+  started at that point (degenerate equal-radius intersections): OCC's fuse of all pieces at once
+  dropped most of a bottom corner's strut sleeve and still gave one watertight solid (8 of 249
+  random designs), or gave 0 solids.
 * the motor mount: two clip sleeves 2e-6 mm out of line (stored rods, a rectangle) fused into
   slivers where thick walls overlap them; a level arm got a bare cylinder 0.5 mm above the seat;
   a bolt pattern as wide as the seat cut its corners off; a seat only as wide as the clips (thin
@@ -402,6 +403,8 @@ def test_camera_mount_keeps_its_upright_on_a_thick_plate(thickness):
     (154.1, 175.9, 128.5, 60.2, 55.9),  # the corner_bottom lost 424 mm^3 of its strut sleeve, silently
     (274.4, 554.488, 113.1, 107.1, 76.2),  # ... 459 of 648 mm^3, both corner_bottom parts
     (262.9, 225.8, 122.4, 88.2, 76.2),  # corner_bottom_mirrored: "0 solids", corner_bottom: 248 mm^3 short
+    (184.7, 169.7, 81.8, 66.3, 61.6),  # leg and strut, equal cylinders from one point: 781 of 1534 mm^3
+    (284.4, 289.1, 141.2, 111.1, 76.2),  # the leg run through the bed: corner_top's STL had a hole
 ])
 def test_corner_hub_keeps_every_sleeve(box, monkeypatch):
     """Carbon boxes as a maker resizes them: every union the corner is built from holds all its

@@ -6,8 +6,8 @@ from "print-safe" pieces, so TPU prints without supports:
 
 * a socket parallel to the bed gets a D-section sleeve (flat bottom on the bed, vertical sides,
   round top, OD = bore + 2 wall): its hole is a bridge of one bore diameter (<= 6 mm);
-* a socket within 45 deg of vertical gets a plain tilted cylinder, run down through the bed and cut
-  flat there (its surface never faces down more than 45 deg);
+* a socket within 45 deg of vertical gets a plain tilted cylinder, its end inside the corner's hub
+  (its surface never faces down more than 45 deg);
 * a socket sloped less than 45 deg above horizontal (the strut at a bottom corner) gets a cylinder
   plus a vertical web (90 % of the OD wide) from its axis down to the bed, so nothing hangs; its
   hole is a sloped bridge one bore wide.
@@ -321,17 +321,23 @@ def _corner(part: PartSpec, socks: list[PSocket], r: float):
     # still came out one watertight solid, its strut socket a hole in the air (8 of 249 random
     # designs, e.g. a carbon box 154.1 x 175.9 x 128.5), or lost everything ("0 solids").
     pieces = [cylinder((port[0], port[1], 0.0), (0, 0, 1), _clear_of(2 * r, _levels(socks, r)), r + TAB_CLEAR)]  # hub
+    # Every sleeve starts TAB_CLEAR out from the port, its end inside the hub. All the sleeves share
+    # the port and the radius r, and two equal cylinders whose axes cross touch at two points level
+    # with the crossing: on the rim of a sleeve that started there. A leg and a strut so met made
+    # OCC's fuse drop both (the mirrored bottom corner of a carbon 184.7 x 169.7 x 81.8 box: 781 of
+    # 1534 mm^3). The leg (within 45 deg of vertical) used to run down through the bed, where its
+    # cut ellipse could pass through the point where the hub's rim meets a ring sleeve's side (an
+    # STL with a hole: carbon, 284.4 x 289.1 x 141.2); inside the hub its end hangs over nothing.
     cos45 = math.cos(math.radians(45))
     for s in socks:
         dz = s.direction[2]
         length = s.seat + s.depth
         if abs(dz) < 1e-6:
-            pieces.append(dsleeve(s.port, s.direction, length, s.port[2], r))
+            pieces.append(dsleeve(s.at(TAB_CLEAR), s.direction, length - TAB_CLEAR, s.port[2], r))
         elif dz >= cos45:
-            back = s.port[2] / dz + r + 1.0  # run it down through the bed; cut flat later
-            pieces.append(cylinder(s.at(-back), s.direction, length + back, r))
+            pieces.append(cylinder(s.at(TAB_CLEAR), s.direction, length - TAB_CLEAR, r))
         elif dz > 0:
-            pieces.append(sloped_sleeve(s.port, s.direction, length, r))
+            pieces.append(sloped_sleeve(s.at(TAB_CLEAR), s.direction, length - TAB_CLEAR, r))
         else:
             raise ValueError(f"{part.name}: socket {s.rod} points into the bed in print orientation")
     if params.get("foot"):
