@@ -53,6 +53,47 @@ MATERIALS: dict[str, Material] = {m.name: m for m in (
 
 
 @dataclass(frozen=True)
+class Strength:
+    """What a material takes before it is damaged, for `check`'s survival sweep: a stress (MPa)
+    for rods and the rigid core, or a strain (elongation at break, 1 = 100 %) for the joints'
+    elastomer. Handbook or datasheet values, never fitted to a drop outcome."""
+
+    name: str
+    mode: str  # "bending" (flexural strength), "yield" (tensile yield), "elongation" (strain at break)
+    value: float  # MPa for stresses; a strain for "elongation"
+    source: str
+
+
+# fmt: off
+STRENGTHS: dict[str, Strength] = {s.name: s for s in (
+    # Pultruded carbon/epoxy rod along the fibres: flexural strength 1.4-2.0 GPa in rod makers'
+    # datasheets (unidirectional ~60 % fibre volume); the low end, as the rods are cut and
+    # clamped in sockets.
+    Strength("carbon_rod", "bending", 1400.0,
+             "pultruded CFRP rod datasheets: flexural strength 1.4-2.0 GPa (the low end)"),
+    # Bamboo along the grain: modulus of rupture 80-250 MPa, rising with density (Dixon & Gibson,
+    # J. R. Soc. Interface 2014, Moso bamboo; Janssen, Mechanical properties of bamboo); skewers
+    # are thin culm wall of ~0.7 g/cm^3: about 140 MPa.
+    Strength("bamboo", "bending", 140.0,
+             "bamboo along the grain, modulus of rupture 80-250 MPa by density (Dixon & Gibson 2014; Janssen): 140 MPa at 0.7 g/cm^3"),
+    # TPU 95A: Ultimaker TPU 95A TDS, elongation at break 580 % (ISO 527).
+    Strength("tpu_95a", "elongation", 5.8, "Ultimaker TPU 95A technical data sheet: elongation at break 580 % (ISO 527)"),
+    # Printed ABS / PLA / PETG: tensile stress at yield of printed test bars (Ultimaker TDS: ABS
+    # 39 MPa, PLA 49.5 MPa; PETG typical 45-50 MPa). Solid bars: a 10 % infill part is weaker.
+    Strength("abs", "yield", 39.0, "Ultimaker ABS technical data sheet: tensile stress at yield 39 MPa (printed bars)"),
+    Strength("pla", "yield", 49.5, "Ultimaker PLA technical data sheet: tensile stress at yield 49.5 MPa (printed bars)"),
+    Strength("petg", "yield", 45.0, "typical PETG filament data sheets: tensile yield 45-50 MPa (the low end)"),
+)}
+# fmt: on
+
+
+def strength(material: str) -> Strength | None:
+    """The library strength of a material by name; None for a material the library does not know
+    (a params file's own material: its parts are then not assessed for damage)."""
+    return STRENGTHS.get(material)
+
+
+@dataclass(frozen=True)
 class Screw:
     """Metric machine screw: nominal diameter, clearance hole and head diameter (mm), mass per 6 mm screw (g)."""
 

@@ -248,6 +248,18 @@ class Frame3D:
         n = e * a / L * (ul6 - ul0)
         return {b.name: float(v) for b, v in zip(self.beams, n)}
 
+    def end_forces(self, u: np.ndarray) -> dict[str, np.ndarray]:
+        """Every beam's end forces in its local axes (12: N, Vy, Vz, T, My, Mz at each end; N,
+        N mm) for a displacement vector u: k_local T u_element."""
+        if not self.beams:
+            return {}
+        idx = self.index()
+        L, T, dofs = self._beam_arrays(idx)
+        e, g, a, i, j, _ = self._beam_props(self.beams)
+        ul = np.einsum("nij,nj->ni", T, u[dofs])
+        f = np.einsum("nij,nj->ni", beam_local_k_batch(L, e, g, a, i, i, j), ul)
+        return {b.name: f[k] for k, b in enumerate(self.beams)}
+
     def geometric_stiffness(self, forces: dict[str, float], sparse: bool = False):
         idx = self.index()
         p = np.array([forces.get(b.name, 0.0) for b in self.beams], float)

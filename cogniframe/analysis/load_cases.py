@@ -69,6 +69,7 @@ class LoadCases:
     strain: dict
     joints: dict
     seconds: float
+    survival_per_n: dict | None = None
 
     def to_dict(self) -> dict:
         return {
@@ -77,7 +78,7 @@ class LoadCases:
             "modes_hz": list(self.modes_hz), "hover_rotor_hz": self.hover_rotor_hz, "mode_near_rotor": self.mode_near_rotor,
             "min_buckling_margin": self.buckling["min_margin"], "critical_rod": self.buckling["critical_rod"],
             "buckling": self.buckling["rods"],
-            "strain": self.strain, "joints": self.joints,
+            "strain": self.strain, "joints": self.joints, "survival_per_n": self.survival_per_n,
         }
 
 
@@ -161,9 +162,13 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
     # 6. TPU strain at the design drop
     strain = _strain(spec, frame, parts, joints, mdl, u * scale, TPU_ELONGATION_AT_BREAK, interface(spec), hinged_socket, hinge_geometry)
 
+    # 7. what each part carries per newton of payload force: the survival sweep scales it
+    per_n = survival_influence(spec, frame, parts, mdl, u / DEFAULT_LOAD_N, {x["rod"]: x["euler_n"] for x in rods_out},
+                               interface(spec), hinged_socket, hinge_geometry)
+
     jinfo = {name: {"method": js.method, "dofs": js.n_dofs} for name, js in joints.items()}  # no timings: byte-stable output
     return LoadCases(k, joint_model, TPU_PRINTED_MODULUS_FACTOR, wall["k_lateral_n_per_m"], wall, thrust, tuple(modes), n_rot, near,
-                     buckling, strain, jinfo, time.perf_counter() - t0)
+                     buckling, strain, jinfo, time.perf_counter() - t0, per_n)
 
 
 def _end_rot(mdl: Model, frame, rn: str, tag: str) -> float:
@@ -235,13 +240,21 @@ def _wall_face(spec, frame, mdl: Model, K, masses, zeta: float, axis: int, sign:
 
 
 def _thrust_case(spec, frame, parts, joints, masses, play=None, full: tuple | None = None) -> dict:
-    """Full thrust on every motor, the battery holder clamped; the frame whole and the arms alone.
-    ``full``: (model, assembled K) of the whole frame with ``play`` if already built."""
+    """Thrust on every motor, the battery holder clamped (the core held); the frame whole and the
+    arms alone (cage, legs and struts removed: the paper's x-frame). Per newton, at hover (the
+    all-up weight over four motors) and at full thrust. ``full``: (model, assembled K) of the
+    whole frame with ``play`` if already built.
+
+    The model is linear: the thrust turns with the motor (a follower force), so on arms that
+    rotate as rigid bodies about a joint the linear rotation T L / k is also the large-rotation
+    one; the tilts are reported as computed, with ``arms_only_small_rotation`` saying whether the
+    full-thrust tilt is inside the model's small-rotation range (10 degrees)."""
     from .flight import max_thrust_g
 
     thrust_g = max_thrust_g(spec)
-    thrust_n = thrust_g * G / 1000.0
-    out = {"max_thrust_g": thrust_g}
+    hover_g = masses["total"] / 4
+    per_n_full, per_n_hover = thrust_g * G / 1000.0, hover_g * G / 1000.0
+    out = {"max_thrust_g": thrust_g, "hover_thrust_g": hover_g}
     for label, roles in (("full", None), ("arms_only", ("arm",))):
         if label == "full" and full is not None:
             mdl, K = full
@@ -256,21 +269,56 @@ def _thrust_case(spec, frame, parts, joints, masses, play=None, full: tuple | No
         fixed = _drop_unconnected(K, fixed)
         f = np.zeros(K.shape[0])
         for m in mdl.motors:
-            f[6 * idx[m] + 2] = thrust_n
+            f[6 * idx[m] + 2] = 1.0  # 1 N up on each motor: linear, scaled below
         u = ff.solve(K, f, fixed)
-        dz = [u[6 * idx[m] + 2] for m in mdl.motors]
-        tilt = [math.degrees(math.hypot(u[6 * idx[m] + 3], u[6 * idx[m] + 4])) for m in mdl.motors]
-        if label == "full":
-            out["motor_deflection_mm_per_n"] = float(np.mean(dz)) / thrust_n
-            out["motor_tilt_deg"] = float(np.max(tilt))
-            out["motor_deflection_mm"] = float(np.mean(dz))
-        else:
-            # per newton only: at full thrust the linear model would tilt the bare arms by ~130 deg,
-            # far outside its small-rotation range (the arms alone are nearly a mechanism)
-            out["arms_only_motor_deflection_mm_per_n"] = float(np.mean(dz)) / thrust_n
-            out["arms_only_motor_tilt_deg_per_n"] = float(np.max(tilt)) / thrust_n
+        dz = float(np.mean([u[6 * idx[m] + 2] for m in mdl.motors]))
+        tilt = float(np.max([math.hypot(u[6 * idx[m] + 3], u[6 * idx[m] + 4]) for m in mdl.motors]))
+        pre = "" if label == "full" else "arms_only_"
+        out[f"{pre}motor_deflection_mm_per_n"] = dz
+        out[f"{pre}motor_tilt_deg_per_n"] = math.degrees(tilt)
+        out[f"{pre}motor_deflection_hover_mm"] = dz * per_n_hover
+        out[f"{pre}motor_deflection_mm"] = dz * per_n_full
+        out[f"{pre}motor_tilt_hover_deg"] = math.degrees(tilt * per_n_hover)
+        out[f"{pre}motor_tilt_deg"] = math.degrees(tilt * per_n_full)
+    out["arms_only_small_rotation"] = out["arms_only_motor_tilt_deg"] <= SMALL_ROTATION_DEG
+    hinge = arm_pair_hinge(joints, parts)
+    if hinge is not None:
+        out["arms_only_core_link_hinge_n_mm_per_rad"] = hinge
     out["exoskeleton_stiffening"] = out["arms_only_motor_deflection_mm_per_n"] / out["motor_deflection_mm_per_n"]
     return out
+
+
+SMALL_ROTATION_DEG = 10.0  # sin x = x within 0.5 %: the linear frame's range
+
+
+def arm_pair_hinge(joints: dict, parts) -> float | None:
+    """Rotational stiffness (N mm/rad) of an arm's two rods, tied rigidly together, in the core
+    link about the axis through both rods (the axis thrust bends the arm about), with the link's
+    support body held, the strut's socket free and the pair free to translate: what the bare arm
+    hangs on. None without a core link. The core link's super-element, condensed."""
+    from .joints.model import joint_kind
+
+    part = next((p for p in joint_parts(parts) if joint_kind(p) == "core_link" and p.name in joints), None)
+    if part is None:
+        return None
+    js = joints[part.name]
+    K, labs = js.matrix, js.labels
+    arms = [i for i, lab in enumerate(labs) if "arm" in lab]
+    if len(arms) != 2 or "body" not in labs:
+        return None
+    free = [i for i, lab in enumerate(labs) if i not in arms and lab != "body"]
+    a = [6 * i + k for i in arms for k in range(6)]
+    b = [6 * i + k for i in free for k in range(6)]
+    Kaa = K[np.ix_(a, a)]
+    if b:
+        Kaa = Kaa - K[np.ix_(a, b)] @ np.linalg.solve(K[np.ix_(b, b)], K[np.ix_(b, a)])
+    refs = np.asarray(js.refs, float)
+    c = refs[arms].mean(axis=0)
+    T = np.vstack([ff.rigid_transfer(c, refs[i]) for i in arms])
+    C = np.linalg.inv(T.T @ Kaa @ T)
+    lat = refs[arms[1]] - refs[arms[0]]
+    lat /= np.linalg.norm(lat)
+    return float(1.0 / (lat @ C[3:, 3:] @ lat))
 
 
 def _modes(spec, frame, parts, joints, masses, n: int = N_MODES, rod_segments: int = 4, play=None) -> list[float]:
@@ -292,13 +340,15 @@ def _modes(spec, frame, parts, joints, masses, n: int = N_MODES, rod_segments: i
     return [round(x, 2) for x in elastic]
 
 
-def _strain(spec, frame, parts, joints, mdl: Model, u: np.ndarray, eps_break: float, itf, hinged_socket, hinge_geometry) -> dict:
-    """Peak TPU strain at the design drop: the knee hinge (all the relative rotation of the hinged
-    leg against the arms in the web, an upper bound) and the sockets (interface bearing)."""
+def _joint_strains(spec, frame, parts, mdl: Model, u: np.ndarray, itf, hinged_socket, hinge_geometry):
+    """TPU strains for displacements u: ({knee instance: hinge strain}, [(joint instance, rod
+    socket label, socket strain)]). The hinge: all the relative rotation of the hinged leg against
+    the arms in the web (an upper bound); the sockets: the super-element's force on each rod body
+    as bearing over the socket depth."""
     fe = mdl.fe
     idx = fe.index()
     knees = {p.name: p for p in joint_parts(parts) if hinged_socket(p) is not None}  # knee (and knee_mirrored)
-    eps_h = 0.0
+    hinge: dict[str, float] = {}
     for inst, labs in mdl.joint_nodes.items():
         knee_part = knees.get(mdl.instance_part[inst])
         if knee_part is None:
@@ -308,16 +358,86 @@ def _strain(spec, frame, parts, joints, mdl: Model, u: np.ndarray, eps_break: fl
         arms = [n for l, n in labs.items() if "arm" in l]
         th_leg = u[6 * idx[leg] + 3:6 * idx[leg] + 6]
         th_arm = np.mean([u[6 * idx[n] + 3:6 * idx[n] + 6] for n in arms], axis=0)
-        eps_h = max(eps_h, t_web / 2 * float(np.linalg.norm(th_leg - th_arm)) / l_web)
-    # sockets: the super-element's force on each rod body, as bearing over the socket depth
+        hinge[inst] = t_web / 2 * float(np.linalg.norm(th_leg - th_arm)) / l_web
     sl = socket_loads(fe, frame, u)
     v, mm = _across(sl.forces, sl.axes), _across(sl.moments, sl.axes)
     L = np.array([e.depth for e in sl.ends])
     # rigid rod on a linear (Winkler) bearing over L, loads at the mouth: peak line load
     q = v / L + 6 * (mm + v * L / 2) / L**2
     eps = q / spec.rods.diameter / itf.e
-    eps_s = float(eps.max()) if eps.size else 0.0
+    return hinge, [(e.node, rn, float(x)) for e, rn, x in zip(sl.ends, sl.rods, eps)]
+
+
+def _strain(spec, frame, parts, joints, mdl: Model, u: np.ndarray, eps_break: float, itf, hinged_socket, hinge_geometry) -> dict:
+    """Peak TPU strain at the design drop: the knee hinge (all the relative rotation of the hinged
+    leg against the arms in the web, an upper bound) and the sockets (interface bearing)."""
+    hinge, socks = _joint_strains(spec, frame, parts, mdl, u, itf, hinged_socket, hinge_geometry)
+    eps_h = max(hinge.values(), default=0.0)
+    eps_s = max((x for _, _, x in socks), default=0.0)
     # symmetric sockets tie (to round-off): the first by name
-    where = min((f"{e.node}/{rn}" for x, e, rn in zip(eps, sl.ends, sl.rods) if x >= eps_s * (1 - _TIE) and x > 0), default=None)
+    where = min((f"{n}/{rn}" for n, rn, x in socks if x >= eps_s * (1 - _TIE) and x > 0), default=None)
     return {"hinge": round(eps_h, 4), "socket": round(eps_s, 4), "socket_at": where, "elongation_at_break": eps_break,
             "peak": round(max(eps_h, eps_s), 4), "ratio_to_break": round(max(eps_h, eps_s) / eps_break, 4)}
+
+
+def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: dict, itf, hinged_socket,
+                       hinge_geometry) -> dict:
+    """What each part carries per newton of payload force (u: the payload case per newton), for
+    the survival sweep (analysis/survival.py), which scales it by the force of each drop:
+
+    - ``rods``: per rod, its role, the peak bending + axial stress (max over its segments' ends of
+      |N|/A + |M| (d/2)/I, MPa per N), its most compressive axial force (N per N; negative in
+      compression) and its Euler load (N, from the buckling case);
+    - ``joints``: per joint part, the peak TPU strain per N over its instances, sockets and (the
+      knee) the living hinge, with where;
+    - ``core_plate_mpa_per_n``: the core plate's bending stress where a core link loads its
+      corner: the link's vertical force times its lever to the nearest stack screw, plus the
+      link's moment across the plate, over the plate section across the corner there,
+      6 M / (w t^2), w = 2 sqrt 2 (plate/2 - pitch/2) (the corner as a cantilever off the stack)."""
+    from ..materials import STACK_PATTERNS
+
+    fe = mdl.fe
+    idx = fe.index()
+    d = spec.rods.diameter
+    a, i_sec = math.pi * d * d / 4, math.pi * d**4 / 64
+    ends = fe.end_forces(u)
+    rods: dict[str, dict] = {}
+    for b in fe.beams:
+        if not b.group:
+            continue
+        f = ends[b.name]
+        sig = max(abs(f[0]) / a + math.hypot(f[4], f[5]) * d / 2 / i_sec, abs(f[6]) / a + math.hypot(f[10], f[11]) * d / 2 / i_sec)
+        r = rods.setdefault(b.group, {"role": frame.rods[b.group].role, "stress_mpa_per_n": 0.0, "axial_n_per_n": math.inf,
+                                      "euler_n": euler_n.get(b.group)})
+        r["stress_mpa_per_n"] = max(r["stress_mpa_per_n"], sig)
+        r["axial_n_per_n"] = min(r["axial_n_per_n"], float(-f[0]))  # tension positive (end 1's force is -N)
+    hinge, socks = _joint_strains(spec, frame, parts, mdl, u, itf, hinged_socket, hinge_geometry)
+    joints: dict[str, dict] = {}
+    for inst, x in sorted(hinge.items()):
+        part = mdl.instance_part[inst]
+        j = joints.setdefault(part, {"strain_per_n": 0.0, "at": None})
+        if x > j["strain_per_n"] * (1 + _TIE):
+            j["strain_per_n"], j["at"] = x, f"{inst} hinge"
+    for inst, rn, x in sorted(socks):
+        part = mdl.instance_part.get(inst)
+        if part is None:
+            continue
+        j = joints.setdefault(part, {"strain_per_n": 0.0, "at": None})
+        if x > j["strain_per_n"] * (1 + _TIE):
+            j["strain_per_n"], j["at"] = x, f"{inst}/{rn}"
+    # the core links' pull on the core, at each link's support body
+    c = spec.core
+    s = STACK_PATTERNS[c.stack_pattern][0] / 2
+    half = c.plate_size / 2
+    w = 2 * math.sqrt(2) * max(half - s, 1.0)
+    sig_core = 0.0
+    for nodes, Ks in fe.springs:
+        for j, n in enumerate(nodes):
+            if n in mdl.links:
+                dofs = (6 * np.array([idx[x] for x in nodes])[:, None] + np.arange(6)).ravel()
+                f = Ks @ u[dofs]
+                fz, mh = abs(f[6 * j + 2]), math.hypot(f[6 * j + 3], f[6 * j + 4])
+                p = fe.nodes[n]
+                lever = math.hypot(abs(p[0]) - s, abs(p[1]) - s)
+                sig_core = max(sig_core, 6 * (fz * lever + mh) / (w * c.plate_thickness**2))
+    return {"rods": rods, "joints": joints, "core_plate_mpa_per_n": sig_core}
