@@ -25,6 +25,7 @@ class CheckResult:
     peak: dict | None = None  # analysis.impact_nl.design_peaks: predicted peak G per drop height
     flight: object | None = None  # analysis.flight.FlightResult
     clash: object | None = None  # analysis.clash.ClashResult, from `build` only
+    survival: object | None = None  # analysis.survival.Survival: what breaks first, at what drop height
 
     @property
     def verdict(self) -> str:
@@ -59,8 +60,38 @@ def complete(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=N
     from . import flight as flight_mod
 
     flight = flight_mod.evaluate(spec, budget.total_g)
-    problems = _problems(spec, budget, drop) + _physics_problems(spec, stiffness, peak) + _aircraft_problems(spec, flight)
-    return CheckResult(d, budget, drop, tuple(problems), stiffness, peak, flight)
+    surv = _survival(spec, budget, drop, stiffness)
+    problems = (_problems(spec, budget, drop) + _physics_problems(spec, stiffness, peak) + _aircraft_problems(spec, flight)
+                + _survival_problems(spec, surv))
+    return CheckResult(d, budget, drop, tuple(problems), stiffness, peak, flight, survival=surv)
+
+
+def _survival(spec: Spec, budget: mass_mod.MassBudget, drop, stiffness: dict | None):
+    """The survival sweep (analysis/survival.py) when the load cases carry their loads per newton;
+    the payload's peak G over the sweep only when `requirements.max_peak_g` asks for it."""
+    if drop is None or not stiffness or not stiffness.get("survival_per_n"):
+        return None
+    from . import survival
+
+    peaks = None
+    if spec.requirements.max_peak_g is not None:
+        from . import impact_nl
+
+        peaks = impact_nl.design_peaks(drop.mass_kg, drop.k_n_per_m, drop.c_n_s_per_m, budget.groups["exoskeleton"] / 1000.0,
+                                       survival.SWEEP_CM, drop.clearance_mm)["heights"]
+    return survival.evaluate(spec, drop, stiffness, peaks)
+
+
+def _survival_problems(spec: Spec, surv) -> list[str]:
+    """A part that fails below the design drop height."""
+    if surv is None or surv.first_failure is None:
+        return []
+    f = surv.first_failure
+    if f["at_drop_cm"] > spec.requirements.design_drop_height_cm:
+        return []
+    return [f"{f['part']} fails ({f['mode']}) from a {f['at_drop_cm']:g} cm flat drop, below the "
+            f"{spec.requirements.design_drop_height_cm:g} cm design drop (requirements.design_drop_height_cm; "
+            f"stronger or thicker part, softer landing)"]
 
 
 def with_clash(result: CheckResult, clash) -> CheckResult:
@@ -159,6 +190,8 @@ def check_dict(result: CheckResult) -> dict:
         out["peak_g"] = result.peak
     if result.flight is not None:
         out["flight"] = result.flight.summary()
+    if result.survival is not None:
+        out["survival"] = result.survival.to_dict()
     if result.clash is not None:
         out["clash"] = result.clash.to_dict()
     return out

@@ -1,0 +1,129 @@
+"""What breaks first: flat drops of increasing height against each part's strength.
+
+For each height of the sweep the drop model (`impact.simulate_height`) gives the frame's peak
+spring force F = k min(x_max, clearance): the payload's compression stops at the clearance,
+where the battery holder reaches the floor and takes the rest as a rigid strike. The frame model
+(`load_cases.survival_influence`: the payload case per newton) turns F into
+
+- each TPU joint's peak strain (sockets' bearing, the knee's living hinge) against the
+  elastomer's elongation at break;
+- each rod's peak bending + axial stress against its flexural strength, and its compression
+  against its Euler load;
+- the core plate's bending stress where a core link loads its corner, against the core
+  plastic's yield stress;
+
+and, once the holder strikes with the speed v_s left at the clearance, the holder's contact
+stress as a flat plane-wave impact on a rigid floor, sigma = v_s sqrt(E rho) (an elastic bar
+meeting a rigid wall: the largest stress a flat face sees before it yields), against the same
+yield stress. The payload's peak G (the peak model's single-drop median when it has one, else
+its mean-pulse peak) is checked against `requirements.max_peak_g` when set. Strengths are
+`materials.STRENGTHS` (datasheet and handbook values), never fitted to a drop outcome.
+
+A margin is strength / load (>= 1: undamaged). ``max_undamaged_drop_cm`` is the highest sweep
+height below which every margin stays >= 1; ``first_failure`` the first part to reach 1, at
+the height interpolated between sweep points (linearly in the margin), None if none does
+within the sweep.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+SWEEP_CM = tuple(float(h) for h in range(10, 610, 10))  # 10 cm to 6 m (11 m/s at touch-down)
+
+
+@dataclass(frozen=True)
+class Survival:
+    heights_cm: tuple[float, ...]
+    max_undamaged_drop_cm: float  # the sweep's top when nothing fails within it
+    first_failure: dict | None  # {part, mode, at_drop_cm}
+    margins: tuple[dict, ...]  # {part, mode, limit, unit, margin: [per height]}, worst first
+    note: str
+
+    def to_dict(self) -> dict:
+        return {"heights_cm": list(self.heights_cm), "max_undamaged_drop_cm": self.max_undamaged_drop_cm,
+                "first_failure": self.first_failure, "margins": list(self.margins), "note": self.note}
+
+
+def _m(x: float) -> float | None:
+    """A margin for JSON: rounded, None when the load is zero (nothing to fail)."""
+    return round(x, 4) if math.isfinite(x) else None
+
+
+def crossing(heights, margins) -> float | None:
+    """The height at which a margin series first falls to 1, linear between sweep points; None
+    if it never does (a series that starts below 1 fails at its first height)."""
+    prev = None
+    for h, m in zip(heights, margins):
+        if m is not None and m < 1.0:
+            if prev is None:
+                return float(h)
+            h0, m0 = prev
+            return float(h0 + (h - h0) * (m0 - 1.0) / (m0 - m))
+        prev = (h, m) if m is not None else prev
+    return None
+
+
+def evaluate(spec, drop, stiffness: dict, peaks: list[dict] | None = None, heights_cm=SWEEP_CM) -> Survival:
+    """The survival sweep for a design: ``drop`` its `impact.DropResult` (m, c, k, clearance),
+    ``stiffness`` its load cases (`check --json`'s stiffness section, with ``survival_per_n``),
+    ``peaks`` the peak model's entries for ``heights_cm`` (None: payload G not assessed)."""
+    from ..materials import strength
+    from .impact import simulate_height
+
+    per_n = stiffness["survival_per_n"]
+    m, k, c, clear = drop.mass_kg, drop.k_n_per_m, drop.c_n_s_per_m, drop.clearance_mm
+    forces, strikes = [], []
+    for h in heights_cm:
+        r = simulate_height(m, c, k, h, clear)
+        forces.append(k * min(r.x_max_mm, clear) / 1000.0)
+        strikes.append(math.sqrt(2 * r.energy_j * r.energy_rigid_pct / 100.0 / m) if r.strikes else 0.0)
+
+    series: list[dict] = []
+
+    def add(part: str, mode: str, limit: float, unit: str, loads: list[float]):
+        series.append({"part": part, "mode": mode, "limit": limit, "unit": unit,
+                       "margin": [_m(limit / x) if x > 0 else None for x in loads]})
+
+    tpu = strength(spec.joints.material)
+    if tpu is not None:
+        for part, j in sorted(per_n["joints"].items()):
+            add(f"joint {part} ({j['at']})", "TPU strain", tpu.value, "strain", [j["strain_per_n"] * f for f in forces])
+    rod = strength(spec.rods.material)
+    by_role: dict[str, list[tuple[str, dict]]] = {}
+    for name, r in sorted(per_n["rods"].items()):
+        by_role.setdefault(r["role"], []).append((name, r))
+    for role, rods in sorted(by_role.items()):
+        if rod is not None:  # the role's most stressed rod (symmetric rods tie: the first by name)
+            name, r = max(rods, key=lambda x: x[1]["stress_mpa_per_n"])
+            add(f"rod {name}", "bending", rod.value, "MPa", [r["stress_mpa_per_n"] * f for f in forces])
+        buck = [(n, r) for n, r in rods if r["euler_n"] and r["axial_n_per_n"] < 0]
+        if buck:
+            name, r = max(buck, key=lambda x: -x[1]["axial_n_per_n"] / x[1]["euler_n"])
+            add(f"rod {name}", "buckling", r["euler_n"], "N", [-r["axial_n_per_n"] * f for f in forces])
+    core_mat = spec.material(spec.core.material)
+    core = strength(spec.core.material)
+    if core is not None:
+        add("core plate", "bending at a core link", core.value, "MPa", [per_n["core_plate_mpa_per_n"] * f for f in forces])
+        impedance = math.sqrt(core_mat.e_mpa * 1e6 * core_mat.density_g_cm3 * 1000.0) / 1e6  # MPa per m/s
+        add("battery holder", "strike on the floor", core.value, "MPa", [impedance * v for v in strikes])
+    max_g = spec.requirements.max_peak_g
+    if max_g is not None and peaks is not None:
+        add("payload", "peak G", float(max_g), "G", [p.get("peak_g_drop_median", p["peak_g"]) for p in peaks])
+
+    fails = [(crossing(heights_cm, s["margin"]), s) for s in series]
+    failing = [(h, s) for h, s in fails if h is not None]
+    if failing:
+        h, s = min(failing, key=lambda x: x[0])
+        first = {"part": s["part"], "mode": s["mode"], "at_drop_cm": round(h, 1)}
+        top = round(h, 1)
+    else:
+        first, top = None, float(heights_cm[-1])
+    for (h, s) in fails:
+        s["fails_at_drop_cm"] = round(h, 1) if h is not None else None
+    worst = sorted(series, key=lambda s: (s["fails_at_drop_cm"] is None, s["fails_at_drop_cm"] or 0.0,
+                                          min((x for x in s["margin"] if x is not None), default=math.inf), s["part"]))
+    note = ("flat drops; frame forces quasi-static at the drop model's peak spring force, capped where the battery "
+            "holder reaches the floor; the holder strike as a plane-wave bound; no fatigue, no tumbling, no edge landings")
+    return Survival(tuple(heights_cm), top, first, tuple(worst), note)
