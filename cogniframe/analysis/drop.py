@@ -171,17 +171,20 @@ def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropR
 
 
 def peak_prediction(spec: Spec, total_mass_g: float, drop: impact.DropResult, exo_mass_g: float) -> dict:
-    """Predicted peak |a| (G, as the logger sees it) per drop height, from the better-validated model."""
+    """Predicted peak |a| (G, as the logger sees it) per drop height, from the better-validated model:
+    the mean pulse's peak (`peak_g`) and one drop's median and 90th percentile (`peak_g_drop_median`,
+    `peak_g_drop_p90`), the feet at the corners of the frame's outside footprint."""
     heights = sorted({*spec.requirements.drop_heights_cm, spec.requirements.design_drop_height_cm})
+    footprint = (float(spec.frame.width), float(spec.frame.depth))
     key = _stiffness_key(spec, "peaks", total_mass_g, drop.k_n_per_m, drop.c_n_s_per_m, exo_mass_g, heights, drop.clearance_mm,
-                         scope="all")
+                         footprint, scope="all")
     hit = cache.load_json("peaks", key)
     if hit is not None:
         return hit
     from . import impact_nl
 
     out = impact_nl.design_peaks(total_mass_g / 1000.0, drop.k_n_per_m, drop.c_n_s_per_m, exo_mass_g / 1000.0,
-                                  heights, drop.clearance_mm)
+                                  heights, drop.clearance_mm, footprint_mm=footprint)
     out = json.loads(json.dumps(out, sort_keys=True))  # as the cache stores it: same bytes fresh or cached
     cache.store_json("peaks", key, out)
     return out
