@@ -245,7 +245,7 @@ def fit(
     lowpass_rad_per_s: Annotated[float, typer.Option("--lowpass-rad-per-s", help="Low-pass corner w of H(s) = w/(s+w), rad/s.")] = 500.0,
     loss: Annotated[str, typer.Option("--loss", help="cauchy: log(1 + total MSE) as the paper; mse: the total.")] = "cauchy",
     model: Annotated[str, typer.Option("--model", help="kelvin-voigt: the paper's one-mass model (default); nonlinear: the two-mass model with the exoskeleton's own mass on a unilateral floor contact (docs/impact-model.md).")] = "kelvin-voigt",
-    predict: Annotated[Optional[list[float]], typer.Option("--predict", help="Drop height in cm to predict (repeatable): median peak |a| as the logger sees it (500 rad/s low-pass), x_max and whether the holder strikes.")] = None,
+    predict: Annotated[Optional[list[float]], typer.Option("--predict", help="Drop height in cm to predict (repeatable): the mean pulse's peak |a| as the logger sees it (500 rad/s low-pass), one drop's median and 90th-percentile peak (scatter learnt from these drops), x_max and whether the holder strikes.")] = None,
     exo_mass_kg: Annotated[float, typer.Option("--exo-mass-kg", help="Exoskeleton (rods + joints) mass in kg for --model nonlinear (paper's build: 0.062).")] = 0.062,
     clearance_mm: Annotated[float, typer.Option("--clearance-mm", help="Battery-holder clearance for the strike flag of --predict, mm.")] = 16.0,
 ) -> None:
@@ -307,8 +307,14 @@ def fit(
         _fit_nonlinear(heights_data, mass_kg, exo_mass_kg, lowpass, loss, predict or [], clearance_mm, as_json, k_static)
         return
     result = F.fit_drop_tests(heights_data, mass_kg, lowpass_rad_per_s=lowpass, loss=loss)
-    predictions = impact_nl.predict("kelvin-voigt", mass_kg, result.c_n_s_per_m, result.k_n_per_m, predict or [],
-                                    clearance_mm, lowpass_rad_per_s=lowpass) if predict else None
+    predictions, scatter = None, None
+    if predict:
+        # the single-drop scatter is learnt from the same drops, with this fit's pulse
+        from cogniframe.analysis import single_drop as S
+
+        scatter = S.fit_scatter(heights_data, lambda h: S.kv_pulse_g(mass_kg, result.c_n_s_per_m, result.k_n_per_m, h))
+        predictions = impact_nl.predict("kelvin-voigt", mass_kg, result.c_n_s_per_m, result.k_n_per_m, predict,
+                                        clearance_mm, lowpass_rad_per_s=lowpass, scatter=scatter.scatter)
 
     if plot is not None:
         from cogniframe.report.drop_plots import plot_fit
@@ -323,6 +329,7 @@ def fit(
             d["static_k_n_per_m"] = k_static
         if predictions is not None:
             d["model"] = "kelvin-voigt"
+            d["single_drop"] = scatter.to_dict()
             d["predictions"] = predictions
         sys.stdout.write(json.dumps(d) + "\n")
         err = _stderr()
@@ -353,7 +360,7 @@ def fit(
                     f"{h.peak_median_g:.1f}", f"{h.rmse_g:.1f}")
     out.print(per)
     if predictions:
-        _print_predictions(out, predictions)
+        _print_predictions(out, predictions, scatter)
     out.print(f"m = {mass_kg:g} kg, loss {loss}, "
               + ("no low-pass" if lowpass is None else f"low-pass {lowpass:g} rad/s")
               + f", {result.evaluations} evaluations")
@@ -365,15 +372,20 @@ def fit(
         out.print(f"wrote model.k_n_per_m and model.c_n_s_per_m to {write}")
 
 
-def _print_predictions(out, predictions: list[dict]) -> None:
+def _print_predictions(out, predictions: list[dict], scatter=None) -> None:
     from rich.table import Table
 
-    t = Table(title="Predictions (peak |a| as the logger sees it, 500 rad/s low-pass)")
-    for col in ("height cm", "peak G", "x_max mm", "strike"):
+    t = Table(title="Predictions (peak |a| as the logger sees it: the mean pulse through the 500 rad/s low-pass, and one drop's median and 90th percentile)")
+    for col in ("height cm", "mean-pulse peak G", "one drop: median G", "p90 G", "x_max mm", "strike"):
         t.add_column(col, justify="right")
     for p in predictions:
-        t.add_row(f"{p['height_cm']:g}", f"{p['peak_g']:.1f}", f"{p['x_max_mm']:.2f}", "yes" if p["strikes"] else "no")
+        t.add_row(f"{p['height_cm']:g}", f"{p['peak_g']:.1f}", f"{p['peak_g_drop_median']:.1f}", f"{p['peak_g_drop_p90']:.1f}",
+                  f"{p['x_max_mm']:.2f}", "yes" if p["strikes"] else "no")
     out.print(t)
+    if scatter is not None:
+        s = scatter.scatter
+        out.print(f"single-drop scatter learnt from these drops: mount {s.mount_hz:.0f} Hz, damping {s.mount_zeta:.3f}, "
+                  f"touch-down tilt {s.tilt_sigma_deg:.2f} deg (Rayleigh scale)")
 
 
 def _fit_nonlinear(heights_data, mass_kg, exo_mass_kg, lowpass, loss, predict, clearance_mm, as_json, k_static) -> None:
@@ -381,9 +393,18 @@ def _fit_nonlinear(heights_data, mass_kg, exo_mass_kg, lowpass, loss, predict, c
     from cogniframe.analysis import impact_nl
 
     r = F.fit_nonlinear(heights_data, mass_kg, exo_mass_kg, lowpass_rad_per_s=lowpass, loss=loss)
+    scatter = None
+    if predict:
+        # the single-drop scatter is learnt from the same drops, with this fit's pulse
+        from cogniframe.analysis import single_drop as S
+
+        scatter = S.fit_scatter(heights_data, lambda h: S.two_mass_pulse_g(r.params(), h))
     preds = impact_nl.predict("nonlinear", mass_kg, r.c_n_s_per_m, r.k_n_per_m, predict, clearance_mm, m_exo=exo_mass_kg,
-                              k_c=r.contact_k_n_per_m, c_c=r.contact_c_n_s_per_m, lowpass_rad_per_s=lowpass)
+                              k_c=r.contact_k_n_per_m, c_c=r.contact_c_n_s_per_m, lowpass_rad_per_s=lowpass,
+                              scatter=scatter.scatter if scatter else None)
     d = r.to_dict()
+    if scatter is not None:
+        d["single_drop"] = scatter.to_dict()
     d["lowpass_rad_per_s"] = lowpass
     d["loss_kind"] = loss
     d["predictions"] = preds
@@ -408,7 +429,7 @@ def _fit_nonlinear(heights_data, mass_kg, exo_mass_kg, lowpass, loss, predict, c
     for h in r.heights:
         out.print(f"{h['height_cm']:g} cm: {h['trials_used']} trials, median peak {h['peak_median_g']:.1f} G, RMSE {h['rmse_g']:.1f} G")
     if preds:
-        _print_predictions(out, preds)
+        _print_predictions(out, preds, scatter)
 
 
 def register(app: typer.Typer) -> None:
