@@ -143,7 +143,9 @@ def test_verdicts_on_top(written):
     text = html_path.read_text(encoding="utf-8")
     assert text.index('id="verdicts"') < text.index('id="mass-budget"')
     rows = {r[0]: r for r in page.tables["verdicts"][1:]}
-    assert set(rows) == {"Mass", "Crash margin", "Printability", "Design verdict"}
+    assert set(rows) == {"Mass", "Crash margin", "What breaks first", "Printability", "Design verdict"}
+    f = result.survival.first_failure
+    assert rows["What breaks first"][2].startswith("first to fail" if f else "nothing fails in flat drops up to")
     assert rows["Mass"][1] == ("PASS" if result.mass.total_g <= result.mass.limit_g else "FAIL")
     assert rows["Printability"][1] == "WARN"  # the slice report carries a warning
     assert rows["Design verdict"][1] == result.verdict
@@ -153,8 +155,8 @@ def test_every_image_is_an_embedded_png(written):
     from PIL import Image
 
     _, _, _, _, page, plates, *_ = written
-    # mass chart + stiffness + drop response + energy split + 2 renders + one preview per plate
-    assert len(page.images) == 4 + 2 + len(plates)
+    # mass chart + stiffness + drop response + energy split + survival margins + 2 renders + one preview per plate
+    assert len(page.images) == 5 + 2 + len(plates)
     for src in page.images:
         assert src.startswith("data:image/png;base64,")
         data = base64.b64decode(src.split(",", 1)[1], validate=True)

@@ -238,3 +238,15 @@ def test_max_peak_g_makes_the_payload_a_failure_mode():
     assert p.get("peak_g_drop_median", p["peak_g"]) == pytest.approx(60.0, rel=0.02)
     assert s["max_undamaged_drop_cm"] == at
     assert any("payload fails (peak G)" in x for x in r.problems) == (at <= 100.0)
+
+
+def test_survival_plot_is_the_same_bytes_and_the_words_name_the_first_failure(checked, tmp_path):
+    from cogniframe.report import html as report
+
+    s = checked["bamboo"]["survival"]
+    a = report.plot_survival(s, tmp_path / "a.png").read_bytes()
+    b = report.plot_survival(s, tmp_path / "b.png").read_bytes()
+    assert a == b and a[:8] == b"\x89PNG\r\n\x1a\n"
+    failing = dict(s, first_failure={"part": "rod rod_strut_fr", "mode": "buckling", "at_drop_cm": 123.4})
+    assert report.survival_words(failing) == "first to fail: rod rod_strut_fr (buckling) at 123.4 cm"
+    assert report.survival_words(s).startswith(f"nothing fails in flat drops up to {s['max_undamaged_drop_cm']:g} cm")

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -281,6 +281,25 @@ def _thrust_case(spec, frame, parts, joints, masses, play=None, full: tuple | No
         out[f"{pre}motor_tilt_hover_deg"] = math.degrees(tilt * per_n_hover)
         out[f"{pre}motor_tilt_deg"] = math.degrees(tilt * per_n_full)
     out["arms_only_small_rotation"] = out["arms_only_motor_tilt_deg"] <= SMALL_ROTATION_DEG
+    # the bracket's other end: the joints at printed TPU's datasheet modulus instead of the
+    # calibrated 0.238 of it (the calibration lumps the rod-bore interface's idealisation, which
+    # the bare arms' hinge -- bulk TPU bending in the print's layer plane -- does not have)
+    from .joints import TPU_PRINTED_MODULUS_FACTOR
+
+    stiff = {n: replace(js, K=tuple(map(tuple, (js.matrix / TPU_PRINTED_MODULUS_FACTOR).tolist()))) for n, js in joints.items()}
+    mdl = build_model(spec, frame, parts, stiff, only_roles=("arm",))
+    K = mdl.fe.stiffness(sparse=True)
+    idx = mdl.fe.index()
+    fixed = np.zeros(K.shape[0], dtype=bool)
+    fixed[6 * idx[mdl.payload]:6 * idx[mdl.payload] + 6] = True
+    fixed = _drop_unconnected(K, fixed)
+    f = np.zeros(K.shape[0])
+    for m in mdl.motors:
+        f[6 * idx[m] + 2] = per_n_full
+    u = ff.solve(K, f, fixed)
+    out["arms_only_motor_deflection_mm_tpu_datasheet"] = float(np.mean([u[6 * idx[m] + 2] for m in mdl.motors]))
+    out["arms_only_motor_tilt_deg_tpu_datasheet"] = math.degrees(float(np.max([math.hypot(u[6 * idx[m] + 3], u[6 * idx[m] + 4])
+                                                                                for m in mdl.motors])))
     hinge = arm_pair_hinge(joints, parts)
     if hinge is not None:
         out["arms_only_core_link_hinge_n_mm_per_rad"] = hinge

@@ -132,6 +132,45 @@ def plot_stiffness(drop: Mapping, path: Path) -> Path:
     return _save(fig, path)
 
 
+def plot_survival(surv: Mapping, path: Path) -> Path:
+    """Each part's margin (strength / load) against the flat-drop height, log scale, with the
+    damage line at 1 and the first failure marked. 700 x 450 px."""
+    from .drop_plots import _figure, _save
+
+    fig, axes = _figure(7.0, 4.5)
+    ax = axes[0, 0]
+    hs = surv["heights_cm"]
+    colours = ("tab:red", "tab:blue", "tab:green", "tab:orange", "tab:purple", "tab:brown", "tab:pink", "tab:olive")
+    shown = surv["margins"][:len(colours)]  # the weakest: the series are sorted worst first
+    for colour, m in zip(colours, shown):
+        pts = [(h, v) for h, v in zip(hs, m["margin"]) if v is not None]
+        if pts:
+            ax.plot([h for h, _ in pts], [v for _, v in pts], color=colour, linewidth=1.4, label=f"{m['part']}: {m['mode']}")
+    ax.axhline(1.0, color="k", linestyle="--", linewidth=1, label="damage (margin 1)")
+    f = surv["first_failure"]
+    if f is not None:
+        ax.axvline(f["at_drop_cm"], color="0.4", linestyle=":", linewidth=1)
+    ax.set_yscale("log")
+    ax.set_xlabel("flat drop height (cm)")
+    ax.set_ylabel("margin = strength / load")
+    ax.set_title("What breaks first: " + (f"{f['part']} ({f['mode']}) at {f['at_drop_cm']:g} cm" if f is not None
+                                          else f"nothing up to {surv['max_undamaged_drop_cm']:g} cm"))
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="upper right", fontsize="x-small")
+    return _save(fig, path)
+
+
+def survival_words(surv: Mapping) -> str:
+    """The survival sweep in one sentence."""
+    f = surv["first_failure"]
+    if f is None:
+        worst = surv["margins"][0] if surv["margins"] else None
+        tail = (f"; the weakest is {worst['part']} ({worst['mode']}), margin "
+                f"{min(x for x in worst['margin'] if x is not None):.2f}" if worst and any(x is not None for x in worst["margin"]) else "")
+        return f"nothing fails in flat drops up to {surv['max_undamaged_drop_cm']:g} cm{tail}"
+    return f"first to fail: {f['part']} ({f['mode']}) at {f['at_drop_cm']:g} cm"
+
+
 def draw_figures(result: "CheckResult", files: Path) -> dict[str, list[tuple[str, Path]]]:
     """Draw the report's charts into `files` (FIGURES: section -> (caption, file name))."""
     from ..analysis.verdict import check_dict
@@ -145,6 +184,8 @@ def draw_figures(result: "CheckResult", files: Path) -> dict[str, list[tuple[str
         figs["drop"] = [("stiffness", plot_stiffness(cd["drop"], files / "stiffness.png")),
                         ("drop response", plot_drop_response(result.drop, files / "drop_response.png")),
                         ("energy split", plot_energy_split(result.drop, files / "energy_split.png"))]
+    if "survival" in cd:
+        figs["survival"] = [("survival margins", plot_survival(cd["survival"], files / "survival_margins.png"))]
     return figs
 
 
@@ -191,6 +232,11 @@ def _verdicts(result: "CheckResult", cd: Mapping, plates, slice_report) -> list[
     else:
         out.append(Verdict("printability", "Printability", "N/A", "no print plates (run `cogniframe build`)",
                            "no print plates (run `cogniframe build`)"))
+    if "survival" in cd:
+        words = survival_words(cd["survival"])
+        f = cd["survival"]["first_failure"]
+        ok = f is None or f["at_drop_cm"] > spec.requirements.design_drop_height_cm
+        out.append(Verdict("survival", "What breaks first", "PASS" if ok else "FAIL", html.escape(words), words))
     out.append(Verdict("overall", "Design verdict", cd["verdict"],
                        html.escape("; ".join(cd["problems"]) or "all requirements met"),
                        "; ".join(cd["problems"]) or "all requirements met"))
@@ -281,9 +327,15 @@ def _stiffness_blocks(cd: Mapping) -> list:
     rows = [("payload stiffness k (N/m)", f"{s['k_n_per_m']:.0f} (joints: {s['joint_model']}, printed TPU at {s['tpu_modulus_factor']:g} x datasheet)"),
             ("side-on (wall) stiffness (N/m)", f"{s['k_lateral_n_per_m']:.0f}"),
             ("highest wall speed (m/s)", f"{w['max_wall_speed_m_s']:.1f} (then the {w['limited_by']} reaches the wall)"),
-            ("motor deflection at full thrust (mm/N)", f"{t['motor_deflection_mm_per_n']:.3f}, tilt {t['motor_tilt_deg']:.2f} deg"),
-            ("arms alone (mm/N)", f"{t['arms_only_motor_deflection_mm_per_n']:.2f}: the exoskeleton stiffens the arms "
-                                  f"{t['exoskeleton_stiffening']:.0f} times"),
+            ("motor deflection, hover / full thrust", f"{t['motor_deflection_hover_mm']:.2f} / {t['motor_deflection_mm']:.2f} mm, "
+                                                      f"tilt {t['motor_tilt_hover_deg']:.2f} / {t['motor_tilt_deg']:.2f} deg"),
+            ("arms alone, hover / full thrust", f"{t['arms_only_motor_deflection_hover_mm']:.1f} / {t['arms_only_motor_deflection_mm']:.1f} mm, "
+                                                f"tilt {t['arms_only_motor_tilt_hover_deg']:.0f} / {t['arms_only_motor_tilt_deg']:.0f} deg"
+                                                + ("" if t["arms_only_small_rotation"] else
+                                                   " (beyond the linear model's small rotations: the arms fold on the core link's TPU tab"
+                                                   + (f"; {t['arms_only_motor_tilt_deg_tpu_datasheet']:.0f} deg with datasheet TPU)"
+                                                      if "arms_only_motor_tilt_deg_tpu_datasheet" in t else ")"))
+                                                + f"; the exoskeleton stiffens the arms {t['exoskeleton_stiffening']:.0f} times"),
             ("first modes (Hz)", ", ".join(f"{f:.1f}" for f in s["modes_hz"][:6]) + f" (rotor at hover {s['hover_rotor_hz']:.0f} Hz"
              + (f"; mode {s['mode_near_rotor']['mode']} within 15 %)" if s["mode_near_rotor"] else ")")),
             ("min buckling margin", f"{s['min_buckling_margin']:.2f} ({s['critical_rod']}, at the {s['design_drop_height_cm']:g} cm design drop)"
@@ -297,6 +349,21 @@ def _stiffness_blocks(cd: Mapping) -> list:
             "breaking. How many crashes a printed TPU hinge survives is not known (the paper names it as the open question): "
             "inspect the knee hinges after hard landings and reprint them when they whiten or crack.")
     return [Table("load-cases", "Load cases", ("quantity", "value"), tuple(rows), ()), ("p", note)]
+
+
+def _survival_blocks(cd: Mapping) -> list:
+    """The survival sweep: the sentence, and each part's margin at the design drop and where it
+    reaches 1."""
+    sv = cd["survival"]
+    design_h = cd.get("stiffness", {}).get("design_drop_height_cm")
+    i = sv["heights_cm"].index(design_h) if design_h in sv["heights_cm"] else None
+    rows = []
+    for m in sv["margins"]:
+        at = m["margin"][i] if i is not None else None
+        rows.append((m["part"], m["mode"], f"{m['limit']:g} {m['unit']}", "-" if at is None else f"{at:.2f}",
+                     "-" if m["fails_at_drop_cm"] is None else f"{m['fails_at_drop_cm']:g}"))
+    head = ("part", "mode", "strength", f"margin at {design_h:g} cm" if i is not None else "margin", "fails from (cm)")
+    return [("p", survival_words(sv) + ". " + sv["note"] + "."), Table("survival-margins", "Margins", head, tuple(rows), ())]
 
 
 def _html_table(t: Table) -> str:
@@ -377,6 +444,10 @@ def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str
                                                                *[("img", c, p) for c, p in figs.get("drop", [])]]))
     if "stiffness" in cd:
         sections.append(("load-cases", "Frame load cases", _stiffness_blocks(cd)))
+    if "survival" in cd:
+        if "survival" not in figs:  # drawn here: the build's figure steps draw the mass and drop charts
+            figs["survival"] = [("survival margins", plot_survival(cd["survival"], files / "survival_margins.png"))]
+        sections.append(("survival", "What breaks first", _survival_blocks(cd) + [("img", c, p) for c, p in figs["survival"]]))
     sections.append(("frame", "Frame", [tables["props"], ("p", f"Battery holder clearance above the ground: {fmt_key(cd, 'frame.clearance_mm')} mm; "
                                                              f"{cd['frame']['rods']} rods, {cd['frame']['joints']} joints.")]))
     sections.append(("cuts", "Cut list and stock plan", [tables["cutlist"], tables["stock"]]))
