@@ -73,12 +73,7 @@ def _survival(spec: Spec, budget: mass_mod.MassBudget, drop, stiffness: dict | N
         return None
     from . import survival
 
-    peaks = None
-    if spec.requirements.max_peak_g is not None:
-        from . import impact_nl
-
-        peaks = impact_nl.design_peaks(drop.mass_kg, drop.k_n_per_m, drop.c_n_s_per_m, budget.groups["exoskeleton"] / 1000.0,
-                                       survival.SWEEP_CM, drop.clearance_mm)["heights"]
+    peaks = survival.payload_peaks(spec, drop, budget.groups["exoskeleton"]) if spec.requirements.max_peak_g is not None else None
     return survival.evaluate(spec, drop, stiffness, peaks)
 
 
