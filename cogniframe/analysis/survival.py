@@ -65,6 +65,27 @@ def crossing(heights, margins) -> float | None:
     return None
 
 
+def payload_peaks(spec, drop, exo_mass_g: float, heights_cm=SWEEP_CM) -> list[dict]:
+    """The peak model's entries over the sweep (`impact_nl.design_peaks`, the feet at the corners
+    of the frame's footprint as `drop.peak_prediction` puts them), cached on disk: a single-drop
+    distribution per height is a second or two for the whole sweep."""
+    from .. import cache
+
+    footprint = (float(spec.frame.width), float(spec.frame.depth))
+    args = (drop.mass_kg, drop.k_n_per_m, drop.c_n_s_per_m, exo_mass_g / 1000.0, list(heights_cm), drop.clearance_mm, footprint)
+    key = cache.key(["survival-peaks", args], ("analysis/impact_nl.py", "analysis/impact.py", "analysis/single_drop.py",
+                                               "analysis/survival.py"))
+    hit = cache.load_json("peaks", key)
+    if hit is not None:
+        return hit["heights"]
+    from . import impact_nl
+
+    out = impact_nl.design_peaks(*args[:6], footprint_mm=footprint)
+    out = {"heights": out["heights"]}
+    cache.store_json("peaks", key, out)
+    return out["heights"]
+
+
 def evaluate(spec, drop, stiffness: dict, peaks: list[dict] | None = None, heights_cm=SWEEP_CM) -> Survival:
     """The survival sweep for a design: ``drop`` its `impact.DropResult` (m, c, k, clearance),
     ``stiffness`` its load cases (`check --json`'s stiffness section, with ``survival_per_n``),
