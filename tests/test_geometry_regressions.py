@@ -28,7 +28,8 @@ at a time, each part built and written as an STL):
 * the motor mount: two clip sleeves 2e-6 mm out of line (stored rods, a rectangle) fused into
   slivers where thick walls overlap them; a level arm got a bare cylinder 0.5 mm above the seat;
   a bolt pattern as wide as the seat cut its corners off; a seat only as wide as the clips (thin
-  rods, a wide arm pair) had its sides tangent to them.
+  rods, a wide arm pair) had its sides tangent to them; carbon with 1.45 mm walls (the studio's
+  test edit) came out of OCC's exact cut as two solids, the second a phantom piece of a clip.
 * the camera mount: a thick core plate brings the link bolts in until the base's two corner cuts
   meet in front of the upright and cut it off.
 """
@@ -349,6 +350,7 @@ def test_knee_web_top_clears_the_legs_top():
     ("bamboo", {"frame__knee_height": 0.38}),  # the arm is level: no web under a bare cylinder
     ("bamboo", {"motors__bolt_spacing": 19.992}),  # the bolt holes cut the seat's corners off
     ("bamboo", {"motors__bolt_spacing": 40.0}),
+    ("carbon", {"joints__wall": 1.45}),  # OCC's exact cut gave the mount and a phantom 210 mm^3 solid
 ])
 def test_motor_mount_builds(base, change):
     from cogniframe.partlist import MOUNT_CLEAR

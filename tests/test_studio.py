@@ -141,6 +141,35 @@ def test_session_checks_edits_refuses_bad_values_and_saves(tmp_path, monkeypatch
     assert sorted(p.name for p in tmp_path.iterdir()) == ["carbon.yaml"]  # nothing else written
 
 
+def test_a_failed_3d_view_still_brings_the_fe_figures(tmp_path, monkeypatch):
+    """The figures of a new joint geometry wait for its FE, which the view's build solves; when
+    the view fails, the FE is solved on its own and the figures come, instead of a wait."""
+    from cogniframe.api import view
+    from cogniframe.studio.session import Session
+
+    def broken(*a, **k):
+        raise RuntimeError("no view today")
+
+    monkeypatch.setattr(view, "build_parts", broken)
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(CARBON, tmp_path / "carbon.yaml")
+    events = Events()
+    s = Session("carbon.yaml", publish=events, view=True)
+    try:
+        s.start()
+        s.edit({"joints.wall": "1.35"}, client=1, edited="joints.wall")  # a wall no other test solves
+        fast = events.wait(lambda e: e["type"] == "figures" and e["client"] == 1, timeout=120)
+        assert fast["pending_fe"] and fast["model"] == "analytic"
+        failed = events.wait(lambda e: e["type"] == "progress" and e.get("error"), timeout=120)
+        assert "no view today" in failed["error"]
+        solved = events.wait(lambda e: e["type"] == "figures" and e["after_fe"], timeout=600)
+        assert solved["model"] == "fe" and not solved["pending_fe"]
+        expected = cf.load("carbon.yaml").with_values({"joints.wall": 1.35}).check()
+        assert solved["check"]["stiffness"]["k_n_per_m"] == pytest.approx(expected.k_n_per_m, abs=0.5)
+    finally:
+        s.close()
+
+
 # -- the server: address, hosts, origins --------------------------------------------------------
 
 def _start_studio(folder: Path, params: str = "carbon.yaml", *extra: str):
@@ -416,11 +445,13 @@ def test_a_new_joint_geometry_shows_the_fast_model_then_the_fe_and_a_new_view(pa
     assert rec["pending_fe"] and page.get_attribute("#model", "data-model") == "analytic-pending"
     assert "solving the joints' FE" in page.text_content("#model")
     k_fast = float(_metric(page, "stiffness.k_n_per_m"))
-    page.wait_for_function("document.body.dataset.model === 'fe'", timeout=600_000)
+    page.wait_for_function("document.body.dataset.model !== 'analytic-pending'", timeout=600_000)
+    assert page.get_attribute("#model", "data-model") == "fe", page.text_content("#model")
     t_fe = time.monotonic() - t0
     k_new = float(_metric(page, "stiffness.k_n_per_m"))
-    page.wait_for_function(f"document.querySelector('#cf-viewer[data-ready=\"1\"]')?.dataset.scene !== {json.dumps(scene)}",
-                           timeout=600_000)
+    page.wait_for_function(f"document.querySelector('#cf-viewer[data-ready=\"1\"]')?.dataset.scene !== {json.dumps(scene)}"
+                           " || document.querySelector('#view-progress')?.dataset.error", timeout=600_000)
+    assert not page.get_attribute("#view-progress", "data-error"), page.get_attribute("#view-progress", "data-error")
     t_view = time.monotonic() - t0
     with capsys.disabled():
         print(f"\nstudio: new joint geometry: fast-model figures after {rec['ms']:.0f} ms (k {k_fast:.0f} N/m), "

@@ -217,8 +217,9 @@ def cylinder(p0, d, length: float, r: float):
     return _cq().Solid.makeCylinder(r, length, vec(p0), vec(d))
 
 
-def sloped_sleeve(start, d, length: float, r: float):
-    """Cylinder along a sloped `d` plus a vertical web from its axis down below the bed."""
+def sloped_sleeve(start, d, length: float, r: float, skirt: float = SKIRT):
+    """Cylinder along a sloped `d` plus a vertical web from its axis down below the bed, `skirt`
+    of the radius wide on each side."""
     cq = _cq()
     d = np.asarray(d, float)
     h = horizontal(d)
@@ -232,7 +233,7 @@ def sloped_sleeve(start, d, length: float, r: float):
     z0, z1 = float(p0[2]), float(p1[2])
     outline = [(r * sa, -1.0), (run + r * sa, -1.0), (run + r * sa, z1 - r * ca), (run, z1), (0, z0), (r * sa, z0 - r * ca)]
     plane = cq.Plane(origin=(float(p0[0]), float(p0[1]), 0.0), xDir=tuple(h), normal=tuple(-lat))
-    web = cq.Workplane(plane).polyline(outline).close().extrude(SKIRT * r, both=True).val()
+    web = cq.Workplane(plane).polyline(outline).close().extrude(skirt * r, both=True).val()
     return cylinder(p0, d, length, r).fuse(web)
 
 

@@ -23,6 +23,7 @@ import numpy as np
 from ..partlist import PartSpec
 from .joint import (
     FLIP_X,
+    SKIRT,
     STACK_SNAP,
     Built,
     above_bed,
@@ -34,6 +35,24 @@ from .joint import (
     transform,
     vec,
 )
+
+
+HOLE_CLEAR = 0.2  # mm: a hole's side never within this of a clip web's flat face
+
+
+def _skirt(r: float, rod_point, rod_dir, holes) -> float:
+    """The clip web's half-width over the sleeve radius: SKIRT, or a narrower web where a hole's
+    side would lie on or next to the web's face. A cylinder tangent to a plane breaks OCC's cut:
+    carbon with 1.45 mm walls put the web's faces 2.7 mm from the rod, the side of a bolt hole
+    2.7 mm from it too, and the cut gave the mount plus a phantom solid of 210 mm^3."""
+    h = horizontal(rod_dir)
+    across = np.array([-h[1], h[0], 0.0])
+    offsets = [(float((np.asarray(c, float) - rod_point) @ across), hr) for c, hr in holes]
+    for f in (SKIRT, SKIRT - 0.1, SKIRT - 0.2):
+        w = f * r
+        if all(abs(o + side * hr - face) >= HOLE_CLEAR for o, hr in offsets for side in (-1, 1) for face in (-w, w)):
+            return f
+    return SKIRT
 
 
 def _parallel(rods):
@@ -79,6 +98,10 @@ def build(part: PartSpec) -> Built:
     corners = [to_print(a_h * sa * half + lat * sl * half)[:2] for sa, sl in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
     pieces = [prism(corners, 0.0, plate_t)]
     cutters = []
+    b = float(part.param("bolt_spacing")) / 2
+    hole_r = float(part.param("screw_clearance")) / 2
+    bolts = [a_h * sa * b + lat * sl * b for sa, sl in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+    holes = [(c, hole_r) for c in bolts] + [(np.zeros(3), float(part.param("shaft_hole")) / 2)]
     for (p, d), (pc, dc) in zip(rods, clips):
         dz = float(dc[2])
         cos_a = math.sqrt(1 - dz * dz)
@@ -93,7 +116,7 @@ def build(part: PartSpec) -> Built:
         if dp[2] < 0:  # build the sleeve rising in print
             start, dp = to_print(pc + dc * (s_lo + width)), -dp
         if abs(dp[2]) > 1e-9:
-            pieces.append(sloped_sleeve(start, dp, width, r))
+            pieces.append(sloped_sleeve(start, dp, width, r, skirt=_skirt(r, pc, dc, holes)))
         else:
             # A level arm (frame.knee_height puts the knee level with the core link): a D-section
             # sleeve from the bed, as the joints' level sockets. A bare cylinder stood 0.5 mm
@@ -103,13 +126,9 @@ def build(part: PartSpec) -> Built:
         through = 4 * width
         cutters.append(cq.Solid.makeCylinder(bore / 2, 2 * through, vec(to_print(p - d * through)), vec(rot @ d)))
     body = above_bed(fuse_all(pieces))
-    b = float(part.param("bolt_spacing")) / 2
-    hole_r = float(part.param("screw_clearance")) / 2
-    for sa, sl in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
-        c = to_print(a_h * sa * b + lat * sl * b)
-        cutters.append(cq.Solid.makeCylinder(hole_r, 200.0, cq.Vector(c[0], c[1], -1.0), cq.Vector(0, 0, 1)))
-    c = to_print(np.zeros(3))
-    cutters.append(cq.Solid.makeCylinder(float(part.param("shaft_hole")) / 2, 200.0, cq.Vector(c[0], c[1], -1.0), cq.Vector(0, 0, 1)))
+    for centre, hr in holes:
+        c = to_print(centre)
+        cutters.append(cq.Solid.makeCylinder(hr, 200.0, cq.Vector(c[0], c[1], -1.0), cq.Vector(0, 0, 1)))
     shape = body.cut(fuse_all(cutters)).clean()
     solids = shape.Solids()
     if len(solids) != 1:

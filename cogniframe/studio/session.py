@@ -265,12 +265,16 @@ class Session:
             except UserError as e:
                 self._view_failed(key)
                 self.publish({"type": "progress", "task": "view", "done": 1, "total": 1, "error": str(e), "text": str(e)})
+                if fe:  # the figures wait for the FE: solve it on its own, or say why it cannot be
+                    self._solve_fe(d)
                 continue
             except Exception as e:  # noqa: BLE001
                 traceback.print_exc()
                 self._view_failed(key)
                 self.publish({"type": "progress", "task": "view", "done": 1, "total": 1, "text": f"the 3D view failed: {e}",
                               "error": f"{type(e).__name__}: {e}"})
+                if fe:
+                    self._solve_fe(d)
                 continue
             finally:
                 for t in shown:

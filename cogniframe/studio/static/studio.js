@@ -191,6 +191,12 @@ function progress(ev) {
   bar.value = ev.done;
   label.textContent = ev.error ? ev.error : ev.text || "";
   box.dataset.active = active ? "1" : "0";
+  box.dataset.error = ev.error || "";
+  if (ev.task === "fe" && ev.error && modelEl.dataset.model === "analytic-pending") {
+    // the figures stay the fast model's: say so, instead of a wait that never ends
+    modelEl.dataset.model = document.body.dataset.model = "analytic-fe-failed";
+    modelEl.textContent = `fast model (analytic joints): the joints' FE failed: ${ev.error}`;
+  }
 }
 
 let sceneKey = null;
