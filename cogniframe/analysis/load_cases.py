@@ -411,8 +411,10 @@ def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: d
       knee) the living hinge, with where;
     - ``core_plate_mpa_per_n``: the core plate's bending stress where a core link loads its
       corner: the link's vertical force times its lever to the nearest stack screw, plus the
-      link's moment across the plate, over the plate section across the corner there,
-      6 M / (w t^2), w = 2 sqrt 2 (plate/2 - pitch/2) (the corner as a cantilever off the stack)."""
+      link's moment across the plate, on the section across the corner there, w = 2 sqrt 2
+      (plate/2 - pitch/2) wide (the corner as a cantilever off the stack). The spacer under the
+      plate is clamped to it by the link's bolt and the stack screws, so the two bend together
+      without shear transfer (the lower bound of their sharing): sigma = 6 M t_p / (w (t_p^3 + t_s^3))."""
     from ..materials import STACK_PATTERNS
 
     fe = mdl.fe
@@ -458,5 +460,6 @@ def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: d
                 fz, mh = abs(f[6 * j + 2]), math.hypot(f[6 * j + 3], f[6 * j + 4])
                 p = fe.nodes[n]
                 lever = math.hypot(abs(p[0]) - s, abs(p[1]) - s)
-                sig_core = max(sig_core, 6 * (fz * lever + mh) / (w * c.plate_thickness**2))
+                sig_core = max(sig_core, 6 * (fz * lever + mh) * c.plate_thickness
+                               / (w * (c.plate_thickness**3 + c.spacer_thickness**3)))
     return {"rods": rods, "joints": joints, "core_plate_mpa_per_n": sig_core}

@@ -1,16 +1,20 @@
 """What breaks first: flat drops of increasing height against each part's strength.
 
-For each height of the sweep the drop model (`impact.simulate_height`) gives the frame's peak
-spring force F = k min(x_max, clearance): the payload's compression stops at the clearance,
-where the battery holder reaches the floor and takes the rest as a rigid strike. The frame model
-(`load_cases.survival_influence`: the payload case per newton) turns F into
+For each height of the sweep the drop model (`impact.simulate_height`) gives two loads: what
+deforms the joints, the spring's force k min(x_max, clearance) (the payload's compression stops
+at the clearance, where the battery holder reaches the floor and takes the rest as a rigid
+strike), and what the frame carries to the floor, spring and damper together, the payload's peak
+deceleration times its mass, F = m (|a|max + g) (the damper's force is the TPU's viscous stress:
+it goes through the rods and the core as the spring's does). The frame model
+(`load_cases.survival_influence`: the payload case per newton, the damping taken to load the
+frame as its stiffness does) turns them into
 
-- each TPU joint's peak strain (sockets' bearing, the knee's living hinge) against the
-  elastomer's elongation at break;
+- each TPU joint's peak strain (sockets' bearing, the knee's living hinge; from k x) against
+  the elastomer's elongation at break;
 - each rod's peak bending + axial stress against its flexural strength, and its compression
-  against its Euler load;
+  against its Euler load (from F);
 - the core plate's bending stress where a core link loads its corner, against the core
-  plastic's yield stress;
+  plastic's yield stress (from F);
 
 and, once the holder strikes with the speed v_s left at the clearance, the holder's contact
 stress as a flat plane-wave impact on a rigid floor, sigma = v_s sqrt(E rho) (an elastic bar
@@ -91,14 +95,18 @@ def evaluate(spec, drop, stiffness: dict, peaks: list[dict] | None = None, heigh
     ``stiffness`` its load cases (`check --json`'s stiffness section, with ``survival_per_n``),
     ``peaks`` the peak model's entries for ``heights_cm`` (None: payload G not assessed)."""
     from ..materials import strength
+    from .constants import G
     from .impact import simulate_height
 
     per_n = stiffness["survival_per_n"]
     m, k, c, clear = drop.mass_kg, drop.k_n_per_m, drop.c_n_s_per_m, drop.clearance_mm
-    forces, strikes = [], []
+    springs, forces, strikes = [], [], []
     for h in heights_cm:
         r = simulate_height(m, c, k, h, clear)
-        forces.append(k * min(r.x_max_mm, clear) / 1000.0)
+        # what deforms the joints: the spring's share, k x (x capped at the clearance)
+        springs.append(k * min(r.x_max_mm, clear) / 1000.0)
+        # what the frame carries to the floor: spring and damper, m (|a| + g) at the payload's peak
+        forces.append(m * G * (r.peak_g + 1.0))
         strikes.append(math.sqrt(2 * r.energy_j * r.energy_rigid_pct / 100.0 / m) if r.strikes else 0.0)
 
     series: list[dict] = []
@@ -110,7 +118,7 @@ def evaluate(spec, drop, stiffness: dict, peaks: list[dict] | None = None, heigh
     tpu = strength(spec.joints.material)
     if tpu is not None:
         for part, j in sorted(per_n["joints"].items()):
-            add(f"joint {part} ({j['at']})", "TPU strain", tpu.value, "strain", [j["strain_per_n"] * f for f in forces])
+            add(f"joint {part} ({j['at']})", "TPU strain", tpu.value, "strain", [j["strain_per_n"] * f for f in springs])
     rod = strength(spec.rods.material)
     by_role: dict[str, list[tuple[str, dict]]] = {}
     for name, r in sorted(per_n["rods"].items()):
