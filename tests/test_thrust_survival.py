@@ -284,3 +284,39 @@ def test_socket_push_pull_solid_fe_is_interface_and_sleeve_shear_in_series():
     closed = L / (1 / k_i + 1 / k_w)
     assert k_fe == pytest.approx(closed, rel=0.05)  # the sleeve's free ends shed a little (FE 3 % low)
     assert k_w * 5 < k_i
+
+
+@pytest.mark.parametrize("name", PRESETS)
+def test_arms_only_compliance_is_all_in_the_core_link(checked, name):
+    """Taken apart: rigid rods leave the bare arms' motor deflection within 2 %; the core links'
+    closed forms (rigid hub on Hetenyi sockets) instead of their solid FE make it 100x smaller;
+    every other joint in closed forms changes nothing. The core link's FE is the whole of it."""
+    from cogniframe.analysis.stiffness import _drop_unconnected, build_model, joint_models
+    from cogniframe.design import design
+
+    spec = spec_mod.load(PARAMS / f"{name}.yaml")
+    d = design(spec)
+
+    def deflection(joints, rigid_rods=False):
+        mdl = build_model(spec, d.frame, d.parts, joints, only_roles=("arm",))
+        if rigid_rods:
+            for b in mdl.fe.beams:
+                if b.group:
+                    b.e, b.g = b.e * 1e4, b.g * 1e4
+        K = mdl.fe.stiffness(sparse=True)
+        idx = mdl.fe.index()
+        fixed = np.zeros(K.shape[0], dtype=bool)
+        fixed[6 * idx[mdl.payload]:6 * idx[mdl.payload] + 6] = True
+        f = np.zeros(K.shape[0])
+        for m in mdl.motors:
+            f[6 * idx[m] + 2] = 1.0
+        u = ff.solve(K, f, _drop_unconnected(K, fixed))
+        return float(np.mean([u[6 * idx[m] + 2] for m in mdl.motors]))
+
+    fe, an = joint_models(spec, d.parts, "fe"), joint_models(spec, d.parts, "analytic")
+    links = [n for n in fe if n.startswith("core_link")]
+    base = deflection(fe)
+    assert base == pytest.approx(checked[name]["stiffness"]["thrust"]["arms_only_motor_deflection_mm_per_n"], rel=0.02)
+    assert deflection(fe, rigid_rods=True) == pytest.approx(base, rel=0.02)
+    assert deflection({**fe, **{n: an[n] for n in links}}) < base / 100
+    assert deflection({**an, **{n: fe[n] for n in links}}) == pytest.approx(base, rel=1e-3)
