@@ -153,6 +153,7 @@ def evaluate(spec, drop, stiffness: dict, peaks: list[dict] | None = None, heigh
         s["fails_at_drop_cm"] = round(h, 1) if h is not None else None
     worst = sorted(series, key=lambda s: (s["fails_at_drop_cm"] is None, s["fails_at_drop_cm"] or 0.0,
                                           min((x for x in s["margin"] if x is not None), default=math.inf), s["part"]))
-    note = ("flat drops; frame forces quasi-static at the drop model's peak spring force, capped where the battery "
-            "holder reaches the floor; the holder strike as a plane-wave bound; no fatigue, no tumbling, no edge landings")
+    note = ("flat drops; joints strained by the drop model's spring force (capped where the battery holder reaches the "
+            "floor), rods and core loaded by its whole force (spring and damper), both quasi-static in the payload "
+            "case's pattern; the holder strike as a plane-wave bound; no fatigue, no tumbling, no edge landings")
     return Survival(tuple(heights_cm), top, first, tuple(worst), note)
