@@ -447,7 +447,7 @@ def prop_clearances(frame: Frame, spec: Spec) -> tuple[PropClearance, ...]:
     for m in frame.motors:
         centre = np.array([m.axis[0], m.axis[1], m.prop_z])
         cage = min(_rod_to_disc(r, centre, radius) for r in frame.rods.values() if r.role != "arm")
-        core = min(_box_to_disc(b, centre, radius) for b in frame.core.boxes)
+        core = _boxes_to_disc(frame.core.boxes, centre, radius)
         others = [np.hypot(o.axis[0] - m.axis[0], o.axis[1] - m.axis[1]) - 2 * radius for o in frame.motors if o is not m]
         out.append(PropClearance(m.name, round(cage, 2), round(core, 2), round(float(min(others)), 2)))
     return tuple(out)
@@ -464,6 +464,23 @@ def _point_to_disc(pts: np.ndarray, centre: np.ndarray, radius: float) -> np.nda
     dxy = np.hypot(pts[:, 0] - centre[0], pts[:, 1] - centre[1])
     dz = np.abs(pts[:, 2] - centre[2])
     return np.hypot(np.maximum(dxy - radius, 0.0), dz)
+
+
+def _boxes_to_disc(boxes, centre: np.ndarray, radius: float) -> float:
+    """min(_box_to_disc) over `boxes`, the same number: a box whose exact distance bound (vertical
+    gap and plan gap beyond the radius) already exceeds the nearest sampled one cannot be nearer
+    (a sampled distance is never below the exact one), so it is not sampled."""
+    def bound(b: Box) -> float:
+        lo, hi = np.asarray(b.centre) - np.asarray(b.size) / 2, np.asarray(b.centre) + np.asarray(b.size) / 2
+        gap = np.maximum(np.maximum(lo - centre, centre - hi), 0.0)
+        return float(math.hypot(gap[2], max(math.hypot(gap[0], gap[1]) - radius, 0.0)))
+
+    best = math.inf
+    for lb, i in sorted((bound(b), i) for i, b in enumerate(boxes)):
+        if lb > best + 1e-9:
+            break
+        best = min(best, _box_to_disc(boxes[i], centre, radius))
+    return best
 
 
 def _box_to_disc(box: Box, centre: np.ndarray, radius: float) -> float:

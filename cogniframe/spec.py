@@ -174,7 +174,7 @@ class ModelSection(_M):
     k_n_per_m: Annotated[float, Field(gt=0, le=1e7, description="measured stiffness (from `cogniframe fit`); null = predict from the frame")] | None = None
     c_n_s_per_m: Annotated[float, Field(gt=0, le=1e5, description="measured damping; null = from damping_ratio")] | None = None
     damping_ratio: Annotated[float, Field(gt=0, le=5, description="used when c_n_s_per_m is null (paper: 0.558)")] = 0.558
-    stiffness_model: Literal["fe", "analytic"] = Field("fe", description="joint stiffness: fe = solid finite elements of each joint's CAD (cached), analytic = closed forms (fast, for sweeps)")
+    stiffness_model: Literal["fe", "analytic", "surrogate"] = Field("fe", description="joint stiffness: fe = solid finite elements of each joint's CAD (cached, seconds per new joint), surrogate = a fit of that FE over the joint geometry (milliseconds, within a few per cent of the FE; the solid FE outside its training box; the sweeps' default), analytic = closed forms (trends only)")
 
 
 class Spec(_M):

@@ -269,10 +269,13 @@ def test_pareto_front_is_the_passing_non_dominated_set():
 
 def test_set_values_apply_to_every_design_and_are_checked(tmp_path):
     sw = sweep_spec.load(sweep_file(tmp_path, GOOD + "set:\n  core.battery.mass: 40\n  requirements.drop_heights_cm: [50, 120]\n"))
-    assert sw.base_data["core"]["battery"]["mass"] == 40 and sw.fixed == ("core.battery.mass", "requirements.drop_heights_cm")
+    assert sw.base_data["core"]["battery"]["mass"] == 40
+    # the sweep's default joint model comes after the file's set: values
+    assert sw.fixed == ("core.battery.mass", "requirements.drop_heights_cm", "model.stiffness_model")
+    assert sw.defaults == ("model.stiffness_model",) and sw.base_data["model"]["stiffness_model"] == "surrogate"
     row = ev.evaluate_one(sw.base_data, sample.designs(sw)[0], 60)
     data = ev.apply_overrides(yaml.safe_load(CARBON.read_text()), {"core.battery.mass": 40, "requirements.drop_heights_cm": [50, 120],
-                                                                  **sample.designs(sw)[0]})
+                                                                  "model.stiffness_model": "surrogate", **sample.designs(sw)[0]})
     data["name"] = "carbon"
     assert row["design_id"] == ev.design_id(data)
     msg = error_of(sweep_file(tmp_path, GOOD + "set:\n  core.battery.mass: 900\n"))

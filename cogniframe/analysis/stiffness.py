@@ -68,9 +68,11 @@ def joint_parts(parts) -> list:
 
 
 def joint_models(spec, parts, method: str = "fe", factor: float | None = None) -> dict:
-    """The super-element of every distinct joint (cached FE, or closed forms)."""
-    from .joints import joint_stiffness, solve_missing
+    """The super-element of every distinct joint (cached FE, the FE's surrogate, or closed forms)."""
+    from .joints import joint_stiffness, solve_missing, surrogate_models
 
+    if method == "surrogate":  # the solid FE for the joints outside its training box
+        return surrogate_models(spec, joint_parts(parts), factor)
     out = {}
     # new geometries first, all at once (in parallel); then every joint comes from the cache
     failed = solve_missing(spec, joint_parts(parts)) if method == "fe" else {}

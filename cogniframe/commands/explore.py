@@ -44,7 +44,7 @@ def optimize(sweep_file: SweepArg,
              trials: Annotated[Optional[int], typer.Option("--trials", min=1, help="designs to try (default: the sweep file's samples)")] = None,
              out: OutOpt = None, scheduler: SchedulerOpt = None, workers: WorkersOpt = None,
              cad: Annotated[int, typer.Option("--cad", min=0, help="build and verify the CAD of the N best designs on the cluster")] = 0,
-             verify: Annotated[int, typer.Option("--verify", min=0, help="re-check the N best with the base file's joint model when the sweep screens with another (0: off)")] = 4,
+             verify: Annotated[Optional[int], typer.Option("--verify", min=0, help="re-check the N best with the base file's joint model when the sweep evaluates with another (0: off; default: 4 when screening with the closed forms, none with the surrogate)")] = None,
              json_out: Annotated[bool, typer.Option("--json", help="print one JSON object with the best design and the run's numbers")] = False) -> None:
     """Optimise over the sweep file's vary box with optuna on Dask: trials.parquet and best.yaml (passes `check`)."""
     from cogniframe.sweep import optimize as opt

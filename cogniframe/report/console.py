@@ -44,6 +44,8 @@ def print_check(result: CheckResult, console: Console) -> None:
     if f is not None:  # docs/flight.md
         console.print(f"Flight ({f.table}): thrust-to-weight {f.thrust_to_weight:.2f}, hover at {f.hover_throttle * 100:.0f} % "
                       f"throttle, {f.hover_current_a:.1f} A, {f.hover_time_min:.1f} min on {f.usable_mah:.0f} mAh usable")
+    for n in getattr(result, "notes", ()):
+        console.print(f"[yellow]note:[/] {n}")
     if result.problems:
         for p in result.problems:
             console.print(f"[red]problem:[/] {p}")

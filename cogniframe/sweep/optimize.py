@@ -11,13 +11,13 @@ through `constraints_func`. INVALID, TIMEOUT and ERROR trials are told as failed
     DIR/optimize.md      objectives, constraints, the best design against the base, the Pareto set
     DIR/cad.json         with --cad N: the N best designs built and verified on the cluster
 
-Two fidelities. A sweep file may screen with the closed-form joints (`set: model.stiffness_model:
-analytic`, milliseconds per design) where its base file uses the solid FE of the joints (seconds
-per new joint geometry). The closed forms and the FE disagree by up to tens of per cent (docs/
-stiffness-model.md), so optimize then *verifies*: the `--verify N` best screened designs (default 4)
-are checked again on the cluster with the base file's own model, and the best design is the best
-of those that still pass under it. best.yaml keeps the base file's model, so `cogniframe check
-best.yaml` gives the verified numbers.
+Joint models. Like `sweep`, optimize evaluates with the solid FE's surrogate by default
+(milliseconds per design, within a few per cent of the FE: docs/stiffness-model.md), so its best
+design needs no re-check for the model's sake; `--verify N` still re-checks the N best with the
+base file's own model. A sweep file that screens with the closed-form joints (`set:
+model.stiffness_model: analytic`) is verified by default (4 designs): the closed forms and the FE
+disagree by up to tens of per cent, so the best design is the best of those that still pass under
+the base file's model. best.yaml keeps the base file's model.
 """
 
 from __future__ import annotations
@@ -196,7 +196,7 @@ def ranked(rows: list[dict], objectives, constraints) -> tuple[list[dict], list[
 
 def run_optimize(sweep: Sweep, objectives: list[Objective], constraints: list[Constraint], out_dir: Path | None = None,
                  trials: int | None = None, scheduler: str | None = None, workers: int | None = None, cad: int = 0,
-                 verify: int = 4,
+                 verify: int | None = None,
                  progress: Callable | None = None, batch: int | None = None) -> OptimizeResult:
     from ..outdir import lock
 
@@ -208,7 +208,7 @@ def run_optimize(sweep: Sweep, objectives: list[Objective], constraints: list[Co
 
 
 def _run_optimize(sweep, objectives, constraints, out_dir: Path, trials, scheduler, workers, cad, progress, batch,
-                  verify: int = 4) -> OptimizeResult:
+                  verify: int | None = None) -> OptimizeResult:
     import optuna
     from optuna.trial import TrialState
 
@@ -228,6 +228,8 @@ def _run_optimize(sweep, objectives, constraints, out_dir: Path, trials, schedul
     study = optuna.create_study(directions=[o.direction for o in objectives], sampler=sampler)
     dists = _distributions(sweep)
     rows: list[dict] = []
+    if verify is None:
+        verify = default_verify(sweep)
     fidelity = two_fidelities(sweep) if verify > 0 else None
     with run_mod.dask_client(scheduler, workers) as (client, scheduler_addr, n_workers):
         run_mod.claim_folder(out_dir, "optimize", sweep)
@@ -298,6 +300,7 @@ def _run_optimize(sweep, objectives, constraints, out_dir: Path, trials, schedul
 
 
 FIDELITY_KEY = "model.stiffness_model"
+DEFAULT_VERIFY = 4  # finalists re-checked when screening with the closed forms
 # How far a screened (closed-form joints) constraint value may miss and the design still be worth
 # re-checking with the FE: the two joint models' max_safe_drop_cm differ by up to ~20 % in either
 # direction on the carbon designs compared (docs/sweeps.md).
@@ -350,6 +353,14 @@ def two_fidelities(sweep: Sweep) -> tuple[str, str] | None:
     own = ((yaml.safe_load(sweep.base_text) or {}).get("model") or {}).get("stiffness_model", "fe")
     screen = report_get(sweep.base_data, FIDELITY_KEY)
     return (screen, own) if screen != own else None
+
+
+def default_verify(sweep: Sweep) -> int:
+    """Finalists re-checked with the base file's model when `--verify` is not given: none when the
+    sweep evaluates with the FE's surrogate (it agrees with the FE within a few per cent), 4 when it
+    screens with the closed forms."""
+    fid = two_fidelities(sweep)
+    return 0 if fid is None or fid[0] == "surrogate" else DEFAULT_VERIFY
 
 
 def _objective_key(row: dict, objectives) -> tuple:
@@ -422,7 +433,7 @@ def write_best_yaml(sweep: Sweep, row: dict, path: Path, keep_model: bool = Fals
     if doc is None:
         doc = CommentedMap()
     targets = {f: report_get(sweep.base_data, f) for f in sweep.fixed  # the sweep file's set: values
-               if not (keep_model and f == FIDELITY_KEY)}
+               if not (keep_model and f == FIDELITY_KEY) and f not in sweep.defaults}
     for k in sweep.keys:
         v = _py(row[k.name])  # numpy scalar -> Python
         targets[k.name] = int(round(v)) if k.integer and isinstance(v, float) else v

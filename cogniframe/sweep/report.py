@@ -226,6 +226,11 @@ def write_reports(out_dir: Path, sweep, table, result) -> None:
                   "they differ from the solid-FE joints of the presets by -49 % to +40 % in k (docs/stiffness-model.md). "
                   "Read trends here; re-check a chosen design with `cogniframe check` (FE), as `cogniframe optimize` "
                   "does for its finalists.", ""]
+    elif joint_model == "surrogate":
+        outside = int((table["joints_outside_box"].fillna("") != "").sum()) if "joints_outside_box" in table else 0
+        lines += ["Joints from the solid FE's surrogate (`model.stiffness_model: surrogate`, the sweeps' default): "
+                  "within a few per cent of the FE (docs/stiffness-model.md); "
+                  f"{outside} design(s) had a joint outside its training box, solved by FE (column `joints_outside_box`).", ""]
     else:
         lines += [f"Joints from `{joint_model}` (the solid FE of each joint geometry).", ""]
     passed = table[table["verdict"] == "PASS"].sort_values("mass_g")

@@ -77,7 +77,8 @@ class Sweep:
     base_path: str
     base_text: str  # the base params file's text (travels to the workers; they never read a disk)
     base_data: dict  # parsed base (name filled in as spec.load does) with the `set:` values applied
-    fixed: tuple[str, ...] = ()  # the `set:` keys
+    fixed: tuple[str, ...] = ()  # the `set:` keys, and the sweep defaults applied (`defaults`)
+    defaults: tuple[str, ...] = ()  # keys set by the sweep's defaults, not by the file (`SWEEP_DEFAULTS`)
 
     @property
     def base_label(self) -> str:
@@ -92,6 +93,12 @@ class Sweep:
         """Hash of what decides the design list: base params, keys, sampler settings."""
         payload = {"base": self.base_data, "settings": self.settings.model_dump(mode="json", exclude={"base"})}
         return hashlib.sha256(json.dumps(payload, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+
+# What a sweep sets unless its file sets or varies it: the joints from the solid FE's surrogate
+# (milliseconds per design, within a few per cent of the FE; the FE for a joint outside its
+# training box), in place of the base file's solid FE (seconds per new joint geometry).
+SWEEP_DEFAULTS = {"model.stiffness_model": ("fe", "surrogate")}  # key: (base value it replaces, sweep value)
 
 
 def json_schema() -> dict:
@@ -133,6 +140,11 @@ def from_dict(data: dict, source: str = "<sweep>", text: str | None = None, fold
     for name, v in settings.set.items():
         _check_value(name, v, base_spec, f"{source}: set.{name}{_line(text, ('set', name))}", containers=True)
         fixed[name] = v
+    defaults = []
+    for name, (slow, fast) in SWEEP_DEFAULTS.items():
+        if name not in fixed and name not in settings.vary and _get(base_data, name, slow) == slow:
+            fixed[name] = fast
+            defaults.append(name)
     if fixed:
         from .evaluate import apply_overrides
 
@@ -146,7 +158,16 @@ def from_dict(data: dict, source: str = "<sweep>", text: str | None = None, fold
     if settings.sampler == "sobol" and len(keys) < 2:
         raise UserError(f"{source}: sampler{_line(text, ('sampler',))}: Sobol indices need at least two keys under vary. "
                         "Fix: add a key to vary, or use sampler: lhs.")
-    return Sweep(str(source), settings, keys, str(base_path), base_text, base_data, tuple(fixed))
+    return Sweep(str(source), settings, keys, str(base_path), base_text, base_data, tuple(fixed), tuple(defaults))
+
+
+def _get(data: dict, dotted: str, default=None):
+    node = data
+    for p in dotted.split("."):
+        if not isinstance(node, dict) or p not in node:
+            return default
+        node = node[p]
+    return default if node is None else node
 
 
 def _find_base(base: str, source: str, text: str | None, folder: Path | None) -> Path:

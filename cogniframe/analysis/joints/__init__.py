@@ -7,7 +7,10 @@ in one of two ways (`method`):
 
 ``"fe"``  (default) the solid FE of the part's CAD (`fe`, which meshes with `meshing` and
           condenses with `solid_fe`). Seconds per new geometry, so solved once and cached.
-``"analytic"`` the closed forms (`closed_forms`). Microseconds; for sweeps and as a cross-check.
+``"analytic"`` the closed forms (`closed_forms`). Microseconds; a cross-check, for trends only.
+``"surrogate"`` the solid FE's fit over the joint geometry (`surrogate`, trained offline by
+          tools/train_joint_surrogate.py): milliseconds, within a few per cent of the FE inside its
+          training box; outside it the joint is solved by FE (`surrogate_models` says which and why).
 
 This module is the entry point: `joint_stiffness` (one joint, from the cache or solved here),
 `solve_missing` (every joint of a design not cached yet, on the caller's worker processes, with
@@ -30,7 +33,7 @@ from .model import (TPU_ELONGATION_AT_BREAK, TPU_PRINTED_MODULUS_FACTOR, JointSt
 # the entry points, and what the frame model, the load cases and the build read from the joints
 __all__ = ["FE_MESH_MM", "TPU_ELONGATION_AT_BREAK", "TPU_PRINTED_MODULUS_FACTOR", "JointStiffness", "analytic_joint",
            "fe_joint", "geometry_key", "has_unsolved", "hinge_geometry", "hinged_socket", "interface", "is_mirror",
-           "joint_stiffness", "mirror_original", "solve_missing"]
+           "joint_stiffness", "mirror_original", "solve_missing", "surrogate_models", "surrogate_notes"]
 
 _CACHE_VERSION = "joint-1"
 # Progress of the solid FE (a new joint geometry costs ~1-2 s): the CLI prints these records on
@@ -55,10 +58,17 @@ def joint_stiffness(spec, part, method: str = "fe", factor: float | None = None,
     from ... import cache
 
     mesh_mm = FE_MESH_MM if mesh_mm is None else mesh_mm
-    if method not in ("fe", "analytic"):
-        raise ValueError(f"joint stiffness method must be 'fe' or 'analytic', got {method!r}")
+    if method not in ("fe", "analytic", "surrogate"):
+        raise ValueError(f"joint stiffness method must be 'fe', 'analytic' or 'surrogate', got {method!r}")
     if method == "analytic":
         return analytic_joint(spec, part, factor)
+    if method == "surrogate":
+        from .surrogate import predict
+
+        unit, _ = predict(spec, part, factor)
+        if unit is not None:
+            return unit
+        method = "fe"  # outside the training box: the reference model
     # Every stiffness in the FE (TPU E and G, the interface E/h_i and G/h_i, the support ties)
     # is proportional to the TPU factor, so the condensed matrix is too: solve and cache at
     # factor 1, scale on use.
@@ -195,3 +205,69 @@ def _solve(spec, todo, mesh_mm: float, submit=None) -> dict[str, str]:
     for p, _ in pending:
         finished(*_fe_unit(spec, p, mesh_mm))
     return failed
+
+
+def _surrogate_split(spec, parts, factor: float | None = None):
+    """({part name: surrogate super-element}, {part name: why it is outside the training box}):
+    originals predicted, mirrored joints reflected from their predicted original (as the FE path
+    reflects them; a mirror whose original is outside, or that is not an exact image, is outside too)."""
+    from .surrogate import predict
+
+    inside, outside = {}, {}
+    for p in parts:
+        if is_mirror(p):
+            continue
+        unit, why = predict(spec, p, factor)
+        if unit is not None:
+            inside[p.name] = unit
+        else:
+            outside[p.name] = why
+    for p in parts:
+        if not is_mirror(p):
+            continue
+        try:
+            found = mirror_original(p, parts)
+        except ValueError as exc:
+            found, why = None, f"not an exact mirror image ({exc})"
+        else:
+            why = "its original is not in the part list" if found is None else None
+        if found is not None:
+            o, P, order = found
+            if o.name in inside:
+                inside[p.name] = reflect_unit(inside[o.name], p, P, order, [s.rod for s in o.sockets])
+                continue
+            why = f"its original {o.name} is outside"
+        outside[p.name] = why
+    return inside, outside
+
+
+def surrogate_models(spec, parts, factor: float | None = None, submit=None) -> dict:
+    """Every joint's super-element from the surrogate; the joints outside its training box from the
+    solid FE (cached; `solve_missing` on `submit`'s workers), those the FE cannot mesh from the
+    closed forms, as `stiffness.joint_models` does for the FE."""
+    inside, outside = _surrogate_split(spec, parts, factor)
+    out = dict(inside)
+    if outside:
+        rest = [p for p in parts if p.name in outside]
+        for name, why in outside.items():
+            progress_log.info("joint surrogate: %s outside its training box (%s); solid FE", name, why)
+        failed = solve_missing(spec, rest, submit=submit)
+        for p in rest:
+            if p.name not in failed:
+                try:
+                    out[p.name] = joint_stiffness(spec, p, "fe", factor)
+                    continue
+                except RuntimeError:
+                    pass
+            out[p.name] = joint_stiffness(spec, p, "analytic", factor)
+    return {p.name: out[p.name] for p in parts}
+
+
+def surrogate_notes(spec, parts) -> list[str]:
+    """One line per joint outside the surrogate's training box (what `check` reports as a note and
+    a sweep as its `joints_outside_box` column); empty when every joint is inside. Milliseconds:
+    the features and the box, no fit evaluated."""
+    from .surrogate import outside_reasons
+
+    return [f"joint {name}: outside the surrogate's training box ({why}); its stiffness is from the solid FE"
+            for name, why in outside_reasons(spec, parts).items()]

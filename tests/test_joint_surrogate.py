@@ -1,0 +1,202 @@
+"""The joint surrogate (`model.stiffness_model: surrogate`) against the solid FE it was fitted to:
+on held-out joints (tests/data/joint_surrogate_holdout.json, made by tools/train_joint_surrogate.py
+from designs the fit never saw) and on live FE solves; its training box, fallback and notes."""
+
+from __future__ import annotations
+
+import json
+import statistics
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from cogniframe import frame as frame_mod
+from cogniframe import partlist
+from cogniframe import spec as spec_mod
+from cogniframe.analysis import stiffness
+from cogniframe.analysis.joints import fe_joint, is_mirror, mirror_original, reflect_unit, surrogate_models
+from cogniframe.analysis.joints import surrogate as sg
+from cogniframe.analysis.joints.model import TPU_PRINTED_MODULUS_FACTOR, JointStiffness
+from cogniframe.sweep.evaluate import apply_overrides
+
+ROOT = Path(__file__).resolve().parents[1]
+HOLDOUT = json.loads((ROOT / "tests" / "data" / "joint_surrogate_holdout.json").read_text())
+
+
+def design(overrides: dict, **extra):
+    data = yaml.safe_load((ROOT / "params" / "carbon.yaml").read_text())
+    s = spec_mod.from_dict(apply_overrides(data, {**overrides, **extra}))
+    f = frame_mod.build(s)
+    return s, f, partlist.build(s, f)
+
+
+def joints_of(parts):
+    return [p for p in parts if p.family == "joint"]
+
+
+def unpack(c: dict) -> np.ndarray:
+    n = len(c["labels"]) * 6
+    K = np.zeros((n, n))
+    K[np.triu_indices(n)] = c["triu"]
+    return K + np.triu(K, 1).T
+
+
+def rel_error(k_pred: np.ndarray, k_fe: np.ndarray) -> float:
+    """Relative Frobenius error of a super-element, rotations scaled by surrogate.LENGTH_MM (so that
+    forces and moments weigh alike), as docs/stiffness-model.md states the accuracy."""
+    s = np.tile([1.0, 1.0, 1.0, sg.LENGTH_MM, sg.LENGTH_MM, sg.LENGTH_MM], k_fe.shape[0] // 6)
+    a, b = k_pred / np.outer(s, s), k_fe / np.outer(s, s)
+    return float(np.linalg.norm(a - b) / np.linalg.norm(b))
+
+
+def frame_k(s, f, parts, units: dict) -> float:
+    """Secant k with the factor-1 `units` of the original joints (mirrors reflected from them)."""
+    joints = {}
+    for p in joints_of(parts):
+        if is_mirror(p):
+            o, P, order = mirror_original(p, parts)
+            u = reflect_unit(units[o.name], p, P, order, [x.rod for x in o.sockets])
+        else:
+            u = units[p.name]
+        joints[p.name] = JointStiffness(u.name, u.method, u.labels, u.refs,
+                                        tuple(map(tuple, (TPU_PRINTED_MODULUS_FACTOR * u.matrix).tolist())))
+    return stiffness.secant_solution(s, f, parts, joints).k_n_per_m
+
+
+@pytest.fixture(scope="module")
+def held_out():
+    """Per held-out design: its parts, the FE units and the surrogate's (both at factor 1)."""
+    out = []
+    for d in HOLDOUT["designs"]:
+        s, f, parts = design(d["overrides"])
+        fe = {}
+        sur = {}
+        for p in joints_of(parts):
+            if is_mirror(p):
+                continue
+            c = d["joints"][p.name]
+            fe[p.name] = JointStiffness(p.name, "fe", tuple(c["labels"]), tuple(map(tuple, c["refs"])),
+                                        tuple(map(tuple, unpack(c).tolist())))
+            sur[p.name], _ = sg.predict(s, p, 1.0)
+        out.append((d, s, f, parts, fe, sur))
+    return out
+
+
+def test_holdout_set_is_of_designs_the_fit_never_saw():
+    meta = HOLDOUT["meta"]
+    assert meta["data_sha256"] == sg.DATA_SHA256  # made with the shipped fit
+    assert len(HOLDOUT["designs"]) >= 12
+    trained = json.loads(sg.DATA_FILE.read_text())["meta"]
+    assert trained["train_designs"] >= 96
+
+
+def test_per_joint_stiffness_within_3_percent_median_5_worst_of_the_fe_on_held_out_joints(held_out):
+    errors = {}
+    outside = 0
+    for d, s, f, parts, fe, sur in held_out:
+        for name, unit in fe.items():
+            if sur[name] is None:  # outside the training box: `check` solves it by FE
+                outside += 1
+                continue
+            errors[(d["design"], name)] = rel_error(sur[name].matrix, unit.matrix)
+    assert outside <= 0.1 * (outside + len(errors))  # the held-out designs come from the training's box
+    v = list(errors.values())
+    worst = max(errors, key=errors.get)
+    assert statistics.median(v) <= 0.03, statistics.median(v)
+    assert max(v) <= 0.05, (worst, errors[worst])
+
+
+def test_frame_k_within_3_percent_median_5_worst_of_the_fe_on_held_out_designs(held_out):
+    errs = []
+    for d, s, f, parts, fe, sur in held_out:
+        k_fe = frame_k(s, f, parts, fe)
+        assert k_fe == pytest.approx(d["k_fe"], rel=1e-4)  # the stored FE matrices give the stored k
+        # a joint outside the training box is solved by FE, as `check` does
+        errs.append(frame_k(s, f, parts, {n: sur[n] or fe[n] for n in fe}) / k_fe - 1)
+    assert statistics.median(np.abs(errs)) <= 0.03, errs
+    assert max(np.abs(errs)) <= 0.05, errs
+
+
+def test_surrogate_joint_has_exactly_the_six_rigid_modes_and_is_positive_semidefinite():
+    s, f, parts = design({"joints.wall": 1.7, "rods.diameter": 3.3})
+    for unit in surrogate_models(s, joints_of(parts)).values():  # the mirrored core link reflected
+        assert unit.method == "surrogate"
+        K = unit.matrix
+        w = np.linalg.eigvalsh(K)
+        assert (w[:6] / w[-1] < 1e-12).all() and w[6] / w[-1] > 1e-9 and w.min() > -1e-9 * w[-1]
+        from cogniframe.analysis.framefe import rigid_transfer
+
+        R = np.vstack([rigid_transfer(np.zeros(3), np.asarray(r)) for r in unit.refs])
+        assert np.linalg.norm(K @ R) <= 1e-9 * np.linalg.norm(K)
+
+
+def test_surrogate_scales_with_the_tpu_factor_and_repeats_to_the_bit():
+    s, f, parts = design({"joints.wall": 1.7})
+    p = next(p for p in joints_of(parts) if p.name == "knee")
+    a, _ = sg.predict(s, p, 1.0)
+    b, _ = sg.predict(s, p, 0.5)
+    np.testing.assert_allclose(b.matrix, 0.5 * a.matrix, rtol=1e-12)
+    assert sg.predict(s, p, 1.0)[0].K == a.K
+
+
+def test_live_fe_of_an_unseen_corner_agrees_with_the_surrogate():
+    # rods, wall, depth and clearance between the presets': a geometry in no training or held-out design
+    s, f, parts = design({"rods.diameter": 3.25, "joints.wall": 1.55, "joints.socket_depth": 10.5,
+                          "joints.fit_clearance.tpu_95a": 0.07, "frame.height": 126.0})
+    p = next(p for p in joints_of(parts) if p.name == "corner_top")
+    fe = fe_joint(s, p, 1.0)
+    sur, why = sg.predict(s, p, 1.0)
+    assert why is None
+    assert rel_error(sur.matrix, fe.matrix) <= 0.05
+
+
+def test_carbon_preset_k_from_the_surrogate_within_5_percent_of_the_fe(carbon):
+    s = carbon
+    f = frame_mod.build(s)
+    parts = partlist.build(s, f)
+    k_fe = stiffness.secant_solution(s, f, parts, stiffness.joint_models(s, parts, "fe")).k_n_per_m
+    k_sur = stiffness.secant_solution(s, f, parts, stiffness.joint_models(s, parts, "surrogate")).k_n_per_m
+    assert k_sur == pytest.approx(k_fe, rel=0.05)
+    assert k_sur == pytest.approx(k_fe, rel=0.03)  # the preset is inside the box, near its lower wall
+
+
+def test_a_joint_outside_the_box_is_named_solved_by_fe_and_only_noted():
+    # a 2.6 mm hinge: thicker than any trained knee; the other joints do not read it
+    s, f, parts = design({"joints.hinge_thickness": 2.6, "joints.wall": 1.7})
+    notes = sg.outside_reasons(s, joints_of(parts))
+    assert set(notes) == {"knee"} and "log_hinge" in notes["knee"]
+    models = surrogate_models(s, joints_of(parts))
+    assert models["knee"].method == "fe"
+    assert {n: m.method for n, m in models.items() if n != "knee"} == dict.fromkeys(
+        [p.name for p in joints_of(parts) if p.name != "knee"], "surrogate")
+    from cogniframe.analysis import verdict
+
+    data = yaml.safe_load((ROOT / "params" / "carbon.yaml").read_text())
+    sp = spec_mod.from_dict(apply_overrides(data, {"joints.hinge_thickness": 2.6, "joints.wall": 1.7,
+                                                   "model.stiffness_model": "surrogate"}))
+    d = verdict.check_dict(verdict.check(sp))
+    assert d["notes"] == ["joint knee: outside the surrogate's training box (" + notes["knee"]
+                          + "); its stiffness is from the solid FE"]
+    assert not any("surrogate" in p for p in d["problems"])
+    assert d["stiffness"]["joints"]["knee"]["method"] == "fe"
+
+
+def test_a_changed_data_file_is_refused(tmp_path, monkeypatch):
+    bad = tmp_path / "joint_surrogate.json"
+    bad.write_bytes(sg.DATA_FILE.read_bytes() + b" ")
+    monkeypatch.setattr(sg, "DATA_FILE", bad)
+    with pytest.raises(RuntimeError, match="not the joint surrogate"):
+        sg.families()
+
+
+def test_fit_is_deterministic_and_recovers_a_log_linear_family():
+    rng = np.random.default_rng(3)
+    X = rng.uniform(0, 1, (40, 3))
+    Y = np.column_stack([1 + 2 * X[:, 0] - X[:, 2], 0.5 * X[:, 1], np.full(40, 0.3)])
+    a, _ = sg.fit_family("k", ("r0", "body"), ("a", "b", "c"), X, Y)
+    b, _ = sg.fit_family("k", ("r0", "body"), ("a", "b", "c"), X, Y)
+    assert json.dumps(a.to_json()) == json.dumps(b.to_json())
+    x = np.array([[0.3, 0.6, 0.2]])
+    np.testing.assert_allclose(a.basis(x) @ np.asarray(a.coef), [[1 + 0.6 - 0.2, 0.3, 0.3]], atol=1e-3)
