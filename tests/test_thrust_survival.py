@@ -320,3 +320,19 @@ def test_arms_only_compliance_is_all_in_the_core_link(checked, name):
     assert deflection(fe, rigid_rods=True) == pytest.approx(base, rel=0.02)
     assert deflection({**fe, **{n: an[n] for n in links}}) < base / 100
     assert deflection({**an, **{n: fe[n] for n in links}}) == pytest.approx(base, rel=1e-3)
+
+
+def test_report_says_what_breaks_first_with_every_margin(tmp_path):
+    from cogniframe.report import html as report
+
+    r = verdict.check(spec_mod.load(PARAMS / "bamboo.yaml"))
+    s = verdict.check_dict(r)["survival"]
+    _, md = report.write_report(r, tmp_path / "out")
+    text = md.read_text(encoding="utf-8")
+    body = text[text.index("## What breaks first"):]
+    body = body[:body.index("\n## ", 5)]
+    f = s["first_failure"]
+    assert f"first to fail: {f['part']} ({f['mode']}) at {f['at_drop_cm']:g} cm" in body
+    rows = [l for l in body.splitlines() if l.startswith("| ") and not l.startswith("| part")]
+    assert [l.split(" | ")[0][2:] for l in rows] == [m["part"] for m in s["margins"]]
+    assert (tmp_path / "out" / "report_files" / "survival_margins.png").read_bytes()[:4] == b"\x89PNG"

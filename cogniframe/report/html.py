@@ -365,7 +365,8 @@ def _survival_blocks(cd: Mapping) -> list:
     rows = []
     for m in sv["margins"]:
         at = m["margin"][i] if i is not None else None
-        rows.append((m["part"], m["mode"], f"{m['limit']:g} {m['unit']}", "-" if at is None else f"{at:.2f}",
+        limit = f"{100 * m['limit']:.0f} % elongation" if m["unit"] == "strain" else f"{m['limit']:g} {m['unit']}"
+        rows.append((m["part"], m["mode"], limit, "-" if at is None else f"{at:.2f}",
                      "-" if m["fails_at_drop_cm"] is None else f"{m['fails_at_drop_cm']:g}"))
     head = ("part", "mode", "strength", f"margin at {design_h:g} cm" if i is not None else "margin", "fails from (cm)")
     return [("p", survival_words(sv) + ". " + sv["note"] + "."), Table("survival-margins", "Margins", head, tuple(rows), ())]
