@@ -328,14 +328,17 @@ def arm_pair_hinge(joints: dict, parts) -> float | None:
     free = [i for i, lab in enumerate(labs) if i not in arms and lab != "body"]
     a = [6 * i + k for i in arms for k in range(6)]
     b = [6 * i + k for i in free for k in range(6)]
-    Kaa = K[np.ix_(a, a)]
-    if b:
-        Kaa = Kaa - K[np.ix_(a, b)] @ np.linalg.solve(K[np.ix_(b, b)], K[np.ix_(b, a)])
     refs = np.asarray(js.refs, float)
     c = refs[arms].mean(axis=0)
     T = np.vstack([ff.rigid_transfer(c, refs[i]) for i in arms])
-    C = np.linalg.inv(T.T @ Kaa @ T)
     lat = refs[arms[1]] - refs[arms[0]]
+    try:
+        Kaa = K[np.ix_(a, a)]
+        if b:
+            Kaa = Kaa - K[np.ix_(a, b)] @ np.linalg.solve(K[np.ix_(b, b)], K[np.ix_(b, a)])
+        C = np.linalg.inv(T.T @ Kaa @ T)
+    except np.linalg.LinAlgError:  # a joint whose arm pair is not held (a mechanism): no figure, not a crash
+        return None
     lat /= np.linalg.norm(lat)
     return float(1.0 / (lat @ C[3:, 3:] @ lat))
 
