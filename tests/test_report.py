@@ -136,6 +136,10 @@ def test_numbers_equal_check_json(written):
     drop_rows = page.tables["drop"][1:]
     assert [r[2] for r in drop_rows] == [f"{h['x_max_mm']:.2f}" for h in cd["drop"]["heights"]]
     assert [r[1] for r in page.tables["cutlist"][1:]] == [f"{r['length_mm']:g}" for r in cd["cutlist"]]
+    # one drop's peak deceleration, median and 90th percentile per height, beside the mean pulse's
+    one_drop = next(r for r in page.tables["load-cases"] if r[0].startswith("peak |a| of one drop"))
+    assert one_drop[1] == ", ".join(f"{h['height_cm']:g} cm: {h['peak_g_drop_median']:.0f} G ({h['peak_g_drop_p90']:.0f} G)"
+                                    for h in cd["peak_g"]["heights"])
 
 
 def test_verdicts_on_top(written):
