@@ -1,15 +1,20 @@
-"""Sweep throughput and resume timings on a LocalCluster of worker processes.
+"""Sweep throughput on a Dask cluster started with `dask scheduler` / `dask worker`, the joints from
+the solid FE's surrogate (the sweeps' default), every cache empty.
 
-Run: python benchmarks/bench_sweep.py [--designs 120] [--workers 2] [--repeat 3]
+Run: python benchmarks/bench_sweep.py [--designs 300] [--workers 2] [--repeat 3] [--breakdown]
 
-Prints medians over --repeat runs of:
-  1. new designs: every design new, with the example sweeps' closed-form joints (frame model, load
-     cases and drop model solved per design), designs/s over the batches;
-  2. repeat designs: the same designs into a new folder with the workers' caches filled (k, load
-     cases and peaks read from the cache);
-  3. resume: a rerun into the finished folder (everything skipped), and after losing half the
-     batch files (as a killed sweep would);
-  4. the per-design breakdown, serial in this process with single-threaded BLAS as in a worker.
+Starts `dask scheduler` and N `dask worker --nthreads 1` processes (this checkout first on their
+PYTHONPATH, a new empty COGNIFRAME_CACHE per run), sweeps --designs new designs varying the joint
+geometry (rod diameter, wall, socket depth, fit clearance, hinge) and the frame height, with bamboo
+and carbon rods, and prints medians over --repeat runs of:
+  - designs/s end to end (the sweep's wall time, cluster already up: the client's warm-up of the
+    workers, every batch, the parquet files and the summary), and over the batches only;
+  - CPU seconds per design on a worker (the evaluating thread's, from the rows), the rate one
+    worker gives (1 / that), and what 64 workers on dedicated cores would give (64 / that, the
+    client's ~1.5 ms a design of parquet writing noted);
+  - how many designs had a joint outside the surrogate's training box (solved by FE);
+  - the load average before and after (the machine may be shared: wall rates fall with it).
+--breakdown adds the per-stage CPU time of one design, serial in this process.
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ from __future__ import annotations
 import argparse
 import os
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -28,120 +34,155 @@ for v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(v, "1")  # as in a Dask worker; also keeps the breakdown comparable
 
 
-def sweep_text(n: int) -> str:
+def sweep_text(n: int, seed: int) -> str:
     return f"""base: {ROOT / 'params' / 'carbon.yaml'}
 samples: {n}
 sampler: lhs
-seed: 11
-set:
-  model.stiffness_model: analytic  # as the example sweeps: closed-form joints (the solid FE is 30-60 s per new joint)
+seed: {seed}
 vary:
   rods.diameter: [2.5, 4.0]
   joints.wall: [1.6, 2.0]
   joints.socket_depth: [8, 14]
+  joints.fit_clearance.tpu_95a: [0.0, 0.2]
+  joints.hinge_thickness: [0.8, 2.0]
   frame.height: [105, 140]
   rods.material: {{choices: [carbon_rod, bamboo]}}
 """
 
 
-def rate_of(run_sweep, sweep, out, workers):
-    """(designs/s wall over the batches, designs/s the workers' CPU time allows, wall of the run)."""
+class Cluster:
+    """`dask scheduler` and `dask worker` processes (this checkout on their path, their own cache)."""
+
+    def __init__(self, workers: int, cache: Path, port: int):
+        env = {**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{os.environ.get('PYTHONPATH', '')}",
+               "COGNIFRAME_CACHE": str(cache), "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+        self.address = f"tcp://127.0.0.1:{port}"
+        log = open(cache.parent / "dask.log", "a")
+        self.procs = [subprocess.Popen(["dask", "scheduler", "--host", "127.0.0.1", "--port", str(port),
+                                        "--dashboard-address", ":0"], env=env, stdout=log, stderr=log)]
+        time.sleep(2)
+        self.procs += [subprocess.Popen(["dask", "worker", self.address, "--nthreads", "1", "--no-nanny",
+                                         "--dashboard-address", ":0"], env=env, stdout=log, stderr=log)
+                       for _ in range(workers)]
+        from distributed import Client
+
+        with Client(self.address, timeout="30s") as c:
+            c.wait_for_workers(workers, timeout=120)
+
+    def close(self) -> None:
+        for p in reversed(self.procs):  # only the processes this benchmark started
+            p.terminate()
+        for p in self.procs:
+            try:
+                p.wait(10)
+            except subprocess.TimeoutExpired:
+                p.kill()
+
+
+def one_run(n: int, workers: int, seed: int, port: int) -> dict:
     import pandas as pd
 
-    marks = []
-    res = run_sweep(sweep, out, workers=workers, progress=lambda b: marks.append((b.done, b.seconds)), reports=False)
-    # designs/s from the first to the last finished batch: excludes cluster start-up and warm-up
-    (d0, t0), (d1, t1) = marks[0], marks[-1]
-    cpu = pd.read_parquet(out / "results.parquet")["cpu_seconds"]
-    return (d1 - d0) / max(t1 - t0, 1e-9), workers / float(cpu.median()), res.seconds
+    from cogniframe.sweep import spec
+    from cogniframe.sweep.run import run_sweep
+
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        cluster = Cluster(workers, tmp / "cache", port)
+        try:
+            (tmp / "s.yaml").write_text(sweep_text(n, seed))
+            sweep = spec.load(tmp / "s.yaml")
+            marks = []
+            t0 = time.perf_counter()
+            run_sweep(sweep, tmp / "out", scheduler=cluster.address, progress=lambda b: marks.append((b.done, b.seconds)))
+            wall = time.perf_counter() - t0
+        finally:
+            cluster.close()
+        table = pd.read_parquet(tmp / "out" / "results.parquet")
+    (d0, t_0), (d1, t_1) = marks[0], marks[-1]
+    cpu = table["cpu_seconds"].dropna()
+    return {"end_to_end": n / wall, "batches": (d1 - d0) / max(t_1 - t_0, 1e-9), "cpu": float(cpu.median()),
+            "outside": int((table["joints_outside_box"].fillna("") != "").sum()),
+            "verdicts": table["verdict"].value_counts().to_dict(), "wall": wall}
 
 
-def breakdown(n: int = 12) -> dict[str, float]:
-    """Median CPU ms per stage of one new design's check (nothing cached: every design differs),
-    and of a whole `check` + row of another new design."""
+def breakdown(n: int = 20) -> dict[str, float]:
+    """Median CPU ms per stage of a new design's sweep evaluation, serial in this process."""
+    import functools
+
     import yaml
 
-    from cogniframe import cutlist, frame, partlist
-    from cogniframe.analysis import verdict
     from cogniframe import spec as spec_mod
-    from cogniframe.analysis import drop, flight, mass
+    from cogniframe.analysis import drop, load_cases, verdict
     from cogniframe.sweep import evaluate as ev
 
-    base = yaml.safe_load((ROOT / "params" / "carbon.yaml").read_text())
-    base["name"] = "carbon"
-    base.setdefault("model", {})["stiffness_model"] = "analytic"  # as the sweep above
-    names = ("validate", "frame (frame.build)", "parts + cut list + mass", "k: joints + play + secant solve",
-             "drop model (impact)", "load cases (wall, thrust, modes, buckling, strain)", "peaks + flight",
-             "whole design: check + row")
-    t: dict[str, list[float]] = {k: [] for k in names}
-    clock = time.thread_time
-    for i in range(n + 1):
-        marks = [clock()]
-        s = spec_mod.from_dict(ev.apply_overrides(base, {"frame.height": 105 + 2.31 * i})); marks.append(clock())
-        fr = frame.build(s); marks.append(clock())
-        parts = partlist.build(s, fr); cut = cutlist.build(s, fr); budget = mass.budget(s, fr, cut, parts, None)
-        marks.append(clock())
-        session = drop.Session(s, fr, parts)
-        drop.predicted_k_n_per_m(s, fr, budget.total_g, session); marks.append(clock())
-        dr = drop.evaluate_design(s, fr, budget.total_g, session); marks.append(clock())
-        drop.load_cases(s, fr, budget.total_g, dr, session); marks.append(clock())
-        drop.peak_prediction(s, budget.total_g, dr, budget.groups["exoskeleton"]); flight.evaluate(s, budget.total_g)
-        marks.append(clock())
-        other = ev.apply_overrides(base, {"frame.height": 106 + 2.31 * i})
-        ev.outputs(verdict.check_dict(verdict.check(spec_mod.from_dict(other)))); marks.append(clock())
-        if i:  # the first pays imports
-            for k, a, b in zip(names, marks, marks[1:]):
-                t[k].append(b - a)
-    return {k: statistics.median(v) * 1000 for k, v in t.items()}
+    os.environ["COGNIFRAME_CACHE"] = tempfile.mkdtemp(prefix="bench-sweep-")
+    acc: dict[str, list[float]] = {}
+    stages = [(spec_mod, "from_dict", "validate"), (verdict, "design", "frame, parts, cut list"),
+              (drop, "_secant", "k: joints (surrogate), play, secant"), (load_cases, "_wall_case", "load case: wall"),
+              (load_cases, "_thrust_case", "load case: thrust"), (load_cases, "_modes", "load case: modes"),
+              (drop, "load_cases", "load cases, all"), (verdict, "_survival", "survival"),
+              (verdict, "check_dict", "check --json dict")]
+    saved = []
+    for mod, name, label in stages:
+        f = getattr(mod, name)
+        saved.append((mod, name, f))
+
+        def timed(*a, _f=f, _label=label, **k):
+            t = time.thread_time()
+            try:
+                return _f(*a, **k)
+            finally:
+                acc.setdefault(_label, []).append(time.thread_time() - t)
+
+        setattr(mod, name, functools.wraps(f)(timed))
+    try:
+        base = yaml.safe_load((ROOT / "params" / "carbon.yaml").read_text())
+        base["model"]["stiffness_model"] = "surrogate"
+        ev.warm_up()
+        ev.evaluate_one(base, {"frame.height": 104.0}, 60)
+        acc.clear()
+        whole = []
+        for i in range(n):
+            row = ev.evaluate_one(base, {"frame.height": 105 + 1.37 * i, "joints.wall": 1.6 + 0.013 * i}, 60)
+            whole.append(row["cpu_seconds"])
+    finally:
+        for mod, name, f in saved:
+            setattr(mod, name, f)
+    out = {k: statistics.median(v) * 1000 for k, v in acc.items()}
+    out["whole design (evaluate_one)"] = statistics.median(whole) * 1000
+    return out
 
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--designs", type=int, default=120)
+    ap.add_argument("--designs", type=int, default=300)
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--repeat", type=int, default=1)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--port", type=int, default=8799)
+    ap.add_argument("--breakdown", action="store_true")
     args = ap.parse_args()
-    from cogniframe.sweep import spec
-    from cogniframe.sweep.run import run_sweep
-
-    cold, warm, startup, resume_all, resume_half, cold_cpu, warm_cpu = [], [], [], [], [], [], []
-    load0 = os.getloadavg()[0]
-    for r in range(args.repeat):
-        with tempfile.TemporaryDirectory() as tmp:
-            tmp = Path(tmp)
-            os.environ["COGNIFRAME_CACHE"] = str(tmp / "cache")  # the workers inherit it: cold FE cache
-            (tmp / "s.yaml").write_text(sweep_text(args.designs))
-            sweep = spec.load(tmp / "s.yaml")
-            rate, cpu_rate, wall = rate_of(run_sweep, sweep, tmp / "cold", args.workers)
-            cold.append(rate)
-            cold_cpu.append(cpu_rate)
-            startup.append(wall - args.designs / rate)
-            rate, cpu_rate, _ = rate_of(run_sweep, sweep, tmp / "warm", args.workers)
-            warm.append(rate)
-            warm_cpu.append(cpu_rate)
-            t0 = time.perf_counter()
-            run_sweep(sweep, tmp / "cold", workers=args.workers, reports=False)
-            resume_all.append(time.perf_counter() - t0)
-            files = sorted((tmp / "cold" / "results").glob("*.parquet"))
-            for f in files[::2]:
-                f.unlink()
-            t0 = time.perf_counter()
-            res = run_sweep(sweep, tmp / "cold", workers=args.workers, reports=False)
-            resume_half.append(time.perf_counter() - t0)
+    load0 = os.getloadavg()
+    runs = [one_run(args.designs, args.workers, 11 + r, args.port + r) for r in range(args.repeat)]
+    load1 = os.getloadavg()
     med = statistics.median
-    print(f"{args.designs} designs (examples/sweeps/carbon.yaml box), LocalCluster of {args.workers} worker processes, "
-          f"{os.cpu_count()} cores, median of {args.repeat}:")
-    print(f"  load average at start {load0:.1f}, at end {os.getloadavg()[0]:.1f} (wall rates fall when the cores are shared)")
-    print(f"  new designs (closed-form joints): {med(cold):6.1f} designs/s wall; "
-          f"{med(cold_cpu):6.1f} designs/s on {args.workers} dedicated cores (from the median CPU time per design)")
-    print(f"  repeat designs (k, cases cached): {med(warm):6.1f} designs/s wall; "
-          f"{med(warm_cpu):6.1f} designs/s on {args.workers} dedicated cores")
-    print(f"  cluster start + warm-up + reports overhead per run: {med(startup):.1f} s")
-    print(f"  resume, everything done:          {med(resume_all):6.2f} s (no cluster started)")
-    print(f"  resume, half the batches lost:    {med(resume_half):6.2f} s ({res.evaluated} designs re-run, cached FE)")
-    print("per new design, serial, single-threaded BLAS (median CPU ms of this thread):")
-    for k, v in breakdown().items():  # CPU time of this thread: independent of other load
-        print(f"  {k:28s} {v:7.1f}")
+    cpu = med(r["cpu"] for r in runs)
+    print(f"{args.designs} new designs per run (joint geometry, height, bamboo and carbon rods), surrogate joints, "
+          f"empty caches; `dask scheduler` + {args.workers} `dask worker --nthreads 1`; {os.cpu_count()} cores; "
+          f"median of {args.repeat} runs")
+    print(f"  load average (1, 5, 15 min) before {load0[0]:.1f} {load0[1]:.1f} {load0[2]:.1f}, "
+          f"after {load1[0]:.1f} {load1[1]:.1f} {load1[2]:.1f}")
+    print(f"  end to end:        {med(r['end_to_end'] for r in runs):6.1f} designs/s "
+          f"({', '.join('%.1f' % r['end_to_end'] for r in runs)}); wall {med(r['wall'] for r in runs):.1f} s")
+    print(f"  over the batches:  {med(r['batches'] for r in runs):6.1f} designs/s")
+    print(f"  CPU per design on a worker (median): {cpu * 1000:.1f} ms -> one worker {1 / cpu:.1f} designs/s; "
+          f"64 workers on dedicated cores {64 / cpu:.0f} designs/s (the client's parquet writing, ~1.5 ms a design, "
+          f"then needs a core of its own)")
+    print(f"  designs with a joint outside the surrogate's box (FE): {[r['outside'] for r in runs]}; "
+          f"verdicts {runs[0]['verdicts']}")
+    if args.breakdown:
+        print("per new design, serial, single-threaded BLAS (median CPU ms of this thread):")
+        for k, v in breakdown().items():
+            print(f"  {k:40s} {v:7.1f}")
 
 
 if __name__ == "__main__":

@@ -20,6 +20,7 @@ and the mirroring share.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -50,9 +51,13 @@ class JointStiffness:
     n_dofs: int = 0
     seconds: float = 0.0
 
-    @property
+    @cached_property
     def matrix(self) -> np.ndarray:
-        return np.array(self.K, dtype=float)
+        """K as an array, made once per object (the frame model reads it for every build) and
+        read-only, so no caller can change what the next one reads."""
+        m = np.array(self.K, dtype=float)
+        m.setflags(write=False)
+        return m
 
     def to_json(self) -> dict:
         return {"name": self.name, "method": self.method, "labels": list(self.labels), "refs": [list(r) for r in self.refs],
