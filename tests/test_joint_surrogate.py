@@ -200,3 +200,21 @@ def test_fit_is_deterministic_and_recovers_a_log_linear_family():
     assert json.dumps(a.to_json()) == json.dumps(b.to_json())
     x = np.array([[0.3, 0.6, 0.2]])
     np.testing.assert_allclose(a.basis(x) @ np.asarray(a.coef), [[1 + 0.6 - 0.2, 0.3, 0.3]], atol=1e-3)
+
+
+def test_sweep_row_k_equals_checks_fe_k_within_5_percent():
+    """A sweep's row (surrogate joints, the sweeps' default) against `check` of the same params
+    with `model.stiffness_model: fe`: bamboo rods, geometry no training design has."""
+    from cogniframe.analysis import verdict
+    from cogniframe.sweep import evaluate as ev
+
+    base = yaml.safe_load((ROOT / "params" / "carbon.yaml").read_text())
+    over = {"rods.material": "bamboo", "rods.diameter": 3.4, "joints.wall": 1.8, "joints.socket_depth": 11.0,
+            "frame.height": 131.0}
+    row = ev.evaluate_one(base, {**over, "model.stiffness_model": "surrogate"}, 120)
+    assert row["joints_outside_box"] == "" and row["stiffness.joints.knee.method"] == "surrogate"
+    fe = verdict.check_dict(verdict.check(spec_mod.from_dict(apply_overrides(base, over))))
+    assert fe["stiffness"]["joint_model"] == "fe"
+    assert row["k_n_per_m"] == pytest.approx(fe["drop"]["k_n_per_m"], rel=0.05)
+    assert row["max_safe_drop_cm"] == pytest.approx(fe["drop"]["max_safe_height_cm"], rel=0.05)
+    assert row["verdict"] == fe["verdict"]

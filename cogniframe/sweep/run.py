@@ -145,15 +145,21 @@ def write_batch(out_dir: Path, rows: list[dict], code: str) -> Path:
 def _frame(rows: list[dict]):
     import pandas as pd
 
-    df = pd.DataFrame(rows)
+    df = pd.DataFrame(rows) if not isinstance(rows, pd.DataFrame) else rows.copy()
+
+    def missing(v) -> bool:  # None, or the NaN pandas puts where a batch had no such column
+        return v is None or (isinstance(v, float) and v != v)
+
     for col in df.columns:  # parquet needs one type per column: mixed objects become text
-        if df[col].dtype == object and not df[col].map(lambda v: v is None or isinstance(v, str)).all():
-            if df[col].map(lambda v: v is None or isinstance(v, bool)).all():
+        if df[col].dtype == object:  # numpy scalars (a numpy bool from a load case) as Python's
+            df[col] = df[col].map(lambda v: v.item() if hasattr(v, "item") and not isinstance(v, (str, bytes)) else v)
+        if df[col].dtype == object and not df[col].map(lambda v: missing(v) or isinstance(v, str)).all():
+            if df[col].map(lambda v: missing(v) or isinstance(v, bool)).all():
                 continue
-            if df[col].map(lambda v: v is None or (isinstance(v, (int, float)) and not isinstance(v, bool))).all():
+            if df[col].map(lambda v: missing(v) or (isinstance(v, (int, float)) and not isinstance(v, bool))).all():
                 df[col] = df[col].astype(float)
             else:
-                df[col] = df[col].map(lambda v: None if v is None else str(v))
+                df[col] = df[col].map(lambda v: None if missing(v) else str(v))
     return df
 
 
@@ -333,6 +339,7 @@ def consolidate(out_dir: Path, designs: list[tuple[str, dict]], code: str):
     log = log[log["design_id"].isin(order)].drop(columns="_timeout")
     log = log.sort_values("design_id", key=lambda s: s.map(order), kind="stable").reset_index(drop=True)
     tmp = out_dir / f".{RESULTS}.{os.getpid()}.tmp"
+    log = _frame(log)  # batches may disagree on a column's type (all None in one, text in another)
     log.to_parquet(tmp, engine="pyarrow", index=False)
     tmp.replace(out_dir / RESULTS)
     return log
