@@ -255,7 +255,10 @@ def _run_optimize(sweep, objectives, constraints, out_dir: Path, trials, schedul
                 rows.append(row)
                 values = [row.get(o.name) for o in objectives]
                 if row["verdict"] in ("PASS", "FAIL") and all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
-                    cons = {"verdict PASS": 0.0 if row["verdict"] == "PASS" else 1.0}
+                    # a FAIL outweighs any miss of a constraint (cm, g, ...): the sampler is steered to
+                    # PASS designs first (with 1, a heavy FAIL that met a drop bound ranked above a
+                    # light PASS 10 cm short of it, and the search drifted over the mass limit)
+                    cons = {"verdict PASS": 0.0 if row["verdict"] == "PASS" else FAIL_VIOLATION}
                     seen = corrected(row, correction)
                     cons.update({str(c): min(c.violation(seen), 1e9) for c in constraints})
                     if native:
@@ -271,7 +274,10 @@ def _run_optimize(sweep, objectives, constraints, out_dir: Path, trials, schedul
             if progress:
                 progress(run_mod.BatchDone(tuple(got), got[0]["worker"] if got else "", done, n_trials, time.perf_counter() - tb, "round"))
         best_rows, pareto = ranked(rows, objectives, constraints)
-        finalists = near_feasible(rows, objectives, constraints, SCREEN_TOLERANCE, correction)[:verify] if fidelity else []
+        # the closed forms' finalists include designs up to SCREEN_TOLERANCE short of a bound (they
+        # may pass under the FE); the surrogate's are its feasible designs, best first
+        tol = SCREEN_TOLERANCE if fidelity and fidelity[0] == "analytic" else 0.0
+        finalists = near_feasible(rows, objectives, constraints, tol, correction)[:verify] if fidelity else []
         verified: list[dict] = []
         if finalists:
             verified = verify_rows(client, sweep, finalists, objectives, constraints, n_workers, fidelity[1])
@@ -301,6 +307,7 @@ def _run_optimize(sweep, objectives, constraints, out_dir: Path, trials, schedul
 
 FIDELITY_KEY = "model.stiffness_model"
 DEFAULT_VERIFY = 4  # finalists re-checked when screening with the closed forms
+FAIL_VIOLATION = 1e3  # a FAIL trial's constraint violation for the sampler (see _run_optimize)
 # How far a screened (closed-form joints) constraint value may miss and the design still be worth
 # re-checking with the FE: the two joint models' max_safe_drop_cm differ by up to ~20 % in either
 # direction on the carbon designs compared (docs/sweeps.md).
