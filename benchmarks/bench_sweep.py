@@ -13,6 +13,8 @@ and carbon rods, and prints medians over --repeat runs of:
     worker gives (1 / that), and what 64 workers on dedicated cores would give (64 / that, the
     client's ~1.5 ms a design of parquet writing noted);
   - how many designs had a joint outside the surrogate's training box (solved by FE);
+  - the same with the workers started with `--preload cogniframe.sweep.evaluate` (the pipeline
+    imported when a worker starts, as on a standing cluster, instead of in the sweep's time);
   - the load average before and after (the machine may be shared: wall rates fall with it).
 --breakdown adds the per-stage CPU time of one design, serial in this process.
 """
@@ -53,7 +55,7 @@ vary:
 class Cluster:
     """`dask scheduler` and `dask worker` processes (this checkout on their path, their own cache)."""
 
-    def __init__(self, workers: int, cache: Path, port: int):
+    def __init__(self, workers: int, cache: Path, port: int, preload: bool = False):
         env = {**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{os.environ.get('PYTHONPATH', '')}",
                "COGNIFRAME_CACHE": str(cache), "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
         self.address = f"tcp://127.0.0.1:{port}"
@@ -61,8 +63,9 @@ class Cluster:
         self.procs = [subprocess.Popen(["dask", "scheduler", "--host", "127.0.0.1", "--port", str(port),
                                         "--dashboard-address", ":0"], env=env, stdout=log, stderr=log)]
         time.sleep(2)
+        extra = ["--preload", "cogniframe.sweep.evaluate"] if preload else []  # imports at worker start
         self.procs += [subprocess.Popen(["dask", "worker", self.address, "--nthreads", "1", "--no-nanny",
-                                         "--dashboard-address", ":0"], env=env, stdout=log, stderr=log)
+                                         "--dashboard-address", ":0", *extra], env=env, stdout=log, stderr=log)
                        for _ in range(workers)]
         from distributed import Client
 
@@ -79,7 +82,7 @@ class Cluster:
                 p.kill()
 
 
-def one_run(n: int, workers: int, seed: int, port: int) -> dict:
+def one_run(n: int, workers: int, seed: int, port: int, preload: bool = False) -> dict:
     import pandas as pd
 
     from cogniframe.sweep import spec
@@ -87,7 +90,7 @@ def one_run(n: int, workers: int, seed: int, port: int) -> dict:
 
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        cluster = Cluster(workers, tmp / "cache", port)
+        cluster = Cluster(workers, tmp / "cache", port, preload)
         try:
             (tmp / "s.yaml").write_text(sweep_text(n, seed))
             sweep = spec.load(tmp / "s.yaml")
@@ -162,10 +165,11 @@ def main() -> None:
     ap.add_argument("--breakdown", action="store_true")
     args = ap.parse_args()
     load0 = os.getloadavg()
-    runs = [one_run(args.designs, args.workers, 11 + r, args.port + r) for r in range(args.repeat)]
+    runs = [one_run(args.designs, args.workers, 11 + r, args.port + 2 * r) for r in range(args.repeat)]
+    warm = [one_run(args.designs, args.workers, 11 + r, args.port + 2 * r + 1, preload=True) for r in range(args.repeat)]
     load1 = os.getloadavg()
     med = statistics.median
-    cpu = med(r["cpu"] for r in runs)
+    cpu = med(r["cpu"] for r in runs + warm)
     print(f"{args.designs} new designs per run (joint geometry, height, bamboo and carbon rods), surrogate joints, "
           f"empty caches; `dask scheduler` + {args.workers} `dask worker --nthreads 1`; {os.cpu_count()} cores; "
           f"median of {args.repeat} runs")
@@ -173,7 +177,10 @@ def main() -> None:
           f"after {load1[0]:.1f} {load1[1]:.1f} {load1[2]:.1f}")
     print(f"  end to end:        {med(r['end_to_end'] for r in runs):6.1f} designs/s "
           f"({', '.join('%.1f' % r['end_to_end'] for r in runs)}); wall {med(r['wall'] for r in runs):.1f} s")
-    print(f"  over the batches:  {med(r['batches'] for r in runs):6.1f} designs/s")
+    print(f"  end to end, workers started with --preload cogniframe.sweep.evaluate (imports done at start): "
+          f"{med(r['end_to_end'] for r in warm):6.1f} designs/s ({', '.join('%.1f' % r['end_to_end'] for r in warm)}); "
+          f"wall {med(r['wall'] for r in warm):.1f} s")
+    print(f"  over the batches:  {med(r['batches'] for r in runs + warm):6.1f} designs/s")
     print(f"  CPU per design on a worker (median): {cpu * 1000:.1f} ms -> one worker {1 / cpu:.1f} designs/s; "
           f"64 workers on dedicated cores {64 / cpu:.0f} designs/s (the client's parquet writing, ~1.5 ms a design, "
           f"then needs a core of its own)")

@@ -208,6 +208,12 @@ def code_digest() -> str:
     return code_hash("*.py", "analysis/*.py", "analysis/joints/*.py", "sweep/evaluate.py")[:12]
 
 
+def dask_setup(worker=None) -> None:
+    """`dask worker ADDRESS --preload cogniframe.sweep.evaluate`: Dask calls this when the worker
+    starts, so the pipeline's imports (~1.5 s) are paid then, not at the start of the first sweep."""
+    warm_up()
+
+
 def warm_up() -> str:
     """Run on every worker (client.run) before the clock starts: import the pipeline and what the
     frame model imports on first use (scipy's sparse LU and eigensolver, dense eigh), and return
