@@ -11,7 +11,8 @@
    Designs that do not validate are skipped. A second hypercube (another seed) is the held-out
    set: joints the fit never sees.
 2. The solid FE (`joints.fe_joint`, factor 1) of every distinct, non-mirrored joint of every
-   design: on `--jobs` local processes, or on a Dask cluster (`--scheduler tcp://host:8786`).
+   design: on `--jobs` local processes, or on a Dask cluster (`--scheduler tcp://host:8786`; the
+   workers write into --work and read this checkout's params/carbon.yaml: a shared filesystem).
    Each result is kept in DIR/fe/<hash>.json (the hash of the part's geometry and interface), so
    a rerun solves only what is missing.
 3. The fit (`joints.surrogate.fit`), written to cogniframe/data/joint_surrogate.json, and the
@@ -367,7 +368,10 @@ def main(argv=None) -> int:
         run_doe(hold + train, a.work, a.jobs, a.scheduler)
     if a.doe_only:
         return 0
-    return fit_and_write(train, hold, a.work)
+    from cogniframe.analysis.numerics import one_blas_thread
+
+    with one_blas_thread():  # the same bits of the fit on any machine (BLAS sums in a fixed order)
+        return fit_and_write(train, hold, a.work)
 
 
 if __name__ == "__main__":
