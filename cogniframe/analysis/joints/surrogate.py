@@ -134,12 +134,12 @@ def features(spec, part) -> tuple[tuple[str, ...], np.ndarray]:
 
 def socket_frame(direction) -> np.ndarray:
     """Rows: the socket's x (out along the rod), y = z_part x x (horizontal), z = x x y."""
-    x = np.asarray(direction, float)
-    x = x / np.linalg.norm(x)
-    y = np.cross([0.0, 0.0, 1.0], x)
-    n = np.linalg.norm(y)
-    y = y / n if n > 1e-9 else np.array([0.0, 1.0, 0.0])
-    return np.vstack([x, y, np.cross(x, y)])
+    a, b, c = (float(v) for v in direction)
+    r = math.sqrt(a * a + b * b + c * c)
+    a, b, c = a / r, b / r, c / r
+    n = math.hypot(a, b)  # z_part x x = (-b, a, 0), of length n
+    p, q = (-b / n, a / n) if n > 1e-9 else (0.0, 1.0)
+    return np.array([[a, b, c], [p, q, 0.0], [-c * q, c * p, a * q - b * p]])  # rows x, y, x cross y
 
 
 def _frames(part, labels) -> np.ndarray:
