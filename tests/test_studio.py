@@ -61,7 +61,7 @@ def test_form_has_one_input_per_schema_value_named_by_its_key(carbon_form):
     assert (h.kind, h.unit, h.description, h.bounds) == ("number", "mm", "outside height, mm", ">= 50, <= 400")
     assert re.search(r'name="frame.height"[^>]*value="120"', page)
     assert fields["core.battery.cells"].kind == "integer" and fields["frame.struts"].kind == "boolean"
-    assert fields["model.stiffness_model"].options == ("fe", "analytic")
+    assert fields["model.stiffness_model"].options == ("fe", "analytic", "surrogate")
     assert fields["printer.preset"].nullable and "" in fields["printer.preset"].options
     assert fields["motors.max_thrust_g"].nullable and fields["motors.max_thrust_g"].unit == "g"
     assert fields["requirements.design_drop_height_cm"].unit == "cm"
