@@ -149,6 +149,48 @@ def test_lowest_eigenvalues_equal_the_dense_solver_on_the_carbon_frame(monkeypat
         assert ff._count_below(K, M, 0.5 * (ref[i] + ref[i + 1]) if i < 13 else ref[13] * 1.0001) == i + 1
 
 
+def test_dense_reference_equals_the_sparse_solver_on_the_carbon_frame():
+    mdl = _carbon_model(rod_segments=4, masses=True)
+    K, M = mdl.fe.stiffness(sparse=True).tocsc(), mdl.fe.mass(sparse=True).tocsc()
+    sparse, dense = ff.lowest_eigenvalues(K, M, 14), ff._dense_lowest(K, M, 14)
+    assert np.abs(dense[6:] - sparse[6:]).max() <= 1e-6 * sparse[6]
+    assert np.abs(dense[:6]).max() <= 1e-6 * sparse[6]
+
+
+def test_a_motor_station_next_to_a_division_point_leaves_no_sliver_segment(monkeypatch):
+    """This design put the motor station 0.47 um from its arm rods' midpoints: a rod segment of
+    ~1e16 N/mm whose round-off (K's eigenvalues down to -7) made the free-flight modes fail
+    (LinAlgError, `check` exit 3). The station now replaces the division point."""
+    import yaml
+
+    from cogniframe.analysis import load_cases
+    from cogniframe.analysis.verdict import check
+
+    data = yaml.safe_load((PARAMS / "carbon.yaml").read_text(encoding="utf-8"))
+    data["rods"]["diameter"], data["frame"]["height"] = 3.047, 139.828
+    data["joints"].update(wall=1.703, socket_depth=12.598, hinge_thickness=1.54)
+    data["joints"]["fit_clearance"]["tpu_95a"] = 0.082
+    data["model"]["stiffness_model"] = "surrogate"
+    models = []
+    real = load_cases.build_model
+
+    def keep(*a, **k):
+        models.append(real(*a, **k))
+        return models[-1]
+
+    monkeypatch.setattr(load_cases, "build_model", keep)
+    result = check(spec_mod.from_dict(data))
+    modes = result.stiffness["modes_hz"]
+    assert len(modes) >= 6 and all(0 < a <= b for a, b in zip(modes, modes[1:]))
+    fe = next(m.fe for m in models if any("#3" in b.name for b in m.fe.beams))  # the modes' 4-segment rods
+    for b in fe.beams:
+        if b.group.startswith("rod_arm"):
+            length = float(np.linalg.norm(np.asarray(fe.nodes[b.n1]) - np.asarray(fe.nodes[b.n0])))
+            assert length >= 0.5, b.name  # 1 % of the 76 mm arm rod at least
+    K = fe.stiffness(sparse=True)
+    assert np.linalg.eigvalsh(K.toarray())[0] > -1e-3  # semi-definite to round-off, not -7
+
+
 def test_a_missed_mode_is_caught_and_answered_densely(monkeypatch):
     # ARPACK that loses one eigenvalue of a pair: the inertia count disagrees, dense answers
     from scipy.sparse.linalg import eigsh as real

@@ -486,14 +486,21 @@ def _count_below(K, M, s: float) -> int:
 
 
 def _dense_lowest(K, M, count: int) -> np.ndarray:
-    """Dense reference: the largest eigenvalues nu = 1 / (lambda - sigma) of M x = nu (K - sigma M) x.
-    (eigh(K, M) directly loses ~1e-4 of the low modes to the stiff rigid links: its absolute
-    error is eps x the largest eigenvalue; shift-inverted, the wanted end is the large one.)"""
-    from scipy.linalg import eigh
+    """Dense reference: the largest eigenvalues nu = 1 / (lambda - sigma) of M x = nu (K - sigma M) x,
+    as those of the symmetric L^T (K - sigma M)^-1 L with M = L L^T.
+
+    eigh(K, M) directly loses ~1e-4 of the low modes to the stiff rigid links: its absolute error
+    is eps x the largest eigenvalue; shift-inverted, the wanted end is the large one. K - sigma M
+    is not handed to a Cholesky factorization: K is semi-definite only to round-off (eps |K|, and
+    a very short element makes |K| large), which a small shift need not cover and a Cholesky
+    refuses; the symmetric indefinite solve (LDL^T) does not need it to be definite."""
+    from scipy.linalg import cholesky, eigh, solve
 
     K = K.toarray() if hasattr(K, "toarray") else np.asarray(K)
     M = M.toarray() if hasattr(M, "toarray") else np.asarray(M)
     n = K.shape[0]
     sigma = _shift(K, M)
-    nu = eigh(M, K - sigma * M, eigvals_only=True, subset_by_index=[n - count, n - 1])
+    L = cholesky(M, lower=True)
+    Z = L.T @ solve(K - sigma * M, L, assume_a="sym")
+    nu = eigh(0.5 * (Z + Z.T), eigvals_only=True, subset_by_index=[n - count, n - 1])
     return np.sort(1.0 / nu + sigma)
