@@ -218,3 +218,31 @@ def test_sweep_row_k_equals_checks_fe_k_within_5_percent():
     assert row["k_n_per_m"] == pytest.approx(fe["drop"]["k_n_per_m"], rel=0.05)
     assert row["max_safe_drop_cm"] == pytest.approx(fe["drop"]["max_safe_height_cm"], rel=0.05)
     assert row["verdict"] == fe["verdict"]
+
+
+def test_a_joint_outside_the_box_is_solved_on_worker_processes_and_announced(tmp_path):
+    """With the surrogate, `Design.needs_fe` says a check will solve a joint's FE (the studio then
+    shows the fast figures first) exactly when a joint is outside the box and not cached; `check`
+    solves it on worker processes, so the checking process never imports the CAD kernel."""
+    import os
+    import subprocess
+    import sys
+
+    data = yaml.safe_load((ROOT / "params" / "carbon.yaml").read_text())
+    inside = apply_overrides(data, {"model.stiffness_model": "surrogate"})
+    outside = apply_overrides(data, {"joints.hinge_thickness": 2.6, "joints.wall": 1.7, "model.stiffness_model": "surrogate"})
+    for name, doc in (("inside", inside), ("outside", outside)):
+        doc["name"] = name
+        (tmp_path / f"{name}.yaml").write_text(yaml.safe_dump(doc, sort_keys=False), encoding="utf-8")
+    code = ("import sys; from cogniframe import api; d = api.load(sys.argv[1]); before = d.needs_fe(); "
+            "r = d.check(); print(before, d.needs_fe(), r.to_dict()['stiffness']['joints']['knee']['method'], "
+            "'cadquery' in sys.modules)")
+    env = {**os.environ, "COGNIFRAME_CACHE": str(tmp_path / "cache")}
+
+    def run(name):
+        out = subprocess.run([sys.executable, "-c", code, str(tmp_path / f"{name}.yaml")], capture_output=True,
+                             text=True, cwd=ROOT, env=env, check=True)
+        return out.stdout.split()
+
+    assert run("inside") == ["False", "False", "surrogate", "False"]
+    assert run("outside") == ["True", "False", "fe", "False"]  # solved once, on the workers; cached after

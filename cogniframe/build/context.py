@@ -81,9 +81,9 @@ class Slicer:
 def needs_joint_fe(spec, design) -> bool:
     """Whether this build meshes and solves a joint: the FE model and a joint geometry that is not
     in the joint cache yet (a few milliseconds: the cache keys are hashes of the parts' inputs)."""
-    if spec.model.stiffness_model != "fe":
+    if spec.model.stiffness_model == "analytic":
         return False
-    from ..analysis.joints import has_unsolved
+    from ..analysis.joints import fe_joints, has_unsolved
     from ..analysis.stiffness import joint_parts
 
-    return has_unsolved(spec, joint_parts(design.parts))
+    return has_unsolved(spec, fe_joints(spec, joint_parts(design.parts)))

@@ -13,21 +13,21 @@ def estimate(ctx) -> Made:
     joint models, each cached on disk by its own inputs) while the CAD pool builds the parts; the
     mass-dependent load cases wait for the CAD volumes (`physics`)."""
     spec = ctx.spec
-    if spec.model.stiffness_model == "fe":
+    if spec.model.stiffness_model != "analytic":
         # new joint FEs first, in parallel; the frame model below then reads every joint from the
         # cache. On the CAD server's workers after the parts (JOB_ORDER); a build's own process
         # pool runs its jobs in order, so there the FEs get workers of their own
-        from ..analysis.joints import solve_missing
+        from ..analysis.joints import fe_joints, solve_missing
         from ..analysis.stiffness import joint_parts
 
-        if ctx.cad.server:
-            solve_missing(spec, joint_parts(ctx.design.parts),
-                          submit=lambda fn, *a: ctx.cad.submit(fn, *a, priority=JOB_ORDER["joint FE"]))
-        else:
+        solved = fe_joints(spec, joint_parts(ctx.design.parts))  # with the surrogate: those outside its box
+        if solved and ctx.cad.server:
+            solve_missing(spec, solved, submit=lambda fn, *a: ctx.cad.submit(fn, *a, priority=JOB_ORDER["joint FE"]))
+        elif solved:
             from ..runtime.pools import joint_fe_workers
 
             with joint_fe_workers() as submit:
-                solve_missing(spec, joint_parts(ctx.design.parts), submit=submit)
+                solve_missing(spec, solved, submit=submit)
     if spec.model.k_n_per_m is None:
         from ..analysis.drop import predicted_k_n_per_m
 

@@ -95,6 +95,19 @@ def _fe_unit(spec, part, mesh_mm: float) -> tuple[str, dict | None, str | None]:
         return part.name, None, str(exc)
 
 
+def fe_joints(spec, parts) -> list:
+    """The joints of ``parts`` whose super-element the solid FE gives under
+    `model.stiffness_model`: all of them (fe), those outside the surrogate's training box
+    (surrogate, milliseconds: the surrogate's box test), none (analytic)."""
+    method = spec.model.stiffness_model
+    if method == "fe":
+        return list(parts)
+    if method == "surrogate":
+        _, outside = _surrogate_split(spec, parts)
+        return [p for p in parts if p.name in outside]
+    return []
+
+
 def has_unsolved(spec, parts, mesh_mm: float | None = None) -> bool:
     """Whether a joint in ``parts`` has no FE super-element in the joint cache yet (the test
     `solve_missing` makes; milliseconds: the keys are hashes of the parts' inputs)."""
