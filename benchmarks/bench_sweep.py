@@ -16,7 +16,8 @@ and carbon rods, and prints medians over --repeat runs of:
   - the same with the workers started with `--preload cogniframe.sweep.evaluate` (the pipeline
     imported when a worker starts, as on a standing cluster, instead of in the sweep's time);
   - the load average before and after (the machine may be shared: wall rates fall with it).
---breakdown adds the per-stage CPU time of one design, serial in this process.
+--breakdown adds the per-stage CPU time of one design, serial in this process (the sweep's check,
+with evaluate.CHECK_OPTIONS: no peak list, no mode list, the survival margins up to the first failure).
 """
 
 from __future__ import annotations
@@ -122,7 +123,8 @@ def breakdown(n: int = 20) -> dict[str, float]:
     acc: dict[str, list[float]] = {}
     stages = [(spec_mod, "from_dict", "validate"), (verdict, "design", "frame, parts, cut list"),
               (drop, "_secant", "k: joints (surrogate), play, secant"), (load_cases, "_wall_case", "load case: wall"),
-              (load_cases, "_thrust_case", "load case: thrust"), (load_cases, "_modes", "load case: modes"),
+              (load_cases, "_thrust_case", "load case: thrust"), (load_cases, "_modes", "load case: modes (solved)"),
+              (load_cases, "_no_mode_near_rotor", "load case: modes near the rotor (counted)"),
               (drop, "load_cases", "load cases, all"), (verdict, "_survival", "survival"),
               (verdict, "check_dict", "check --json dict")]
     saved = []

@@ -132,8 +132,11 @@ def _stiffness_key(spec: Spec, *extra, scope: str = "k") -> str:
     return cache.key([inputs, extra], _MODULES)
 
 
-def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropResult, session: Session | None = None) -> dict:
+def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropResult, session: Session | None = None,
+               modes: bool = True) -> dict:
     """`check --json`'s `stiffness` section: every load case of `load_cases.load_cases`, cached.
+    ``modes=False``: no mode list, `mode_near_rotor` as with it (`load_cases.load_cases`'s option;
+    a separate cache entry, so a full `check` never reads a section without its modes).
 
     The design drop's force is the spring force at its maximum compression, k x_max (the
     strike clearance caps x_max: beyond it the battery holder carries the rest)."""
@@ -144,7 +147,7 @@ def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropR
     k_model = drop.k_n_per_m
     zeta = drop.damping_ratio
     key = _stiffness_key(spec, "cases", round(total_mass_g, 6), round(k_model, 6), round(x, 9), round(zeta, 9),
-                         spec.requirements.wall_impact_speed_m_s, scope="all")
+                         spec.requirements.wall_impact_speed_m_s, *(() if modes else ("no mode list",)), scope="all")
     hit = cache.load_json("cases", key)
     if hit is not None:
         return hit
@@ -160,7 +163,7 @@ def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropR
 
             play = {n: np.asarray(p, float) for n, p in _secant(spec, frame, session)["play"].items()}
     lc = cases(spec, frame, session.parts, total_mass_g, joint_model=spec.model.stiffness_model, damping_ratio=zeta,
-               design_force_n=k_model * x / 1000.0, joints=session.joints, play=play, solved=solved)
+               design_force_n=k_model * x / 1000.0, joints=session.joints, play=play, solved=solved, modes=modes)
     out = lc.to_dict()
     out["design_drop_height_cm"] = h_design
     out["design_force_n"] = k_model * x / 1000.0

@@ -84,12 +84,15 @@ class LoadCases:
 
 def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "fe", damping_ratio: float = 0.558,
                design_force_n: float | None = None, joints: dict | None = None, play: dict | None = None,
-               solved: SecantSolution | None = None) -> LoadCases:
+               solved: SecantSolution | None = None, modes: bool = True) -> LoadCases:
     """All load cases of the design (see the module docstring). ``design_force_n``: the spring
     force at the design drop's maximum compression (k x_max), for buckling and strain. ``play``:
     the play springs at PLAY_REFERENCE_N if already known (`secant_k_and_play`; {} = no play),
     else iterated here; ``solved``: the secant's solution with those springs (`secant_solution`),
-    whose payload case is this one's.
+    whose payload case is this one's. ``modes=False`` lists no modes (``modes_hz`` empty) and
+    decides ``mode_near_rotor`` by counting the eigenvalues below the band instead of solving for
+    them (`_no_mode_near_rotor`); when the count cannot rule a mode out, the modes are solved as
+    by default, so ``mode_near_rotor`` is the default's either way.
 
     The payload, wall and full-thrust cases share one model and one assembled K (they differ in
     supports and loads only); the arms-only thrust case and the modes (rods in 4 elements, with
@@ -125,10 +128,13 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
     thrust = _thrust_case(spec, frame, parts, joints, masses, play, full=(mdl, K0))
 
     # 4. modes (free flight)
-    modes = _modes(spec, frame, parts, joints, masses, play=play)
     n_rot = hover_rotor_hz(spec, total_mass_g)
+    if modes or not _no_mode_near_rotor(spec, frame, parts, joints, masses, n_rot, play=play):
+        hz = _modes(spec, frame, parts, joints, masses, play=play)
+    else:  # modes=False and none of them near the rotor: not listed
+        hz = []
     near = None
-    for i, fhz in enumerate(modes):
+    for i, fhz in enumerate(hz):
         if abs(fhz - n_rot) <= MODE_WARN_BAND * n_rot:
             near = {"mode": i + 1, "hz": fhz, "rotor_hz": n_rot}
             break
@@ -167,7 +173,7 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
                                interface(spec), hinged_socket, hinge_geometry)
 
     jinfo = {name: {"method": js.method, "dofs": js.n_dofs} for name, js in joints.items()}  # no timings: byte-stable output
-    return LoadCases(k, joint_model, TPU_PRINTED_MODULUS_FACTOR, wall["k_lateral_n_per_m"], wall, thrust, tuple(modes), n_rot, near,
+    return LoadCases(k, joint_model, TPU_PRINTED_MODULUS_FACTOR, wall["k_lateral_n_per_m"], wall, thrust, tuple(hz), n_rot, near,
                      buckling, strain, jinfo, time.perf_counter() - t0, per_n)
 
 
@@ -343,8 +349,8 @@ def arm_pair_hinge(joints: dict, parts) -> float | None:
     return float(1.0 / (lat @ C[3:, 3:] @ lat))
 
 
-def _modes(spec, frame, parts, joints, masses, n: int = N_MODES, rod_segments: int = 4, play=None) -> list[float]:
-    """The first n elastic natural frequencies in free flight (Hz, rounded to 0.01)."""
+def _modal_matrices(spec, frame, parts, joints, masses, rod_segments: int = 4, play=None):
+    """(K, M) of the free-flight modal problem: rods in ``rod_segments`` elements, with masses."""
     from scipy.sparse import diags
 
     mdl = build_model(spec, frame, parts, joints, rod_segments=rod_segments, masses=masses, play=play)
@@ -356,10 +362,35 @@ def _modes(spec, frame, parts, joints, masses, n: int = N_MODES, rod_segments: i
         K, M = K[keep][:, keep].tocsc(), M[keep][:, keep].tocsc()
     # massless DOFs (rigid-link ends) get a tiny inertia so M is positive definite
     M = (M + diags(np.where(M.diagonal() <= 0, 1e-12, 0.0))).tocsc()
+    return K, M
+
+
+def _modes(spec, frame, parts, joints, masses, n: int = N_MODES, rod_segments: int = 4, play=None) -> list[float]:
+    """The first n elastic natural frequencies in free flight (Hz, rounded to 0.01)."""
+    K, M = _modal_matrices(spec, frame, parts, joints, masses, rod_segments, play)
     w2 = lowest_eigenvalues(K, M, 6 + n)
     hz = [math.sqrt(max(x, 0.0)) / (2 * math.pi) for x in w2]
     elastic = hz[6:]  # free flight: six rigid-body modes first
     return [round(x, 2) for x in elastic]
+
+
+def _no_mode_near_rotor(spec, frame, parts, joints, masses, rotor_hz: float, n: int = N_MODES, rod_segments: int = 4,
+                        play=None) -> bool:
+    """True when none of the first n elastic modes (those `_modes` reports) can lie within
+    MODE_WARN_BAND of ``rotor_hz``, from the count of eigenvalues of the same modal problem below
+    the band's lower edge (the negative pivots of an LDL^T of K - s M, Sylvester's law of
+    inertia): when the 6 rigid-body and n elastic modes all sit below it, `_modes` flags none.
+    One factorization instead of the eigensolver. The edge is lowered by the modes' rounding
+    (0.01 Hz) and a relative 1e-6 for the eigenvalues' round-off, so a mode whose rounded value
+    could reach the band is never ruled out; False (solve the modes) when the count cannot tell."""
+    from .framefe import negative_pivots
+
+    edge_hz = ((1 - MODE_WARN_BAND) * rotor_hz - 0.01) * (1 - 1e-6)
+    if edge_hz <= 0:
+        return False
+    K, M = _modal_matrices(spec, frame, parts, joints, masses, rod_segments, play)
+    below = negative_pivots(K - (2 * math.pi * edge_hz) ** 2 * M)
+    return below >= 6 + n
 
 
 def _joint_strains(spec, frame, parts, mdl: Model, u: np.ndarray, itf, hinged_socket, hinge_geometry):

@@ -34,13 +34,19 @@ class CheckResult:
 
 
 def check(spec: Spec, geometry: dict | None = None, clash=None, design_: Design | None = None,
-          peaks: bool = True) -> CheckResult:
+          peaks: bool = True, modes: bool = True, survival_margins: bool = True) -> CheckResult:
     """Mass budget, crash margin, flight and requirements; `geometry` = CAD volumes when known,
     `clash` = the build's clash check (analysis.clash.ClashResult) when known, `design_` = this
     spec's design when the caller has it. ``peaks=False`` leaves out the predicted peak
     deceleration per drop height unless `requirements.max_peak_g` needs it for the verdict (a
-    sweep records no per-height list: the same verdict, a third of a design's time saved)."""
-    return with_clash(complete(spec, *mass_and_drop(spec, geometry, design_), peaks=peaks), clash)
+    sweep records no per-height list: the same verdict, a third of a design's time saved).
+    ``modes=False`` leaves out the list of natural frequencies (`stiffness.modes_hz`) and
+    decides `stiffness.mode_near_rotor` by counting eigenvalues (load_cases.load_cases): the
+    same flag and verdict, the modes' eigensolver saved. ``survival_margins=False`` ends the
+    survival sweep's per-height margins at the first failure (`_survival`): the same
+    `max_undamaged_drop_cm` and `first_failure`, shorter lists."""
+    return with_clash(complete(spec, *mass_and_drop(spec, geometry, design_), peaks=peaks, modes=modes,
+                               survival_margins=survival_margins), clash)
 
 
 def mass_and_drop(spec: Spec, geometry: dict | None = None, design_: Design | None = None):
@@ -56,15 +62,17 @@ def mass_and_drop(spec: Spec, geometry: dict | None = None, design_: Design | No
     return d, budget, drop, session
 
 
-def complete(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=None, peaks: bool = True) -> CheckResult:
+def complete(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=None, peaks: bool = True,
+             modes: bool = True, survival_margins: bool = True) -> CheckResult:
     """The rest of `check` for that mass budget and drop model: load cases, peaks, flight and the
-    verdict (no clash check: `with_clash` adds the build's)."""
+    verdict (no clash check: `with_clash` adds the build's). ``peaks``, ``modes``,
+    ``survival_margins``: as in `check`."""
     with one_blas_thread():
-        stiffness, peak = _physics(spec, d, budget, drop, session, peaks or spec.requirements.max_peak_g is not None)
+        stiffness, peak = _physics(spec, d, budget, drop, session, peaks or spec.requirements.max_peak_g is not None, modes)
     from . import flight as flight_mod
 
     flight = flight_mod.evaluate(spec, budget.total_g)
-    surv = _survival(spec, budget, drop, stiffness)
+    surv = _survival(spec, budget, drop, stiffness, survival_margins)
     # the survival sweep informs (the report warns when a part fails below the design drop); the
     # PASS/FAIL stays with the requirements' own checks
     problems = _problems(spec, budget, drop) + _physics_problems(spec, stiffness, peak) + _aircraft_problems(spec, flight)
@@ -80,14 +88,31 @@ def _notes(spec: Spec, d: Design) -> list[str]:
     return surrogate_notes(spec, [p for p in d.parts if p.family == "joint"])
 
 
-def _survival(spec: Spec, budget: mass_mod.MassBudget, drop, stiffness: dict | None):
+# ``survival_margins=False``: the survival sweep's heights tried first (10 to 400 cm, two thirds
+# of them): the example sweeps' and the benchmark's frames all fail between 40 and 360 cm
+_SURVIVAL_FIRST_CM = 400.0
+
+
+def _survival(spec: Spec, budget: mass_mod.MassBudget, drop, stiffness: dict | None, margins: bool = True):
     """The survival sweep (analysis/survival.py) when the load cases carry their loads per newton;
-    the payload's peak G over the sweep only when `requirements.max_peak_g` asks for it."""
+    the payload's peak G over the sweep only when `requirements.max_peak_g` asks for it.
+
+    ``margins=False``: the sweep's heights up to _SURVIVAL_FIRST_CM first, and the whole sweep
+    only when nothing fails there. A part failing within them fails first in the whole sweep
+    too (a failure further up crosses 1 above the last height tried, one within below it), so
+    `first_failure` and `max_undamaged_drop_cm` are the whole sweep's; the per-height lists end
+    there. With the payload's peak G (max_peak_g set) the whole sweep, as by default."""
     if drop is None or not stiffness or not stiffness.get("survival_per_n"):
         return None
     from . import survival
 
     peaks = survival.payload_peaks(spec, drop, budget.groups["exoskeleton"]) if spec.requirements.max_peak_g is not None else None
+    if not margins and peaks is None:
+        first = tuple(h for h in survival.SWEEP_CM if h <= _SURVIVAL_FIRST_CM)
+        if len(first) >= 2:
+            short = survival.evaluate(spec, drop, stiffness, None, first)
+            if short.first_failure is not None:
+                return short
     return survival.evaluate(spec, drop, stiffness, peaks)
 
 
@@ -114,13 +139,14 @@ def _drop(spec: Spec, d: Design, budget: mass_mod.MassBudget, session=None):
     return drop_mod.evaluate_design(spec, d.frame, budget.total_g, session)
 
 
-def _physics(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=None, peaks: bool = True):
+def _physics(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=None, peaks: bool = True,
+             modes: bool = True):
     """The frame's load cases and the predicted peak deceleration (both cached on disk)."""
     from . import drop as drop_mod
 
     if drop is None:
         return None, None
-    cases = drop_mod.load_cases(spec, d.frame, budget.total_g, drop, session)
+    cases = drop_mod.load_cases(spec, d.frame, budget.total_g, drop, session, modes=modes)
     peak = drop_mod.peak_prediction(spec, budget.total_g, drop, budget.groups["exoskeleton"]) if peaks else None
     return cases, peak
 

@@ -19,6 +19,7 @@ import hashlib
 import json
 import threading
 import time
+from types import MappingProxyType
 
 VERDICTS = ("PASS", "FAIL", "INVALID", "TIMEOUT", "ERROR")
 
@@ -26,6 +27,17 @@ VERDICTS = ("PASS", "FAIL", "INVALID", "TIMEOUT", "ERROR")
 _KNOWN = {"name", "verdict", "problems", "mass", "cutlist", "stock", "frame", "parts", "drop", "notes"}
 OUTPUTS = ("mass_g", "mass_margin_g", "k_n_per_m", "c_n_s_per_m", "max_safe_drop_cm", "prop_margin_mm", "clearance_mm",
            "stock_rods", "joints_outside_box")
+
+
+# What a sweep's check leaves out, as `verdict.check`'s options: lists no column records (a row
+# keeps only scalars) and no verdict reads; every recorded column keeps check's value.
+# `peaks`: the peak deceleration per drop height (computed all the same when
+# requirements.max_peak_g makes it part of the verdict). `modes`: the natural frequencies
+# (`stiffness.modes_hz`); the recorded `stiffness.mode_near_rotor` is decided by an eigenvalue
+# count instead of the eigensolver. `survival_margins`: the survival sweep's per-height margins
+# above the first failure (`survival.max_undamaged_drop_cm` and `survival.first_failure.*` are
+# the whole sweep's). The thrust case and the rest of the load cases are recorded and run as in check.
+CHECK_OPTIONS = MappingProxyType({"peaks": False, "modes": False, "survival_margins": False})
 
 
 class DesignTimeout(BaseException):
@@ -64,9 +76,7 @@ def check_row(params: dict, source: str, text: str | None = None) -> dict:
     try:
         spec = spec_mod.from_dict(params, source=source, text=text)
         with spec.blamed():  # a later stage's error gains the key's line, as in `cogniframe check`
-            # the peak deceleration per drop height is a list no column records: left out unless
-            # requirements.max_peak_g makes it part of the verdict (then computed as in check)
-            result = verdict.check(spec, peaks=False)
+            result = verdict.check(spec, **CHECK_OPTIONS)
     except UserError as e:
         return {"verdict": "INVALID", "problems": "", "error": str(e)}
     return outputs(verdict.check_dict(result))

@@ -204,14 +204,16 @@ def base_outputs(sweep) -> dict:
     return ev.evaluate_one(sweep.base_data, {}, sweep.settings.timeout_s, "client", sweep.base_text, sweep.base_label)
 
 
-def write_reports(out_dir: Path, sweep, table, result) -> None:
+def write_reports(out_dir: Path, sweep, table, result, base: dict | None = None) -> None:
+    """pareto.png, sensitivity.png and summary.md; `base`: the base design's row when a worker
+    evaluated it already (else it is evaluated here)."""
     if not len(table):
         return
     keys = [k.name for k in sweep.keys]
     plot_pareto(table, out_dir / "pareto.png", f"{sweep.stem}: {len(table)} designs from {Path(sweep.base_path).name}")
     method, inputs, outputs, m, r2 = sensitivity(sweep, table)
     plot_sensitivity(method, inputs, outputs, m, out_dir / "sensitivity.png")
-    base = base_outputs(sweep)
+    base = base if base is not None else base_outputs(sweep)
     c = result.as_dict()
     lines = [f"# Sweep {sweep.stem}", "",
              f"Base `{sweep.base_path}` ({base['verdict']}, {_fmt(base['mass_g'])} g, max safe drop "

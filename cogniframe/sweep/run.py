@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import itertools
 import json
 import math
 import os
@@ -25,7 +26,7 @@ import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Iterator
+from typing import Callable, Iterator, Sequence
 
 from ..errors import UserError
 from . import evaluate as ev
@@ -214,22 +215,28 @@ def _has_n_workers(client) -> bool:
     return "n_workers" in inspect.signature(client.scheduler_info).parameters
 
 
-def batch_size(n_designs: int, n_workers: int, requested: int | None) -> int:
-    """Designs per task: few enough tasks to keep scheduling overhead small, enough for balance."""
+MIN_BATCH, MAX_BATCH = 4, 64
+
+
+def batch_sizes(n_designs: int, n_workers: int, requested: int | None) -> list[int]:
+    """Designs per task, in submission order: `requested` each when the sweep file sets `batch`;
+    otherwise each batch half the designs left per worker (at most 64, at least 4), so
+    the batches shrink towards the end. Few large batches keep the scheduling and the client's
+    parquet files few; small last ones let the workers finish together (with equal batches the
+    last one runs alone while the other workers idle, up to a batch's time)."""
     if requested:
-        return requested
-    return max(1, min(64, math.ceil(n_designs / max(1, n_workers * 4))))
+        return [requested] * math.ceil(n_designs / requested)
+    out, left = [], n_designs
+    while left > 0:
+        size = min(left, max(MIN_BATCH, min(MAX_BATCH, math.ceil(left / max(1, 2 * n_workers)))))
+        out.append(size)
+        left -= size
+    return out
 
 
-def evaluate_all(client, base: dict, items: list[dict], timeout_s: float, size: int, n_workers: int,
-                 on_batch: Callable[[list[dict]], None] | None = None, text: str | None = None,
-                 base_name: str = "the base") -> list[dict]:
-    """Evaluate `items` (overrides) in batches of `size` on the cluster; rows in the order of `items`.
-
-    At most 2 batches per worker are in flight, so a kill loses little and results stream back.
-    """
-    from distributed import as_completed
-
+def check_workers(client) -> None:
+    """Import the pipeline on every worker (`evaluate.warm_up`) and refuse workers whose code hash
+    differs from this machine's: their rows would not match."""
     codes = client.run(ev.warm_up)
     mine = ev.code_digest()
     other = {addr: c for addr, c in codes.items() if c != mine}
@@ -237,11 +244,27 @@ def evaluate_all(client, base: dict, items: list[dict], timeout_s: float, size: 
         raise UserError(f"Dask worker(s) {', '.join(sorted(other))} run different cogniframe code than this machine "
                         f"(code hash {', '.join(sorted(set(other.values())))} against {mine}): their rows would not match. "
                         "Fix: install the same cogniframe version on every worker and restart them.")
+
+
+def evaluate_all(client, base: dict, items: list[dict], timeout_s: float, size: int | Sequence[int], n_workers: int,
+                 on_batch: Callable[[list[dict]], None] | None = None, text: str | None = None,
+                 base_name: str = "the base", checked: bool = False) -> list[dict]:
+    """Evaluate `items` (overrides) in batches of `size` designs (or of the sizes listed, in order)
+    on the cluster; rows in the order of `items`. `checked`: `check_workers` already ran.
+
+    At most 2 batches per worker are in flight, so a kill loses little and results stream back.
+    """
+    from distributed import as_completed
+
+    if not checked:
+        check_workers(client)
     # the base params and text go with each batch (a few kB), not scattered once: scattered data
     # lives only on the workers, so a worker that dropped out (killed, or its heartbeat missed on a
     # loaded machine) took it along and the batches that needed it were cancelled ("lost
     # dependencies", seen once in the test suite); a batch's own arguments are re-sent with it
-    batches = [items[i:i + size] for i in range(0, len(items), size)]
+    sizes = [size] * math.ceil(len(items) / size) if isinstance(size, int) else list(size)
+    starts = [0, *itertools.accumulate(sizes)][:-1]
+    batches = [items[a:a + n] for a, n in zip(starts, sizes) if items[a:a + n]]
     index = {}
     rows_by_batch: dict[int, list[dict]] = {}
     todo = iter(enumerate(batches))
@@ -293,10 +316,11 @@ def _run_sweep(sweep: Sweep, out_dir: Path, scheduler: str | None, workers: int 
         done = set(log.loc[log["verdict"] != "TIMEOUT", "design_id"])
     todo = [(i, o) for i, o in designs if i not in done]
     scheduler_addr, n_workers = scheduler or "", 0
+    base_row = None
     if todo:
         with dask_client(scheduler, workers) as (client, scheduler_addr, n_workers):
             claim_folder(out_dir, "sweep", sweep)
-            size = batch_size(len(todo), n_workers, sweep.settings.batch)
+            sizes = batch_sizes(len(todo), n_workers, sweep.settings.batch)
             count = {"n": 0}
             tb = time.perf_counter()
 
@@ -306,12 +330,18 @@ def _run_sweep(sweep: Sweep, out_dir: Path, scheduler: str | None, workers: int 
                 if progress:
                     progress(BatchDone(tuple(rows), rows[0]["worker"], count["n"], len(todo), time.perf_counter() - tb))
 
+            check_workers(client)
+            # the summary's base row on a worker, ahead of the batches: the client would have to
+            # import and run the pipeline after the sweep for it (the same code: checked above)
+            base_fut = client.submit(ev.evaluate_one, sweep.base_data, {}, sweep.settings.timeout_s, "", sweep.base_text,
+                                     sweep.base_label, pure=False) if reports else None
             try:
-                evaluate_all(client, sweep.base_data, [o for _, o in todo], sweep.settings.timeout_s, size, n_workers, on_batch,
-                             sweep.base_text, sweep.base_label)
+                evaluate_all(client, sweep.base_data, [o for _, o in todo], sweep.settings.timeout_s, sizes, n_workers, on_batch,
+                             sweep.base_text, sweep.base_label, checked=True)
             except KeyboardInterrupt:
                 consolidate(out_dir, designs, code)  # what finished is in results.parquet; a rerun resumes
                 raise
+            base_row = _result_or_none(base_fut)
     else:
         claim_folder(out_dir, "sweep", sweep)
     table = consolidate(out_dir, designs, code)
@@ -321,8 +351,18 @@ def _run_sweep(sweep: Sweep, out_dir: Path, scheduler: str | None, workers: int 
     if reports:
         from . import report
 
-        report.write_reports(out_dir, sweep, table, result)
+        report.write_reports(out_dir, sweep, table, result, base_row)
     return result
+
+
+def _result_or_none(fut):
+    """A future's result, or None when its task failed (a worker lost): the caller computes it itself."""
+    if fut is None:
+        return None
+    try:
+        return fut.result()
+    except Exception:
+        return None
 
 
 def consolidate(out_dir: Path, designs: list[tuple[str, dict]], code: str):
