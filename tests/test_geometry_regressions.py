@@ -149,28 +149,26 @@ def test_thin_rods_core_links_mesh_watertight(base, height):
         assert mesh.is_watertight and mesh.volume > 0, part.name
 
 
+def _arm_and_rigid_leg(knee):
+    """(arm socket, rigid leg socket, sleeve radius, the arm block's back) of a knee, in print."""
+    from cogniframe.parts.joint import _groups, map_sockets, print_from_local
+
+    arms, legs = _groups(map_sockets(knee, print_from_local(knee)))
+    a = arms[0]
+    rigid = max(legs, key=lambda s: float(s.direction @ a.direction))
+    return a, rigid, a.bore / 2 + knee.wall, a.seat - knee.wall
+
+
 def test_rigid_leg_reaches_into_the_arm_block():
     """Pure numpy: the rigid leg's sleeve starts far enough back that its inner back corner lies at
     least JOIN inside the arm block's footprint; the presets' knees already do (start unchanged)."""
-    from cogniframe.parts.joint import (
-        JOIN,
-        _groups,
-        _rigid_leg_start,
-        horizontal,
-        map_sockets,
-        print_from_local,
-    )
+    from cogniframe.parts.joint import JOIN, _rigid_leg_start, horizontal
 
     for spec, moved in ((_variant("carbon", rods__diameter=2.3, frame__height=91), True),
                         (spec_mod.load(ROOT / "params" / "carbon.yaml"), False),
                         (spec_mod.load(ROOT / "params" / "bamboo.yaml"), False)):
         (knee,) = _joints(spec, ["knee"])
-        socks = map_sockets(knee, print_from_local(knee))
-        arms, legs = _groups(socks)
-        a = arms[0]
-        r = a.bore / 2 + knee.wall
-        s_back = a.seat - knee.wall
-        rigid = max(legs, key=lambda s: float(s.direction @ a.direction))
+        a, rigid, r, s_back = _arm_and_rigid_leg(knee)
         t = _rigid_leg_start(a, rigid, r, s_back, knee.wall)
         assert (t < rigid.seat - knee.wall) == moved
         dx, u = horizontal(a.direction), horizontal(rigid.direction)
@@ -210,25 +208,10 @@ def test_a_large_seat_joins_the_lower_leg_by_a_hub():
     """Pure numpy: with the d22 seat no start of the lower leg's sleeve reaches the arm block
     (`_rigid_leg_start` is None, where it used to answer 51 mm behind the knee), and the hub that
     joins them overlaps both and stays clear of the hinge web and its slots."""
-    from cogniframe.parts.joint import (
-        HINGE_GAP,
-        _footprint_rect,
-        _groups,
-        _hull,
-        _knee_hub,
-        _rigid_leg_start,
-        knee_hinge,
-        map_sockets,
-        print_from_local,
-    )
+    from cogniframe.parts.joint import HINGE_GAP, _footprint_rect, _hull, _knee_hub, _rigid_leg_start, knee_hinge
 
     for knee in _joints(_variant("carbon", **D22), ["knee", "knee_mirrored"]):
-        socks = map_sockets(knee, print_from_local(knee))
-        arms, legs = _groups(socks)
-        a = arms[0]
-        r = a.bore / 2 + knee.wall
-        s_back = a.seat - knee.wall
-        rigid = max(legs, key=lambda s: float(s.direction @ a.direction))
+        a, rigid, r, s_back = _arm_and_rigid_leg(knee)
         assert _rigid_leg_start(a, rigid, r, s_back, knee.wall) is None, knee.name
         web = knee_hinge(knee)
         hub = _knee_hub(a, rigid, r, s_back, knee.wall, web)

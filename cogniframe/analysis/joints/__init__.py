@@ -103,7 +103,9 @@ def fe_joints(spec, parts) -> list:
     if method == "fe":
         return list(parts)
     if method == "surrogate":
-        _, outside = _surrogate_split(spec, parts)
+        from .surrogate import outside_reasons
+
+        outside = outside_reasons(spec, parts)
         return [p for p in parts if p.name in outside]
     return []
 
@@ -223,34 +225,18 @@ def _solve(spec, todo, mesh_mm: float, submit=None) -> dict[str, str]:
 def _surrogate_split(spec, parts, factor: float | None = None):
     """({part name: surrogate super-element}, {part name: why it is outside the training box}):
     originals predicted, mirrored joints reflected from their predicted original (as the FE path
-    reflects them; a mirror whose original is outside, or that is not an exact image, is outside too)."""
-    from .surrogate import predict
+    reflects them); which joints are outside is `surrogate.outside_reasons`."""
+    from .surrogate import outside_reasons, predict
 
-    inside, outside = {}, {}
+    outside = outside_reasons(spec, parts)
+    inside = {}
     for p in parts:
-        if is_mirror(p):
-            continue
-        unit, why = predict(spec, p, factor)
-        if unit is not None:
-            inside[p.name] = unit
-        else:
-            outside[p.name] = why
+        if not is_mirror(p) and p.name not in outside:
+            inside[p.name], _ = predict(spec, p, factor)
     for p in parts:
-        if not is_mirror(p):
-            continue
-        try:
-            found = mirror_original(p, parts)
-        except ValueError as exc:
-            found, why = None, f"not an exact mirror image ({exc})"
-        else:
-            why = "its original is not in the part list" if found is None else None
-        if found is not None:
-            o, P, order = found
-            if o.name in inside:
-                inside[p.name] = reflect_unit(inside[o.name], p, P, order, [s.rod for s in o.sockets])
-                continue
-            why = f"its original {o.name} is outside"
-        outside[p.name] = why
+        if is_mirror(p) and p.name not in outside:
+            o, P, order = mirror_original(p, parts)
+            inside[p.name] = reflect_unit(inside[o.name], p, P, order, [s.rod for s in o.sockets])
     return inside, outside
 
 
