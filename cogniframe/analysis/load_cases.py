@@ -267,18 +267,7 @@ def _thrust_case(spec, frame, parts, joints, masses, play=None, full: tuple | No
         else:
             mdl = build_model(spec, frame, parts, joints, only_roles=roles, play=play)
             K = mdl.fe.stiffness(sparse=True)
-        fe = mdl.fe
-        idx = fe.index()
-        fixed = np.zeros(K.shape[0], dtype=bool)
-        i = 6 * idx[mdl.payload]
-        fixed[i:i + 6] = True
-        fixed = _drop_unconnected(K, fixed)
-        f = np.zeros(K.shape[0])
-        for m in mdl.motors:
-            f[6 * idx[m] + 2] = 1.0  # 1 N up on each motor: linear, scaled below
-        u = ff.solve(K, f, fixed)
-        dz = float(np.mean([u[6 * idx[m] + 2] for m in mdl.motors]))
-        tilt = float(np.max([math.hypot(u[6 * idx[m] + 3], u[6 * idx[m] + 4]) for m in mdl.motors]))
+        dz, tilt = _motors_under_thrust(mdl, K, 1.0)  # 1 N up on each motor: linear, scaled below
         pre = "" if label == "full" else "arms_only_"
         out[f"{pre}motor_deflection_mm_per_n"] = dz
         out[f"{pre}motor_tilt_deg_per_n"] = math.degrees(tilt)
@@ -294,18 +283,9 @@ def _thrust_case(spec, frame, parts, joints, masses, play=None, full: tuple | No
 
     stiff = {n: replace(js, K=tuple(map(tuple, (js.matrix / TPU_PRINTED_MODULUS_FACTOR).tolist()))) for n, js in joints.items()}
     mdl = build_model(spec, frame, parts, stiff, only_roles=("arm",))
-    K = mdl.fe.stiffness(sparse=True)
-    idx = mdl.fe.index()
-    fixed = np.zeros(K.shape[0], dtype=bool)
-    fixed[6 * idx[mdl.payload]:6 * idx[mdl.payload] + 6] = True
-    fixed = _drop_unconnected(K, fixed)
-    f = np.zeros(K.shape[0])
-    for m in mdl.motors:
-        f[6 * idx[m] + 2] = per_n_full
-    u = ff.solve(K, f, fixed)
-    out["arms_only_motor_deflection_mm_tpu_datasheet"] = float(np.mean([u[6 * idx[m] + 2] for m in mdl.motors]))
-    out["arms_only_motor_tilt_deg_tpu_datasheet"] = math.degrees(float(np.max([math.hypot(u[6 * idx[m] + 3], u[6 * idx[m] + 4])
-                                                                                for m in mdl.motors])))
+    dz, tilt = _motors_under_thrust(mdl, mdl.fe.stiffness(sparse=True), per_n_full)
+    out["arms_only_motor_deflection_mm_tpu_datasheet"] = dz
+    out["arms_only_motor_tilt_deg_tpu_datasheet"] = math.degrees(tilt)
     hinge = arm_pair_hinge(joints, parts)
     if hinge is not None:
         out["arms_only_core_link_hinge_n_mm_per_rad"] = hinge
@@ -314,6 +294,23 @@ def _thrust_case(spec, frame, parts, joints, masses, play=None, full: tuple | No
 
 
 SMALL_ROTATION_DEG = 10.0  # sin x = x within 0.5 %: the linear frame's range
+
+
+def _motors_under_thrust(mdl: Model, K, thrust_n: float) -> tuple[float, float]:
+    """(mean vertical deflection mm, largest tilt rad) of the motors with ``thrust_n`` up on each
+    and the core (the payload node) held."""
+    idx = mdl.fe.index()
+    fixed = np.zeros(K.shape[0], dtype=bool)
+    i = 6 * idx[mdl.payload]
+    fixed[i:i + 6] = True
+    fixed = _drop_unconnected(K, fixed)
+    f = np.zeros(K.shape[0])
+    for m in mdl.motors:
+        f[6 * idx[m] + 2] = thrust_n
+    u = ff.solve(K, f, fixed)
+    dz = float(np.mean([u[6 * idx[m] + 2] for m in mdl.motors]))
+    tilt = float(np.max([math.hypot(u[6 * idx[m] + 3], u[6 * idx[m] + 4]) for m in mdl.motors]))
+    return dz, tilt
 
 
 def arm_pair_hinge(joints: dict, parts) -> float | None:
