@@ -350,6 +350,7 @@ def _hinge_seat(dirs: list[np.ndarray], roles: list[str], wall: float) -> float:
 
 
 STACK_H = 16.0  # FC + 4-in-1 ESC on 8 mm standoffs, mm
+STACK_BOTTOM = 3.0  # soft-mount grommets / nylon nuts under the ESC, mm: the core links' tabs keep below it
 CAMERA_BASE_T = 2.0  # camera mount base plate under the stack, mm
 SENSOR_GAP = 3.0  # holder rear face to the flow board's edge, mm
 

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .frame import CAMERA_BASE_T, CORNER_SIGN, CORNERS, Frame
+from .frame import CAMERA_BASE_T, CORNER_SIGN, CORNERS, STACK_BOTTOM, Frame
 from .materials import BOARDS, CONNECTORS, SCREWS, STACK_PATTERNS
 from .spec import Spec
 
@@ -223,9 +223,15 @@ def _joint(spec: Spec, frame: Frame, name: str, kind: str, proto: str = "fl", co
         params += [("screw", screw.name), ("screw_clearance", screw.clearance_d),
                    # plate-corner hole and plate top, in the link's local frame (its node is at plate mid-height)
                    ("bolt_hole", _t(np.array([sx * hole, sy * hole, 0.0]) - np.array([origin[0], origin[1], 0.0]))),
-                   ("plate_top_z", round(spec.core.plate_thickness / 2, 4)), ("tab_thickness", spec.core.plate_thickness)]
+                   ("plate_top_z", round(spec.core.plate_thickness / 2, 4)), ("tab_thickness", LINK_TAB),
+                   # the plate corner the link seats against (its two edge faces), same frame
+                   ("plate_corner", _t(np.array([sx, sy, 0.0]) * spec.core.plate_size / 2 - np.array([origin[0], origin[1], 0.0]))),
+                   # the ESC board's footprint (its centre, at the height of its underside less
+                   # 0.5 mm) and half-side, same frame: the tab keeps below the board
+                   ("esc_keepout", _t(np.array([0.0, 0.0, float(frame.core.stack.lo[2]) + STACK_BOTTOM - 0.5]) - origin)),
+                   ("esc_half", STACK_PATTERNS[spec.core.stack_pattern][1] / 2 + 0.5)]
         # tab + plate + spacer, nut in the spacer's nut trap: round up to a stock length
-        grip = 2 * spec.core.plate_thickness + spec.core.spacer_thickness
+        grip = LINK_TAB + spec.core.plate_thickness + spec.core.spacer_thickness
         length = next((n for n in (8, 10, 12, 14, 16, 20) if n >= grip), 20)
         hardware = (HardwareLine(f"{screw.name} x {length} socket-head screw + nut (core link to plate)", 1, screw.mass_g * length / 6 + 0.1),)
     if kind == "corner_bottom":
@@ -234,9 +240,17 @@ def _joint(spec: Spec, frame: Frame, name: str, kind: str, proto: str = "fl", co
                     spec.joints.wall, _joint_estimate(spec, sockets, kind, dict(params)), tuple(params), hardware)
 
 
+# The core link's tab: it carries an arm's thrust moment from the arm block, across the seat at
+# the plate corner, onto the plate top. Its bending there is the hinge the bare arms hang on
+# (cubic in its depth: at 3 mm the bare arms folded at full thrust; docs/stiffness-model.md).
+LINK_TAB = 6.0  # mm
+
+
 def _link_hole(spec: Spec) -> float:
-    """Plate-corner bolt position for the core links, along x and y from the centre (mm)."""
-    return spec.core.plate_size / 2 - max(4.0, spec.core.plate_thickness + 1.5)
+    """Plate-corner bolt position for the core links, along x and y from the centre (mm): near the
+    corner, because under thrust the tab lifts off the plate between the seat and the bolt head
+    (an M2 clearance hole 3.5 mm from both edges keeps 2.3 mm of plate to each)."""
+    return spec.core.plate_size / 2 - max(3.5, spec.core.plate_thickness + 0.5)
 
 
 def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict | None = None) -> Estimate:
@@ -345,11 +359,53 @@ def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict |
             vol += hub_area * hub_h
             a_h += hub_area
             a_v += 2 * s_back * hub_h
+            seat_area = _seat_area(params, ports[par], z[par], dirs[par[0]], sockets[par[0]].seat - j.wall, r,
+                                   min(float(z[par].max() + r - 0.5), tab_h))
+            vol += seat_area * 2 * v0
+            a_v += 2 * seat_area
         ext = np.array([np.ptp(np.vstack([ports, ports + dirs * L[:, None]]) @ np.eye(3), axis=0).max() + 2 * r,
                         2 * r + float(L.max()), float(z.max() + r)])
     a_v += sum(math.pi * spec.bore * s.depth for s in sockets)
     env = tuple(sorted(float(x) for x in ext))
     return Estimate(vol, a_h, a_v, (env[2], env[1], env[0]))
+
+
+def _seat_area(params: dict, ports: np.ndarray, heights: np.ndarray, d: np.ndarray, s_back: float, r: float,
+               height: float) -> float:
+    """Plan area (mm^2) of a core link's seat as parts/joint.py builds it: from 1 mm inside the arm
+    block's back to past the plate corner, the block's width across, less the plate's corner
+    quadrant, from the bed up to `height` in print (the arm pair's two `ports` print at
+    `heights`: print height runs across the pair)."""
+    corner = np.asarray(params.get("plate_corner", (0.0, 0.0, 0.0)), float)[:2]
+    bolt = np.asarray(params.get("bolt_hole", (0.0, 0.0, 0.0)), float)[:2]
+    sign = np.sign(corner - bolt)
+    e_in = -d[:2] / np.hypot(d[0], d[1])
+    e_w = np.array([-e_in[1], e_in[0]])
+    u_b = min(float((p[:2] + d[:2] * s_back) @ e_in) for p in ports) - 1.0
+    w_half = max(abs(float(p[:2] @ e_w)) for p in ports) + r + 1.0
+    u_far = float(corner @ e_in) + w_half + 1.0
+    quad = [e_in * u_b - e_w * w_half, e_in * u_far - e_w * w_half, e_in * u_far + e_w * w_half, e_in * u_b + e_w * w_half]
+    across = ports[1, :2] - ports[0, :2]
+    g = across * (heights[1] - heights[0]) / float(across @ across)  # print height per mm in plan
+    h0 = float(heights[0] - ports[0, :2] @ g)  # print height = h0 + p . g
+    band = _clip(_clip(quad, -g, h0), g, height - h0)
+    inside = _clip(_clip(band, np.array([sign[0], 0.0]), sign[0] * corner[0]), np.array([0.0, sign[1]]), sign[1] * corner[1])
+    return _polygon_area(band) - _polygon_area(inside) if len(band) > 2 else 0.0
+
+
+def _clip(poly, a: np.ndarray, b: float) -> list:
+    """The part of a convex polygon where a . p <= b (Sutherland-Hodgman, one edge)."""
+    out = []
+    for i, p in enumerate(poly):
+        q = poly[i - 1]
+        fp, fq = float(a @ p) - b, float(a @ q) - b
+        if fp <= 0:
+            if fq > 0:
+                out.append(q + (p - q) * fq / (fq - fp))
+            out.append(p)
+        elif fq <= 0:
+            out.append(q + (p - q) * fq / (fq - fp))
+    return out
 
 
 def _hull_area(pts: np.ndarray) -> float:

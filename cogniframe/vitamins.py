@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .frame import Frame
+from .frame import STACK_BOTTOM, Frame
 from .materials import BOARDS, CONNECTORS, PROPS, STACK_PATTERNS, Board
 from .spec import Spec
 
@@ -31,7 +31,6 @@ PROP_DISC_T = 3.0  # mm
 PROP_GAP = 0.5  # bell top to the underside of the blade disc, mm
 SHAFT_D = {"1104": 1.5, "1404": 1.5}  # motor shaft diameter (mm); 1.5 mm for both classes
 SHAFT_ABOVE = 2.5  # shaft length above the bell (into the prop hub), mm
-STACK_BOTTOM = 3.0  # soft-mount grommets / nylon nuts under the ESC, mm
 STACK_STANDOFF = 8.0  # between the ESC and the FC, mm
 STANDOFF_D = 4.0  # nylon M2 standoff across flats (drawn round), mm
 

@@ -409,7 +409,7 @@ def test_thrust_to_weight_below_the_requirement_fails(run_cli, tmp_path):
 
 def test_a_build_with_a_clash_exits_1_naming_both_solids(run_cli, tmp_path, monkeypatch):
     """Bamboo without its 2 mm spacer: the core links sit on the battery holder's top edges again
-    (4.5 mm^3 each). The build runs the clash check, writes clash.json and FAILs (exit 1) with a
+    (3.1 mm^3 each). The build runs the clash check, writes clash.json and FAILs (exit 1) with a
     problem naming both solids. (Plates, slicing and renders are skipped: not what is tested.)"""
     import json
 
@@ -430,7 +430,7 @@ def test_a_build_with_a_clash_exits_1_naming_both_solids(run_cli, tmp_path, monk
     assert check["verdict"] == "FAIL" and not clash["ok"]
     pairs = {frozenset((c["a"], c["b"])): c["volume_mm3"] for c in clash["clashes"]}
     for link in ("core_link_fl", "core_link_fr", "core_link_rr", "core_link_rl"):
-        assert pairs[frozenset((link, "battery_holder"))] == pytest.approx(4.5, abs=1.0)
+        assert pairs[frozenset((link, "battery_holder"))] == pytest.approx(3.1, abs=1.0)
     assert any("core_link_fr" in x and "battery_holder" in x and "mm^3" in x for x in check["problems"])
 
 

@@ -132,9 +132,10 @@ def test_fe_stiffer_and_thicker_rods_raise_k():
         _k_fe(_variant(rods={"diameter": 3.0}, joints={"wall": 1.6}))
 
 
+# The FE's first mode is the motors on their arms bouncing on the core links' seat and tab, which
+# socket depth and wall barely change (depth 8 -> 12 mm: 14.36 -> 14.35 Hz; wall 1.5 -> 1.8 mm:
+# 15.32 -> 15.05 Hz, the heavier joints): k rises with both (above), the first mode does not.
 @pytest.mark.parametrize("sections_lo, sections_hi", [
-    ({"joints": {"socket_depth": 8}}, {"joints": {"socket_depth": 12}}),
-    ({"joints": {"wall": 1.5}}, {"joints": {"wall": 1.8}}),
     ({"joints": {"hinge_thickness": 1.2}}, {"joints": {"hinge_thickness": 1.8}}),
     ({"rods": {"material": "bamboo"}}, {"rods": {"material": "carbon_rod"}}),
     ({"rods": {"diameter": 3.0}, "joints": {"wall": 1.6}}, {"rods": {"diameter": 3.5}, "joints": {"wall": 1.6}}),
@@ -562,8 +563,8 @@ def test_a_mirror_that_is_not_an_exact_image_is_solved_by_FE(tmp_path, monkeypat
 def test_solve_missing_submits_the_biggest_joint_first(tmp_path, monkeypatch):
     """Longest-processing-time-first: the FE jobs go to the workers by falling closed-form volume
     (the mesh has a fixed size, so the factorization grows with it), so the last one to start is
-    the smallest and the workers end together. Carbon: knee, core link, corner bottom, corner top
-    (measured FE CPU 1.45, 1.57, 1.3, 0.74 s); the mirrored core link is derived, not submitted."""
+    the smallest and the workers end together. Carbon: core link (with its seat and 6 mm tab),
+    knee, corner bottom, corner top; the mirrored core link is derived, not submitted."""
     from concurrent.futures import Future
 
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))
@@ -579,7 +580,7 @@ def test_solve_missing_submits_the_biggest_joint_first(tmp_path, monkeypatch):
     # the mirror falls back to its own FE when its original fails: not solved here either
     monkeypatch.setattr(JS, "_fe_unit", lambda spec, part, mesh_mm: (part.name, None, "not solved in this test"))
     failed = JS.solve_missing(s, st.joint_parts(p), submit=submit)
-    assert order == ["knee", "core_link", "corner_bottom", "corner_top"]
+    assert order == ["core_link", "knee", "corner_bottom", "corner_top"]
     assert set(failed) == {"knee", "core_link", "corner_bottom", "corner_top", "core_link_mirrored"}
 
 

@@ -157,23 +157,52 @@ def test_thrust_reports_deflection_and_tilt_at_hover_and_full_thrust(checked, na
 
 @pytest.mark.parametrize("name", PRESETS)
 def test_arms_only_motor_tilt_comes_from_the_core_link_hinge(checked, name):
-    """The bare arms hang on the core link, whose TPU hub turns on its tab: the arm pair's
-    rotational stiffness there (the condensed super-element) is a few tens of N mm/rad, and the
-    motor's tilt per newton is at least its thrust lever (mouths to motor, ~39 mm) over it."""
+    """The bare arms hang on the core link, whose TPU hub turns on its seat and tab at the plate
+    corner: the arm pair's rotational stiffness there (the condensed super-element) is 100-200
+    N mm/rad (a 3 mm tab over air gave ~43, and the arms folded), and the motor's tilt per newton
+    is at least its thrust lever (mouths to motor, ~39 mm) over it."""
     t = checked[name]["stiffness"]["thrust"]
     k = t["arms_only_core_link_hinge_n_mm_per_rad"]
-    assert 20 < k < 100
+    assert 100 < k < 200
     assert math.radians(t["arms_only_motor_tilt_deg_per_n"]) > 30.0 / k
 
 
-@pytest.mark.xfail(strict=True, reason="the model's core link hub hinges on its 3 mm TPU tab (~43 N mm/rad for an arm "
-                   "pair): the bare arms fold (tilt > 100 deg at full thrust), which the paper's photographs "
-                   "contradict; see docs/stiffness-model.md, 'Bending under thrust'")
 @pytest.mark.parametrize("name", PRESETS)
 def test_arms_only_bend_without_folding_at_full_thrust(checked, name):
     t = checked[name]["stiffness"]["thrust"]
     assert t["arms_only_motor_deflection_mm"] < 0.5 * ARM_LENGTH_MM[name]
     assert t["arms_only_motor_tilt_deg"] < 45
+
+
+@pytest.fixture(scope="module")
+def carbon_tab_contact():
+    from cogniframe.analysis.joints.contact import tab_contact
+    from cogniframe.analysis.joints.model import joint_kind
+    from cogniframe.design import design
+
+    spec = spec_mod.load(PARAMS / "carbon.yaml")
+    link = next(p for p in design(spec).parts if p.family == "joint" and joint_kind(p) == "core_link")
+    return tab_contact(spec, link)
+
+
+@pytest.mark.slow
+def test_tab_in_one_sided_contact_keeps_most_of_the_tied_hinge(checked, carbon_tab_contact):
+    """The joint FE ties the tab's underside both ways; under thrust part of it lifts off the
+    plate near the corner (the screw head holds only what lies under it). The active-set contact
+    solve keeps 80-95 % of the tied hinge (carbon: 142.6 -> 122.5 N mm/rad, 17 of 38 mm^2 in
+    contact), and the tied hinge is the one check reports."""
+    c = carbon_tab_contact
+    assert c.hinge_tied == pytest.approx(checked["carbon"]["stiffness"]["thrust"]["arms_only_core_link_hinge_n_mm_per_rad"], rel=1e-6)
+    assert 0.05 < c.overstatement < 0.25
+    assert 0.25 * c.underside_mm2 < c.contact_mm2 < 0.75 * c.underside_mm2
+
+
+@pytest.mark.slow
+def test_arms_only_tilt_stays_under_45_deg_with_the_tab_in_contact(checked, carbon_tab_contact):
+    """The tilt with the tab's contact instead of its tie: the link's share of the tilt scales
+    with 1 / hinge, the rods' does not (an upper bound when all of it is scaled)."""
+    t = checked["carbon"]["stiffness"]["thrust"]
+    assert t["arms_only_motor_tilt_deg"] * (1 + carbon_tab_contact.overstatement) < 45
 
 
 # -- survival -------------------------------------------------------------------------------------
@@ -289,8 +318,9 @@ def test_socket_push_pull_solid_fe_is_interface_and_sleeve_shear_in_series():
 @pytest.mark.parametrize("name", PRESETS)
 def test_arms_only_compliance_is_all_in_the_core_link(checked, name):
     """Taken apart: rigid rods leave the bare arms' motor deflection within 2 %; the core links'
-    closed forms (rigid hub on Hetenyi sockets) instead of their solid FE make it 100x smaller;
-    every other joint in closed forms changes nothing. The core link's FE is the whole of it."""
+    closed forms (rigid hub on Hetenyi sockets) instead of their solid FE make it 50x smaller
+    (carbon 118x, bamboo 60x); every other joint in closed forms changes nothing. The core link's
+    FE is nearly the whole of it."""
     from cogniframe.analysis.stiffness import _drop_unconnected, build_model, joint_models
     from cogniframe.design import design
 
@@ -316,9 +346,10 @@ def test_arms_only_compliance_is_all_in_the_core_link(checked, name):
     fe, an = joint_models(spec, d.parts, "fe"), joint_models(spec, d.parts, "analytic")
     links = [n for n in fe if n.startswith("core_link")]
     base = deflection(fe)
-    assert base == pytest.approx(checked[name]["stiffness"]["thrust"]["arms_only_motor_deflection_mm_per_n"], rel=0.02)
+    # check's figure includes the fit's play (2-3 % of it); this model has none
+    assert base == pytest.approx(checked[name]["stiffness"]["thrust"]["arms_only_motor_deflection_mm_per_n"], rel=0.04)
     assert deflection(fe, rigid_rods=True) == pytest.approx(base, rel=0.02)
-    assert deflection({**fe, **{n: an[n] for n in links}}) < base / 100
+    assert deflection({**fe, **{n: an[n] for n in links}}) < base / 50
     assert deflection({**an, **{n: fe[n] for n in links}}) == pytest.approx(base, rel=1e-3)
 
 

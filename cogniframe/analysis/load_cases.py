@@ -277,7 +277,7 @@ def _thrust_case(spec, frame, parts, joints, masses, play=None, full: tuple | No
         out[f"{pre}motor_tilt_deg"] = math.degrees(tilt * per_n_full)
     out["arms_only_small_rotation"] = out["arms_only_motor_tilt_deg"] <= SMALL_ROTATION_DEG
     # the bracket's other end: the joints at printed TPU's datasheet modulus instead of the
-    # calibrated 0.238 of it (the calibration lumps the rod-bore interface's idealisation, which
+    # calibrated fraction of it (the calibration lumps the rod-bore interface's idealisation, which
     # the bare arms' hinge -- bulk TPU bending in the print's layer plane -- does not have)
     from .joints import TPU_PRINTED_MODULUS_FACTOR
 

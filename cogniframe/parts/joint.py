@@ -569,9 +569,74 @@ def _core_link(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarray):
     # (bamboo with joints.fit_clearance 0.22); 0.03 mm above the upper arm's axis it made faces
     # of 1e-6 mm^2 (bamboo, joints.wall 5.48).
     pieces.append(prism(_hull(np.array(backs)), 0.0, _clear_of(max(tops + [z_top]), _levels(socks, r))))
+    pieces.append(_seat(part, arms, socks, r, m, z_top))
     cq = _cq()
     bolt_hole = cq.Solid.makeCylinder(hole_d / 2, t + 2.0, vec(bolt + e_v * (v0 - 1.0)), vec(e_v))
-    return finish(above_bed(fuse_all(pieces)), [socket_cutter(s) for s in socks] + [bolt_hole])
+    return finish(above_bed(fuse_all(pieces)), [socket_cutter(s) for s in socks] + [bolt_hole, _esc_keepout(part, m)])
+
+
+def _esc_keepout(part: PartSpec, m: np.ndarray):
+    """The room under the ESC board (its footprint, from 0.5 mm under the board up), in print
+    coordinates: where a small plate brings the tab under the board's corner, the tab is cut
+    down to clear it."""
+    c = np.asarray(part.param("esc_keepout"), float)
+    h = float(part.param("esc_half"))
+    square = [c[:2] + np.array([sx, sy]) * h for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+    return apply(prism(square, float(c[2]), float(c[2]) + 100.0), m)
+
+
+def seat_geometry(part: PartSpec):
+    """The plate corner a core link seats against, in its local frame: (corner xy, signs (sx,
+    sy) pointing out of the plate, plate bottom z, plate top z), or None (a part without the
+    `plate_corner` param). The plate is {sx (x - cx) <= 0, sy (y - cy) <= 0, z0 <= z <= z1}."""
+    params = dict(part.params)
+    if "plate_corner" not in params:
+        return None
+    c = np.asarray(params["plate_corner"], float)[:2]
+    b = np.asarray(params["bolt_hole"], float)[:2]  # inside the plate
+    sign = np.sign(c - b)
+    z1 = float(params["plate_top_z"])
+    return c, sign, -z1, z1  # the link's node lies at the plate's mid-height
+
+
+def _seat(part: PartSpec, arms: list[PSocket], socks: list[PSocket], r: float, m: np.ndarray, cap: float):
+    """The seat: TPU filling the gap between the arm block's back and the core plate's two edge
+    faces, over the plate's thickness and the block's width, up to the tab (print coordinates).
+    Without it the arm block meets the core only through the 3 mm tab, which hangs past the
+    plate corner over air (a ~4 mm gap between the hub and the plate's edges at plate level):
+    the seat makes the block + tab junction a section 2 plate thicknesses deep from the block to
+    the plate edge, and leaves the tab's underside only where it lies on the plate. Its faces on
+    the plate edge bear under the whole frame's payload / landing and open under thrust, so the
+    joint FE leaves them free (docs/stiffness-model.md)."""
+    geo = seat_geometry(part)
+    if geo is None:
+        return None
+    cq = _cq()
+    c, sign, z0, z1 = geo
+    rot, o = m[:3, :3], m[:3, 3]
+    a = arms[0]
+    d_loc = rot.T @ a.direction
+    e_in = -np.array([d_loc[0], d_loc[1]]) / np.hypot(d_loc[0], d_loc[1])  # horizontal, toward the core
+    e_w = np.array([-e_in[1], e_in[0]])
+    ports = [rot.T @ (s.port - o) for s in arms]
+    backs = [p + (rot.T @ s.direction) * (s.seat - part.wall) for p, s in zip(ports, arms)]
+    u_b = min(float(b[:2] @ e_in) for b in backs) - 1.0  # 1 mm into the block
+    w_half = max(abs(float(p[:2] @ e_w)) for p in ports) + r + 1.0  # past the block both sides: trimmed below
+    u_far = float(c @ e_in) + w_half + 1.0
+    quad = [e_in * u_b - e_w * w_half, e_in * u_far - e_w * w_half, e_in * u_far + e_w * w_half, e_in * u_b + e_w * w_half]
+    # up into the tab by 1 mm: a seat top in the tab's underside plane left faces of 5e-5 mm^2
+    # (the two planes built along different paths agree only to round-off)
+    body = apply(prism(quad, z0, z1 + 1.0), m)
+    big = 200.0
+    plate = apply(prism([c, c - np.array([sign[0], 0.0]) * big, c - sign * big, c - np.array([0.0, sign[1]]) * big],
+                        z0 - 1.0, z1 + 1.0), m)
+    # In print the block's width is vertical: from the bed to the tab's top (`cap`: the seat is as
+    # wide as the tab it deepens; wider, it weighs more than it stiffens), at most to the top of
+    # the highest sleeve less half a millimetre (clear of the round top's tangent line and of the
+    # sleeves' levels).
+    top = _clear_of(min(cap, max(float(s.port[2]) for s in arms) + r - 0.5), _levels(socks, r))
+    clip = cq.Solid.makeBox(2 * big, 2 * big, top, cq.Vector(-big, -big, 0.0))
+    return body.cut(plate).intersect(clip)
 
 
 def _clear_of(z: float, levels, gap: float = TAB_CLEAR) -> float:

@@ -6,7 +6,8 @@ knee's slotted living hinge); `meshing` turns it into gmsh tetrahedra and `solid
 scikit-fem quadratic elasticity onto rigid bodies. This module picks those bodies' surfaces:
 each rod is tied to its bore wall and socket bottom through the elastic interface layer
 (`model.interface`); the support body is tied stiffly to the pad (floor) or to the bolt hole and
-the tab's underside (core plate). It also holds the mesh settings, which are part of the joint
+the tab's underside where it lies on the plate (core plate; `contact.py` measures what tying it
+both ways overstates under thrust). It also holds the mesh settings, which are part of the joint
 cache key.
 """
 
@@ -14,6 +15,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -41,11 +43,42 @@ def fe_joint(spec, part, factor: float | None = None, mesh_mm: float | None = No
 
 
 def _fe_joint(spec, part, factor: float | None, mesh_mm: float | None) -> JointStiffness:
+    from . import solid_fe
+
+    t0 = time.perf_counter()
+    pb = joint_problem(spec, part, factor, mesh_mm)
+    c = solid_fe.condense(pb.points, pb.tets, pb.e, pb.nu, list(pb.ties))
+    # back to the part's local frame: u_print = R u_local
+    T = np.kron(np.eye(len(pb.ties)), _block_rot(pb.rotation))
+    K = T.T @ c.K @ T
+    K = 0.5 * (K + K.T)
+    return JointStiffness(part.name, "fe", pb.labels, pb.refs, tuple(map(tuple, K.tolist())), c.n_dofs,
+                          time.perf_counter() - t0)
+
+
+@dataclass(frozen=True)
+class JointProblem:
+    """A joint's solid FE before condensation: the mesh (print coordinates), the material and
+    the ties, with the print-from-local rotation and offset and the ties' labels and reference
+    points in the part's local frame."""
+
+    points: np.ndarray
+    tets: np.ndarray
+    e: float
+    nu: float
+    ties: tuple
+    rotation: np.ndarray
+    offset: np.ndarray
+    labels: tuple[str, ...]
+    refs: tuple
+
+
+def joint_problem(spec, part, factor: float | None = None, mesh_mm: float | None = None) -> JointProblem:
+    """Mesh the part's CAD and pick the tied surfaces (see the module docstring)."""
     from . import meshing, solid_fe
     from ...parts.shapes import brep_text, shared_brep
     from ...parts import joint as joint_cad
 
-    t0 = time.perf_counter()
     mesh_mm = FE_MESH_MM if mesh_mm is None else mesh_mm
     itf = interface(spec, factor)
     m = joint_cad.print_from_local(part)
@@ -89,25 +122,24 @@ def _fe_joint(spec, part, factor: float | None, mesh_mm: float | None) -> JointS
         axis = R @ np.array([0.0, 0.0, 1.0])
         r_hole = float(part.param("screw_clearance")) / 2
         z0 = float(part.param("plate_top_z"))
+        corner, sign, _, _ = joint_cad.seat_geometry(part)
 
         def sel_bolt(c, n, bolt=bolt, axis=axis):
             rel = c - bolt[:, None]
             t = axis @ rel
             radial = np.linalg.norm(rel - np.outer(axis, t), axis=0)
             hole = np.abs(radial - r_hole) < tol
-            # the tab's underside on the plate: local z = plate_top_z, facing down (local -z)
+            # the tab's underside where it lies on the plate: local z = plate_top_z, facing down
+            # (local -z), inside the plate corner; the seat's faces on the plate's edges stay free
+            # (they open under thrust)
             zl = axis @ (c - o[:, None])
-            under = (np.abs(zl - z0) < 1e-3) & ((axis @ n) < -0.99)
+            cl = R.T @ (c - o[:, None])
+            on = (sign[0] * (cl[0] - corner[0]) < 1e-3) & (sign[1] * (cl[1] - corner[1]) < 1e-3)
+            under = (np.abs(zl - z0) < 1e-3) & ((axis @ n) < -0.99) & on
             return hole | under
 
         ties.append(solid_fe.Tie("body", sel_bolt, tuple(o), _TIE_STIFF * itf.e, _TIE_STIFF * itf.e))
     if _has_body(part):
         labels += ("body",)
-    c = solid_fe.condense(pts, tets, itf.e, _nu(itf.e, itf.g), ties)
-    # back to the part's local frame: u_print = R u_local
-    T = np.kron(np.eye(len(ties)), _block_rot(R))
-    K = T.T @ c.K @ T
     refs = refs_local + ([(0.0, 0.0, 0.0)] if _has_body(part) else [])
-    K = 0.5 * (K + K.T)
-    return JointStiffness(part.name, "fe", labels, tuple(refs), tuple(map(tuple, K.tolist())), c.n_dofs,
-                          time.perf_counter() - t0)
+    return JointProblem(pts, tets, itf.e, _nu(itf.e, itf.g), tuple(ties), R, o, labels, tuple(refs))

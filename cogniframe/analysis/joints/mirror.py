@@ -54,7 +54,7 @@ def reflection(original, part) -> tuple[np.ndarray, tuple[int, ...]]:
         raise ValueError(f"{part.name} and {original.name} are not the same kind of joint")
     if part.wall != original.wall:
         raise ValueError(f"walls differ ({part.wall} / {original.wall} mm)")
-    skip = ("mirror", "kind", "bolt_hole")
+    skip = ("mirror", "kind", "bolt_hole", "plate_corner", "esc_keepout")
     p_par = {k: v for k, v in part.params if k not in skip}
     o_par = {k: v for k, v in original.params if k not in skip}
     if p_par != o_par:
@@ -90,10 +90,11 @@ def reflection(original, part) -> tuple[np.ndarray, tuple[int, ...]]:
     ez = np.array([0.0, 0.0, 1.0])
     if np.abs(P @ ez - ez).max() > 1e-9:
         raise ValueError("the mirror plane is not vertical")
-    holes = [dict(x.params).get("bolt_hole") for x in (original, part)]
-    if holes != [None, None]:
-        if None in holes or np.abs(P @ np.asarray(holes[0], float) - np.asarray(holes[1], float)).max() > MIRROR_TOL:
-            raise ValueError("the bolt hole is not the mirror image of the original's")
+    for key in ("bolt_hole", "plate_corner", "esc_keepout"):
+        holes = [dict(x.params).get(key) for x in (original, part)]
+        if holes != [None, None]:
+            if None in holes or np.abs(P @ np.asarray(holes[0], float) - np.asarray(holes[1], float)).max() > MIRROR_TOL:
+                raise ValueError(f"the {key.replace('_', ' ')} is not the mirror image of the original's")
     mo, mp = print_from_local(original), print_from_local(part)
     Q = mp[:3, :3] @ P @ mo[:3, :3].T  # print(part) = Q print(original)
     keeps_bed = np.abs(Q[:, 2] - ez).max() < 1e-9 and np.abs(Q[2, :] - ez).max() < 1e-9
