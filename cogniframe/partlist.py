@@ -370,21 +370,34 @@ def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict |
     return Estimate(vol, a_h, a_v, (env[2], env[1], env[0]))
 
 
+def link_plate_corner(params: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The plate corner a core link seats against, in the link's local frame (x, y), and the
+    signs (sx, sy) pointing out of the plate: the plate is {sx (x - cx) <= 0, sy (y - cy) <= 0}."""
+    corner = np.asarray(params["plate_corner"], float)[:2]
+    return corner, np.sign(corner - np.asarray(params["bolt_hole"], float)[:2])  # the bolt is inside the plate
+
+
+def seat_plan(params: dict, ports, d: np.ndarray, s_back: float, r: float) -> list[np.ndarray]:
+    """A core link's seat in plan, in its local frame, before the plate's corner is cut out and the
+    print height clips it: the quadrilateral from 1 mm inside the arm block's back (the arm
+    `ports`, direction `d`, sockets' backs `s_back` out) to past the plate corner, a millimetre
+    past the block's width on both sides."""
+    corner, _ = link_plate_corner(params)
+    e_in = -np.array([d[0], d[1]]) / np.hypot(d[0], d[1])  # horizontal, toward the core
+    e_w = np.array([-e_in[1], e_in[0]])
+    u_b = min(float((np.asarray(p) + d * s_back)[:2] @ e_in) for p in ports) - 1.0
+    w_half = max(abs(float(np.asarray(p)[:2] @ e_w)) for p in ports) + r + 1.0
+    u_far = float(corner @ e_in) + w_half + 1.0
+    return [e_in * u_b - e_w * w_half, e_in * u_far - e_w * w_half, e_in * u_far + e_w * w_half, e_in * u_b + e_w * w_half]
+
+
 def _seat_area(params: dict, ports: np.ndarray, heights: np.ndarray, d: np.ndarray, s_back: float, r: float,
                height: float) -> float:
-    """Plan area (mm^2) of a core link's seat as parts/joint.py builds it: from 1 mm inside the arm
-    block's back to past the plate corner, the block's width across, less the plate's corner
-    quadrant, from the bed up to `height` in print (the arm pair's two `ports` print at
-    `heights`: print height runs across the pair)."""
-    corner = np.asarray(params.get("plate_corner", (0.0, 0.0, 0.0)), float)[:2]
-    bolt = np.asarray(params.get("bolt_hole", (0.0, 0.0, 0.0)), float)[:2]
-    sign = np.sign(corner - bolt)
-    e_in = -d[:2] / np.hypot(d[0], d[1])
-    e_w = np.array([-e_in[1], e_in[0]])
-    u_b = min(float((p[:2] + d[:2] * s_back) @ e_in) for p in ports) - 1.0
-    w_half = max(abs(float(p[:2] @ e_w)) for p in ports) + r + 1.0
-    u_far = float(corner @ e_in) + w_half + 1.0
-    quad = [e_in * u_b - e_w * w_half, e_in * u_far - e_w * w_half, e_in * u_far + e_w * w_half, e_in * u_b + e_w * w_half]
+    """Plan area (mm^2) of a core link's seat as parts/joint.py builds it (`seat_plan`, less the
+    plate's corner quadrant), from the bed up to `height` in print (the arm pair's two `ports`
+    print at `heights`: print height runs across the pair)."""
+    corner, sign = link_plate_corner(params)
+    quad = seat_plan(params, ports, d, s_back, r)
     across = ports[1, :2] - ports[0, :2]
     g = across * (heights[1] - heights[0]) / float(across @ across)  # print height per mm in plan
     h0 = float(heights[0] - ports[0, :2] @ g)  # print height = h0 + p . g

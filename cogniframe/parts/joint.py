@@ -43,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..frame import HINGE_GAP
-from ..partlist import PARALLEL_TOL, PartSpec
+from ..partlist import PARALLEL_TOL, PartSpec, link_plate_corner, seat_plan
 
 CHAMFER = 0.5  # mm, 45 deg, at every socket mouth
 JOIN = 0.4  # mm, least overlap of the knee's rigid leg sleeve with the arm block, each way (one 0.4 mm line)
@@ -587,43 +587,27 @@ def _esc_keepout(part: PartSpec, m: np.ndarray):
 
 def seat_geometry(part: PartSpec):
     """The plate corner a core link seats against, in its local frame: (corner xy, signs (sx,
-    sy) pointing out of the plate, plate bottom z, plate top z), or None (a part without the
-    `plate_corner` param). The plate is {sx (x - cx) <= 0, sy (y - cy) <= 0, z0 <= z <= z1}."""
+    sy) pointing out of the plate, plate bottom z, plate top z). The plate is
+    {sx (x - cx) <= 0, sy (y - cy) <= 0, z0 <= z <= z1}."""
     params = dict(part.params)
-    if "plate_corner" not in params:
-        return None
-    c = np.asarray(params["plate_corner"], float)[:2]
-    b = np.asarray(params["bolt_hole"], float)[:2]  # inside the plate
-    sign = np.sign(c - b)
+    c, sign = link_plate_corner(params)
     z1 = float(params["plate_top_z"])
     return c, sign, -z1, z1  # the link's node lies at the plate's mid-height
 
 
 def _seat(part: PartSpec, arms: list[PSocket], socks: list[PSocket], r: float, m: np.ndarray, cap: float):
     """The seat: TPU filling the gap between the arm block's back and the core plate's two edge
-    faces, over the plate's thickness and the block's width, up to the tab (print coordinates).
-    Without it the arm block meets the core only through the 3 mm tab, which hangs past the
-    plate corner over air (a ~4 mm gap between the hub and the plate's edges at plate level):
-    the seat makes the block + tab junction a section 2 plate thicknesses deep from the block to
+    faces, over the plate's thickness, up to the tab (print coordinates). Without it the arm
+    block meets the core only through the tab, which crosses a ~4 mm gap to the plate's edges over
+    air: the seat makes the block + tab junction the plate's thickness deeper from the block to
     the plate edge, and leaves the tab's underside only where it lies on the plate. Its faces on
     the plate edge bear under the whole frame's payload / landing and open under thrust, so the
     joint FE leaves them free (docs/stiffness-model.md)."""
-    geo = seat_geometry(part)
-    if geo is None:
-        return None
     cq = _cq()
-    c, sign, z0, z1 = geo
+    c, sign, z0, z1 = seat_geometry(part)
     rot, o = m[:3, :3], m[:3, 3]
-    a = arms[0]
-    d_loc = rot.T @ a.direction
-    e_in = -np.array([d_loc[0], d_loc[1]]) / np.hypot(d_loc[0], d_loc[1])  # horizontal, toward the core
-    e_w = np.array([-e_in[1], e_in[0]])
-    ports = [rot.T @ (s.port - o) for s in arms]
-    backs = [p + (rot.T @ s.direction) * (s.seat - part.wall) for p, s in zip(ports, arms)]
-    u_b = min(float(b[:2] @ e_in) for b in backs) - 1.0  # 1 mm into the block
-    w_half = max(abs(float(p[:2] @ e_w)) for p in ports) + r + 1.0  # past the block both sides: trimmed below
-    u_far = float(c @ e_in) + w_half + 1.0
-    quad = [e_in * u_b - e_w * w_half, e_in * u_far - e_w * w_half, e_in * u_far + e_w * w_half, e_in * u_b + e_w * w_half]
+    quad = seat_plan(dict(part.params), [rot.T @ (s.port - o) for s in arms], rot.T @ arms[0].direction,
+                     arms[0].seat - part.wall, r)
     # up into the tab by 1 mm: a seat top in the tab's underside plane left faces of 5e-5 mm^2
     # (the two planes built along different paths agree only to round-off)
     body = apply(prism(quad, z0, z1 + 1.0), m)

@@ -51,16 +51,8 @@ def tab_contact(spec, part, factor: float | None = None) -> TabContact:
     arms = [i for i, lab in enumerate(pb.labels) if "arm" in lab]
     others = [i for i in range(len(ties)) if i not in arms and i != body]
 
-    # boundary facets: centroids, outward unit normals, areas (print coordinates)
     mesh = MeshTet(pb.points, pb.tets)
-    bf = mesh.boundary_facets()
-    fv = mesh.p[:, mesh.facets[:, bf]]
-    cen = fv.mean(axis=1)
-    nrm = np.cross((fv[:, 1] - fv[:, 0]).T, (fv[:, 2] - fv[:, 0]).T).T
-    area = 0.5 * np.linalg.norm(nrm, axis=0)
-    nrm /= 2 * area
-    inner = mesh.p[:, mesh.t[:, mesh.f2t[0, bf]]].sum(axis=1) - fv.sum(axis=1)
-    nrm *= np.where(np.einsum("ij,ij->j", cen - inner, nrm) < 0, -1.0, 1.0)
+    bf, cen, nrm, area = solid_fe.boundary_facets(mesh)  # print coordinates
 
     axis = R @ np.array([0.0, 0.0, 1.0])
     z0 = float(part.param("plate_top_z"))
@@ -93,7 +85,8 @@ def tab_contact(spec, part, factor: float | None = None) -> TabContact:
             return mask
 
         ties[body] = dataclasses.replace(ties[body], select=sel)
-        c = solid_fe.condense(pb.points, pb.tets, pb.e, pb.nu, ties)
+        sysm = solid_fe.assemble(pb.points, pb.tets, pb.e, pb.nu, ties)  # condensed, then the motion recovered from it
+        c = solid_fe.condense_system(sysm, ties)
         a = [6 * i + k for i in arms for k in range(6)]
         b = [6 * i + k for i in others for k in range(6)]
         K = c.K
@@ -113,7 +106,6 @@ def tab_contact(spec, part, factor: float | None = None) -> TabContact:
             ur[6 * i:6 * i + 6] = pair[6 * j:6 * j + 6]
         for j, i in enumerate(others):
             ur[6 * i:6 * i + 6] = q[6 + 6 * j:12 + 6 * j]
-        sysm = solid_fe.assemble(pb.points, pb.tets, pb.e, pb.nu, ties)
         u = sla.spsolve(sysm.Kuu().tocsc(), -(sysm.Kur @ ur))
         U = u.reshape(-1, 3)[:pb.points.shape[1]].T
         into = np.einsum("ij,ij->j", U[:, mesh.facets[:, bf]].mean(axis=1), nrm)  # > 0: into the plate

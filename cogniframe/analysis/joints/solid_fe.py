@@ -75,7 +75,11 @@ def condense(points: np.ndarray, tets: np.ndarray, e_mpa: float, nu: float, ties
     matrix's lower triangle is written once, directly in the nested-dissection order the
     factorization uses (`_lower_triplets`). `tests/test_joint_fe_assembly.py` checks it against skfem's own
     BilinearForm / LinearForm assembly (benchmarks/bench_joint_fe.py times it)."""
-    sysm = assemble(points, tets, e_mpa, nu, ties)
+    return condense_system(assemble(points, tets, e_mpa, nu, ties), ties)
+
+
+def condense_system(sysm: System, ties: list[Tie]) -> Condensed:
+    """`condense` of a system already assembled with these ties."""
     iperm = _nd_order_points(sysm.rows, sysm.cols, sysm.blocks, sysm.n_points)
     lower = _lower_triplets(sysm.rows, sysm.cols, sysm.blocks, iperm)
     perm = (3 * np.argsort(iperm)[:, None] + np.arange(3)[None, :]).ravel()  # new DOF -> old DOF
@@ -107,6 +111,24 @@ class System:
         return _csc_blocks(*_mirror(self.rows, self.cols, self.blocks), np.arange(self.n_points), self.n_points)
 
 
+def boundary_facets(mesh):
+    """The skfem mesh's boundary facets: (indices, centroids (3, n), outward unit normals (3, n),
+    areas (n,))."""
+    bf = mesh.boundary_facets()
+    fv = mesh.p[:, mesh.facets[:, bf]]  # (3, 3 vertices, nbf)
+    cen = fv.mean(axis=1)
+    nrm = np.cross((fv[:, 1] - fv[:, 0]).T, (fv[:, 2] - fv[:, 0]).T).T
+    norm = np.linalg.norm(nrm, axis=0)
+    nrm /= norm
+    # outward: skfem stores a facet's vertices sorted by number, so the cross product's sign is
+    # arbitrary (a selection by "facing down" took a mesh-dependent half of the core link's tab
+    # underside, and a mirror image of a joint got another half); flip away from the vertex of
+    # the facet's tetrahedron that is not on it
+    opp = mesh.p[:, mesh.t[:, mesh.f2t[0, bf]]].sum(axis=1) - fv.sum(axis=1)
+    nrm *= np.where(np.einsum("ij,ij->j", cen - opp, nrm) < 0, -1.0, 1.0)
+    return bf, cen, nrm, 0.5 * norm
+
+
 def assemble(points: np.ndarray, tets: np.ndarray, e_mpa: float, nu: float, ties: list[Tie]) -> System:
     """K_uu, K_ur, K_rr of the mesh and its ties (see `condense`)."""
     from skfem import ElementTetP2, FacetBasis, MeshTet
@@ -118,17 +140,7 @@ def assemble(points: np.ndarray, tets: np.ndarray, e_mpa: float, nu: float, ties
     n_dofs = 3 * npts
     blocks = [_elasticity_blocks(mesh, elem, *lame_parameters(e_mpa, nu))]
 
-    bf = mesh.boundary_facets()
-    fv = mesh.p[:, mesh.facets[:, bf]]  # (3, 3 vertices, nbf)
-    cen = fv.mean(axis=1)
-    nrm = np.cross((fv[:, 1] - fv[:, 0]).T, (fv[:, 2] - fv[:, 0]).T).T
-    nrm /= np.linalg.norm(nrm, axis=0)
-    # outward: skfem stores a facet's vertices sorted by number, so the cross product's sign is
-    # arbitrary (a selection by "facing down" took a mesh-dependent half of the core link's tab
-    # underside, and a mirror image of a joint got another half); flip away from the vertex of
-    # the facet's tetrahedron that is not on it
-    opp = mesh.p[:, mesh.t[:, mesh.f2t[0, bf]]].sum(axis=1) - fv.sum(axis=1)
-    nrm *= np.where(np.einsum("ij,ij->j", cen - opp, nrm) < 0, -1.0, 1.0)
+    bf, cen, nrm, _ = boundary_facets(mesh)
 
     nr = 6 * len(ties)
     Krr = np.zeros((nr, nr))
