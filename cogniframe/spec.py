@@ -62,7 +62,7 @@ class JointsSection(_M):
     wall: Annotated[float, Field(ge=0.8, le=6, description="wall around every rod socket, mm")] = 1.6
     socket_depth: Annotated[float, Field(ge=4, le=40, description="how deep a rod goes into its socket, mm")] = 10
     seat: Annotated[float, Field(ge=0, le=20, description="minimum distance from a joint's centre to a socket bottom, mm (raised automatically where sockets meet at sharp angles)")] = 3.0
-    fit_clearance: dict[str, Annotated[float, Field(ge=-0.3, le=1.0)]] = Field(
+    fit_clearance: dict[str, Annotated[float, Field(ge=-0.4, le=1.0)]] = Field(
         default_factory=lambda: {"tpu_95a": 0.1},
         description="socket hole = rod diameter + this, per joint material, mm; tune with `cogniframe coupon`",
     )
