@@ -285,10 +285,13 @@ def test_fit_kv_predict_gives_logger_peaks_and_keeps_the_fit():
     # the filtered model peak at 100 cm, as the logger sees it: the mean pulse, under the measured 127.4 G median
     assert d["predictions"][0]["peak_g"] == pytest.approx(model_accel_g(0.241, d["c_n_s_per_m"], d["k_n_per_m"], 100, 120).max(), abs=0.006)
     assert d["predictions"][0]["peak_g"] < 127.4
-    # one drop, scatter learnt from the 50 cm drops: 139.3 / 161.9 G against the measured 127.4 / 157.2 G
-    assert d["predictions"][0]["peak_g_drop_median"] == pytest.approx(139.3, abs=1.5)
-    assert d["predictions"][0]["peak_g_drop_p90"] == pytest.approx(161.9, abs=1.5)
+    # one drop, scatter learnt from the 50 cm drops: 126.2 / 158.5 G against the measured 127.4 / 157.2 G;
+    # 154.5 G at 150 cm against the paper's 136.7 G (docs/impact-model.md, "Peaks across heights")
+    assert d["predictions"][0]["peak_g_drop_median"] == pytest.approx(126.2, abs=1.5)
+    assert d["predictions"][0]["peak_g_drop_p90"] == pytest.approx(158.5, abs=1.5)
+    assert d["predictions"][1]["peak_g_drop_median"] == pytest.approx(154.5, abs=2.0)
     assert d["single_drop"]["heights"][0]["measured"]["p50"] == pytest.approx(89.7, abs=0.01)
+    assert d["single_drop"]["tilt_sigma_deg"] == 0.0 and d["single_drop"]["spin_sigma_deg_s"] > 0.0
 
 
 def test_fit_nonlinear_predict_json():
@@ -299,7 +302,7 @@ def test_fit_nonlinear_predict_json():
     assert d["contact_k_n_per_m"] > 10 * d["k_n_per_m"]  # the floor contact is much stiffer than the frame
     (p,) = d["predictions"]
     assert p["height_cm"] == 100 and 40 < p["peak_g"] < 127.4 and p["strikes"] is False
-    assert p["peak_g_drop_median"] == pytest.approx(138.8, abs=1.5) and p["peak_g_drop_p90"] == pytest.approx(173.4, abs=2.0)
+    assert p["peak_g_drop_median"] == pytest.approx(125.8, abs=1.5) and p["peak_g_drop_p90"] == pytest.approx(163.1, abs=2.0)
 
 
 def test_fit_nonlinear_table_and_bad_model():

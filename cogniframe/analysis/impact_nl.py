@@ -201,8 +201,8 @@ def predict(model: str, m: float, c: float, k: float, heights_cm, clearance_mm: 
 
 # Which model `check` uses for peak G: the one with the smaller errors predicting the 100 cm
 # single-drop median and 90th percentile from a fit on 50 cm alone (tests/test_single_drop.py
-# re-derives it; docs/impact-model.md): Kelvin-Voigt 139.3 / 161.9 G (+9.3 / +3.0 %), two-mass
-# 138.8 / 173.4 G (+8.9 / +10.3 %) against 127.4 / 157.2 G. Its mean pulse is also the closer
+# re-derives it; docs/impact-model.md): Kelvin-Voigt 126.2 / 158.5 G (-0.9 / +0.8 %), two-mass
+# 125.8 / 163.1 G (-1.2 / +3.8 %) against 127.4 / 157.2 G. Its mean pulse is also the closer
 # one (68.2 G against 65.8 G; the measured mean trace peaks at 75.1 G).
 BEST_MODEL = "kelvin-voigt"
 
@@ -216,7 +216,8 @@ def design_peaks(m: float, k: float, c: float, m_exo: float, heights_cm, clearan
 
     return {"model": BEST_MODEL, "lowpass_rad_per_s": 500.0,
             "validation": "fit on the paper's 50 cm drops: the mean pulse predicts the 100 cm median peak 46 % low; "
-                          "the single-drop median 9 % high, its 90th percentile 3 % high (docs/impact-model.md)",
+                          "the single-drop median 1 % low, its 90th percentile 1 % high; the paper's 150 cm median "
+                          "13 % high (docs/impact-model.md)",
             "single_drop": {**PAPER_SCATTER.to_dict(), "learnt_from": "paper's 50 cm drops (101 trials)",
                             "footprint_mm": list(footprint_mm) if footprint_mm else None},
             "heights": predict(BEST_MODEL, m, c, k, heights_cm, clearance_mm, m_exo=m_exo,

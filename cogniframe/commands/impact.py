@@ -385,7 +385,8 @@ def _print_predictions(out, predictions: list[dict], scatter=None) -> None:
     if scatter is not None:
         s = scatter.scatter
         out.print(f"single-drop scatter learnt from these drops: mount {s.mount_hz:.0f} Hz, damping {s.mount_zeta:.3f}, "
-                  f"touch-down tilt {s.tilt_sigma_deg:.2f} deg (Rayleigh scale)")
+                  f"release spin {s.spin_sigma_deg_s:.2f} deg/s (Rayleigh scale; a tilt of "
+                  f"{s.tilt_scale_deg(100.0):.2f} deg at touch-down from 100 cm)")
 
 
 def _fit_nonlinear(heights_data, mass_kg, exo_mass_kg, lowpass, loss, predict, clearance_mm, as_json, k_static) -> None:
