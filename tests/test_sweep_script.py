@@ -59,7 +59,7 @@ def test_main_guard_is_read_from_the_script_at_the_calling_line(tmp_path, monkey
     is guarded, one before it is not."""
     import types
 
-    from cogniframe.sweep.run import unguarded_main_script
+    from cogniframe.runtime.mainguard import unguarded_main_script
 
     script = tmp_path / "m.py"
     script.write_text("x = 1\n"               # line 1: top level
@@ -104,3 +104,17 @@ def test_readme_python_example_runs_as_written(tmp_path):
     assert (tmp_path / "out" / "carbon-4mm" / "report.html").is_file()
     assert (tmp_path / "out" / "sweeps" / "carbon" / "results.parquet").is_file()
     assert f"{script}:8: UserWarning" in r.stderr  # the sweep's line: checked in this process, and said so
+
+
+def test_unguarded_build_without_the_cad_server_is_refused_with_the_fix(tmp_path):
+    """Without the CAD server a build's CAD workers come from forkserver, which runs the script again:
+    refused before anything is written, naming the script's line and the two fixes."""
+    script = tmp_path / "build.py"
+    script.write_text("import cogniframe as cf\n"
+                      f"cf.load({str(ROOT / 'params' / 'carbon.yaml')!r}).build('out/x')\n", encoding="utf-8")
+    env = {**os.environ, "COGNIFRAME_CAD_SERVER": "0"}
+    r = _run(script, timeout=300, env=env)
+    assert r.returncode == 1
+    assert f"{script}, line 2: this build runs at the script's top level" in r.stderr
+    assert "COGNIFRAME_CAD_SERVER=0" in r.stderr and 'if __name__ == "__main__":' in r.stderr
+    assert not (tmp_path / "out").exists()

@@ -16,9 +16,9 @@ threads). The base params travel inside each task; workers never read the client
 Dask starts its worker processes with multiprocessing's spawn, and a spawned process first runs
 the main script again (as `__mp_main__`). A script that calls `cf.sweep(...)` at its top level,
 outside `if __name__ == "__main__":`, would start a sweep in every worker while it boots ("Nanny
-failed to start"). So when the sweep is called from such a place (`unguarded_main_script`), the
+failed to start"). So when the sweep is called from such a place, the
 local cluster is one worker thread in this process instead, and a warning says how to get the
-worker processes back. Guarded scripts, the CLI, `python -m`, notebooks and REPLs get processes.
+worker processes back (`runtime.mainguard`). Guarded scripts, the CLI, `python -m`, notebooks and REPLs get processes.
 """
 
 from __future__ import annotations
@@ -202,6 +202,8 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[tuple[ob
         finally:
             client.close()
         return
+    from ..runtime.mainguard import unguarded_main_script
+
     where = unguarded_main_script()
     if where is not None:
         import warnings
@@ -236,48 +238,6 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[tuple[ob
     finally:
         client.close()
         cluster.close()
-
-
-def unguarded_main_script(frame=None) -> tuple[str, int] | None:
-    """The main script's path and line when the sweep is being started from its top-level code outside
-    `if __name__ == "__main__":` (the code a spawned worker process runs again); else None.
-
-    None too where spawn runs nothing again: no main file (REPL, Jupyter), a package's `__main__`
-    run with `python -m` (multiprocessing skips those), or no top-level frame of the main script on
-    the stack (then it cannot be told, and the sweep keeps its worker processes)."""
-    import ast
-
-    main = sys.modules.get("__main__")
-    path = getattr(main, "__file__", None)
-    spec = getattr(main, "__spec__", None)
-    if main is None or path is None or (spec is not None and spec.name.rpartition(".")[2] == "__main__"):
-        return None
-    f = frame or sys._getframe(1)
-    while f is not None and not (f.f_globals is main.__dict__ and f.f_code.co_name == "<module>"):
-        f = f.f_back
-    if f is None:
-        return None
-    try:
-        tree = ast.parse(Path(path).read_text(encoding="utf-8"))
-    except (OSError, SyntaxError, ValueError):
-        return None
-    line = f.f_lineno
-    for node in tree.body:
-        if isinstance(node, ast.If) and _is_main_test(node.test) and node.lineno <= line <= (node.end_lineno or line):
-            return None
-    return path, line
-
-
-def _is_main_test(test) -> bool:
-    """`__name__ == "__main__"` (either way round)."""
-    import ast
-
-    if not (isinstance(test, ast.Compare) and len(test.ops) == 1 and isinstance(test.ops[0], ast.Eq)):
-        return False
-    sides = [test.left, test.comparators[0]]
-    names = [s.id for s in sides if isinstance(s, ast.Name)]
-    consts = [s.value for s in sides if isinstance(s, ast.Constant)]
-    return names == ["__name__"] and consts == ["__main__"]
 
 
 def _has_n_workers(client) -> bool:
