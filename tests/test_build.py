@@ -155,3 +155,22 @@ def test_build_runs_the_clash_check_and_reports_flight(built):
     spec = spec_mod.load(ROOT / "params" / f"{name}.yaml")
     n = len(vitamins(spec, frame_mod.build(spec)))
     assert f"{n} vitamins" in (out / "report.html").read_text(encoding="utf-8")
+
+
+def test_plates_are_prusaslicer_3mf_that_lib3mf_loads(built):
+    """The presets' printers (no preset slicer but PrusaSlicer) get PrusaSlicer's 3MF, with its settings
+    inside; every plate loads in lib3mf with manifold, oriented meshes and unique ids."""
+    import zipfile
+
+    from threemf import check_3mf
+
+    _, out, _ = built
+    plates = sorted((out / "plates").glob("*.3mf"))
+    assert plates
+    for p in plates:
+        counts = check_3mf(p)
+        assert counts["items"] > 0
+        with zipfile.ZipFile(p) as z:
+            names = z.namelist()
+        assert "Metadata/Slic3r_PE.config" in names and "Metadata/Slic3r_PE_model.config" in names
+        assert "Metadata/model_settings.config" not in names

@@ -23,9 +23,16 @@ SCHEMA = PKG / "data" / "params.schema.json"
 def test_preset_tables_build_volumes_from_the_makers_specs():
     # The makers' published build volumes (mm) and stock nozzles; sources in cogniframe/data/printers.yaml.
     expected = {"monoprice_mini_v2": (120, 120, 120), "prusa_mini": (180, 180, 180), "bambu_a1_mini": (180, 180, 180),
-                "ender3": (220, 220, 250), "prusa_mk4": (250, 210, 220)}
+                "ender3": (220, 220, 250), "prusa_mk4": (250, 210, 220),
+                # Bambu Lab's A1, P1S / P1P and X1-Carbon specification pages: 256 x 256 x 256 mm
+                "bambu_a1": (256, 256, 256), "bambu_p1s": (256, 256, 256), "bambu_p1p": (256, 256, 256),
+                "bambu_x1c": (256, 256, 256)}
     assert {k: p.bed for k, p in PRINTERS.items()} == expected
     assert {p.nozzle for p in PRINTERS.values()} == {0.4}
+    # the Bambu Lab machines' plates are for Bambu Studio (OrcaSlicer reads the same files); the others PrusaSlicer
+    assert {k for k, p in PRINTERS.items() if p.slicer == "bambustudio"} == {"bambu_a1_mini", "bambu_a1", "bambu_p1s",
+                                                                            "bambu_p1p", "bambu_x1c"}
+    assert {p.slicer for p in PRINTERS.values()} == {"bambustudio", "prusaslicer"}
     for p in PRINTERS.values():
         assert p.url.startswith("https://") and len(p.source) > 20, p.key
 
@@ -55,8 +62,36 @@ def test_printers_command_lists_every_preset(run_cli):
     rows = {r["preset"]: r for r in json.loads(out)}
     assert set(rows) == set(PRINTERS)
     assert rows["bambu_a1_mini"]["bed_mm"] == [180.0, 180.0, 180.0]
+    assert rows["bambu_a1_mini"]["slicer"] == "bambustudio" and rows["prusa_mk4"]["slicer"] == "prusaslicer"
     code, out, _ = run_cli("printers")
     assert code == 0 and "prusa_mk4" in out and "250 x 210 x 220" in out
+
+
+def test_printers_table_fits_an_80_column_terminal():
+    """Every line of the table is at most 80 characters wide and nothing is cut short (no ellipsis)."""
+    from rich.console import Console
+
+    con = Console(width=80, record=True, color_system=None)
+    con.print(maker.printers_table())
+    text = con.export_text()
+    assert max(len(line) for line in text.splitlines()) <= 80
+    assert "\u2026" not in text
+    for p in PRINTERS.values():  # every preset key and bed whole, on one line
+        assert p.key in text and " x ".join(f"{v:g}" for v in p.bed) in text, p.key
+
+
+def test_printers_command_at_80_columns(tmp_path):
+    """The command itself in a terminal of 80 columns (rich reads COLUMNS)."""
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "COLUMNS": "80", "PYTHONPATH": str(ROOT)}
+    out = subprocess.run([sys.executable, "-m", "cogniframe", "printers"], capture_output=True, text=True, env=env,
+                         cwd=tmp_path, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert max(len(line) for line in out.stdout.splitlines()) <= 80
+    assert "bambu_x1c" in out.stdout and "bambustudio" in out.stdout
 
 
 @pytest.mark.slow

@@ -232,10 +232,13 @@ class Design:
         from ..runtime import server as cad_server
 
         out_path = Path(out) if out is not None else None
+        use_server = cad_server.wanted(server)
+        if not use_server:
+            _refuse_unguarded_build(server)
         try:
             with self._params_file() as params_path:
                 result = run_build(self._spec, params_path, out_path, jobs=jobs, use_cache=use_cache, console=console,
-                                   gcode=gcode, server=cad_server.wanted(server), early=early)
+                                   gcode=gcode, server=use_server, early=early)
         except UserError as e:
             if e.key is not None or str(e).startswith(f"{self._source}: "):
                 raise _params_error(e, self._source) from None
@@ -454,6 +457,27 @@ class BuildResult:
 
     def __repr__(self) -> str:
         return f"<cogniframe.BuildResult {self.verdict}: {self.out_dir} ({len(self.files)} files)>"
+
+
+def _refuse_unguarded_build(server: bool | None) -> None:
+    """A build without the CAD server makes its parts on forkserver / spawn worker processes, and
+    those run the main script again: from a script's unguarded top level it would start the build
+    once more in each of them (they fail on the output folder's lock). Say so instead. With the
+    server (the default on Linux) the workers are forks of the server, which runs no script."""
+    import sys
+
+    from ..runtime.mainguard import unguarded_main_script
+
+    where = unguarded_main_script()
+    if where is None:
+        return
+    why = ("server=False" if server is False else "COGNIFRAME_CAD_SERVER=0" if sys.platform.startswith("linux")
+           else "there is no CAD server off Linux")
+    raise UserError(f"{where[0]}, line {where[1]}: this build runs at the script's top level, not under "
+                    f'`if __name__ == "__main__":`, and without the CAD server ({why}) its CAD worker processes would '
+                    f"run the script again. Fix: put the script's code under that line"
+                    + (", or build with the CAD server (leave COGNIFRAME_CAD_SERVER unset, or server=True)."
+                       if sys.platform.startswith("linux") else "."))
 
 
 # -- sweeps -----------------------------------------------------------------------------------

@@ -1,5 +1,10 @@
 """The print plates: laid out per material (3MF with their slicer settings inside), sliced by
-PrusaSlicer, and drawn as previews. Each step's row sits beside its make and key functions."""
+PrusaSlicer, and drawn as previews. Each step's row sits beside its make and key functions.
+
+The printer preset's slicer picks the 3MF: PrusaSlicer's (settings in Slic3r_PE.config) or
+OrcaSlicer / Bambu Studio's (settings per object in model_settings.config, `export/bambu3mf.py`).
+Either is sliced by PrusaSlicer with the same generated profile for the grams and time: there is
+no OrcaSlicer or Bambu Studio command line to run here, and the geometry is the same."""
 
 from __future__ import annotations
 
@@ -14,11 +19,31 @@ def plates_key(ctx, material: str):
     return [[[p.name, p.qty, ctx.part_value(p.name)["stl_sha256"]] for p in ctx.parts_of(material)],
             ctx.bed, float(ctx.spec.printer.margin), _config(ctx, material)]
 
+def _orca(ctx) -> bool:
+    """Plates for OrcaSlicer / Bambu Studio (the printer preset's slicer), else for PrusaSlicer."""
+    from ..printers import orca_family, slicer_of
+
+    return orca_family(slicer_of(ctx.spec.printer.preset))
+
 def _config(ctx, material: str) -> str:
-    """PrusaSlicer settings embedded in this material's plates: the .ini's values."""
+    """The settings embedded in this material's plates: the .ini's values for PrusaSlicer, the
+    per-object settings for OrcaSlicer / Bambu Studio."""
     from ..export import slicer
 
+    if _orca(ctx):
+        from ..export import bambu3mf
+
+        return bambu3mf.settings_text(bambu3mf.object_settings(ctx.spec, material, _infill(ctx, material)))
     return slicer.project_config(ctx.spec, material, _infill(ctx, material))
+
+def _plate_3mf(ctx, plate, material: str):
+    from ..export import plates as pl
+
+    if _orca(ctx):
+        from ..export import bambu3mf
+
+        return bambu3mf.plate_3mf(plate, bambu3mf.object_settings(ctx.spec, material, _infill(ctx, material)))
+    return pl.plate_3mf(plate, _config(ctx, material))
 
 def make_plates(ctx, material: str) -> Made:
     from ..export import plates as pl
@@ -29,7 +54,7 @@ def make_plates(ctx, material: str) -> Made:
     value = []
     for plate in pl.pack_plates(items, ctx.spec.printer.bed, ctx.spec.printer.margin):
         f3 = folder / f"{plate.name}.3mf"
-        data, read = pl.plate_3mf(plate, _config(ctx, material))
+        data, read = _plate_3mf(ctx, plate, material)
         f3.write_bytes(data)
         model = pl.model_sha256(data)
         ctx.keep_plate_items(model, read)  # what reading the file back gives: its readers need not read it
@@ -102,10 +127,13 @@ def make_slice(ctx, material: str) -> Made:
                            "objects": [list(o) for o in r.objects]})
             if _keep_gcode(ctx):
                 kept.append(f"plates/{v['name']}.gcode")
+    if _orca(ctx):  # say whose numbers these are: the plates are for another slicer
+        version = f"{version}, measuring plates written for Bambu Studio / OrcaSlicer with cogniframe's profile"
     return Made((f"plates/{material}.ini", *kept), {"slicer": version, "plates": plates})
 
 
-PLATES = Step("plates:{material}", ("part:{material}/*",), make_plates, plates_key, ("export/plates.py", "export/slicer.py", "partlist.py"),
+PLATES = Step("plates:{material}", ("part:{material}/*",), make_plates, plates_key,
+              ("export/plates.py", "export/bambu3mf.py", "export/slicer.py", "partlist.py", "printers.py"),
               reads="each part's STL hash and qty, bed, margin, print settings")
 SLICE = Step("slice:{material}", ("plates:{material}",), make_slice, slice_key, ("export/slicer.py", "partlist.py"), "wait",
              reads="plate files, profile, PrusaSlicer version (each plate on its own key)")

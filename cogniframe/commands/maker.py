@@ -27,25 +27,36 @@ SCHEMA_LINE = "# yaml-language-server: $schema="
 
 
 def printers_cmd(json_out: Annotated[bool, typer.Option("--json", help="print JSON instead of a table")] = False) -> None:
-    """List the printer presets for `printer: {preset: NAME}`: build volume, nozzle, source."""
+    """List the printer presets for `printer: {preset: NAME}`: build volume, nozzle, slicer (sources with --json)."""
     from cogniframe.printers import PRINTERS
 
     if json_out:
-        data = [{"preset": p.key, "name": p.name, "bed_mm": list(p.bed), "nozzle_mm": p.nozzle, "url": p.url,
-                 "source": p.source}
+        data = [{"preset": p.key, "name": p.name, "bed_mm": list(p.bed), "nozzle_mm": p.nozzle, "slicer": p.slicer,
+                 "url": p.url, "source": p.source}
                 for p in PRINTERS.values()]
         sys.stdout.write(json.dumps(data, indent=2) + "\n")
         return
     from rich.console import Console
+
+    Console().print(printers_table())
+
+
+def printers_table():
+    """The presets as a rich Table that fits an 80-column terminal: the specification pages and
+    sources are long, so they are in `printers --json`, not in the table."""
     from rich.table import Table
 
-    t = Table(title="Printer presets: put `preset: NAME` under `printer:`; keys beside it override the preset")
-    for col, just in (("preset", "left"), ("printer", "left"), ("build volume mm", "right"), ("nozzle mm", "right"),
-                      ("specification", "left")):
-        t.add_column(col, justify=just, overflow="fold", no_wrap=col != "specification")
+    from cogniframe.printers import PRINTERS
+
+    t = Table(title="Printer presets: put `preset: NAME` under `printer:`; keys beside it override the preset",
+              caption="Plates are written for the slicer named here. Specification pages and sources: "
+                      "`cogniframe printers --json`.")
+    for col, just in (("preset", "left"), ("printer", "left"), ("bed x y z mm", "right"), ("nozzle", "right"),
+                      ("slicer", "left")):
+        t.add_column(col, justify=just, overflow="fold", no_wrap=col != "printer")
     for p in PRINTERS.values():
-        t.add_row(p.key, p.name, " x ".join(f"{v:g}" for v in p.bed), f"{p.nozzle:g}", p.url)
-    Console().print(t)
+        t.add_row(p.key, p.name, " x ".join(f"{v:g}" for v in p.bed), f"{p.nozzle:g}", p.slicer)
+    return t
 
 
 def preset_text(preset: str) -> str:

@@ -12,6 +12,13 @@ in flight.
 Cluster: `--scheduler ADDRESS` connects to an existing Dask scheduler; without it a LocalCluster
 of worker processes (threads_per_worker=1; the FE model is Python-bound, so processes, not
 threads). The base params travel inside each task; workers never read the client's disk.
+
+Dask starts its worker processes with multiprocessing's spawn, and a spawned process first runs
+the main script again (as `__mp_main__`). A script that calls `cf.sweep(...)` at its top level,
+outside `if __name__ == "__main__":`, would start a sweep in every worker while it boots ("Nanny
+failed to start"). So when the sweep is called from such a place, the
+local cluster is one worker thread in this process instead, and a warning says how to get the
+worker processes back (`runtime.mainguard`). Guarded scripts, the CLI, `python -m`, notebooks and REPLs get processes.
 """
 
 from __future__ import annotations
@@ -194,6 +201,30 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[tuple[ob
             yield client, scheduler, len(info["workers"])
         finally:
             client.close()
+        return
+    from ..runtime.mainguard import unguarded_main_script
+
+    where = unguarded_main_script()
+    if where is not None:
+        import warnings
+
+        script, line = where
+        warnings.warn_explicit(
+            f"cogniframe: {script} starts this sweep at its top level, not under "
+            f'`if __name__ == "__main__":`, and every Dask worker process would run the script again; '
+            f"the designs are checked one at a time in this process instead. Put the script's code under "
+            f"that line to check them on {workers or max(1, os.cpu_count() or 1)} worker processes.",
+            UserWarning, script, line)
+        # one thread: the FE model is Python-bound (threads would not run it faster) and gmsh is not thread-safe
+        cluster = LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None,
+                               scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"},
+                               silence_logs=logging.CRITICAL)
+        client = Client(cluster)
+        try:
+            yield client, cluster.scheduler_address, 1
+        finally:
+            client.close()
+            cluster.close()
         return
     n = workers or max(1, os.cpu_count() or 1)
     # no dashboard; the scheduler's small HTTP server on a free localhost port (not 8787: another
