@@ -486,12 +486,12 @@ HEAD_CLEAR = 0.3  # mm: a screw head's counterbore (and seat) is this much wider
 
 def mount_hole_limits(spec: Spec) -> tuple[float, float]:
     """(plan distance a motor hole keeps from a rod's axis so the hole leaves two extrusion lines
-    of wall to the bore, plan distance its screw head keeps from the rod's axis so the head seats
-    on the plate beside the clip sleeve), mm."""
+    of wall to the bore, plan distance its screw head's seat keeps from it), mm. The head's seat
+    is a counterbore up to the plate's underside, cut through any clip sleeve or web below it, so
+    the head bears on flat plate; it too leaves two extrusion lines to the bore."""
     screw = SCREWS[spec.motor.screw]
-    bore_wall = spec.bore / 2 + screw.clearance_d / 2 + 2 * spec.printer.nozzle
-    head = screw.head_d / 2 + HEAD_CLEAR + spec.bore / 2 + spec.joints.wall
-    return bore_wall, head
+    wall = 2 * spec.printer.nozzle
+    return spec.bore / 2 + screw.clearance_d / 2 + wall, screw.head_d / 2 + HEAD_CLEAR + spec.bore / 2 + wall
 
 
 def mount_holes(spec: Spec, rods_local) -> tuple[tuple[float, float], ...]:

@@ -11,7 +11,7 @@ Rules:
   it the screw reaches the windings);
 * `rod_wall`: no hole of a part that clips onto rods cuts a rod bore or sleeve: in plan, a hole's
   axis keeps bore/2 + hole/2 + two extrusion lines from every rod's axis, and a screw head's seat
-  keeps clear of the clip sleeve;
+  (a counterbore through any sleeve under the plate) keeps two extrusion lines to the bore too;
 * `pattern`: a motor mount's holes are where the motor's holes are: each on a hole of the
   catalogue pattern (opposite holes across the shaft, MotorPreset.hole_points) turned onto the
   arm, and at least one opposite pair of them.
@@ -100,7 +100,7 @@ def _mount_rods(spec, p) -> list[FitProblem]:
     hole_d = float(p.param("screw_clearance"))
     wall = 2 * spec.printer.nozzle
     need_hole = bore / 2 + hole_d / 2 + wall
-    need_head = float(p.param("counterbore_d")) / 2 + bore / 2 + p.wall
+    need_head = float(p.param("counterbore_d")) / 2 + bore / 2 + wall
     for i, xy in enumerate(p.param("holes"), start=1):
         for k, (pt, d) in enumerate(p.param("arm_rods"), start=1):
             dist = plan_distance(xy, pt, d)
@@ -111,7 +111,7 @@ def _mount_rods(spec, p) -> list[FitProblem]:
                                       f"the motor screw would pass through the rod (frame.arm_spacing)"))
             elif dist < need_head - 1e-6:
                 out.append(FitProblem("rod_wall", f"{p.name} hole {i}", f"arm rod {k}",
-                                      f"fit: the {sc.name} screw head under {p.name} hole {i} lands on arm rod {k}'s clip sleeve "
+                                      f"fit: the {sc.name} screw head's seat under {p.name} hole {i} cuts into arm rod {k}'s bore "
                                       f"({dist:.2f} mm from the rod's axis, needs {need_head:.2f} mm) (frame.arm_spacing)"))
     return out
 

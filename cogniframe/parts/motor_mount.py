@@ -12,9 +12,10 @@ Printed upside down, the seat on the bed (z_print = seat_z - z_local). Pieces:
   seat plane (the up-slope ends) is cut flat by the bed;
 * through holes: each rod's bore (full length, so the rod slides through), the motor's holes
   (`holes`: the catalogue pattern across the shaft, turned onto the arm axis and across it, only
-  the pairs that clear the rods; `screw_clearance`), and the centre hole `shaft_hole`; where the
-  plate is thicker than the screw's `grip`, a counterbore (`counterbore_d`) from the underside
-  sinks the head so the stock screw engages the motor's thread (partlist.motor_screw).
+  the pairs that clear the rods; `screw_clearance`), and the centre hole `shaft_hole`; under each
+  hole a counterbore (`counterbore_d`) from `grip` below the seat down through anything there (a
+  clip sleeve or web), so the screw head bears on flat plate and the stock screw engages the
+  motor's thread (partlist.motor_screw).
 """
 
 from __future__ import annotations
@@ -103,6 +104,7 @@ def build(part: PartSpec) -> Built:
     cutters = []
     hole_r = float(part.param("screw_clearance")) / 2
     bolts = [np.array([x, y, 0.0]) for x, y in part.param("holes")]
+    cb_r = float(part.param("counterbore_d")) / 2
     holes = [(c, hole_r) for c in bolts] + [(np.zeros(3), float(part.param("shaft_hole")) / 2)]
     grip = float(part.param("grip"))
     for (p, d), (pc, dc) in zip(rods, clips):
@@ -119,7 +121,7 @@ def build(part: PartSpec) -> Built:
         if dp[2] < 0:  # build the sleeve rising in print
             start, dp = to_print(pc + dc * (s_lo + width)), -dp
         if abs(dp[2]) > 1e-9:
-            pieces.append(sloped_sleeve(start, dp, width, r, skirt=_skirt(r, pc, dc, holes)))
+            pieces.append(sloped_sleeve(start, dp, width, r, skirt=_skirt(r, pc, dc, holes + [(c, cb_r) for c in bolts])))
         else:
             # A level arm (frame.knee_height puts the knee level with the core link): a D-section
             # sleeve from the bed, as the joints' level sockets. A bare cylinder stood 0.5 mm
@@ -132,11 +134,9 @@ def build(part: PartSpec) -> Built:
     for centre, hr in holes:
         c = to_print(centre)
         cutters.append(cq.Solid.makeCylinder(hr, 200.0, cq.Vector(c[0], c[1], -1.0), cq.Vector(0, 0, 1)))
-    if grip < plate_t - 1e-6:  # the heads sink into the plate's underside (up, as printed)
-        for centre in bolts:
-            c = to_print(centre)
-            cutters.append(cq.Solid.makeCylinder(float(part.param("counterbore_d")) / 2, 200.0,
-                                                 cq.Vector(c[0], c[1], grip), cq.Vector(0, 0, 1)))
+    for centre in bolts:  # the heads' seats: up from `grip` as printed (down from the plate in the air)
+        c = to_print(centre)
+        cutters.append(cq.Solid.makeCylinder(cb_r, 200.0, cq.Vector(c[0], c[1], grip), cq.Vector(0, 0, 1)))
     shape = body.cut(fuse_all(cutters)).clean()
     solids = shape.Solids()
     if len(solids) != 1:
