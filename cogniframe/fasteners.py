@@ -43,6 +43,7 @@ class Fastener:
     thread_depth: float | None
     bom: str
     budget_line: str  # the mass budget's hardware line that holds its mass
+    boards: tuple[str, ...] = ()  # bought boards it passes through by their mounting holes (drawn without holes)
 
     def tip(self) -> np.ndarray:
         return np.asarray(self.base) + np.asarray(self.axis) * self.length
@@ -75,9 +76,80 @@ def motor_screws(spec, parts) -> list[Fastener]:
     return out
 
 
+def _screw_and_nut(name: str, size: str, length: float, head, axis, layers, part: str, hole_d: float,
+                   board: str, board_hole: float, line: str) -> list[Fastener]:
+    """A screw through a bought board and a printed part, held by a nut on the far side: `head` the
+    head's bearing point, `layers` the thicknesses under it (board, part)."""
+    sc = SCREWS[size]
+    head, axis = np.asarray(head, float), np.asarray(axis, float)
+    grip = float(sum(layers))
+    nut = f"nut_{name}"
+    return [Fastener(f"screw_{name}", "screw", size, length, _t(head), _t(axis), ((board, board_hole), (part, hole_d)), grip,
+                     nut, round(length - grip, 4), None, f"{size} x {length:g} socket-head screw (ISO 4762)", line, (board,)),
+            Fastener(nut, "nut", size, sc.nut_m, _t(head + axis * grip), _t(axis), (), 0.0, "", 0.0, None,
+                     f"{size} hex nut (ISO 4032)", line)]
+
+
+def _line(part, word: str) -> str:
+    return next((h.item for h in part.hardware if word in h.item), "")
+
+
+def camera_screws(spec, frame, parts) -> list[Fastener]:
+    """The camera board's screws: from its front face through the board and the mount's upright,
+    nuts behind the upright."""
+    from .materials import BOARDS
+    from .partlist import CAMERA_WALL
+    from .vitamins import _camera_world
+
+    mount = next((p for p in parts if p.family == "camera_mount"), None)
+    if mount is None or spec.core.camera is None:
+        return []
+    g = dict(mount.params)
+    board = BOARDS[spec.core.camera.model]
+    m = _camera_world(spec, frame, g)
+    length = _length_of(_line(mount, "camera"), 6.0)
+    out = []
+    for i, (x, z) in enumerate(g["camera_holes"], start=1):
+        # the vitamin's frame: z from the base top (the mount's upright coordinates less the base)
+        head = m[:3, :3] @ np.array([x, board.size[2], z - g["base_t"]]) + m[:3, 3]
+        axis = m[:3, :3] @ np.array([0.0, -1.0, 0.0])
+        out += _screw_and_nut(f"camera_{i}", "M2", length, head, axis, (board.size[2], CAMERA_WALL), "front_camera_mount",
+                              float(g["camera_hole_d"]), "camera", board.hole_d, _line(mount, "camera"))
+    return out
+
+
+def computer_screws(spec, frame, parts) -> list[Fastener]:
+    """The companion computer's screws: down through the board and the mount plate, nuts under it."""
+    from .materials import BOARDS
+
+    mount = next((p for p in parts if p.family == "computer_mount"), None)
+    if mount is None or frame.core.computer is None or spec.core.computer is None:
+        return []
+    board = BOARDS["pi_zero"]
+    size = spec.core.computer.screw
+    line = _line(mount, "screw")
+    length = _length_of(line, 6.0)
+    c = frame.core.computer
+    t = float(mount.param("thickness"))
+    out = []
+    for i, (x, y) in enumerate(mount.param("computer_holes"), start=1):
+        head = (c.centre[0] + x, c.centre[1] + y, float(c.lo[2]) + board.size[2])
+        out += _screw_and_nut(f"computer_{i}", size, length, head, (0.0, 0.0, -1.0), (board.size[2], t), "computer_mount",
+                              float(mount.param("computer_hole_d")), "computer", board.hole_d, line)
+    return out
+
+
+def _length_of(item: str, default: float) -> float:
+    """The screw length a hardware line names ("M2 x 6 screw ..." -> 6)."""
+    import re
+
+    m = re.search(r"\bM\d+(?:\.\d+)?\s*x\s*(\d+(?:\.\d+)?)", item)
+    return float(m.group(1)) if m else default
+
+
 def fasteners(spec, frame, parts) -> tuple[Fastener, ...]:
     """Every screw and nut of the design, in a stable order."""
-    return tuple(motor_screws(spec, parts))
+    return tuple(motor_screws(spec, parts) + camera_screws(spec, frame, parts) + computer_screws(spec, frame, parts))
 
 
 def screw_of(f: Fastener):

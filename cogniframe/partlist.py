@@ -546,8 +546,14 @@ def motor_screw(spec: Spec, plate_t: float) -> tuple[float, float, float]:
     if fits:
         n = float(max(fits))
         return n, round(plate_t, 4), round(n - plate_t, 4)
+    if e_min > depth:
+        raise spec.error("motors.thread_depth",
+                         f"the {motor.name}'s {depth:g} mm thread is shallower than {MIN_THREAD_TURNS} turns of its "
+                         f"{screw.name} screws ({e_min:g} mm): a screw that short strips out",
+                         f"measure the motor's thread depth (a screw in by hand until it stops) and give it as "
+                         f"motors.thread_depth, at least {e_min:g}")
     shorter = [n for n in screw.lengths if n - plate_t < e_min]
-    if not shorter or e_min > depth:
+    if not shorter:
         raise spec.error("motors.thread_depth",
                          f"no stock {screw.name} screw ({', '.join(f'{n:g}' for n in screw.lengths)} mm) both clamps the "
                          f"{plate_t:.2f} mm motor seat and engages the {motor.name}'s {depth:g} mm thread by {e_min:g} mm",

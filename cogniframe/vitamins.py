@@ -282,15 +282,21 @@ def fastener_vitamins(spec: Spec, frame: Frame, parts=None) -> list[Vitamin]:
 
 
 def thread_pairs(spec: Spec, frame: Frame, parts=None) -> frozenset:
-    """Each screw and the bought part it threads into (its motor, its nut): they share the
-    thread's volume by design, so the clash check does not test that pair."""
+    """Each screw and the bought part it threads into (its motor, its nut), and each screw and the
+    board it passes through by the board's mounting hole (the boards are drawn without holes):
+    they share that volume by design, so the clash check does not test those pairs."""
     from .fasteners import fasteners
 
     if parts is None:
         from . import partlist
 
         parts = partlist.build(spec, frame)
-    return frozenset(frozenset((f.name, f.thread)) for f in fasteners(spec, frame, parts))
+    out = set()
+    for f in fasteners(spec, frame, parts):
+        if f.thread:
+            out.add(frozenset((f.name, f.thread)))
+        out.update(frozenset((f.name, b)) for b in f.boards)
+    return frozenset(out)
 
 
 def vitamins(spec: Spec, frame: Frame, parts=None) -> tuple[Vitamin, ...]:

@@ -341,3 +341,38 @@ def test_built_1104_mount_holes_are_4p5mm_from_the_axis_and_clear_the_rods(spaci
     for *_, face in holes + seats:  # neither the hole nor the head's seat cuts into a bore
         for b in bores:
             assert face.distance(b) >= 2 * spec.printer.nozzle - 1e-6
+
+
+# -- the core's screws and nuts -----------------------------------------------------------------
+
+def test_camera_and_computer_screws_pass_through_board_and_mount_into_a_nut():
+    """Carbon: the Pi camera v2 (M2 on 21 x 12.5 mm) through its 1.0 mm board and the 1.6 mm upright,
+    and the Pi Zero (M2.5 on 58 x 23 mm) through its 1.4 mm board and the 2.5 mm mount plate, each
+    into an ISO 4032 nut it fills."""
+    spec = _spec("carbon")
+    fr, parts = _design(spec)
+    fs = {f.name: f for f in fasteners_mod.fasteners(spec, fr, parts)}
+    cam = [f for n, f in fs.items() if n.startswith("screw_camera_")]
+    pi = [f for n, f in fs.items() if n.startswith("screw_computer_")]
+    assert len(cam) == len(pi) == 4
+    for f in cam:
+        assert f.grip == pytest.approx(2.6) and f.length == 6.0 and f.engagement == pytest.approx(3.4)
+        assert fs[f.thread].kind == "nut" and np.allclose(fs[f.thread].base, f.tip() - np.asarray(f.axis) * 3.4)
+    xs = sorted({round(f.base[0], 6) for f in cam})
+    assert xs == [-10.5, 10.5]  # 21 mm apart
+    c = fr.core.computer
+    assert sorted({(round(f.base[0] - c.centre[0], 6), round(f.base[1] - c.centre[1], 6)) for f in pi}) == \
+        [(-29.0, -11.5), (-29.0, 11.5), (29.0, -11.5), (29.0, 11.5)]
+    for f in pi:
+        assert f.size == "M2.5" and f.grip == pytest.approx(3.9) and f.engagement >= SCREWS["M2.5"].nut_m
+
+
+def test_fails_a_screw_that_does_not_fill_its_nut():
+    spec = _spec("carbon")
+    fr, parts = _design(spec)
+    fs = list(fasteners_mod.fasteners(spec, fr, parts))
+    i = next(k for k, f in enumerate(fs) if f.name == "screw_computer_1")
+    fs[i] = replace(fs[i], length=5.0, engagement=round(5.0 - fs[i].grip, 4))  # 1.1 mm into a 2.0 mm nut
+    r = fit_check.check(spec, parts, fs)
+    (p,) = r.problems
+    assert (p.rule, p.a, p.b) == ("thread", "screw_computer_1", "nut_computer_1") and "does not fill the nut" in p.message

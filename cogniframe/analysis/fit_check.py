@@ -154,7 +154,8 @@ def _screw(f) -> list[FitProblem]:
             out.append(FitProblem("screw_hole", name, f.name,
                                   f"fit: {f.name} ({f.size}) does not pass through {name}: its hole is {hole_d:g} mm "
                                   f"(needs at least {sc.d + SLACK:g} mm)"))
-    e_min = MIN_THREAD_TURNS * sc.pitch
+    nut = f.thread.startswith("nut_")
+    e_min = sc.nut_m if nut else MIN_THREAD_TURNS * sc.pitch  # a nut: the screw fills it
     if f.length <= f.grip + 1e-9:
         out.append(FitProblem("thread", f.name, f.thread,
                               f"fit: {f.name} ({f.size} x {f.length:g}) does not reach {f.thread}: the parts it joins are "
@@ -162,7 +163,8 @@ def _screw(f) -> list[FitProblem]:
     elif f.engagement < e_min - 1e-9:
         out.append(FitProblem("thread", f.name, f.thread,
                               f"fit: {f.name} ({f.size} x {f.length:g}) engages {f.thread}'s thread by {f.engagement:.2f} mm, "
-                              f"less than {MIN_THREAD_TURNS} turns ({e_min:g} mm): it would strip"))
+                              + (f"less than the {e_min:g} mm nut: it does not fill the nut" if nut else
+                                 f"less than {MIN_THREAD_TURNS} turns ({e_min:g} mm): it would strip")))
     if f.thread_depth is not None and f.engagement > f.thread_depth + 1e-9:
         out.append(FitProblem("thread", f.name, f.thread,
                               f"fit: {f.name} ({f.size} x {f.length:g}) enters {f.thread} {f.engagement:.2f} mm, past its "
