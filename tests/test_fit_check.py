@@ -105,7 +105,9 @@ def test_presets_pass_the_fit_check(name):
     r = _fit(spec, fr, parts)
     assert r.ok, r.messages()
     mount = _mount(parts)
-    assert r.screws == 4 * len(mount.param("holes")) >= 8
+    fs = fasteners_mod.fasteners(spec, fr, parts)
+    assert sum(f.name.startswith("screw_motor_") for f in fs) == 4 * len(mount.param("holes")) >= 8
+    assert r.screws == sum(f.kind == "screw" for f in fs)
     # the 1104 and 1404 patterns: 4.5 mm from the shaft axis
     assert np.allclose([math.hypot(*h) for h in mount.param("holes")], 4.5)
     e = mount.param("engagement")
@@ -261,7 +263,7 @@ def test_screws_are_vitamins_at_their_holes():
     fr, parts = _design(spec)
     mount = _mount(parts)
     vits = {v.name: v for v in vitamins(spec, fr, parts)}
-    screws = [v for v in vits.values() if v.family == "screw"]
+    screws = [v for v in vits.values() if v.name.startswith("screw_motor_")]
     assert len(screws) == 4 * len(mount.param("holes"))
     for mo in fr.motors:
         mine = [v for v in screws if v.name.startswith(f"screw_motor_{mo.corner}_")]
