@@ -484,17 +484,17 @@ MOUNT_CLEAR = 0.2  # mm: the motor seat's sides stand this far outside its clip 
 HEAD_CLEAR = 0.3  # mm: a screw head's counterbore (and seat) is this much wider than the head, radially
 
 
-def mount_hole_limits(spec: Spec) -> tuple[float, float]:
+def mount_hole_limits(spec: Spec, bore: float) -> tuple[float, float]:
     """(plan distance a motor hole keeps from a rod's axis so the hole leaves two extrusion lines
     of wall to the bore, plan distance its screw head's seat keeps from it), mm. The head's seat
     is a counterbore up to the plate's underside, cut through any clip sleeve or web below it, so
     the head bears on flat plate; it too leaves two extrusion lines to the bore."""
     screw = SCREWS[spec.motor.screw]
     wall = 2 * spec.printer.nozzle
-    return spec.bore / 2 + screw.clearance_d / 2 + wall, screw.head_d / 2 + HEAD_CLEAR + spec.bore / 2 + wall
+    return bore / 2 + screw.clearance_d / 2 + wall, screw.head_d / 2 + HEAD_CLEAR + bore / 2 + wall
 
 
-def mount_holes(spec: Spec, rods_local) -> tuple[tuple[float, float], ...]:
+def mount_holes(spec: Spec, rods_local, bore: float) -> tuple[tuple[float, float], ...]:
     """The motor's holes the mount carries, (x, y) about the motor axis in the mount's local frame:
     the catalogue pattern (opposite holes across the shaft) turned so its first pair lies on the
     arm axis and its second pair across it, each pair kept when both its holes clear both rods
@@ -504,7 +504,7 @@ def mount_holes(spec: Spec, rods_local) -> tuple[tuple[float, float], ...]:
     d0 = np.asarray(rods_local[0][1], float)
     turn = math.degrees(math.atan2(d0[1], d0[0]))
     pts = motor.hole_points(turn)
-    bore_wall, head = mount_hole_limits(spec)
+    bore_wall, head = mount_hole_limits(spec, bore)
     need = max(bore_wall, head)
 
     def clear(xy) -> bool:
@@ -570,7 +570,7 @@ def _motor_mount(spec: Spec, frame: Frame) -> PartSpec:
     # Rod axis points through the mount's local origin (the motor axis on the arm centreline).
     rods_local = mount_rods(frame, m0)
     screw = SCREWS[motor.screw]
-    holes = mount_holes(spec, rods_local)
+    holes = mount_holes(spec, rods_local, spec.bore)  # the bore the mount's sleeves are cut to (its `bore` param)
     reach = max(motor.holes) / 2
     # The seat carries the bell, reaches MOUNT_CLEAR past the arm pair's clips (flush with them, its
     # sides were tangent to the clip sleeves: 1 mm rods 26.4 mm apart gave a 1e-9 mm^2 sliver face and
