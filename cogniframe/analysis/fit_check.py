@@ -67,7 +67,7 @@ def plan_distance(xy, point, direction) -> float:
     return float(abs(v[0] * d[1] - v[1] * d[0]))
 
 
-def check(spec, parts, fasteners) -> FitResult:  # noqa: C901 (one loop per rule)
+def check(spec, parts, fasteners) -> FitResult:
     """Every rule on every motor mount and every screw (see the module docstring)."""
     problems: list[FitProblem] = []
     details: list[dict] = []
