@@ -8,6 +8,7 @@ raises ValueError listing the valid choices.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 
@@ -95,7 +96,9 @@ def strength(material: str) -> Strength | None:
 
 @dataclass(frozen=True)
 class Screw:
-    """Metric machine screw: nominal diameter, clearance hole and head diameter (mm), mass per 6 mm screw (g)."""
+    """Metric socket-head cap screw (ISO 4762) of one size: nominal diameter d, thread pitch, the
+    clearance hole a printed part gives it, head diameter and height, the hex nut's width across
+    flats and thickness (ISO 4032), mass per 6 mm screw (g), and the stock lengths sold."""
 
     name: str
     d: float
@@ -103,16 +106,64 @@ class Screw:
     head_d: float
     nut_af: float
     mass_g: float
+    pitch: float = 0.4
+    head_h: float = 2.0
+    nut_m: float = 1.6
+    lengths: tuple[float, ...] = (3, 4, 5, 6, 8, 10, 12, 16, 20)
+    source: str = ""
+
+    def mass_of(self, length: float) -> float:
+        """Catalogue mass of one screw `length` mm long (g): the table's 6 mm screw, the shank scaled."""
+        return round(self.mass_g * length / 6.0, 3)
 
 
 SCREWS: dict[str, Screw] = {
-    # ISO 273 medium clearance holes; ISO 4762 heads; ISO 4032 nut widths across flats.
-    "M2": Screw("M2", 2.0, 2.4, 3.8, 4.0, 0.25),
-    "M2.5": Screw("M2.5", 2.5, 2.9, 4.5, 5.0, 0.4),
-    "M3": Screw("M3", 3.0, 3.4, 5.5, 5.5, 0.6),
+    # ISO 273 medium clearance holes; ISO 4762 heads (dk, k); ISO 4032 nuts (s, m); ISO 261 pitch;
+    # stock lengths: the ISO 4762 preferred lengths sold for these sizes.
+    "M1.4": Screw("M1.4", 1.4, 1.6, 2.6, 3.0, 0.12, 0.3, 1.4, 1.2, (3, 4, 5, 6, 8),
+                  "ISO 4762 M1.4: dk 2.6, k 1.4; ISO 4032 (DIN 934) M1.4 nut s 3.0, m 1.2; ISO 273 medium clearance 1.6; pitch 0.3"),
+    "M2": Screw("M2", 2.0, 2.4, 3.8, 4.0, 0.25, 0.4, 2.0, 1.6, (3, 4, 5, 6, 8, 10, 12, 16, 20),
+                "ISO 4762 M2: dk 3.8, k 2.0; ISO 4032 M2 nut s 4.0, m 1.6; ISO 273 medium clearance 2.4; pitch 0.4"),
+    "M2.5": Screw("M2.5", 2.5, 2.9, 4.5, 5.0, 0.4, 0.45, 2.5, 2.0, (4, 5, 6, 8, 10, 12, 16, 20, 25),
+                  "ISO 4762 M2.5: dk 4.5, k 2.5; ISO 4032 M2.5 nut s 5.0, m 2.0; ISO 273 medium clearance 2.9; pitch 0.45"),
+    "M3": Screw("M3", 3.0, 3.4, 5.5, 5.5, 0.6, 0.5, 3.0, 2.4, (4, 5, 6, 8, 10, 12, 16, 20, 25, 30),
+                "ISO 4762 M3: dk 5.5, k 3.0; ISO 4032 M3 nut s 5.5, m 2.4; ISO 273 medium clearance 3.4; pitch 0.5"),
 }
 
-# Flight-controller stack hole spacing (square, mm) and the board outline it implies (mm).
+# A screw holds in a thread by at least this many full turns of its pitch (4 pitches: 1.6 mm of
+# an M2). Motor bases are thin aluminium: their thread is what limits the screw, so the fit check
+# asks for this much and never more than the motor's thread depth.
+MIN_THREAD_TURNS = 4
+
+
+@dataclass(frozen=True)
+class Insert:
+    """A heat-set threaded insert: thread, the hole a printed part gives it, its length (mm), mass (g)."""
+
+    name: str
+    screw: str
+    hole_d: float
+    length: float
+    outer_d: float
+    mass_g: float
+    source: str
+
+
+INSERTS: dict[str, Insert] = {i.name: i for i in (
+    Insert("insert_M2", "M2", 3.2, 4.0, 3.6, 0.1, "Ruthex RX-M2x4 heat-set insert datasheet: hole 3.2 mm, length 4.0 mm, outer 3.6 mm"),
+    Insert("insert_M2.5", "M2.5", 3.6, 5.7, 4.6, 0.15, "Ruthex RX-M2.5x5.7 heat-set insert datasheet: hole 3.6 mm, length 5.7 mm, outer 4.6 mm"),
+    Insert("insert_M3", "M3", 4.0, 5.7, 4.6, 0.2, "Ruthex RX-M3x5.7 heat-set insert datasheet: hole 4.0 mm, length 5.7 mm, outer 4.6 mm"),
+)}
+
+
+def screw_length(size: str, at_least: float) -> float | None:
+    """The shortest stock length of `size` that is at least `at_least` mm, or None (none is)."""
+    return next((float(n) for n in SCREWS[size].lengths if n >= at_least - 1e-9), None)
+
+
+# Flight-controller stack hole spacing and the board outline it implies (mm). Stacks are quoted
+# as a SQUARE: "20x20" is four holes on the corners of a 20 mm square (28.3 mm across the
+# diagonal), unlike a motor's pattern (MotorPreset.holes).
 STACK_PATTERNS: dict[str, tuple[float, float]] = {
     "20x20": (20.0, 27.0),
     "30.5x30.5": (30.5, 36.0),
@@ -121,23 +172,90 @@ STACK_PATTERNS: dict[str, tuple[float, float]] = {
 
 @dataclass(frozen=True)
 class MotorPreset:
-    """Brushless motor: square bolt spacing (mm), screw, bell diameter and height (mm), mass (g)."""
+    """A brushless motor class as its makers quote it.
+
+    `holes`: the mounting pattern the FPV way, centre to centre ACROSS THE SHAFT: "9x9" is one
+    opposite pair of holes 9 mm apart and the other pair, at 90 deg to it, 9 mm apart too -- four
+    holes on a 9 mm circle, 4.5 mm from the shaft axis (not a 9 mm square). A two-pair pattern
+    such as "16x19" is (16, 19): the first pair 16 mm apart, the second 19 mm. `screw`: the
+    thread in the motor's base; `thread_depth`: how far a screw may enter it before it reaches
+    the windings (the screw must engage the thread and stop short of this). Bell diameter and
+    height over the base (mm), mass (g), shaft boss diameter (mm), typical full-throttle thrust
+    of one motor on its usual propeller and pack (g), and the source of the numbers."""
 
     name: str
-    bolt_spacing: float
+    holes: tuple[float, float]
     screw: str
     bell_d: float
     height: float
     mass_g: float
     shaft_boss_d: float
+    thread_depth: float = 2.5
+    thrust_g: float = 190.0
+    source: str = ""
+
+    @property
+    def bolt_spacing(self) -> float:
+        """The first pair's centre-to-centre distance across the shaft (mm)."""
+        return self.holes[0]
+
+    @property
+    def pattern(self) -> str:
+        """The pattern as makers print it: 9x9, 16x19."""
+        return "x".join(f"{h:g}" for h in self.holes)
+
+    def hole_points(self, turn_deg: float = 0.0) -> tuple[tuple[float, float], ...]:
+        """The four hole centres (x, y) about the shaft axis (mm): the first pair on the line at
+        `turn_deg` from x, the second pair across it."""
+        a = math.radians(turn_deg)
+        u, v = (math.cos(a), math.sin(a)), (-math.sin(a), math.cos(a))
+        out = []
+        for r, w in ((self.holes[0] / 2, u), (self.holes[1] / 2, v)):
+            out += [(r * w[0], r * w[1]), (-r * w[0], -r * w[1])]
+        return tuple((round(x, 9) + 0.0, round(y, 9) + 0.0) for x, y in out)
 
 
-MOTOR_PRESETS: dict[str, MotorPreset] = {
-    # 1104 class (paper's carbon build): 9 x 9 mm M2 pattern, ~14 mm bell, ~6 g.
-    "1104": MotorPreset("1104", 9.0, "M2", 14.0, 13.0, 6.0, 5.0),
-    # 1404 class (bamboo build): 9 x 9 mm M2 pattern, ~18 mm bell, ~9 g.
-    "1404": MotorPreset("1404", 9.0, "M2", 18.0, 15.0, 9.0, 5.5),
-}
+# Thread depths: no maker of these motors prints one; the figure is the motor base's tapped
+# depth the class leaves under the stator (the authors warn that long screws reach the windings).
+# Typical thrusts: the class on its usual propeller and pack, for motors.max_thrust_g's default
+# when analysis/flight.py has no bench table for the motor.
+_NOT_CHECKED = "maker's product page, not re-checked here"
+
+# fmt: off
+MOTOR_PRESETS: dict[str, MotorPreset] = {m.name: m for m in (
+    MotorPreset("1103", (6.6, 6.6), "M1.4", 13.5, 11.0, 3.7, 4.0, 1.5, 90.0,
+                f"Happymodel EX1103 / BetaFPV 1103: 6.6 mm M1.4 (opposite holes), ~3.7 g ({_NOT_CHECKED})"),
+    # 1104 class (the paper's carbon build): the authors' motor base (CogniFly_v8 Flex_MotorBase_Shorter)
+    # has its four 2.0 mm holes 4.5 mm from the centre -- the 9x9 pattern read across the shaft -- and a
+    # 4.1 mm shaft hole; the seat under the motor is 2.5 mm thick there.
+    MotorPreset("1104", (9.0, 9.0), "M2", 14.0, 13.0, 6.0, 5.0, 2.5, 190.0,
+                "the authors' motor base (CogniFly-STL v8 Flex_MotorBase_Shorter: holes 4.5 mm from the axis); "
+                "1104 class 9x9 M2, ~6 g (BetaFPV / Racerstar 1104 pages)"),
+    MotorPreset("1105", (9.0, 9.0), "M2", 14.0, 13.5, 5.8, 5.0, 2.5, 210.0,
+                f"BetaFPV 1105: 9x9 M2 (opposite holes), ~5.8 g ({_NOT_CHECKED})"),
+    MotorPreset("1106", (9.0, 9.0), "M2", 14.4, 14.0, 6.6, 5.0, 2.5, 240.0,
+                f"BetaFPV 1106 / EMAX RS1106: 9x9 M2 (opposite holes), ~6.6 g ({_NOT_CHECKED})"),
+    MotorPreset("1202", (6.6, 6.6), "M1.4", 15.0, 10.5, 3.6, 4.0, 1.5, 110.0,
+                f"BetaFPV 1202.5: 6.6 mm M1.4 (opposite holes), ~3.6 g ({_NOT_CHECKED})"),
+    MotorPreset("1203", (6.6, 6.6), "M1.4", 15.0, 11.5, 4.0, 4.0, 1.5, 130.0,
+                f"1203 class (e.g. Happymodel EX1203): 6.6 mm M1.4, ~4 g ({_NOT_CHECKED})"),
+    MotorPreset("1204", (9.0, 9.0), "M2", 15.5, 12.5, 6.3, 5.0, 2.5, 200.0,
+                f"1204 class (e.g. Racerstar BR1204): 9x9 M2 (opposite holes), ~6.3 g ({_NOT_CHECKED})"),
+    # 1404 class (the bamboo build): iFlight XING2 1404 (product page via its part record): 9x9 mm M2
+    # base pattern, 1.5 mm shaft.
+    MotorPreset("1404", (9.0, 9.0), "M2", 18.0, 15.0, 9.0, 5.5, 3.0, 200.0,
+                "iFlight XING2 1404 product page: 9 x 9 mm M2 base pattern, 1.5 mm shaft; T-Motor F1404 and "
+                "EMAX ECO 1404 quote the same 9x9 M2; ~9 g"),
+    MotorPreset("1406", (9.0, 9.0), "M2", 18.5, 16.0, 10.5, 5.5, 3.0, 260.0,
+                f"1406 class (e.g. BrotherHobby 1406): 9x9 M2 (opposite holes), ~10.5 g ({_NOT_CHECKED})"),
+    MotorPreset("1407", (9.0, 9.0), "M2", 18.5, 16.5, 11.0, 5.5, 3.0, 290.0,
+                f"T-Motor F1407: 9x9 M2 (opposite holes), ~11 g ({_NOT_CHECKED})"),
+    MotorPreset("1408", (12.0, 12.0), "M2", 19.0, 17.0, 12.5, 6.0, 3.0, 330.0,
+                f"1408 class (e.g. iFlight XING 1408): 12x12 M2 (opposite holes), ~12.5 g ({_NOT_CHECKED})"),
+    MotorPreset("1505", (12.0, 12.0), "M2", 20.0, 16.5, 12.0, 6.0, 3.0, 340.0,
+                f"iFlight XING2 1505: 12x12 M2 (opposite holes), ~12 g ({_NOT_CHECKED})"),
+)}
+# fmt: on
 
 
 def lookup(table: dict, name: str, what: str):
@@ -159,7 +277,9 @@ def lookup(table: dict, name: str, what: str):
 @dataclass(frozen=True)
 class Board:
     """A bought circuit board: outline (x across, y along, thickness), the component block on
-    top (x, y, height), square-ish mounting-hole rectangle (mm), hole diameter, catalogue mass (g)."""
+    top (x, y, height), the mounting holes as a RECTANGLE's sides, centre to centre (mm: a stack's
+    "20x20" is a 20 mm square, the Pi Zero's 58 x 23 a rectangle; not a motor's across-the-shaft
+    reading), hole diameter, catalogue mass (g)."""
 
     name: str
     bom: str

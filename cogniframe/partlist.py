@@ -29,7 +29,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .frame import CAMERA_BASE_T, CORNER_SIGN, CORNERS, STACK_BOTTOM, Frame
-from .materials import BOARDS, CONNECTORS, SCREWS, STACK_PATTERNS
+from .materials import BOARDS, CONNECTORS, MIN_THREAD_TURNS, SCREWS, STACK_PATTERNS
 from .spec import Spec
 
 Vec = tuple[float, float, float]
@@ -481,6 +481,86 @@ def _mount_rotation(frame: Frame, m0, m) -> float:
 
 
 MOUNT_CLEAR = 0.2  # mm: the motor seat's sides stand this far outside its clip sleeves
+HEAD_CLEAR = 0.3  # mm: a screw head's counterbore (and seat) is this much wider than the head, radially
+
+
+def mount_hole_limits(spec: Spec, bore: float) -> tuple[float, float]:
+    """(plan distance a motor hole keeps from a rod's axis so the hole leaves two extrusion lines
+    of wall to the bore, plan distance its screw head's seat keeps from it), mm. The head's seat
+    is a counterbore up to the plate's underside, cut through any clip sleeve or web below it, so
+    the head bears on flat plate; it too leaves two extrusion lines to the bore."""
+    screw = SCREWS[spec.motor.screw]
+    wall = 2 * spec.printer.nozzle
+    return bore / 2 + screw.clearance_d / 2 + wall, screw.head_d / 2 + HEAD_CLEAR + bore / 2 + wall
+
+
+def mount_holes(spec: Spec, rods_local, bore: float) -> tuple[tuple[float, float], ...]:
+    """The motor's holes the mount carries, (x, y) about the motor axis in the mount's local frame:
+    the catalogue pattern (opposite holes across the shaft) turned so its first pair lies on the
+    arm axis and its second pair across it, each pair kept when both its holes clear both rods
+    (a hole through a sleeve would make the screw go through the rod). Raises the spec's error
+    on frame.arm_spacing when no pair clears (the rods sit where every pair's screws would go)."""
+    motor = spec.motor
+    d0 = np.asarray(rods_local[0][1], float)
+    turn = math.degrees(math.atan2(d0[1], d0[0]))
+    pts = motor.hole_points(turn)
+    bore_wall, head = mount_hole_limits(spec, bore)
+    need = max(bore_wall, head)
+
+    def clear(xy) -> bool:
+        return all(_plan_distance(xy, p, d) >= need - 1e-9 for p, d in rods_local)
+
+    kept = tuple(xy for i in (0, 2) if clear(pts[i]) and clear(pts[i + 1]) for xy in pts[i:i + 2])
+    if not kept:
+        half = spec.frame.arm_spacing / 2
+        ok = [2 * (r + need) for r in (0.0, motor.holes[1] / 2)]
+        raise spec.error("frame.arm_spacing",
+                         f"the {motor.name} motor's {motor.pattern} mm {motor.screw} holes (opposite holes across the shaft, "
+                         f"{motor.holes[0] / 2:g} mm from it) all fall on the arm rods {2 * half:g} mm apart: every screw would "
+                         f"go through a rod's clip sleeve",
+                         f"set frame.arm_spacing to at least {min(ok):.1f} (the holes on the arm axis) "
+                         f"or choose a motor whose pattern fits between the rods")
+    return tuple((round(x, 6) + 0.0, round(y, 6) + 0.0) for x, y in kept)
+
+
+def _plan_distance(xy, point, direction) -> float:
+    """Plan (x, y) distance from a vertical line through `xy` to a rod's axis line."""
+    d = np.asarray(direction, float)[:2]
+    n = float(np.linalg.norm(d))
+    d = d / n
+    v = np.asarray(xy, float) - np.asarray(point, float)[:2]
+    return float(abs(v[0] * d[1] - v[1] * d[0]))
+
+
+def motor_screw(spec: Spec, plate_t: float) -> tuple[float, float, float]:
+    """(stock length, grip under the head, thread engagement) of the motor's mounting screws
+    through a seat plate `plate_t` thick: the longest stock length that engages the motor's
+    thread by at least MIN_THREAD_TURNS pitches and stays within its thread depth. When every
+    stock length is too short through the whole plate, the head sits in a counterbore that leaves
+    `grip` of plate under it (the engagement then the middle of the allowed range)."""
+    motor = spec.motor
+    screw = SCREWS[motor.screw]
+    e_min = MIN_THREAD_TURNS * screw.pitch
+    depth = motor.thread_depth
+    fits = [n for n in screw.lengths if e_min - 1e-9 <= n - plate_t <= depth + 1e-9]
+    if fits:
+        n = float(max(fits))
+        return n, round(plate_t, 4), round(n - plate_t, 4)
+    if e_min > depth:
+        raise spec.error("motors.thread_depth",
+                         f"the {motor.name}'s {depth:g} mm thread is shallower than {MIN_THREAD_TURNS} turns of its "
+                         f"{screw.name} screws ({e_min:g} mm): a screw that short strips out",
+                         f"measure the motor's thread depth (a screw in by hand until it stops) and give it as "
+                         f"motors.thread_depth, at least {e_min:g}")
+    shorter = [n for n in screw.lengths if n - plate_t < e_min]
+    if not shorter:
+        raise spec.error("motors.thread_depth",
+                         f"no stock {screw.name} screw ({', '.join(f'{n:g}' for n in screw.lengths)} mm) both clamps the "
+                         f"{plate_t:.2f} mm motor seat and engages the {motor.name}'s {depth:g} mm thread by {e_min:g} mm",
+                         "give the motor's real thread depth (motors.thread_depth) or change joints.wall")
+    n = float(max(shorter))
+    e = round((e_min + depth) / 2, 4)
+    return n, round(n - e, 4), e
 
 
 def _motor_mount(spec: Spec, frame: Frame) -> PartSpec:
@@ -490,24 +570,32 @@ def _motor_mount(spec: Spec, frame: Frame) -> PartSpec:
     # Rod axis points through the mount's local origin (the motor axis on the arm centreline).
     rods_local = mount_rods(frame, m0)
     screw = SCREWS[motor.screw]
+    holes = mount_holes(spec, rods_local, spec.bore)  # the bore the mount's sleeves are cut to (its `bore` param)
+    reach = max(motor.holes) / 2
     # The seat carries the bell, reaches MOUNT_CLEAR past the arm pair's clips (flush with them, its
     # sides were tangent to the clip sleeves: 1 mm rods 26.4 mm apart gave a 1e-9 mm^2 sliver face and
-    # an STL with a hole) and holds the motor's bolt pattern with a wall outside each hole (bolts near
-    # its edge cut its corners off: motors.bolt_spacing 20 mm).
+    # an STL with a hole) and holds the motor's holes with a wall outside each (holes near its edge cut
+    # its corners off: a 20 mm pattern).
     width = max(motor.bell_d + 4.0, spec.frame.arm_spacing + spec.bore + 2 * spec.joints.wall + 2 * MOUNT_CLEAR,
-                motor.bolt_spacing + screw.clearance_d + 2 * spec.joints.wall)
+                2 * reach + screw.clearance_d + 2 * spec.joints.wall)
+    seat_z = round(m0.seat_z - axis[2], 4)
     thick = spec.joints.wall + 1.5
+    plate_t = min(thick, seat_z)
+    length, grip, engagement = motor_screw(spec, plate_t)
     clip_len = width
     od = spec.bore + 2 * spec.joints.wall
     vol = width * width * thick + 2 * (math.pi / 4 * (od**2 - spec.bore**2) * clip_len)
-    vol -= 4 * math.pi / 4 * screw.clearance_d**2 * thick + math.pi / 4 * (motor.shaft_boss_d + 1) ** 2 * thick
+    vol -= len(holes) * math.pi / 4 * screw.clearance_d**2 * thick + math.pi / 4 * (motor.shaft_boss_d + 1) ** 2 * thick
+    vol -= len(holes) * math.pi / 4 * ((screw.head_d + 2 * HEAD_CLEAR) ** 2 - screw.clearance_d**2) * (plate_t - grip)
     est = Estimate(vol, 2 * width * width, 4 * width * thick + 2 * math.pi * od * clip_len, (width, width, thick + od))
     placements = tuple(Placement(m.name, _mount_rotation(frame, m0, m), _t(m.axis)) for m in frame.motors)
-    params = (("bolt_spacing", motor.bolt_spacing), ("screw", screw.name), ("screw_clearance", screw.clearance_d),
-              ("shaft_hole", motor.shaft_boss_d + 1.0), ("bell_d", motor.bell_d), ("seat_z", round(m0.seat_z - axis[2], 4)),
+    params = (("holes", holes), ("pattern", motor.holes), ("screw", screw.name), ("screw_clearance", screw.clearance_d),
+              ("screw_length", length), ("grip", grip), ("engagement", engagement),
+              ("counterbore_d", round(screw.head_d + 2 * HEAD_CLEAR, 4)),
+              ("shaft_hole", motor.shaft_boss_d + 1.0), ("bell_d", motor.bell_d), ("seat_z", seat_z),
               ("arm_rods", tuple(rods_local)), ("arm_slope_deg", round(m0.arm_slope_deg, 4)), ("width", width),
               ("bore", round(spec.bore, 4)))
-    hw = (HardwareLine(f"{screw.name} x 6 screw (motor to mount)", 4, screw.mass_g),)
+    hw = (HardwareLine(f"{screw.name} x {length:g} socket-head screw (motor to mount)", len(holes), screw.mass_of(length)),)
     return PartSpec("motor_mount", "motor_mount", "exoskeleton", spec.joints.material, 1.0, placements, (), spec.joints.wall,
                     est, params, hw)
 

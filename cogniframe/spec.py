@@ -12,6 +12,7 @@ import hashlib
 import json
 import re
 from contextlib import contextmanager
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
@@ -113,9 +114,10 @@ class CoreSection(_M):
 
 
 class MotorsSection(_M):
-    model: str = Field("1104", description="motor preset (sets bolt pattern, size, mass): " + ", ".join(MOTOR_PRESETS))
-    bolt_spacing: Annotated[float, Field(gt=3, le=40, description="override the preset's square bolt spacing, mm")] | None = None
+    model: str = Field("1104", description="motor preset (sets hole pattern, screw, size, mass): " + ", ".join(MOTOR_PRESETS))
+    bolt_spacing: Annotated[float, Field(gt=3, le=40, description="override the preset's hole pattern: the distance between OPPOSITE holes, across the shaft, mm (a '9x9' motor reads 9: four holes on a 9 mm circle)")] | None = None
     screw: str | None = Field(None, description="override the preset's screw size")
+    thread_depth: Annotated[float, Field(gt=0.5, le=10, description="override the preset's thread depth in the motor base, mm: how far a mounting screw may enter before it reaches the windings (measure yours)")] | None = None
     mass: Annotated[float, Field(gt=0, le=100, description="override the preset's mass, g each")] | None = None
     radius: Annotated[float, Field(ge=20, le=300, description="motor axis distance from the frame centre, in plan, mm")] = 82
     prop_diameter: Annotated[float, Field(ge=25, le=260, description="propeller diameter, mm (3 in = 76.2)")] = 76.2
@@ -296,8 +298,9 @@ class Spec(_M):
     @property
     def motor(self) -> MotorPreset:
         p = MOTOR_PRESETS[self.motors.model]
-        return MotorPreset(p.name, self.motors.bolt_spacing or p.bolt_spacing, self.motors.screw or p.screw,
-                           p.bell_d, p.height, self.motors.mass or p.mass_g, p.shaft_boss_d)
+        holes = (self.motors.bolt_spacing,) * 2 if self.motors.bolt_spacing else p.holes
+        return replace(p, holes=holes, screw=self.motors.screw or p.screw, mass_g=self.motors.mass or p.mass_g,
+                       thread_depth=self.motors.thread_depth or p.thread_depth)
 
     @property
     def source(self) -> str:

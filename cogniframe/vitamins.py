@@ -29,7 +29,7 @@ from .spec import Spec
 # stands about 3 mm tall; the hub sits inside this slab.
 PROP_DISC_T = 3.0  # mm
 PROP_GAP = 0.5  # bell top to the underside of the blade disc, mm
-SHAFT_D = {"1104": 1.5, "1404": 1.5}  # motor shaft diameter (mm); 1.5 mm for both classes
+SHAFT_D = 1.5  # motor shaft diameter (mm): 1.5 mm on the 11xx-15xx classes
 SHAFT_ABOVE = 2.5  # shaft length above the bell (into the prop hub), mm
 STACK_STANDOFF = 8.0  # between the ESC and the FC, mm
 STANDOFF_D = 4.0  # nylon M2 standoff across flats (drawn round), mm
@@ -43,6 +43,8 @@ COLOURS = {
     "computer": (0.10, 0.45, 0.20),
     "camera": (0.10, 0.55, 0.25),
     "flow_sensor": (0.40, 0.10, 0.50),
+    "screw": (0.20, 0.20, 0.22),
+    "nut": (0.75, 0.75, 0.78),
 }
 
 
@@ -63,7 +65,7 @@ class Prim:
 @dataclass(frozen=True)
 class Vitamin:
     name: str  # assembly name: motor_fl, propeller_fl, battery, flight_controller ...
-    family: str  # motor | propeller | battery | fc | esc | computer | camera | flow_sensor
+    family: str  # motor | propeller | battery | fc | esc | computer | camera | flow_sensor | screw | nut
     bom: str  # the data table's description (what to buy)
     budget_line: str  # the mass budget item this vitamin's mass is in
     prims: tuple[Prim, ...]
@@ -125,7 +127,7 @@ def motor_vitamins(spec: Spec, frame: Frame) -> list[Vitamin]:
     """Each motor: stator base (the mounting foot), bell and shaft; its propeller disc above it."""
     m = spec.motor
     out = []
-    shaft = SHAFT_D.get(m.name, 1.5)
+    shaft = SHAFT_D
     for mo in frame.motors:
         x, y, _ = mo.axis
         z0 = mo.seat_z
@@ -133,7 +135,7 @@ def motor_vitamins(spec: Spec, frame: Frame) -> list[Vitamin]:
         prims = (cyl((x, y, z0), (0, 0, 1), m.bell_d * 0.4, base_h),  # stator base / mounting foot
                  cyl((x, y, z0 + base_h), (0, 0, 1), m.bell_d / 2, m.height - base_h),  # bell over the stator
                  cyl((x, y, z0 + m.height), (0, 0, 1), shaft / 2, PROP_GAP + SHAFT_ABOVE))
-        out.append(Vitamin(f"motor_{mo.corner}", "motor", f"brushless motor {m.name} {_kv(spec)}KV ({m.bolt_spacing:g} mm {m.screw} pattern)",
+        out.append(Vitamin(f"motor_{mo.corner}", "motor", f"brushless motor {m.name} {_kv(spec)}KV ({m.pattern} {m.screw} across the shaft)",
                            f"motor {m.name}", prims, COLOURS["motor"]))
         r = spec.motors.prop_diameter / 2
         zc = mo.prop_z + PROP_GAP
@@ -257,14 +259,56 @@ def flow_vitamin(spec: Spec, frame: Frame) -> Vitamin | None:
                    view=(_t(apex), (0.0, 0.0, -1.0), 21.0))  # PMW3901: 42 deg field of view
 
 
-def vitamins(spec: Spec, frame: Frame) -> tuple[Vitamin, ...]:
-    """Every bought part drawn in the assembly, in a stable order."""
+def fastener_vitamins(spec: Spec, frame: Frame, parts=None) -> list[Vitamin]:
+    """Each screw as its head (ISO 4762 head diameter and height, under `base`) and its shank (the
+    nominal diameter, its length under the head); each nut as a cylinder across its flats."""
+    from .fasteners import fasteners
+    from .materials import SCREWS
+
+    if parts is None:
+        from . import partlist
+
+        parts = partlist.build(spec, frame)
+    out = []
+    for f in fasteners(spec, frame, parts):
+        sc = SCREWS[f.size]
+        base, axis = np.asarray(f.base), np.asarray(f.axis)
+        if f.kind == "screw":
+            prims = (cyl(base - axis * sc.head_h, axis, sc.head_d / 2, sc.head_h), cyl(base, axis, sc.d / 2, f.length))
+        else:
+            prims = (cyl(base, axis, sc.nut_af / 2, f.length),)
+        out.append(Vitamin(f.name, f.kind, f.bom, f.budget_line, prims, COLOURS[f.kind]))
+    return out
+
+
+def thread_pairs(spec: Spec, frame: Frame, parts=None) -> frozenset:
+    """Each screw and the bought part it threads into (its motor, its nut), and each screw and the
+    board it passes through by the board's mounting hole (the boards are drawn without holes):
+    they share that volume by design, so the clash check does not test those pairs."""
+    from .fasteners import fasteners
+
+    if parts is None:
+        from . import partlist
+
+        parts = partlist.build(spec, frame)
+    out = set()
+    for f in fasteners(spec, frame, parts):
+        if f.thread:
+            out.add(frozenset((f.name, f.thread)))
+        out.update(frozenset((f.name, b)) for b in f.boards)
+    return frozenset(out)
+
+
+def vitamins(spec: Spec, frame: Frame, parts=None) -> tuple[Vitamin, ...]:
+    """Every bought part drawn in the assembly, in a stable order; `parts`: the design's part list
+    when the caller has it (the screws sit in its holes), else made here."""
     out = motor_vitamins(spec, frame)
     out.append(battery_vitamin(spec, frame))
     out += stack_vitamins(spec, frame)
     for v in (computer_vitamin(spec, frame), camera_vitamin(spec, frame), flow_vitamin(spec, frame)):
         if v is not None:
             out.append(v)
+    out += fastener_vitamins(spec, frame, parts)
     return tuple(out)
 
 

@@ -4,7 +4,8 @@
 table aside: it holds whole material definitions). `random_design(rnd)` starts from a preset and
 either edits the box and a few keys as a person does (`"edit"`), anywhere in their bounds, or
 draws every bounded key at once (`"anywhere"`: mostly designs the validation must refuse).
-Boxes are square or not, at random.
+Boxes are square or not, at random; a third of the designs fly another motor of the catalogue
+(materials.MOTOR_PRESETS), so the fit check meets every hole pattern.
 """
 
 from __future__ import annotations
@@ -100,6 +101,10 @@ def random_design(rnd: random.Random, mode: str | None = None) -> dict:
         for key, lo, hi, kind in rnd.sample(keys, k=rnd.randint(0, 3)):
             put(doc, key, _value(rnd, lo, hi, kind))
     put(doc, "frame.struts", rnd.random() < 0.8)
+    if rnd.random() < 1 / 3:
+        from cogniframe.materials import MOTOR_PRESETS
+
+        put(doc, "motors.model", rnd.choice(sorted(MOTOR_PRESETS)))
     return doc
 
 

@@ -28,13 +28,14 @@ def _bodies(d):
 def scenes():
     """Per preset: the design and its clash result (one clash check per preset)."""
     from cogniframe.analysis import clash
-    from cogniframe.export.assembly import own_motor_pairs
+    from cogniframe.export.assembly import not_clashes
 
     out = {}
     for p in PRESETS:
         d = built_preset(p)
         b = _bodies(d)
-        out[p] = (d, b, clash.check(b, prop_margin=d.spec.requirements.prop_margin, ignore=own_motor_pairs(d.frame)))
+        out[p] = (d, b, clash.check(b, prop_margin=d.spec.requirements.prop_margin,
+                                    ignore=not_clashes(d.spec, d.frame, tuple(d.parts.values()))))
     return out
 
 
@@ -109,6 +110,29 @@ def test_moving_one_part_into_another_is_a_fail_naming_both(scenes):
     # the check turns clashes into FAIL problems
     result = verdict.check(d.spec, clash=r)
     assert result.verdict == "FAIL" and any("battery_holder" in p and "sensor_mount" in p for p in result.problems)
+
+
+def test_screws_are_in_the_clash_check_and_one_off_its_hole_is_a_clash(scenes):
+    """The motor screws are bodies of the clash check; in its own clearance hole a screw touches
+    nothing (its head on the seat's underside, its tip in the motor's thread, which is exempt);
+    moved 1 mm sideways it cuts the mount, and the check names both."""
+    from cogniframe.analysis import clash
+    from cogniframe.export.assembly import not_clashes
+
+    d, bodies, r = scenes["carbon"]
+    screws = [b for b in bodies if b.name.startswith("screw_motor_")]
+    assert len(screws) == 4 * len(d.parts["motor_mount"].param("holes"))
+    assert any(b.name.startswith("nut_") for b in bodies)
+    ignore = not_clashes(d.spec, d.frame, tuple(d.parts.values()))
+    assert frozenset(("screw_motor_fl_1", "motor_fl")) in ignore
+    assert frozenset(("screw_motor_fl_1", "motor_mount_fl")) not in ignore
+    near = [b for b in bodies if b.name in ("screw_motor_fl_1", "motor_mount_fl", "motor_fl")]
+    assert clash.check(near, ignore=ignore).ok
+    side = np.eye(4)
+    side[0, 3] = 1.0
+    moved = [clash.Body(b.name, b.kind, b.mesh, side, b.disc) if b.name == "screw_motor_fl_1" else b for b in near]
+    (c,) = clash.check(moved, ignore=ignore).clashes
+    assert {c.a, c.b} == {"screw_motor_fl_1", "motor_mount_fl"} and c.volume_mm3 > 0.5
 
 
 # -- vitamins -------------------------------------------------------------------------------------

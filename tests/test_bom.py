@@ -47,7 +47,10 @@ def test_lines_cover_the_design(checked):
     assert {ln.size.split(" mm")[0] for ln in rods} == {f"{r.length_mm:g}" for r in d.cut.rows}
     hw = {ln.item: ln for ln in lines if ln.category == "hardware"}
     motor_screws = next(ln for ln in hw.values() if "motor to mount" in ln.item)
-    assert motor_screws.qty == 16 and motor_screws.size == "M2 x 6"
+    # every hole of every motor mount, at the length the plan chose through its seat into the motor's thread
+    mount = next(p for p in d.parts if p.family == "motor_mount")
+    assert motor_screws.qty == 4 * len(mount.param("holes")) >= 8
+    assert motor_screws.size == f"M2 x {mount.param('screw_length'):g}"
     assert all(ln.size.startswith("M") for ln in hw.values() if "screw" in ln.item)
     assert all(ln.size.endswith(" mm") for ln in hw.values() if "screw" not in ln.item)  # strap, zip ties
     (motor,) = [ln for ln in lines if ln.category == "motor"]

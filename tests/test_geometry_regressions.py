@@ -36,6 +36,7 @@ at a time, each part built and written as an STL):
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -333,6 +334,8 @@ def test_knee_web_top_clears_the_legs_top():
     ("bamboo", {"frame__knee_height": 0.38}),  # the arm is level: no web under a bare cylinder
     ("bamboo", {"motors__bolt_spacing": 19.992}),  # the bolt holes cut the seat's corners off
     ("bamboo", {"motors__bolt_spacing": 40.0}),
+    ("carbon", {"frame__arm_spacing": 25.0}),  # the authors' spacing: all four holes
+    ("carbon", {"motors__model": "1505", "frame__arm_spacing": 25.0}),  # 12 mm holes across the shaft
     ("carbon", {"joints__wall": 1.45}),  # OCC's exact cut gave the mount and a phantom 210 mm^3 solid
 ])
 def test_motor_mount_builds(base, change):
@@ -342,8 +345,9 @@ def test_motor_mount_builds(base, change):
     (mount,) = _parts(spec, ["motor_mount"])
     _one_watertight_solid(mount)
     width = float(mount.param("width"))
-    # the seat holds the bolt pattern with a wall outside each hole, and reaches past the clips
-    assert width >= float(mount.param("bolt_spacing")) + float(mount.param("screw_clearance")) + 2 * mount.wall
+    # the seat holds the motor's holes with a wall outside each, and reaches past the clips
+    reach = max(math.hypot(x, y) for x, y in mount.param("holes"))
+    assert width >= 2 * reach + float(mount.param("screw_clearance")) + 2 * mount.wall - 1e-5  # holes stored to 1e-6
     assert width >= spec.frame.arm_spacing + spec.bore + 2 * mount.wall + 2 * MOUNT_CLEAR - 1e-9
 
 

@@ -23,6 +23,7 @@ from pydantic import BaseModel
 
 from cogniframe import spec as spec_mod
 from cogniframe.cli import main
+from cogniframe.materials import MOTOR_PRESETS
 
 ROOT = Path(__file__).resolve().parents[1]
 BASE = yaml.safe_load((ROOT / "params" / "carbon.yaml").read_text())
@@ -119,6 +120,35 @@ def test_check_never_crashes_and_accepts_only_sound_designs(changes, tmp_path):
     assert math.isfinite(k) and k > 0, (changes, k)
     assert all(math.isfinite(h["x_max_mm"]) and h["x_max_mm"] > 0 for h in data["drop"]["heights"]), changes
     assert data["verdict"] == ("PASS" if code == 0 else "FAIL")
+    # every design check accepts bolts together: its screws, holes and motor pattern fit
+    assert data["fit"]["ok"], (changes, data["fit"]["problems"])
+
+
+@settings(deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), model=st.sampled_from(sorted(MOTOR_PRESETS)))
+def test_every_design_that_builds_passes_the_fit_check(seed, model):
+    """Random designs across the schema (tests/design_space.py) with each motor of the catalogue:
+    the part list is refused with a key, or its screws pass through their holes into their threads,
+    its holes clear the rods and its motor holes are the motor's (analysis/fit_check.py)."""
+    import random
+
+    import design_space
+    from cogniframe.analysis.verdict import fit_of
+    from cogniframe.design import design
+    from cogniframe.errors import UserError
+
+    doc = design_space.random_design(random.Random(seed))
+    doc["motors"]["model"] = model
+    try:
+        spec = spec_mod.from_dict(doc, "design.yaml")
+        d = design(spec)
+    except UserError as e:
+        assert e.key or "design.yaml: " in str(e), str(e)
+        return
+    fit = fit_of(spec, d)
+    assert fit.ok, (seed, model, fit.messages())
+    mount = next(p for p in d.parts if p.family == "motor_mount")
+    assert len(mount.param("holes")) in (2, 4)
 
 
 @settings(suppress_health_check=[HealthCheck.function_scoped_fixture])

@@ -167,7 +167,7 @@ def test_materials_library_has_sources():
 
 def test_lookup_lists_valid_choices():
     assert lookup(MOTOR_PRESETS, "1104", "motor").bolt_spacing == 9.0
-    with pytest.raises(ValueError, match="valid choices: 1104, 1404"):
+    with pytest.raises(ValueError, match="valid choices: 1103, 1104, 1105, 1106, 1202, 1203, 1204, 1404, 1406, 1407, 1408, 1505"):
         lookup(MOTOR_PRESETS, "2207", "motor")
 
 

@@ -129,10 +129,6 @@ def propulsion(spec: Spec) -> Propulsion | None:
     return Propulsion(t, (cells / t.cells) ** 2)
 
 
-# Static thrust of one motor at full throttle, g, for a motor with no thrust table for its kv, prop
-# and pack: the makers' thrust tables of the class (1104 with a 3025 prop on 3S; 1404 with a 4 in
-# prop on 2S).
-MAX_THRUST_G_BY_MOTOR = {"1104": 190.0, "1404": 200.0}
 
 
 def max_thrust_g(spec: Spec) -> float:
@@ -144,7 +140,8 @@ def max_thrust_g(spec: Spec) -> float:
     p = propulsion(spec)
     if p is not None:
         return p.thrust_g(1.0)
-    return MAX_THRUST_G_BY_MOTOR.get(spec.motors.model, 190.0)
+    # the motor catalogue's typical full thrust of the class (materials.MOTOR_PRESETS)
+    return spec.motor.thrust_g
 
 
 def momentum_hover_power_w(thrust_n: float, prop_diameter_mm: float, fom_eta: float = FOM_ETA) -> float:

@@ -27,6 +27,7 @@ class CheckResult:
     clash: object | None = None  # analysis.clash.ClashResult, from `build` only
     notes: tuple[str, ...] = ()  # warnings that do not fail the design (joints outside the surrogate's training box)
     survival: object | None = None  # analysis.survival.Survival: what breaks first, at what drop height
+    fit: object | None = None  # analysis.fit_check.FitResult: the screws, holes and motor patterns
 
     @property
     def verdict(self) -> str:
@@ -73,10 +74,22 @@ def complete(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=N
 
     flight = flight_mod.evaluate(spec, budget.total_g)
     surv = _survival(spec, budget, drop, stiffness, survival_margins)
+    fit = fit_of(spec, d)
     # the survival sweep informs (the report warns when a part fails below the design drop); the
     # PASS/FAIL stays with the requirements' own checks
-    problems = _problems(spec, budget, drop) + _physics_problems(spec, stiffness, peak) + _aircraft_problems(spec, flight)
-    return CheckResult(d, budget, drop, tuple(problems), stiffness, peak, flight, survival=surv, notes=tuple(_notes(spec, d)))
+    problems = (_problems(spec, budget, drop) + _physics_problems(spec, stiffness, peak) + _aircraft_problems(spec, flight)
+                + fit.messages())
+    return CheckResult(d, budget, drop, tuple(problems), stiffness, peak, flight, survival=surv, notes=tuple(_notes(spec, d)),
+                       fit=fit)
+
+
+def fit_of(spec: Spec, d: Design):
+    """The fit check of the design (analysis/fit_check.py): screws through their holes into their
+    threads, holes clear of the rods, motor holes on the motor's pattern."""
+    from ..fasteners import fasteners
+    from . import fit_check
+
+    return fit_check.check(spec, d.parts, fasteners(spec, d.frame, d.parts))
 
 
 def _notes(spec: Spec, d: Design) -> list[str]:
@@ -220,6 +233,8 @@ def check_dict(result: CheckResult) -> dict:
         out["survival"] = result.survival.to_dict()
     if result.clash is not None:
         out["clash"] = result.clash.to_dict()
+    if result.fit is not None:
+        out["fit"] = result.fit.to_dict()
     if result.notes:
         out["notes"] = list(result.notes)
     return out

@@ -176,10 +176,10 @@ RENDER_PART = Step("render:{part}", ("part:*/{part}",), make_render_part, render
                    after=("plates:*",),  # a render never holds up the slicer
                    reads="the part's STL hash, material")
 RENDERS = Step("renders", ("part:*",), make_renders, renders_key,
-               ("report/renders.py", "export/plates.py", "report/assembly_steps.py", "vitamins.py"),
+               ("report/renders.py", "export/plates.py", "report/assembly_steps.py", "vitamins.py", "fasteners.py"),
                reads="STL hashes, placements, rods, vitamins")
 VIEWER = Step("viewer", ("check", "plates:*"), make_viewer, viewer_key,
-              ("report/viewer/*", "export/plates.py", "report/assembly_steps.py", "report/renders.py", "vitamins.py"),
+              ("report/viewer/*", "export/plates.py", "report/assembly_steps.py", "report/renders.py", "vitamins.py", "fasteners.py"),
               reads="STL hashes, placements, grams each, plates, rods, cut list")
 BOM = Step("bom", ("check", "slice:*"), bom, reads="(always: BOM, assembly steps)")
 REPORT = Step("report", ("check", "bom", "plots", "figures", "previews:*", "render:*", "renders", "viewer"), report,

@@ -73,7 +73,7 @@ def build_assembly(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir:
         assy.add(cyl, name=rod.name, color=cq.Color(*ROD_BLACK))
     from ..vitamins import to_cq, vitamins
 
-    for v in vitamins(spec, frame):
+    for v in vitamins(spec, frame, parts):
         assy.add(to_cq(v), name=v.name, color=cq.Color(*v.colour))
     return assy
 
@@ -115,7 +115,7 @@ def write_glb(spec: Spec, frame, parts: Sequence[PartSpec], meshes: dict, print_
                 world_from_print(pl.matrix(), np.asarray(print_from_local[p.name], float)))
     for rod in frame.rods.values():
         add(rod.name, rod.name, lambda rod=rod: cylinder_arrays(rod.start, rod.end, rod.diameter / 2), ROD_BLACK, np.eye(4))
-    for v in vitamins(spec, frame):
+    for v in vitamins(spec, frame, parts):
         add(v.name, v.name, lambda v=v: mesh_arrays(v), v.colour, np.eye(4))
     path = Path(path)
     path.write_bytes(glb_bytes(shapes, nodes))
@@ -211,7 +211,7 @@ def bodies(spec: Spec, frame, parts: Sequence[PartSpec], built, meshes: dict) ->
                             world_from_print(pl.matrix(), by_name[p.name].print_from_local)))
     for rod in frame.rods.values():
         out.append(Body(rod.name, "rod", rod_mesh(rod)))
-    for v in vitamins(spec, frame):
+    for v in vitamins(spec, frame, parts):
         out.append(Body(v.name, "propeller" if v.disc else "vitamin", to_trimesh(v), None, v.disc is not None))
     return out
 
@@ -219,6 +219,15 @@ def bodies(spec: Spec, frame, parts: Sequence[PartSpec], built, meshes: dict) ->
 def own_motor_pairs(frame) -> frozenset:
     """Each propeller sits on its own motor's shaft: that pair is not a clash."""
     return frozenset(frozenset((f"propeller_{m.corner}", f"motor_{m.corner}")) for m in frame.motors)
+
+
+def not_clashes(spec: Spec, frame, parts: Sequence[PartSpec]) -> frozenset:
+    """The pairs that share space by design: a propeller and its motor, a screw and the thread it
+    engages (its motor, its nut). A screw in its own clearance hole is tested like any pair: the
+    hole clears its shank and its head sits on the part's face, so their overlap is ~0."""
+    from ..vitamins import thread_pairs
+
+    return own_motor_pairs(frame) | thread_pairs(spec, frame, parts)
 
 
 def check_clashes(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path,
@@ -238,7 +247,7 @@ def check_clashes(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: 
 
         store = Memo("clash-pairs", memo[1], memo[0])
     return clash.check(bodies(spec, frame, parts, built, meshes), prop_margin=spec.requirements.prop_margin,
-                       ignore=own_motor_pairs(frame), memo=store)
+                       ignore=not_clashes(spec, frame, parts), memo=store)
 
 
 def _vitamin_key(spec: Spec, frame) -> list:

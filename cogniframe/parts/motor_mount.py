@@ -10,8 +10,12 @@ Printed upside down, the seat on the bed (z_print = seat_z - z_local). Pieces:
   hangs in print (a level arm: a D-section sleeve, its flat sides down to the seat); it runs from
   where the seat leaves a full `wall` above the bore, down-slope for `width`. Anything above the
   seat plane (the up-slope ends) is cut flat by the bed;
-* through holes: each rod's bore (full length, so the rod slides through), the square motor bolt
-  pattern (`bolt_spacing`, `screw_clearance`), and the centre hole `shaft_hole`.
+* through holes: each rod's bore (full length, so the rod slides through), the motor's holes
+  (`holes`: the catalogue pattern across the shaft, turned onto the arm axis and across it, only
+  the pairs that clear the rods; `screw_clearance`), and the centre hole `shaft_hole`; under each
+  hole a counterbore (`counterbore_d`) from `grip` below the seat down through anything there (a
+  clip sleeve or web), so the screw head bears on flat plate and the stock screw engages the
+  motor's thread (partlist.motor_screw).
 """
 
 from __future__ import annotations
@@ -98,10 +102,11 @@ def build(part: PartSpec) -> Built:
     corners = [to_print(a_h * sa * half + lat * sl * half)[:2] for sa, sl in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
     pieces = [prism(corners, 0.0, plate_t)]
     cutters = []
-    b = float(part.param("bolt_spacing")) / 2
     hole_r = float(part.param("screw_clearance")) / 2
-    bolts = [a_h * sa * b + lat * sl * b for sa, sl in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+    bolts = [np.array([x, y, 0.0]) for x, y in part.param("holes")]
+    cb_r = float(part.param("counterbore_d")) / 2
     holes = [(c, hole_r) for c in bolts] + [(np.zeros(3), float(part.param("shaft_hole")) / 2)]
+    grip = float(part.param("grip"))
     for (p, d), (pc, dc) in zip(rods, clips):
         dz = float(dc[2])
         cos_a = math.sqrt(1 - dz * dz)
@@ -116,7 +121,7 @@ def build(part: PartSpec) -> Built:
         if dp[2] < 0:  # build the sleeve rising in print
             start, dp = to_print(pc + dc * (s_lo + width)), -dp
         if abs(dp[2]) > 1e-9:
-            pieces.append(sloped_sleeve(start, dp, width, r, skirt=_skirt(r, pc, dc, holes)))
+            pieces.append(sloped_sleeve(start, dp, width, r, skirt=_skirt(r, pc, dc, holes + [(c, cb_r) for c in bolts])))
         else:
             # A level arm (frame.knee_height puts the knee level with the core link): a D-section
             # sleeve from the bed, as the joints' level sockets. A bare cylinder stood 0.5 mm
@@ -129,6 +134,9 @@ def build(part: PartSpec) -> Built:
     for centre, hr in holes:
         c = to_print(centre)
         cutters.append(cq.Solid.makeCylinder(hr, 200.0, cq.Vector(c[0], c[1], -1.0), cq.Vector(0, 0, 1)))
+    for centre in bolts:  # the heads' seats: up from `grip` as printed (down from the plate in the air)
+        c = to_print(centre)
+        cutters.append(cq.Solid.makeCylinder(cb_r, 200.0, cq.Vector(c[0], c[1], grip), cq.Vector(0, 0, 1)))
     shape = body.cut(fuse_all(cutters)).clean()
     solids = shape.Solids()
     if len(solids) != 1:

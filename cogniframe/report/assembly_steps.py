@@ -177,8 +177,8 @@ def assembly_steps(design: "Design") -> tuple[Step, ...]:
     rest = [n for n in parts if n not in used_parts]
     comps = ", ".join(f"{c.qty} x {c.name}" if c.qty > 1 else c.name for c in spec.components)
     add("Electronics", rest, [], "none",
-        f"Screw the {spec.motor.name} motors onto the motor mounts ({spec.motor.screw} screws, not longer than the mount "
-        "so they do not touch the windings). Mount the flight controller / ESC stack on the core plate standoffs"
+        f"Screw the {spec.motor.name} motors onto the motor mounts: {_motor_screws(parts)}. Mount the flight controller / "
+        "ESC stack on the core plate standoffs"
         + (f", the {spec.core.computer.name} on the computer mount" if spec.core.computer else "")
         + (f"; fit {comps}" if comps else "") + ". Solder the motors to the ESC, route wires along the arm rods, fit "
         "the propellers (2 CW, 2 CCW) last. Battery: "
@@ -208,3 +208,15 @@ def to_markdown(steps: Sequence[Step], title: str = "Assembly") -> str:
         out.append(f"- Glue: {s.glue}")
         out.append("")
     return "\n".join(out)
+
+
+def _motor_screws(parts: dict) -> str:
+    """The motor screws as the builder needs them (`parts`: name -> PartSpec): how many, which,
+    into what and how deep."""
+    mount = parts.get("motor_mount")
+    if mount is None or "holes" not in dict(mount.params):
+        return "the screws that come with the motors, no longer than the seat plus the motor's thread"
+    n = len(mount.param("holes"))
+    which = "the pair of opposite holes on the arm's axis" if n == 2 else "all four holes"
+    return (f"{n} {mount.param('screw')} x {mount.param('screw_length'):g} screws per motor, up through {which} "
+            f"into the motor's thread ({mount.param('engagement'):g} mm deep; a longer screw reaches the windings)")

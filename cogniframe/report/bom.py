@@ -109,7 +109,7 @@ def build_bom(spec: "Spec", design: "Design", budget: "MassBudget",
     motor = spec.motor
     it = take(f"motor {motor.name}")
     if it is not None:
-        lines.append(BomLine("motor", f"brushless motor {motor.name}", it.qty, f"{motor.bolt_spacing:g} mm {motor.screw} bolt square",
+        lines.append(BomLine("motor", f"brushless motor {motor.name}", it.qty, f"{motor.pattern} mm {motor.screw} holes (opposite holes across the shaft)",
                              "", it.mass_g_each, it.mass_g,
                              notes=f"bell {motor.bell_d:g} mm" + (f"; {spec.motors.kv} KV" if spec.motors.kv else "")))
     it = take(f"propeller {spec.motors.prop_diameter:g} mm")
