@@ -105,40 +105,161 @@ def test_session_checks_edits_refuses_bad_values_and_saves(tmp_path, monkeypatch
     shutil.copy(CARBON, tmp_path / "carbon.yaml")
     original = (tmp_path / "carbon.yaml").read_bytes()
     events = Events()
-    s = Session("carbon.yaml", publish=events, view=False)
+    s = Session("carbon.yaml", view=False)
     try:
-        s.start()
+        page = s.connect(events)
+        base = s.base_hash
+        s.edit(page, {}, base, seq=1)
         first = events.wait(lambda e: e["type"] == "figures")
         if first["pending_fe"]:  # the joints' FE not in the cache yet: the analytic figures at once, then the FE's
             assert first["model"] == "analytic"
             first = events.wait(lambda e: e["type"] == "figures" and e["after_fe"], timeout=600)
         assert first["model"] == "fe" and not first["pending_fe"]
         assert first["check"] == cf.load("carbon.yaml").check().to_dict()
-        s.edit({"core.battery.mass": "70"}, client=1, edited="core.battery.mass")
-        heavier = events.wait(lambda e: e["type"] == "figures" and e["client"] == 1)
+        s.edit(page, {"core.battery.mass": "70"}, base, seq=2, edited="core.battery.mass")
+        heavier = events.wait(lambda e: e["type"] == "figures" and e["seq"] == 2)
         assert heavier["check"]["mass"]["total_g"] == pytest.approx(first["check"]["mass"]["total_g"] + 12, abs=0.011)
         assert heavier["model"] == "fe" and not heavier["pending_fe"] and heavier["ms"] < 2000
-        s.edit({"core.battery.mass": "70", "rods.diameter": "20"}, client=2, edited="rods.diameter")
-        bad = events.wait(lambda e: e["type"] == "invalid" and e["client"] == 2)
+        s.edit(page, {"core.battery.mass": "70", "rods.diameter": "20"}, base, seq=3, edited="rods.diameter")
+        bad = events.wait(lambda e: e["type"] == "invalid" and e["seq"] == 3)
         with pytest.raises(cf.ParamsError) as err:
             cf.load("carbon.yaml").with_values({"core.battery.mass": 70, "rods.diameter": 20})
         assert bad["message"] == str(err.value) and bad["key"] == "rods.diameter"
-        assert s.save()["type"] == "save-error"  # nothing is saved while a value is refused
+        refused = s.save({"core.battery.mass": "70", "rods.diameter": "20"}, base, page)
+        assert refused["type"] == "save-error" and "rods.diameter" in refused["message"]  # a refused value is never saved
         assert (tmp_path / "carbon.yaml").read_bytes() == original
-        s.edit({"core.battery.mass": "70", "rods.diameter": "3.0"}, client=3)
-        events.wait(lambda e: e["type"] == "figures" and e["client"] == 3)
-        assert s.save()["type"] == "saved"
+        saved = s.save({"core.battery.mass": "70", "rods.diameter": "3.0"}, base, page)
+        assert saved["type"] == "saved" and saved["base"] != base
         assert (tmp_path / "carbon.yaml").read_text(encoding="utf-8") == original.decode().replace(
             "    mass: 58             # g", "    mass: 70             # g")
-        (tmp_path / "carbon.yaml").write_text(original.decode() + "# edited elsewhere\n", encoding="utf-8")
-        s.edit({"core.battery.mass": "71"}, client=4)
-        events.wait(lambda e: e["type"] == "figures" and e["client"] == 4)
-        refused = s.save()
+        # a page still on the old text: its Save is refused, whatever it holds, and nothing is written
+        after = (tmp_path / "carbon.yaml").read_bytes()
+        stale = s.save({"core.battery.mass": "71"}, base, page)
+        assert stale["type"] == "save-error" and "changed on disk" in stale["message"]
+        assert (tmp_path / "carbon.yaml").read_bytes() == after
+        (tmp_path / "carbon.yaml").write_text(after.decode() + "# edited elsewhere\n", encoding="utf-8")
+        refused = s.save({"core.battery.mass": "71"}, saved["base"], page)
         assert refused["type"] == "save-error" and "changed on disk" in refused["message"]
         assert (tmp_path / "carbon.yaml").read_text(encoding="utf-8").endswith("# edited elsewhere\n")
+        rebased = s.rebase()  # the file as it is now, under the page's edits
+        assert rebased["type"] == "rebased" and rebased["values"]["core.battery.mass"] == "70"
+        assert s.save({"core.battery.mass": "71"}, rebased["base"], page)["type"] == "saved"
+        text = (tmp_path / "carbon.yaml").read_text(encoding="utf-8")
+        assert "    mass: 71             # g" in text and text.endswith("# edited elsewhere\n")
     finally:
         s.close()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["carbon.yaml"]  # nothing else written
+
+
+def test_pages_of_one_session_never_change_each_other(tmp_path, monkeypatch):
+    """Each page's figures are its own design's: a page that connects or edits resets no other."""
+    from cogniframe.studio.session import Session
+
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(CARBON, tmp_path / "carbon.yaml")
+    a_events, b_events = Events(), Events()
+    s = Session("carbon.yaml", view=False)
+    try:
+        a = s.connect(a_events)
+        s.edit(a, {"frame.width": "220"}, s.base_hash, seq=1)
+        fig_a = a_events.wait(lambda e: e["type"] == "figures" and e["seq"] == 1, timeout=600)
+        b = s.connect(b_events)  # a new page: A's design stays
+        s.edit(b, {"core.battery.mass": "61"}, s.base_hash, seq=1)
+        fig_b = b_events.wait(lambda e: e["type"] == "figures" and e["seq"] == 1, timeout=600)
+        s.edit(a, {"frame.width": "220", "frame.depth": "215"}, s.base_hash, seq=2)
+        fig_a2 = a_events.wait(lambda e: e["type"] == "figures" and e["seq"] == 2, timeout=600)
+        assert not [e for e in a_events.items if e["type"] == "figures" and e["check"]["mass"]["total_g"] == fig_b["check"]["mass"]["total_g"]]
+        expect_a = cf.load("carbon.yaml").with_values({"frame.width": 220, "frame.depth": 215}).with_fast_model().check()
+        assert fig_a2["check"]["mass"]["total_g"] == pytest.approx(expect_a.mass_g, abs=0.01)
+        assert fig_b["check"]["mass"]["total_g"] == pytest.approx(cf.load("carbon.yaml").check().mass_g + 3, abs=0.011)
+        assert fig_a["check"]["frame"] != fig_b["check"]["frame"]
+    finally:
+        s.close()
+
+
+def test_set_values_makes_a_whole_edit_from_one_parse(monkeypatch):
+    """The form's every value set at once: one parse of the text (not one per key), and the same
+    text as setting the keys one at a time."""
+    import yaml
+
+    from cogniframe.api import yamledit
+
+    d = cf.load(CARBON)
+    values = d.spec.model_dump(mode="json")
+    fields = form.fields(form.build(spec_mod.json_schema(), values))
+    edit = {k: form.value_at(values, k) for k in fields}
+    edit.update({"frame.width": 220, "core.battery.mass": 70, "model.new_section.a": 1, "model.new_section.b": [1, 2]})
+    one_by_one = yamledit._one_by_one(d.text, edit)
+    calls = []
+    compose = yaml.compose
+    monkeypatch.setattr(yaml, "compose", lambda *a, **k: calls.append(1) or compose(*a, **k))
+    t0 = time.perf_counter()
+    assert yamledit.set_values(d.text, edit) == one_by_one
+    assert len(calls) == 1 and len(edit) > 100
+    assert time.perf_counter() - t0 < 0.5
+
+
+def test_messages_the_studio_does_not_take_are_refused_in_a_sentence(tmp_path, monkeypatch):
+    from cogniframe.studio.session import MAX_SHOWN, Refused, Session
+
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(CARBON, tmp_path / "carbon.yaml")
+    events = Events()
+    s = Session("carbon.yaml", view=False)
+    try:
+        page = s.connect(events)
+        t0 = time.perf_counter()
+        with pytest.raises(Refused, match="10000 keys in one message"):
+            s.edit(page, {f"frame.k{i}": 1 for i in range(10_000)}, s.base_hash)
+        with pytest.raises(Refused, match="not an input of the form"):
+            s.edit(page, {"frame.nope": 1}, s.base_hash)
+        with pytest.raises(Refused) as err:
+            s.edit(page, {"name": "x" * 1_000_000}, s.base_hash)
+        assert len(str(err.value)) < 200
+        assert time.perf_counter() - t0 < 0.5
+        with pytest.raises(Refused, match="reload the page"):
+            s.edit(page, {}, "not a hash the studio holds")
+        # a name long enough to pass but not valid: the CLI's paragraph, its long runs cut
+        s.edit(page, {"name": "y" * 900}, s.base_hash, seq=1)
+        bad = events.wait(lambda e: e["type"] == "invalid" and e["seq"] == 1)
+        assert bad["key"] == "name" and "y" * 100 in bad["message"] and len(bad["message"]) <= 4000
+        # true/false only: anything else goes to the validator, which refuses it as the CLI does
+        s.edit(page, {"frame.struts": "maybe"}, s.base_hash, seq=2, edited="frame.struts")
+        maybe = events.wait(lambda e: e["type"] == "invalid" and e["seq"] == 2)
+        (tmp_path / "maybe.yaml").write_text(CARBON.read_text(encoding="utf-8").replace("  struts: true", '  struts: "maybe"'),
+                                             encoding="utf-8")
+        with pytest.raises(cf.ParamsError) as cli:
+            cf.load("maybe.yaml")
+        assert maybe["key"] == "frame.struts" and maybe["message"] == str(cli.value).replace("maybe.yaml", "carbon.yaml")
+    finally:
+        s.close()
+    from cogniframe.studio.session import shorten
+
+    assert len(shorten("z" * 1_000_000)) < MAX_SHOWN + 60
+
+
+def test_compare_gives_each_designs_figures(tmp_path, monkeypatch):
+    from cogniframe.studio.session import COMPARE_ROWS, Session
+
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(CARBON, tmp_path / "carbon.yaml")
+    s = Session("carbon.yaml", view=False)
+    try:
+        out = s.compare([{"name": "file", "base": s.base_hash, "values": {}},
+                         {"name": "heavy", "base": s.base_hash, "values": {"core.battery.mass": "70"}},
+                         {"name": "bad", "base": s.base_hash, "values": {"rods.diameter": "20"}}])
+    finally:
+        s.close()
+    file_, heavy, bad = out["columns"]
+    check = cf.load("carbon.yaml").check().to_dict()
+    assert set(file_["figures"]) == {row[0] for row in COMPARE_ROWS}
+    assert file_["figures"]["mass_g"] == check["mass"]["total_g"] and file_["figures"]["verdict"] == "PASS"
+    assert file_["figures"]["first_mode_hz"] == check["stiffness"]["modes_hz"][0]
+    design = check["stiffness"]["design_drop_height_cm"]
+    assert file_["figures"]["one_drop_peak_g"] == next(h["peak_g_drop_median"] for h in check["peak_g"]["heights"]
+                                                       if h["height_cm"] == design)
+    assert heavy["figures"]["mass_g"] == pytest.approx(file_["figures"]["mass_g"] + 12, abs=0.011)
+    assert heavy["figures"]["verdict"] == "FAIL" and "rods.diameter" in bad["error"]
 
 
 def test_a_failed_3d_view_still_brings_the_fe_figures(tmp_path, monkeypatch):
@@ -154,11 +275,11 @@ def test_a_failed_3d_view_still_brings_the_fe_figures(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     shutil.copy(CARBON, tmp_path / "carbon.yaml")
     events = Events()
-    s = Session("carbon.yaml", publish=events, view=True)
+    s = Session("carbon.yaml", view=True)
     try:
-        s.start()
-        s.edit({"joints.wall": "1.35"}, client=1, edited="joints.wall")  # a wall no other test solves
-        fast = events.wait(lambda e: e["type"] == "figures" and e["client"] == 1, timeout=120)
+        page = s.connect(events)
+        s.edit(page, {"joints.wall": "1.35"}, s.base_hash, seq=1, edited="joints.wall")  # a wall no other test solves
+        fast = events.wait(lambda e: e["type"] == "figures" and e["seq"] == 1, timeout=120)
         assert fast["pending_fe"] and fast["model"] == "analytic"
         failed = events.wait(lambda e: e["type"] == "progress" and e.get("error"), timeout=120)
         assert "no view today" in failed["error"]
@@ -262,17 +383,62 @@ def test_listens_on_127_0_0_1_only_and_stops_on_ctrl_c(tmp_path):
         from websockets.exceptions import InvalidStatus
         from websockets.sync.client import connect
 
-        with pytest.raises(InvalidStatus):
-            connect(f"ws://127.0.0.1:{port}/ws", origin="http://evil.example", open_timeout=10).close()
-        with connect(f"ws://127.0.0.1:{port}/ws", origin=f"http://127.0.0.1:{port}", open_timeout=10) as ws:
+        token, base = _token_and_base(port)
+        for query, origin in ((f"?token={token}", "http://evil.example"), ("", f"http://127.0.0.1:{port}"),
+                              ("?token=guessed", f"http://127.0.0.1:{port}"), (f"?token={token}x", None)):
+            with pytest.raises(InvalidStatus):  # another site's page, or a page without this server's token
+                connect(f"ws://127.0.0.1:{port}/ws{query}", origin=origin, open_timeout=10).close()
+        with connect(f"ws://127.0.0.1:{port}/ws?token={token}", origin=f"http://127.0.0.1:{port}", open_timeout=10,
+                     max_size=None) as ws:
+            # what a page should never send: each refused in a sentence, none a traceback on the terminal
+            for bad in ("not json", b"\x00\x01", "[1, 2]", json.dumps({"type": "launch"}),
+                        json.dumps({"type": "edit", "base": base, "values": {"name": "x" * 1_000_000}}),
+                        json.dumps({"type": "edit", "base": base, "values": "frame.width=1"}),
+                        json.dumps({"type": "compare", "designs": [{"base": base}] * 50})):
+                ws.send(bad)
+                event = json.loads(ws.recv(timeout=30))
+                assert event["type"] == "refused" and len(event["message"]) < 300, event
+            ws.send(json.dumps({"type": "edit", "seq": 1, "base": base, "values": {}}))
             event = json.loads(ws.recv(timeout=300))
             while event["type"] != "figures":
                 event = json.loads(ws.recv(timeout=300))
-            assert event["check"]["name"] == "carbon"
+            assert event["check"]["name"] == "carbon" and event["seq"] == 1
+            while event["type"] != "figures" or event["pending_fe"]:  # stopped once idle: a FE pool that is
+                event = json.loads(ws.recv(timeout=600))              # starting when Ctrl-C comes prints its own
     finally:
         code, err = _stop(proc)
     assert code == 0 and "studio stopped" in err, err
+    assert "Traceback" not in err and "errors are logged to" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["carbon.yaml"]
+
+
+def _token_and_base(port: int) -> tuple[str, str]:
+    import urllib.request
+
+    with urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=30) as r:
+        text = r.read().decode()
+    return re.search(r'data-token="([^"]+)"', text).group(1), re.search(r'data-base="([0-9a-f]{64})"', text).group(1)
+
+
+def test_every_response_forbids_framing(tmp_path):
+    import urllib.error
+    import urllib.request
+
+    shutil.copy(CARBON, tmp_path / "carbon.yaml")
+    proc, port = _start_studio(tmp_path)
+    try:
+        for path in ("/", "/static/studio.js", "/static/studio.css", "/viewer/viewer.js", "/scene/none.json", "/files/x", "/nope"):
+            try:
+                r = urllib.request.urlopen(f"http://127.0.0.1:{port}{path}", timeout=30)
+            except urllib.error.HTTPError as e:
+                r = e
+            assert r.headers["X-Frame-Options"] == "DENY", path
+            assert r.headers["Content-Security-Policy"] == "frame-ancestors 'none'", path
+        token_1, _ = _token_and_base(port)
+        token_2, _ = _token_and_base(port)
+        assert token_1 == token_2 and len(token_1) >= 40  # one per server, random
+    finally:
+        _stop(proc)
 
 
 def test_bad_params_or_busy_port_exit_2(tmp_path, run_cli):
