@@ -523,14 +523,25 @@ def test_an_edit_changes_the_figures_within_half_a_second(page, studio, capsys):
     assert page.text_content(".verdict") == "FAIL"  # over 250 g
     assert "over the 250 g limit" in page.text_content("#problems")
     times = [rec["ms"]]
-    for grams in ("66", "59", "64", "58", "62", "58"):  # battery grams: no new geometry, no FE
-        times.append(_edit(page, "core.battery.mass", grams)["ms"])
+    # ten edits of values that change no shape (battery grams and capacity, motor KV): no FE, no new view;
+    # each time is the page's, from the input event to the figures on the page
+    for key, value in (("core.battery.mass", "66"), ("motors.kv", "6500"), ("core.battery.mass", "59"),
+                       ("core.battery.capacity_mah", "700"), ("core.battery.mass", "64"), ("motors.kv", "7000"),
+                       ("core.battery.capacity_mah", "650"), ("core.battery.mass", "58"), ("motors.kv", "6000")):
+        times.append(_edit(page, key, value)["ms"])
+    assert len(times) == 10
     assert float(_metric(page, "mass.total_g")) == pytest.approx(before, abs=0.11)
     assert page.text_content(".verdict") == "PASS"
+    load = os.getloadavg()[0]
     with capsys.disabled():
-        print(f"\nstudio: edit -> figures (no new geometry), ms: {[round(t) for t in times]}, median {statistics.median(times):.0f}")
-    assert statistics.median(times) < 500, times
-    _save(page, studio)  # back to the file as it was (same value)
+        print(f"\nstudio: edit -> figures (no new geometry), ms: {[round(t) for t in times]}, "
+              f"median {statistics.median(times):.0f} (load average {load:.1f} on {os.cpu_count()} cores)")
+    # what the page adds to the studio's own work (the socket, the 30 ms typing pause, the drawing) is small
+    # whatever the load; the whole is under half a second on a machine not loaded past its cores
+    overhead = [r["ms"] - r["server_ms"] for r in page.evaluate("window.cogniframeStudio.latencies.slice(-10)")]
+    assert statistics.median(overhead) < 200, overhead
+    assert statistics.median(times) < (500 if load <= (os.cpu_count() or 1) else 3000), (times, load)
+    assert page.is_disabled("#save") and page.text_content("#status") == "as in the file"  # every value back
 
 
 def test_a_bad_value_gets_the_cli_message_and_nothing_is_saved(page, studio, tmp_path, run_cli, monkeypatch):
@@ -648,3 +659,200 @@ def test_build_offers_the_plates_and_the_report(page, studio):
         data = r.read()
     assert data[:2] == b"PK" and data == (out / plate.removeprefix("/files/")).read_bytes()  # a 3MF is a zip
     assert sorted(p.name for p in studio["folder"].iterdir()) == ["carbon.yaml", "out"]
+
+
+# -- in the browser: pages, the address, snapshots ---------------------------------------------------
+
+def _open(ctx, url: str, errors: list | None = None):
+    tab = ctx.new_page()
+    if errors is not None:
+        tab.on("pageerror", lambda e: errors.append(str(e)))
+    tab.goto(url)
+    tab.wait_for_function("document.body.dataset.figuresSeq !== undefined", timeout=300_000)
+    return tab
+
+
+def _figures(tab) -> dict:
+    return tab.evaluate("Object.fromEntries([...document.querySelectorAll('#figures [data-metric]')]"
+                        ".map(e => [e.dataset.metric.replace(/heights\\.\\d+/, 'heights.design'), e.textContent]))")
+
+
+def test_two_pages_keep_their_edits_and_save_writes_what_the_saving_page_shows(studio):
+    params = studio["folder"] / "carbon.yaml"
+    original = params.read_bytes()
+    ctx = studio["browser"].new_context(viewport={"width": 1400, "height": 1000})
+    errors: list[str] = []
+    try:
+        a = _open(ctx, studio["url"], errors)
+        _edit(a, "core.battery.capacity_mah", "800")  # not saved
+        fig_a = _figures(a)
+        b = _open(ctx, studio["url"], errors)  # a second page connects: A's design stays A's
+        assert b.input_value("[name='core.battery.capacity_mah']") == "650"
+        _edit(b, "core.battery.mass", "61")
+        fig_b = _figures(b)
+        a.wait_for_timeout(500)
+        assert a.input_value("[name='core.battery.capacity_mah']") == "800" and a.input_value("[name='core.battery.mass']") == "58"
+        assert _figures(a) == fig_a and fig_a != fig_b
+        assert a.text_content("#status") == "edited, not saved"
+        _save(a, studio)
+        saved = params.read_text(encoding="utf-8")  # the file holds what A shows, not B's battery
+        assert saved == original.decode().replace("    capacity_mah: 650 ", "    capacity_mah: 800 ")
+        assert cf.load(params).get("core.battery.capacity_mah") == 800 and cf.load(params).get("core.battery.mass") == 58
+        # B's edits are not in the file: its Save refuses, and the refusal stays until dismissed
+        b.wait_for_selector("#notice:not([hidden]) #rebase:not([hidden])", timeout=30_000)
+        b.click("#save")
+        b.wait_for_function("document.querySelector('#notice .notice-text').textContent.includes('changed on disk')",
+                            timeout=30_000)
+        assert params.read_text(encoding="utf-8") == saved
+        _edit(b, "core.battery.mass", "62")  # later events do not replace it
+        b.wait_for_timeout(1500)
+        assert b.is_visible("#notice") and "changed on disk" in b.text_content("#notice")
+        # B takes the saved file under its edits, then its Save writes both
+        b.click("#rebase")
+        b.wait_for_function("document.getElementById('notice').hidden", timeout=30_000)
+        assert b.input_value("[name='core.battery.capacity_mah']") == "800" and b.input_value("[name='core.battery.mass']") == "62"
+        b.wait_for_function("!document.getElementById('save').disabled", timeout=60_000)
+        _save(b, studio)
+        assert params.read_text(encoding="utf-8") == saved.replace("    mass: 58             # g", "    mass: 62             # g")
+        b.click("#dismiss") if b.is_visible("#notice") else None
+        assert not b.is_visible("#notice")
+        assert not errors, errors
+    finally:
+        ctx.close()
+        params.write_bytes(original)  # the next pages start from the preset again
+
+
+def test_a_page_of_another_origin_cannot_frame_the_studio(studio):
+    ctx = studio["browser"].new_context(viewport={"width": 1400, "height": 1000})
+    try:
+        tab = ctx.new_page()
+        evil = "http://localhost:9/"  # another origin (the studio is 127.0.0.1:PORT), served by the route below
+        tab.route(evil, lambda route: route.fulfill(content_type="text/html", body=(
+            f'<iframe id="f" src="{studio["url"]}" style="opacity:0" width="800" height="600"></iframe>')))
+        tab.goto(evil)
+        tab.wait_for_timeout(3000)
+        framed = [f for f in tab.frames if f != tab.main_frame]
+        assert framed, "no frame"
+        for f in framed:  # Chromium refused to show the studio in it: no form, no token to read
+            assert not f.url.startswith(studio["url"]) or f.query_selector("#params") is None
+            try:
+                assert f.evaluate("document.querySelector('[data-token]')") is None
+            except Exception:  # noqa: BLE001 - an error page of another origin cannot even be read
+                pass
+    finally:
+        ctx.close()
+
+
+def test_a_10000_key_message_is_refused_at_once_and_the_other_page_keeps_updating(studio):
+    ctx = studio["browser"].new_context(viewport={"width": 1400, "height": 1000})
+    try:
+        a = _open(ctx, studio["url"])
+        b = _open(ctx, studio["url"])
+        # A sends what its own page never would: 10 000 keys, then a 1 MB name, on a socket of its own
+        result = a.evaluate("""() => new Promise((resolve) => {
+            const ws = new WebSocket(`ws://${location.host}/ws?token=${document.body.dataset.token}`);
+            const out = [];
+            ws.onopen = () => {
+              const values = {};
+              for (let i = 0; i < 10000; i++) values[`frame.k${i}`] = i;
+              out.t0 = performance.now();
+              ws.send(JSON.stringify({type: "edit", seq: 1, base: document.body.dataset.base, values}));
+            };
+            ws.onmessage = (m) => {
+              const ev = JSON.parse(m.data);
+              if (ev.type !== "refused") return;
+              out.push({ms: performance.now() - out.t0, message: ev.message});
+              if (out.length === 1) {
+                out.t0 = performance.now();
+                ws.send(JSON.stringify({type: "edit", seq: 2, base: document.body.dataset.base,
+                                        values: {name: "x".repeat(1000000)}}));
+              } else { ws.close(); resolve(out); }
+            };
+        })""")
+        rec = _edit(b, "core.battery.mass", "66")  # B's figures keep coming
+        keys, big = result
+        assert "10000 keys" in keys["message"] and keys["ms"] < 500, keys
+        assert "bytes" in big["message"] and len(big["message"]) < 300 and big["ms"] < 500, big
+        assert rec["ms"] < 5000 and float(_metric(b, "mass.total_g")) == pytest.approx(float(_metric(a, "mass.total_g")) + 8, abs=0.11)
+        # in the page: a 1 MB name typed into the form is refused in a sentence, not echoed whole
+        a.evaluate("(() => { const el = document.querySelector(\"[name='name']\"); el.value = 'y'.repeat(1000000);"
+                   " el.dispatchEvent(new Event('input', {bubbles: true})); })()")
+        a.wait_for_selector("#notice:not([hidden])", timeout=30_000)
+        assert "refused" in a.text_content("#notice") and len(a.text_content("#notice")) < 400
+    finally:
+        ctx.close()
+
+
+def test_the_design_is_in_the_address(studio):
+    browser = studio["browser"]
+    ctx = browser.new_context(viewport={"width": 1400, "height": 1000})
+    other = browser.new_context(viewport={"width": 1400, "height": 1000})
+    try:
+        a = _open(ctx, studio["url"])
+        _edit(a, "core.battery.mass", "70")
+        _edit(a, "motors.kv", "6500")
+        _edit(a, "core.battery.capacity_mah", "700")
+        assert "capacity_mah=700" in a.url
+        _edit(a, "core.battery.capacity_mah", "650")  # back to the file's value: only changed values stay in the address
+        url = a.url
+        assert url.split("#", 1)[1] == "core.battery.mass=70&motors.kv=6500"
+        shown = _figures(a)
+        # the link, in a browser that never saw this page: the same design and figures
+        c = _open(other, url)
+        c.wait_for_function(f"document.querySelector(\"[data-metric='mass.total_g']\").textContent === {json.dumps(shown['mass.total_g'])}",
+                            timeout=60_000)
+        assert c.input_value("[name='core.battery.mass']") == "70" and c.input_value("[name='motors.kv']") == "6500"
+        assert _figures(c) == shown and c.text_content("#status") == "edited, not saved"
+        # leaving asks first; a reload keeps the unsaved edits
+        dialogs = []
+        a.on("dialog", lambda d: (dialogs.append(d.type), d.accept()))
+        a.reload()
+        a.wait_for_function("document.body.dataset.figuresSeq !== undefined", timeout=300_000)
+        a.wait_for_function(f"document.querySelector(\"[data-metric='mass.total_g']\").textContent === {json.dumps(shown['mass.total_g'])}",
+                            timeout=60_000)
+        assert dialogs == ["beforeunload"]
+        assert a.input_value("[name='core.battery.mass']") == "70" and _figures(a) == shown
+        # undo and redo walk the edits back and forth, the address with them
+        a.fill("[name='core.battery.mass']", "59")
+        a.wait_for_function("location.hash.includes('core.battery.mass=59')", timeout=30_000)
+        a.click("#undo")
+        a.wait_for_function("location.hash === '#core.battery.mass=70&motors.kv=6500'", timeout=30_000)
+        a.click("#redo")
+        a.wait_for_function("location.hash.includes('core.battery.mass=59')", timeout=30_000)
+        assert a.input_value("[name='core.battery.mass']") == "59"
+    finally:
+        ctx.close()
+        other.close()
+
+
+def test_compare_of_two_snapshots_shows_both_columns(studio):
+    ctx = studio["browser"].new_context(viewport={"width": 1400, "height": 1000})
+    try:
+        a = _open(ctx, studio["url"])
+        a.fill("#snapshot-name", "as in the file")
+        a.click("#snapshot-take")
+        _edit(a, "core.battery.mass", "70")
+        a.fill("#snapshot-name", "70 g battery")
+        a.click("#snapshot-take")
+        assert a.eval_on_selector_all("#snapshots li", "ls => ls.map(l => l.dataset.snapshot)") == ["now", "0", "1"]
+        a.check("#snapshots li[data-snapshot='0'] input")
+        a.check("#snapshots li[data-snapshot='1'] input")
+        a.click("#compare-go")
+        a.wait_for_selector("table.compare", timeout=300_000)
+        heads = a.eval_on_selector_all("table.compare thead th", "ths => ths.map(t => t.textContent)")
+        assert heads == ["", "as in the file", "70 g battery"]
+        rows = a.eval_on_selector_all("table.compare tbody tr", "trs => Object.fromEntries(trs.map(tr => [tr.dataset.row, "
+                                      "[...tr.cells].slice(1).map(td => [td.textContent, td.classList.contains('differs')])]))")
+        file_check = cf.load(studio["folder"] / "carbon.yaml").check()
+        heavy = cf.load(studio["folder"] / "carbon.yaml").with_values({"core.battery.mass": 70}).check()
+        assert rows["mass_g"] == [[f"{file_check.mass_g:.1f}", True], [f"{heavy.mass_g:.1f}", True]]
+        assert rows["verdict"] == [["PASS", True], ["FAIL", True]]
+        assert rows["k_n_per_m"][0] == rows["k_n_per_m"][1] and not rows["k_n_per_m"][0][1]  # same k: not highlighted
+        assert set(rows) == {"mass_g", "margin_g", "k_n_per_m", "safe_drop_cm", "one_drop_peak_g", "hover_time_min",
+                             "thrust_to_weight", "first_mode_hz", "verdict"}
+        # a snapshot opens in the form (and Undo goes back)
+        a.click("#snapshots li[data-snapshot='0'] .snap-open")
+        a.wait_for_function("location.hash === ''", timeout=30_000)
+        assert a.input_value("[name='core.battery.mass']") == "58"
+    finally:
+        ctx.close()

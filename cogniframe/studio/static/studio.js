@@ -136,10 +136,9 @@ form.addEventListener("change", onEdit);
 
 function commit() {  // an edit: into the undo history, the address, and to the server
   const state = changes();
-  if (!sameState(state, committed)) {
-    past.push(committed);
-    future.length = 0;
-  }
+  if (sameState(state, committed)) { editStart = null; return; }  // e.g. the change event of a field left: nothing new
+  past.push(committed);
+  future.length = 0;
   send();
 }
 
@@ -265,7 +264,7 @@ function handle(ev) {
     wantedScene = ev.geometry;
     if (sceneUrls[wantedScene]) loadScene({ key: wantedScene, url: sceneUrls[wantedScene] });
     const dirty = showDirty();
-    setStatus(dirty ? "edited, not saved" : "as in the file", dirty ? "dirty" : "");
+    if (dirty || !statusEl.textContent.startsWith("saved")) setStatus(dirty ? "edited, not saved" : "as in the file", dirty ? "dirty" : "");
   } else if (ev.type === "invalid") {
     if (ev.seq < seq) return;
     valid = false;
