@@ -658,6 +658,16 @@ def test_build_offers_the_plates_and_the_report(page, studio):
     with urllib.request.urlopen(studio["url"].rstrip("/") + plate, timeout=30) as r:
         data = r.read()
     assert data[:2] == b"PK" and data == (out / plate.removeprefix("/files/")).read_bytes()  # a 3MF is a zip
+    with urllib.request.urlopen(studio["url"] + "files/report.html", timeout=30) as r:  # opens in the browser
+        assert r.headers["Content-Type"].startswith("text/html") and r.headers["Content-Disposition"].startswith("inline")
+        assert r.read() == (out / "report.html").read_bytes()
+    ctx = studio["browser"].new_context()
+    try:  # Chromium shows it (a download would make goto fail with "Download is starting")
+        tab = ctx.new_page()
+        response = tab.goto(studio["url"] + "files/report.html")
+        assert response.ok and tab.locator("body").inner_text().strip()
+    finally:
+        ctx.close()
     assert sorted(p.name for p in studio["folder"].iterdir()) == ["carbon.yaml", "out"]
 
 
