@@ -391,7 +391,7 @@ def test_listens_on_127_0_0_1_only_and_stops_on_ctrl_c(tmp_path):
         with connect(f"ws://127.0.0.1:{port}/ws?token={token}", origin=f"http://127.0.0.1:{port}", open_timeout=10,
                      max_size=None) as ws:
             # what a page should never send: each refused in a sentence, none a traceback on the terminal
-            for bad in ("not json", b"\x00\x01", "[1, 2]", json.dumps({"type": "launch"}),
+            for bad in ("not json", b"\x00\x01", "[1, 2]", json.dumps({"type": "launch"}), "[" * 100_000 + "]" * 100_000,
                         json.dumps({"type": "edit", "base": base, "values": {"name": "x" * 1_000_000}}),
                         json.dumps({"type": "edit", "base": base, "values": "frame.width=1"}),
                         json.dumps({"type": "compare", "designs": [{"base": base}] * 50})):

@@ -91,10 +91,10 @@ def page(session: Session, token: str) -> str:
     <button type="button" id="save" disabled title="write the edited values into {e(str(session.path))} (comments kept)">Save</button>
     <button type="button" id="build" title="cogniframe build into out/{e(d.name)}">Build</button>
   </div>
-</header>
 <div id="notice" class="notice" role="alert" {'' if session.disk_error else 'hidden'}><p class="notice-text">{e(session.disk_error or '')}</p>
   <button type="button" id="rebase" hidden>Take the saved file under my edits</button>
   <button type="button" id="dismiss" title="close this message">Dismiss</button></div>
+</header>
 <main>
 <section id="form-pane" aria-label="parameters">
 {session.form_html(d)}
@@ -262,8 +262,8 @@ async def _handle(session: Session, page_: Page, message: dict, reply_later, pen
                                               f"{MAX_MESSAGE_BYTES // 1024} KiB per message. Nothing was changed."}
     try:
         msg = json.loads(text)
-    except ValueError:
-        return {"type": "refused", "message": "refused: a message that is not JSON. Nothing was changed."}
+    except (ValueError, RecursionError):  # RecursionError: JSON nested thousands deep
+        return {"type": "refused", "message": "refused: a message that is not JSON (or is nested too deep). Nothing was changed."}
     if not isinstance(msg, dict):
         return {"type": "refused", "message": "refused: a message is a JSON object with a `type`. Nothing was changed."}
     kind = msg.get("type")
@@ -275,13 +275,15 @@ async def _handle(session: Session, page_: Page, message: dict, reply_later, pen
                          edited=edited if isinstance(edited, str) else None)
             return None
         if kind in ("save", "rebase", "compare"):
+            if kind == "compare" and any(t.get_name() == "compare" for t in pending):
+                return {"type": "refused", "message": "refused: a compare of this page is still running; wait for it."}
             if kind == "save":
                 args = (session.save, msg.get("values"), msg.get("base"), page_)
             elif kind == "rebase":
                 args = (session.rebase,)
             else:
                 args = (session.compare, msg.get("designs"))
-            t = asyncio.create_task(reply_later(*args, request_id=request_id))
+            t = asyncio.create_task(reply_later(*args, request_id=request_id), name=kind)
             pending.add(t)
             t.add_done_callback(pending.discard)
             return None

@@ -258,7 +258,7 @@ function handle(ev) {
     if (sentAt[ev.seq] !== undefined && !ev.after_fe) {
       const ms = performance.now() - sentAt[ev.seq];
       delete sentAt[ev.seq];
-      window.cogniframeStudio.latencies.push({ seq: ev.seq, ms, server_ms: ev.ms, pending_fe: ev.pending_fe });
+      window.cogniframeStudio.latencies.push({ seq: ev.seq, ms, server_ms: ev.ms, cpu_ms: ev.cpu_ms, pending_fe: ev.pending_fe });
       timing.textContent = `updated ${ms.toFixed(0)} ms after the edit (check: ${ev.ms.toFixed(0)} ms)`;
     }
     wantedScene = ev.geometry;
