@@ -147,10 +147,10 @@ def _secured(app):
 
 def create_app(session: Session, token: str | None = None):
     token = token or secrets.token_urlsafe(32)
-    state: dict = {}
 
     async def index(request):
-        return HTMLResponse(page(session, token), headers={"Cache-Control": "no-store"})
+        text = await asyncio.to_thread(page, session, token)  # reads (and may validate) the file: off the event loop
+        return HTMLResponse(text, headers={"Cache-Control": "no-store"})
 
     async def static(request):
         name = request.path_params["name"]
@@ -236,7 +236,6 @@ def create_app(session: Session, token: str | None = None):
 
     @contextlib.asynccontextmanager
     async def lifespan(app):
-        state["loop"] = asyncio.get_running_loop()
         session.start()
         yield
 

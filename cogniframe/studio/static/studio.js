@@ -32,9 +32,9 @@ let stale = false;           // the file was saved from another page: Save refus
 let editStart = null;        // performance.now() of the first input event not sent yet
 const sentAt = {};           // seq -> the first input event of that edit (or the send)
 let requests = 0;            // ids of save / rebase / compare
-const past = [];             // undo: earlier states (changes)
+const past = [];             // undo: what every field showed before each edit
 const future = [];           // redo
-let committed = {};          // the state the newest edit sent (for undo)
+let committed = {};          // what every field showed at the newest edit sent
 let wantedScene = null;      // the geometry of the figures shown: the 3D view to show
 const sceneUrls = {};        // scenes the server said are ready: key -> url
 let lastFigures = null;
@@ -66,8 +66,22 @@ function sendable(state) {  // a checkbox as true/false, everything else as type
   return out;
 }
 
-function showState(state) {
+function showState(state) {  // `state`: changed values; the other fields show the file's
   for (const el of inputs) setField(el, Object.hasOwn(state, el.name) ? state[el.name] : baseValues.get(el.name));
+}
+
+function fields() {  // what every field shows: undo, redo and snapshots keep this, so a Save between changes nothing
+  return Object.fromEntries(inputs.map((el) => [el.name, fieldValue(el)]));
+}
+
+function showFields(all) {
+  for (const el of inputs) if (Object.hasOwn(all, el.name)) setField(el, all[el.name]);
+}
+
+function changesOf(all) {  // the changed values of a full set of fields, against the file this page is on now
+  const out = {};
+  for (const [k, v] of Object.entries(all)) if (baseValues.has(k) && v !== baseValues.get(k)) out[k] = v;
+  return out;
 }
 
 function sameState(a, b) {
@@ -135,8 +149,7 @@ form.addEventListener("input", onEdit);
 form.addEventListener("change", onEdit);
 
 function commit() {  // an edit: into the undo history, the address, and to the server
-  const state = changes();
-  if (sameState(state, committed)) { editStart = null; return; }  // e.g. the change event of a field left: nothing new
+  if (sameState(fields(), committed)) { editStart = null; return; }  // e.g. the change event of a field left: nothing new
   past.push(committed);
   future.length = 0;
   send();
@@ -145,7 +158,7 @@ function commit() {  // an edit: into the undo history, the address, and to the 
 function send() {
   clearTimeout(timer);
   const state = changes();
-  committed = state;
+  committed = fields();
   writeAddress(state);
   seq += 1;
   sentAt[seq] = editStart ?? performance.now();
@@ -158,15 +171,15 @@ function send() {
 
 function undo() {
   if (!past.length) return;
-  future.push(changes());
-  showState(past.pop());
+  future.push(fields());
+  showFields(past.pop());
   lastEdited = null;
   send();
 }
 function redo() {
   if (!future.length) return;
-  past.push(changes());
-  showState(future.pop());
+  past.push(fields());
+  showFields(future.pop());
   lastEdited = null;
   send();
 }
@@ -290,7 +303,6 @@ function handle(ev) {
     stale = false;
     const dirty = showDirty();
     writeAddress(changes());
-    committed = changes();
     setStatus(dirty ? `saved ${ev.path} (edits made since are not saved)` : `saved ${ev.path}`, dirty ? "dirty" : "ok");
     document.body.dataset.saved = String(ev.id);
   } else if (ev.type === "save-error") {
@@ -304,10 +316,12 @@ function handle(ev) {
     showNotice(`Another page saved ${ev.path}. This page's edits are not in it, and its Save refuses until you take the saved file under them.`,
       { rebase: true });
   } else if (ev.type === "rebased") {
-    const state = changes();
+    const state = changes();  // this page's edits, put on the file as it is now
     base = ev.base;
     document.body.dataset.base = base;
     for (const [k, v] of Object.entries(ev.values)) if (baseValues.has(k)) baseValues.set(k, v);
+    past.push(fields());
+    future.length = 0;
     showState(state);
     stale = false;
     notice.hidden = true;
@@ -446,9 +460,9 @@ function listSnapshots() {
         title: "show this design in the form (Undo goes back)" });
       open.addEventListener("click", () => {
         const snap = snapshots()[Number(id)];
-        past.push(changes());
+        past.push(fields());
         future.length = 0;
-        showState(snap.values);
+        showFields(snap.fields);
         send();
       });
       const del = Object.assign(document.createElement("button"), { type: "button", textContent: "delete", className: "snap-delete" });
@@ -463,7 +477,7 @@ document.getElementById("snapshot-take").addEventListener("click", () => {
   const input = document.getElementById("snapshot-name");
   const list = snapshots();
   const name = input.value.trim() || `snapshot ${list.length + 1}`;
-  list.push({ name, base, values: changes() });
+  list.push({ name, fields: fields() });
   input.value = "";
   storeSnapshots(list);
 });
@@ -472,8 +486,9 @@ document.getElementById("compare-go").addEventListener("click", () => {
   const picked = [...document.querySelectorAll("#snapshots input:checked")].map((b) => b.value);
   if (picked.length < 2) { showNotice("Tick two or more designs to compare."); return; }
   const list = snapshots();
+  // each design as its fields' values on the file this page is on now
   const designs = picked.map((id) => id === "now" ? { name: "now", base, values: sendable(changes()) }
-    : { name: list[Number(id)].name, base: list[Number(id)].base, values: sendable(list[Number(id)].values) });
+    : { name: list[Number(id)].name, base, values: sendable(changesOf(list[Number(id)].fields || {})) });
   requests += 1;
   post({ type: "compare", id: requests, designs });
   document.getElementById("compare").replaceChildren(Object.assign(document.createElement("p"), { className: "note", textContent: "comparing…" }));
@@ -506,5 +521,5 @@ function showCompare(ev) {
 
 // the design in the address (a link, a bookmark, a reload) before the first edit is sent
 showState(stateFromAddress());
-committed = changes();
+committed = fields();
 listSnapshots();
