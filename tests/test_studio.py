@@ -76,6 +76,8 @@ def test_field_parse():
     assert f["motors.max_thrust_g"].parse("") is None and f["motors.max_thrust_g"].parse("null") is None
     assert f["printer.bed"].parse("180, 180, 180") == [180, 180, 180] and f["printer.bed"].parse("[1,2.5]") == [1, 2.5]
     assert f["frame.struts"].parse(False) is False and f["name"].parse("x2") == "x2"
+    assert f["frame.struts"].parse("True") is True and f["frame.struts"].parse("false") is False
+    assert f["frame.struts"].parse("maybe") == "maybe"  # not false: the validator refuses it, as the CLI does
     assert f["printer.preset"].parse("") is None and f["motors.model"].parse("1404") == "1404"
 
 
