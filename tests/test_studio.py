@@ -76,6 +76,8 @@ def test_field_parse():
     assert f["motors.max_thrust_g"].parse("") is None and f["motors.max_thrust_g"].parse("null") is None
     assert f["printer.bed"].parse("180, 180, 180") == [180, 180, 180] and f["printer.bed"].parse("[1,2.5]") == [1, 2.5]
     assert f["frame.struts"].parse(False) is False and f["name"].parse("x2") == "x2"
+    assert f["frame.struts"].parse("True") is True and f["frame.struts"].parse("false") is False
+    assert f["frame.struts"].parse("maybe") == "maybe"  # not false: the validator refuses it, as the CLI does
     assert f["printer.preset"].parse("") is None and f["motors.model"].parse("1404") == "1404"
 
 
@@ -105,40 +107,161 @@ def test_session_checks_edits_refuses_bad_values_and_saves(tmp_path, monkeypatch
     shutil.copy(CARBON, tmp_path / "carbon.yaml")
     original = (tmp_path / "carbon.yaml").read_bytes()
     events = Events()
-    s = Session("carbon.yaml", publish=events, view=False)
+    s = Session("carbon.yaml", view=False)
     try:
-        s.start()
+        page = s.connect(events)
+        base = s.base_hash
+        s.edit(page, {}, base, seq=1)
         first = events.wait(lambda e: e["type"] == "figures")
         if first["pending_fe"]:  # the joints' FE not in the cache yet: the analytic figures at once, then the FE's
             assert first["model"] == "analytic"
             first = events.wait(lambda e: e["type"] == "figures" and e["after_fe"], timeout=600)
         assert first["model"] == "fe" and not first["pending_fe"]
         assert first["check"] == cf.load("carbon.yaml").check().to_dict()
-        s.edit({"core.battery.mass": "70"}, client=1, edited="core.battery.mass")
-        heavier = events.wait(lambda e: e["type"] == "figures" and e["client"] == 1)
+        s.edit(page, {"core.battery.mass": "70"}, base, seq=2, edited="core.battery.mass")
+        heavier = events.wait(lambda e: e["type"] == "figures" and e["seq"] == 2)
         assert heavier["check"]["mass"]["total_g"] == pytest.approx(first["check"]["mass"]["total_g"] + 12, abs=0.011)
         assert heavier["model"] == "fe" and not heavier["pending_fe"] and heavier["ms"] < 2000
-        s.edit({"core.battery.mass": "70", "rods.diameter": "20"}, client=2, edited="rods.diameter")
-        bad = events.wait(lambda e: e["type"] == "invalid" and e["client"] == 2)
+        s.edit(page, {"core.battery.mass": "70", "rods.diameter": "20"}, base, seq=3, edited="rods.diameter")
+        bad = events.wait(lambda e: e["type"] == "invalid" and e["seq"] == 3)
         with pytest.raises(cf.ParamsError) as err:
             cf.load("carbon.yaml").with_values({"core.battery.mass": 70, "rods.diameter": 20})
         assert bad["message"] == str(err.value) and bad["key"] == "rods.diameter"
-        assert s.save()["type"] == "save-error"  # nothing is saved while a value is refused
+        refused = s.save({"core.battery.mass": "70", "rods.diameter": "20"}, base, page)
+        assert refused["type"] == "save-error" and "rods.diameter" in refused["message"]  # a refused value is never saved
         assert (tmp_path / "carbon.yaml").read_bytes() == original
-        s.edit({"core.battery.mass": "70", "rods.diameter": "3.0"}, client=3)
-        events.wait(lambda e: e["type"] == "figures" and e["client"] == 3)
-        assert s.save()["type"] == "saved"
+        saved = s.save({"core.battery.mass": "70", "rods.diameter": "3.0"}, base, page)
+        assert saved["type"] == "saved" and saved["base"] != base
         assert (tmp_path / "carbon.yaml").read_text(encoding="utf-8") == original.decode().replace(
             "    mass: 58             # g", "    mass: 70             # g")
-        (tmp_path / "carbon.yaml").write_text(original.decode() + "# edited elsewhere\n", encoding="utf-8")
-        s.edit({"core.battery.mass": "71"}, client=4)
-        events.wait(lambda e: e["type"] == "figures" and e["client"] == 4)
-        refused = s.save()
+        # a page still on the old text: its Save is refused, whatever it holds, and nothing is written
+        after = (tmp_path / "carbon.yaml").read_bytes()
+        stale = s.save({"core.battery.mass": "71"}, base, page)
+        assert stale["type"] == "save-error" and "changed on disk" in stale["message"]
+        assert (tmp_path / "carbon.yaml").read_bytes() == after
+        (tmp_path / "carbon.yaml").write_text(after.decode() + "# edited elsewhere\n", encoding="utf-8")
+        refused = s.save({"core.battery.mass": "71"}, saved["base"], page)
         assert refused["type"] == "save-error" and "changed on disk" in refused["message"]
         assert (tmp_path / "carbon.yaml").read_text(encoding="utf-8").endswith("# edited elsewhere\n")
+        rebased = s.rebase()  # the file as it is now, under the page's edits
+        assert rebased["type"] == "rebased" and rebased["values"]["core.battery.mass"] == "70"
+        assert s.save({"core.battery.mass": "71"}, rebased["base"], page)["type"] == "saved"
+        text = (tmp_path / "carbon.yaml").read_text(encoding="utf-8")
+        assert "    mass: 71             # g" in text and text.endswith("# edited elsewhere\n")
     finally:
         s.close()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["carbon.yaml"]  # nothing else written
+
+
+def test_pages_of_one_session_never_change_each_other(tmp_path, monkeypatch):
+    """Each page's figures are its own design's: a page that connects or edits resets no other."""
+    from cogniframe.studio.session import Session
+
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(CARBON, tmp_path / "carbon.yaml")
+    a_events, b_events = Events(), Events()
+    s = Session("carbon.yaml", view=False)
+    try:
+        a = s.connect(a_events)
+        s.edit(a, {"frame.width": "220"}, s.base_hash, seq=1)
+        fig_a = a_events.wait(lambda e: e["type"] == "figures" and e["seq"] == 1, timeout=600)
+        b = s.connect(b_events)  # a new page: A's design stays
+        s.edit(b, {"core.battery.mass": "61"}, s.base_hash, seq=1)
+        fig_b = b_events.wait(lambda e: e["type"] == "figures" and e["seq"] == 1, timeout=600)
+        s.edit(a, {"frame.width": "220", "frame.depth": "215"}, s.base_hash, seq=2)
+        fig_a2 = a_events.wait(lambda e: e["type"] == "figures" and e["seq"] == 2, timeout=600)
+        assert not [e for e in a_events.items if e["type"] == "figures" and e["check"]["mass"]["total_g"] == fig_b["check"]["mass"]["total_g"]]
+        expect_a = cf.load("carbon.yaml").with_values({"frame.width": 220, "frame.depth": 215}).with_fast_model().check()
+        assert fig_a2["check"]["mass"]["total_g"] == pytest.approx(expect_a.mass_g, abs=0.01)
+        assert fig_b["check"]["mass"]["total_g"] == pytest.approx(cf.load("carbon.yaml").check().mass_g + 3, abs=0.011)
+        assert fig_a["check"]["frame"] != fig_b["check"]["frame"]
+    finally:
+        s.close()
+
+
+def test_set_values_makes_a_whole_edit_from_one_parse(monkeypatch):
+    """The form's every value set at once: one parse of the text (not one per key), and the same
+    text as setting the keys one at a time."""
+    import yaml
+
+    from cogniframe.api import yamledit
+
+    d = cf.load(CARBON)
+    values = d.spec.model_dump(mode="json")
+    fields = form.fields(form.build(spec_mod.json_schema(), values))
+    edit = {k: form.value_at(values, k) for k in fields}
+    edit.update({"frame.width": 220, "core.battery.mass": 70, "model.new_section.a": 1, "model.new_section.b": [1, 2]})
+    one_by_one = yamledit._one_by_one(d.text, edit)
+    calls = []
+    compose = yaml.compose
+    monkeypatch.setattr(yaml, "compose", lambda *a, **k: calls.append(1) or compose(*a, **k))
+    t0 = time.perf_counter()
+    assert yamledit.set_values(d.text, edit) == one_by_one
+    assert len(calls) == 1 and len(edit) > 100
+    assert time.perf_counter() - t0 < 0.5
+
+
+def test_messages_the_studio_does_not_take_are_refused_in_a_sentence(tmp_path, monkeypatch):
+    from cogniframe.studio.session import MAX_SHOWN, Refused, Session
+
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(CARBON, tmp_path / "carbon.yaml")
+    events = Events()
+    s = Session("carbon.yaml", view=False)
+    try:
+        page = s.connect(events)
+        t0 = time.perf_counter()
+        with pytest.raises(Refused, match="10000 keys in one message"):
+            s.edit(page, {f"frame.k{i}": 1 for i in range(10_000)}, s.base_hash)
+        with pytest.raises(Refused, match="not an input of the form"):
+            s.edit(page, {"frame.nope": 1}, s.base_hash)
+        with pytest.raises(Refused) as err:
+            s.edit(page, {"name": "x" * 1_000_000}, s.base_hash)
+        assert len(str(err.value)) < 200
+        assert time.perf_counter() - t0 < 0.5
+        with pytest.raises(Refused, match="reload the page"):
+            s.edit(page, {}, "not a hash the studio holds")
+        # a name long enough to pass but not valid: the CLI's paragraph, its long runs cut
+        s.edit(page, {"name": "y" * 900}, s.base_hash, seq=1)
+        bad = events.wait(lambda e: e["type"] == "invalid" and e["seq"] == 1)
+        assert bad["key"] == "name" and "y" * 100 in bad["message"] and len(bad["message"]) <= 4000
+        # true/false only: anything else goes to the validator, which refuses it as the CLI does
+        s.edit(page, {"frame.struts": "maybe"}, s.base_hash, seq=2, edited="frame.struts")
+        maybe = events.wait(lambda e: e["type"] == "invalid" and e["seq"] == 2)
+        (tmp_path / "maybe.yaml").write_text(CARBON.read_text(encoding="utf-8").replace("  struts: true", '  struts: "maybe"'),
+                                             encoding="utf-8")
+        with pytest.raises(cf.ParamsError) as cli:
+            cf.load("maybe.yaml")
+        assert maybe["key"] == "frame.struts" and maybe["message"] == str(cli.value).replace("maybe.yaml", "carbon.yaml")
+    finally:
+        s.close()
+    from cogniframe.studio.session import shorten
+
+    assert len(shorten("z" * 1_000_000)) < MAX_SHOWN + 60
+
+
+def test_compare_gives_each_designs_figures(tmp_path, monkeypatch):
+    from cogniframe.studio.session import COMPARE_ROWS, Session
+
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(CARBON, tmp_path / "carbon.yaml")
+    s = Session("carbon.yaml", view=False)
+    try:
+        out = s.compare([{"name": "file", "base": s.base_hash, "values": {}},
+                         {"name": "heavy", "base": s.base_hash, "values": {"core.battery.mass": "70"}},
+                         {"name": "bad", "base": s.base_hash, "values": {"rods.diameter": "20"}}])
+    finally:
+        s.close()
+    file_, heavy, bad = out["columns"]
+    check = cf.load("carbon.yaml").check().to_dict()
+    assert set(file_["figures"]) == {row[0] for row in COMPARE_ROWS}
+    assert file_["figures"]["mass_g"] == check["mass"]["total_g"] and file_["figures"]["verdict"] == "PASS"
+    assert file_["figures"]["first_mode_hz"] == check["stiffness"]["modes_hz"][0]
+    design = check["stiffness"]["design_drop_height_cm"]
+    assert file_["figures"]["one_drop_peak_g"] == next(h["peak_g_drop_median"] for h in check["peak_g"]["heights"]
+                                                       if h["height_cm"] == design)
+    assert heavy["figures"]["mass_g"] == pytest.approx(file_["figures"]["mass_g"] + 12, abs=0.011)
+    assert heavy["figures"]["verdict"] == "FAIL" and "rods.diameter" in bad["error"]
 
 
 def test_a_failed_3d_view_still_brings_the_fe_figures(tmp_path, monkeypatch):
@@ -154,11 +277,11 @@ def test_a_failed_3d_view_still_brings_the_fe_figures(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     shutil.copy(CARBON, tmp_path / "carbon.yaml")
     events = Events()
-    s = Session("carbon.yaml", publish=events, view=True)
+    s = Session("carbon.yaml", view=True)
     try:
-        s.start()
-        s.edit({"joints.wall": "1.35"}, client=1, edited="joints.wall")  # a wall no other test solves
-        fast = events.wait(lambda e: e["type"] == "figures" and e["client"] == 1, timeout=120)
+        page = s.connect(events)
+        s.edit(page, {"joints.wall": "1.35"}, s.base_hash, seq=1, edited="joints.wall")  # a wall no other test solves
+        fast = events.wait(lambda e: e["type"] == "figures" and e["seq"] == 1, timeout=120)
         assert fast["pending_fe"] and fast["model"] == "analytic"
         failed = events.wait(lambda e: e["type"] == "progress" and e.get("error"), timeout=120)
         assert "no view today" in failed["error"]
@@ -262,17 +385,79 @@ def test_listens_on_127_0_0_1_only_and_stops_on_ctrl_c(tmp_path):
         from websockets.exceptions import InvalidStatus
         from websockets.sync.client import connect
 
-        with pytest.raises(InvalidStatus):
-            connect(f"ws://127.0.0.1:{port}/ws", origin="http://evil.example", open_timeout=10).close()
-        with connect(f"ws://127.0.0.1:{port}/ws", origin=f"http://127.0.0.1:{port}", open_timeout=10) as ws:
+        token, base = _token_and_base(port)
+        for query, origin in ((f"?token={token}", "http://evil.example"), ("", f"http://127.0.0.1:{port}"),
+                              ("?token=guessed", f"http://127.0.0.1:{port}"), (f"?token={token}x", None)):
+            with pytest.raises(InvalidStatus):  # another site's page, or a page without this server's token
+                connect(f"ws://127.0.0.1:{port}/ws{query}", origin=origin, open_timeout=10).close()
+        with connect(f"ws://127.0.0.1:{port}/ws?token={token}", origin=f"http://127.0.0.1:{port}", open_timeout=10,
+                     max_size=None) as ws:
+            # what a page should never send: each refused in a sentence, none a traceback on the terminal
+            for bad in ("not json", b"\x00\x01", "[1, 2]", json.dumps({"type": "launch"}), "[" * 100_000 + "]" * 100_000,
+                        json.dumps({"type": "edit", "base": base, "values": {"name": "x" * 1_000_000}}),
+                        json.dumps({"type": "edit", "base": base, "values": "frame.width=1"}),
+                        json.dumps({"type": "compare", "designs": [{"base": base}] * 50})):
+                ws.send(bad)
+                event = json.loads(ws.recv(timeout=30))
+                assert event["type"] == "refused" and len(event["message"]) < 300, event
+            ws.send(json.dumps({"type": "edit", "seq": 1, "base": base, "values": {}}))
             event = json.loads(ws.recv(timeout=300))
             while event["type"] != "figures":
                 event = json.loads(ws.recv(timeout=300))
-            assert event["check"]["name"] == "carbon"
+            assert event["check"]["name"] == "carbon" and event["seq"] == 1
+        served = _stderr_so_far(proc)
+        assert "Traceback" not in served and "errors are logged to" in served, served
     finally:
         code, err = _stop(proc)
     assert code == 0 and "studio stopped" in err, err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["carbon.yaml"]
+
+
+def _stderr_so_far(proc) -> str:
+    """What the studio wrote on its stderr until now (without waiting for more)."""
+    fd = proc.stderr.fileno()
+    os.set_blocking(fd, False)
+    chunks = []
+    try:
+        while True:
+            chunk = os.read(fd, 1 << 16)
+            if not chunk:
+                break
+            chunks.append(chunk)
+    except BlockingIOError:
+        pass
+    finally:
+        os.set_blocking(fd, True)
+    return b"".join(chunks).decode("utf-8", "replace")
+
+
+def _token_and_base(port: int) -> tuple[str, str]:
+    import urllib.request
+
+    with urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=30) as r:
+        text = r.read().decode()
+    return re.search(r'data-token="([^"]+)"', text).group(1), re.search(r'data-base="([0-9a-f]{64})"', text).group(1)
+
+
+def test_every_response_forbids_framing(tmp_path):
+    import urllib.error
+    import urllib.request
+
+    shutil.copy(CARBON, tmp_path / "carbon.yaml")
+    proc, port = _start_studio(tmp_path)
+    try:
+        for path in ("/", "/static/studio.js", "/static/studio.css", "/viewer/viewer.js", "/scene/none.json", "/files/x", "/nope"):
+            try:
+                r = urllib.request.urlopen(f"http://127.0.0.1:{port}{path}", timeout=30)
+            except urllib.error.HTTPError as e:
+                r = e
+            assert r.headers["X-Frame-Options"] == "DENY", path
+            assert r.headers["Content-Security-Policy"] == "frame-ancestors 'none'", path
+        token_1, _ = _token_and_base(port)
+        token_2, _ = _token_and_base(port)
+        assert token_1 == token_2 and len(token_1) >= 40  # one per server, random
+    finally:
+        _stop(proc)
 
 
 def test_bad_params_or_busy_port_exit_2(tmp_path, run_cli):
@@ -357,14 +542,25 @@ def test_an_edit_changes_the_figures_within_half_a_second(page, studio, capsys):
     assert page.text_content(".verdict") == "FAIL"  # over 250 g
     assert "over the 250 g limit" in page.text_content("#problems")
     times = [rec["ms"]]
-    for grams in ("66", "59", "64", "58", "62", "58"):  # battery grams: no new geometry, no FE
-        times.append(_edit(page, "core.battery.mass", grams)["ms"])
+    # ten edits of values that change no shape (battery grams and capacity, motor KV): no FE, no new view;
+    # each time is the page's, from the input event to the figures on the page
+    for key, value in (("core.battery.mass", "66"), ("motors.kv", "6500"), ("core.battery.mass", "59"),
+                       ("core.battery.capacity_mah", "700"), ("core.battery.mass", "64"), ("motors.kv", "7000"),
+                       ("core.battery.capacity_mah", "650"), ("core.battery.mass", "58"), ("motors.kv", "6000")):
+        times.append(_edit(page, key, value)["ms"])
+    assert len(times) == 10
     assert float(_metric(page, "mass.total_g")) == pytest.approx(before, abs=0.11)
     assert page.text_content(".verdict") == "PASS"
+    load = os.getloadavg()[0]
     with capsys.disabled():
-        print(f"\nstudio: edit -> figures (no new geometry), ms: {[round(t) for t in times]}, median {statistics.median(times):.0f}")
-    assert statistics.median(times) < 500, times
-    _save(page, studio)  # back to the file as it was (same value)
+        print(f"\nstudio: edit -> figures (no new geometry), ms: {[round(t) for t in times]}, "
+              f"median {statistics.median(times):.0f} (load average {load:.1f} on {os.cpu_count()} cores)")
+    # what the page adds to the studio's own work (the socket, the 30 ms typing pause, the drawing) is small
+    # whatever the load; the whole is under half a second on a machine not loaded past its cores
+    overhead = [r["ms"] - r["server_ms"] for r in page.evaluate("window.cogniframeStudio.latencies.slice(-10)")]
+    assert statistics.median(overhead) < 200, overhead
+    assert statistics.median(times) < (500 if load <= (os.cpu_count() or 1) else 3000), (times, load)
+    assert page.is_disabled("#save") and page.text_content("#status") == "as in the file"  # every value back
 
 
 def test_a_bad_value_gets_the_cli_message_and_nothing_is_saved(page, studio, tmp_path, run_cli, monkeypatch):
@@ -401,7 +597,11 @@ def test_save_keeps_the_comments(page, studio):
                                    "    capacity_mah: 700    # the paper's 3S 650 mAh 75C pack")
     assert [l for l in after.splitlines() if "#" in l][:4] == [l for l in before.splitlines() if "#" in l][:4]
     assert cf.load(params).get("core.battery.capacity_mah") == 700
-    _edit(page, "core.battery.capacity_mah", "650")
+    n = page.evaluate("window.cogniframeStudio.latencies.length")
+    page.click("#undo")  # back to what the field showed before the edit, the Save between notwithstanding
+    page.wait_for_function(f"window.cogniframeStudio.latencies.length > {n}", timeout=60_000)
+    assert page.input_value("[name='core.battery.capacity_mah']") == "650"
+    assert page.url.endswith("#core.battery.capacity_mah=650")  # 650 is now the change from the file
     _save(page, studio)
     assert params.read_text(encoding="utf-8") == before
 
@@ -481,4 +681,234 @@ def test_build_offers_the_plates_and_the_report(page, studio):
     with urllib.request.urlopen(studio["url"].rstrip("/") + plate, timeout=30) as r:
         data = r.read()
     assert data[:2] == b"PK" and data == (out / plate.removeprefix("/files/")).read_bytes()  # a 3MF is a zip
+    with urllib.request.urlopen(studio["url"] + "files/report.html", timeout=30) as r:  # opens in the browser
+        assert r.headers["Content-Type"].startswith("text/html") and r.headers["Content-Disposition"].startswith("inline")
+        assert r.read() == (out / "report.html").read_bytes()
+    ctx = studio["browser"].new_context()
+    try:  # Chromium shows it (a download would make goto fail with "Download is starting")
+        tab = ctx.new_page()
+        response = tab.goto(studio["url"] + "files/report.html")
+        assert response.ok and tab.locator("body").inner_text().strip()
+    finally:
+        ctx.close()
     assert sorted(p.name for p in studio["folder"].iterdir()) == ["carbon.yaml", "out"]
+
+
+# -- in the browser: pages, the address, snapshots ---------------------------------------------------
+
+def _open(ctx, url: str, errors: list | None = None):
+    tab = ctx.new_page()
+    if errors is not None:
+        tab.on("pageerror", lambda e: errors.append(str(e)))
+    tab.goto(url)
+    tab.wait_for_function("document.body.dataset.figuresSeq !== undefined", timeout=300_000)
+    return tab
+
+
+def _figures(tab) -> dict:
+    return tab.evaluate("Object.fromEntries([...document.querySelectorAll('#figures [data-metric]')]"
+                        ".map(e => [e.dataset.metric.replace(/heights\\.\\d+/, 'heights.design'), e.textContent]))")
+
+
+def test_two_pages_keep_their_edits_and_save_writes_what_the_saving_page_shows(studio):
+    params = studio["folder"] / "carbon.yaml"
+    original = params.read_bytes()
+    ctx = studio["browser"].new_context(viewport={"width": 1400, "height": 1000})
+    errors: list[str] = []
+    try:
+        a = _open(ctx, studio["url"], errors)
+        _edit(a, "core.battery.capacity_mah", "800")  # not saved
+        fig_a = _figures(a)
+        b = _open(ctx, studio["url"], errors)  # a second page connects: A's design stays A's
+        assert b.input_value("[name='core.battery.capacity_mah']") == "650"
+        _edit(b, "core.battery.mass", "61")
+        fig_b = _figures(b)
+        a.wait_for_timeout(500)
+        assert a.input_value("[name='core.battery.capacity_mah']") == "800" and a.input_value("[name='core.battery.mass']") == "58"
+        assert _figures(a) == fig_a and fig_a != fig_b
+        assert a.text_content("#status") == "edited, not saved"
+        _save(a, studio)
+        saved = params.read_text(encoding="utf-8")  # the file holds what A shows, not B's battery
+        assert saved == original.decode().replace("    capacity_mah: 650 ", "    capacity_mah: 800 ")
+        assert cf.load(params).get("core.battery.capacity_mah") == 800 and cf.load(params).get("core.battery.mass") == 58
+        # B's edits are not in the file: its Save refuses, and the refusal stays until dismissed
+        b.wait_for_selector("#notice:not([hidden]) #rebase:not([hidden])", timeout=30_000)
+        b.click("#save")
+        b.wait_for_function("document.querySelector('#notice .notice-text').textContent.includes('changed on disk')",
+                            timeout=30_000)
+        assert params.read_text(encoding="utf-8") == saved
+        _edit(b, "core.battery.mass", "62")  # later events do not replace it
+        b.wait_for_timeout(1500)
+        assert b.is_visible("#notice") and "changed on disk" in b.text_content("#notice")
+        # B takes the saved file under its edits, then its Save writes both
+        b.click("#rebase")
+        b.wait_for_function("document.getElementById('notice').hidden", timeout=30_000)
+        assert b.input_value("[name='core.battery.capacity_mah']") == "800" and b.input_value("[name='core.battery.mass']") == "62"
+        b.wait_for_function("!document.getElementById('save').disabled", timeout=60_000)
+        _save(b, studio)
+        assert params.read_text(encoding="utf-8") == saved.replace("    mass: 58             # g", "    mass: 62             # g")
+        b.click("#dismiss") if b.is_visible("#notice") else None
+        assert not b.is_visible("#notice")
+        assert not errors, errors
+    finally:
+        ctx.close()
+        params.write_bytes(original)  # the next pages start from the preset again
+
+
+def test_a_page_of_another_origin_cannot_frame_the_studio(studio, tmp_path):
+    """Another local site (http://localhost:OTHER) frames the studio: Chromium refuses to show it. The
+    same page frames a page of its own server that sends no frame protection: that one shows (the
+    check sees a framed page when there is one)."""
+    import functools
+    import http.server
+    import threading
+
+    (tmp_path / "plain.html").write_text('<form id="params"></form>', encoding="utf-8")
+    class Quiet(http.server.SimpleHTTPRequestHandler):
+        def log_message(self, *args):
+            pass
+
+    handler = functools.partial(Quiet, directory=str(tmp_path))
+    other = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=other.serve_forever, daemon=True).start()
+    port = other.server_address[1]
+    ctx = studio["browser"].new_context()
+    try:
+        for target, shown in ((studio["url"], False), (f"http://127.0.0.1:{port}/plain.html", True)):
+            (tmp_path / "frame.html").write_text(f'<iframe src="{target}" style="opacity:0" width="800" height="600"></iframe>',
+                                                 encoding="utf-8")
+            tab = ctx.new_page()
+            tab.goto(f"http://localhost:{port}/frame.html")  # another origin than the studio's 127.0.0.1:PORT
+            end = time.monotonic() + 120
+            while time.monotonic() < end:  # until the frame's navigation ended (the page, or Chromium's refusal)
+                framed = [f for f in tab.frames if f != tab.main_frame]
+                if framed and all(f.url not in ("", "about:blank") for f in framed):
+                    break
+                tab.wait_for_timeout(100)
+            assert len(framed) == 1, [f.url for f in framed]
+            if shown:
+                assert framed[0].url == target and framed[0].query_selector("#params") is not None
+            else:  # refused: Chromium's error page instead, no form, no token to read
+                assert framed[0].url.startswith("chrome-error://"), framed[0].url
+            tab.close()
+    finally:
+        ctx.close()
+        other.shutdown()
+
+
+def test_a_10000_key_message_is_refused_at_once_and_the_other_page_keeps_updating(studio, capsys):
+    ctx = studio["browser"].new_context(viewport={"width": 1400, "height": 1000})
+    try:
+        a = _open(ctx, studio["url"])
+        b = _open(ctx, studio["url"])
+        # A sends what its own page never would: 10 000 keys, then a 1 MB name, on a socket of its own
+        a.evaluate("""() => { window.refusals = new Promise((resolve) => {
+            const ws = new WebSocket(`ws://${location.host}/ws?token=${document.body.dataset.token}`);
+            const out = [];
+            ws.onopen = () => {
+              const values = {};
+              for (let i = 0; i < 10000; i++) values[`frame.k${i}`] = i;
+              out.t0 = performance.now();
+              ws.send(JSON.stringify({type: "edit", seq: 1, base: document.body.dataset.base, values}));
+            };
+            ws.onmessage = (m) => {
+              const ev = JSON.parse(m.data);
+              if (ev.type !== "refused") return;
+              out.push({ms: performance.now() - out.t0, message: ev.message});
+              if (out.length === 1) {
+                out.t0 = performance.now();
+                ws.send(JSON.stringify({type: "edit", seq: 2, base: document.body.dataset.base,
+                                        values: {name: "x".repeat(1000000)}}));
+              } else { ws.close(); resolve(out); }
+            };
+        }); }""")
+        rec = _edit(b, "core.battery.mass", "66")  # meanwhile, B's figures keep coming
+        keys, big = a.evaluate("window.refusals")
+        with capsys.disabled():
+            print(f"\nstudio: 10 000 keys refused after {keys['ms']:.0f} ms, a 1 MB name after {big['ms']:.0f} ms; "
+                  f"the other page's edit -> figures {rec['ms']:.0f} ms (load average {os.getloadavg()[0]:.1f})")
+        assert "10000 keys" in keys["message"] and keys["ms"] < 500, keys
+        assert "bytes" in big["message"] and len(big["message"]) < 300 and big["ms"] < 500, big
+        assert rec["ms"] < 5000 and float(_metric(b, "mass.total_g")) == pytest.approx(float(_metric(a, "mass.total_g")) + 8, abs=0.11)
+        # in the page: a 1 MB name typed into the form is refused in a sentence, not echoed whole
+        a.evaluate("(() => { const el = document.querySelector(\"[name='name']\"); el.value = 'y'.repeat(1000000);"
+                   " el.dispatchEvent(new Event('input', {bubbles: true})); })()")
+        a.wait_for_selector("#notice:not([hidden])", timeout=30_000)
+        assert "refused" in a.text_content("#notice") and len(a.text_content("#notice")) < 400
+    finally:
+        ctx.close()
+
+
+def test_the_design_is_in_the_address(studio):
+    browser = studio["browser"]
+    ctx = browser.new_context(viewport={"width": 1400, "height": 1000})
+    other = browser.new_context(viewport={"width": 1400, "height": 1000})
+    try:
+        a = _open(ctx, studio["url"])
+        _edit(a, "core.battery.mass", "70")
+        _edit(a, "motors.kv", "6500")
+        _edit(a, "core.battery.capacity_mah", "700")
+        assert "capacity_mah=700" in a.url
+        _edit(a, "core.battery.capacity_mah", "650")  # back to the file's value: only changed values stay in the address
+        url = a.url
+        assert url.split("#", 1)[1] == "core.battery.mass=70&motors.kv=6500"
+        shown = _figures(a)
+        # the link, in a browser that never saw this page: the same design and figures
+        c = _open(other, url)
+        c.wait_for_function(f"document.querySelector(\"[data-metric='mass.total_g']\").textContent === {json.dumps(shown['mass.total_g'])}",
+                            timeout=60_000)
+        assert c.input_value("[name='core.battery.mass']") == "70" and c.input_value("[name='motors.kv']") == "6500"
+        assert _figures(c) == shown and c.text_content("#status") == "edited, not saved"
+        # leaving asks first; a reload keeps the unsaved edits
+        dialogs = []
+        a.on("dialog", lambda d: (dialogs.append(d.type), d.accept()))
+        a.reload()
+        a.wait_for_function("document.body.dataset.figuresSeq !== undefined", timeout=300_000)
+        a.wait_for_function(f"document.querySelector(\"[data-metric='mass.total_g']\").textContent === {json.dumps(shown['mass.total_g'])}",
+                            timeout=60_000)
+        assert dialogs == ["beforeunload"]
+        assert a.input_value("[name='core.battery.mass']") == "70" and _figures(a) == shown
+        # undo and redo walk the edits back and forth, the address with them
+        a.fill("[name='core.battery.mass']", "59")
+        a.wait_for_function("location.hash.includes('core.battery.mass=59')", timeout=30_000)
+        a.click("#undo")
+        a.wait_for_function("location.hash === '#core.battery.mass=70&motors.kv=6500'", timeout=30_000)
+        a.click("#redo")
+        a.wait_for_function("location.hash.includes('core.battery.mass=59')", timeout=30_000)
+        assert a.input_value("[name='core.battery.mass']") == "59"
+    finally:
+        ctx.close()
+        other.close()
+
+
+def test_compare_of_two_snapshots_shows_both_columns(studio):
+    ctx = studio["browser"].new_context(viewport={"width": 1400, "height": 1000})
+    try:
+        a = _open(ctx, studio["url"])
+        a.fill("#snapshot-name", "as in the file")
+        a.click("#snapshot-take")
+        _edit(a, "core.battery.mass", "70")
+        a.fill("#snapshot-name", "70 g battery")
+        a.click("#snapshot-take")
+        assert a.eval_on_selector_all("#snapshots li", "ls => ls.map(l => l.dataset.snapshot)") == ["now", "0", "1"]
+        a.check("#snapshots li[data-snapshot='0'] input")
+        a.check("#snapshots li[data-snapshot='1'] input")
+        a.click("#compare-go")
+        a.wait_for_selector("table.compare", timeout=300_000)
+        heads = a.eval_on_selector_all("table.compare thead th", "ths => ths.map(t => t.textContent)")
+        assert heads == ["", "as in the file", "70 g battery"]
+        rows = a.eval_on_selector_all("table.compare tbody tr", "trs => Object.fromEntries(trs.map(tr => [tr.dataset.row, "
+                                      "[...tr.cells].slice(1).map(td => [td.textContent, td.classList.contains('differs')])]))")
+        file_check = cf.load(studio["folder"] / "carbon.yaml").check()
+        heavy = cf.load(studio["folder"] / "carbon.yaml").with_values({"core.battery.mass": 70}).check()
+        assert rows["mass_g"] == [[f"{file_check.mass_g:.1f}", True], [f"{heavy.mass_g:.1f}", True]]
+        assert rows["verdict"] == [["PASS", True], ["FAIL", True]]
+        assert rows["k_n_per_m"][0] == rows["k_n_per_m"][1] and not rows["k_n_per_m"][0][1]  # same k: not highlighted
+        assert set(rows) == {"mass_g", "margin_g", "k_n_per_m", "safe_drop_cm", "one_drop_peak_g", "hover_time_min",
+                             "thrust_to_weight", "first_mode_hz", "verdict"}
+        # a snapshot opens in the form (and Undo goes back)
+        a.click("#snapshots li[data-snapshot='0'] .snap-open")
+        a.wait_for_function("location.hash === ''", timeout=30_000)
+        assert a.input_value("[name='core.battery.mass']") == "58"
+    finally:
+        ctx.close()

@@ -32,10 +32,118 @@ _LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml: the same mar
 
 
 def set_values(text: str, values: Mapping[str, Any]) -> str:
-    """`text` with each dotted key set to its value, in order."""
+    """`text` with each dotted key set to its value, in order: the same text as `set_value` one
+    key at a time, from one parse of `text` (the studio applies a whole form's edits per
+    keystroke, and a parse per key made 1000 keys take a minute). Edits whose spans overlap (a
+    key and a key inside it) are made one key at a time."""
+    values = dict(values)
+    if len(values) <= 1 or not text.strip():
+        return _one_by_one(text, values)
+    root = yaml.compose(text, Loader=_LOADER)
+    if root is None:
+        return _one_by_one(text, values)
+    spans: list[tuple[int, int, str]] = []  # (start, end, new text) of the values already in the file
+    blocks: dict[int, list] = {}  # id(node) -> [node, where, tree]: keys added under one mapping or scalar
+    for key, value in values.items():
+        kind, node, key_node, rest = _locate(root, key)
+        if kind == "replace":
+            spans.append(_replacement(text, node, key_node, value))
+        else:
+            entry = blocks.setdefault(id(node), [node, (kind, key_node), _Tree()])
+            if not entry[2].add(rest, value):
+                return _one_by_one(text, values)  # a key and a key inside it, both new: key by key
+    inserts: dict[int, list[tuple[int, int, list[str]]]] = {}  # position -> (indent, order, lines)
+    for order, (node, (kind, key_node), tree) in enumerate(blocks.values()):
+        if kind == "nest":  # a scalar where a section is wanted: it becomes a flow mapping
+            spans.append(_replacement(text, node, key_node, tree.plain()))
+        elif node.flow_style:
+            close = _flow_close(text, node)
+            inner = text[node.start_mark.index + 1: close].strip()
+            entries = ", ".join(f"{k}: {render(v.plain() if isinstance(v, _Tree) else v)}" for k, v in tree.items())
+            spans.append((close, close, (", " if inner else "") + entries))
+        else:
+            indent = node.value[0][0].start_mark.column if node.value else 0
+            newline = text.find("\n", _content_end(node))
+            at = len(text) if newline < 0 else newline
+            inserts.setdefault(at, []).append((indent, order, tree.lines(indent, bool(text.strip()))))
+    for at, found in inserts.items():
+        # deeper sections first: their lines continue the innermost block that ends there
+        lines = [line for _, _, ls in sorted(found, key=lambda f: (-f[0], f[1])) for line in ls]
+        if at == len(text):
+            spans.append((at, at, ("" if text.endswith("\n") else "\n") + "\n".join(lines) + "\n"))
+        else:
+            spans.append((at, at, "\n" + "\n".join(lines)))
+    spans.sort(key=lambda s: (s[0], s[1]))
+    for a, b in zip(spans, spans[1:]):
+        if b[0] < a[1] or (b[0] == a[0] and max(a[1], b[1]) > a[0]):
+            return _one_by_one(text, values)  # nested or repeated spans: key by key, as written
+    for start, end, new in reversed(spans):
+        text = text[:start] + new + text[end:]
+    return text
+
+
+def _one_by_one(text: str, values: Mapping[str, Any]) -> str:
     for key, value in values.items():
         text = set_value(text, key, value)
     return text
+
+
+class _Tree(dict):
+    """Keys added under one node: dotted parts nested as dicts, in the order they came."""
+
+    def add(self, parts: list[str], value: Any) -> bool:
+        """False when a value and a section would share a name (the caller then goes key by key)."""
+        node = self
+        for p in parts[:-1]:
+            child = node.setdefault(p, _Tree())
+            if not isinstance(child, _Tree):
+                return False
+            node = child
+        if parts[-1] in node:
+            return False
+        node[parts[-1]] = value
+        return True
+
+    def plain(self) -> dict:
+        return {k: v.plain() if isinstance(v, _Tree) else v for k, v in self.items()}
+
+    def lines(self, indent: int, blank_before_sections: bool) -> list[str]:
+        """As `_append_lines` writes them: one line per level, two more spaces a level, a blank
+        line before a new top-level section."""
+        out: list[str] = []
+        for k, v in self.items():
+            if isinstance(v, _Tree):
+                if indent == 0 and blank_before_sections:
+                    out.append("")
+                out.append(" " * indent + f"{k}:")
+                out += v.lines(indent + 2, False)
+            else:
+                out.append(" " * indent + f"{k}: {render(v)}")
+        return out
+
+
+def _locate(root: Node, key: str) -> tuple[str, Node, Node | None, list[str]]:
+    """Where `set_value` puts `key`: ("replace", value node, its key node, []), ("insert", the
+    mapping, None, the parts it lacks) or ("nest", the scalar, its key node, the parts under it)."""
+    parts = key.split(".")
+    if not key or any(p == "" for p in parts):
+        raise KeyError(f"{key!r} is not a dotted key such as rods.diameter")
+    node: Node = root
+    key_node: Node | None = None
+    for i, part in enumerate(parts):
+        if isinstance(node, MappingNode):
+            found = next(((k, v) for k, v in node.value if isinstance(k, ScalarNode) and k.value == part), None)
+            if found is None:
+                return "insert", node, None, parts[i:]
+            key_node, node = found
+        elif isinstance(node, SequenceNode) and part.isdigit():
+            index = int(part)
+            if index >= len(node.value):
+                raise KeyError(f"{'.'.join(parts[:i])} has {len(node.value)} entries; there is no entry {index}")
+            key_node, node = None, node.value[index]
+        else:
+            return "nest", node, key_node, parts[i:]
+    return "replace", node, key_node, []
 
 
 def render(value: Any) -> str:
@@ -111,23 +219,34 @@ def _content_end(node: Node) -> int:
 
 
 def _replace(text: str, node: Node, key_node: Node | None, value: Any) -> str:
+    start, end, new = _replacement(text, node, key_node, value)
+    return text[:start] + new + text[end:]
+
+
+def _replacement(text: str, node: Node, key_node: Node | None, value: Any) -> tuple[int, int, str]:
+    """(start, end, new text) that set the value of `node`."""
     if _empty(node):  # `key:` with no value: write it after the colon
         if key_node is None:
             raise KeyError("an empty list entry cannot be set")
         colon = text.index(":", key_node.end_mark.index)
-        return text[: colon + 1] + " " + render(value) + text[colon + 1:]
+        return colon + 1, colon + 1, " " + render(value)
     start, end = node.start_mark.index, _content_end(node)
     new = render(value)
     if isinstance(node, ScalarNode) and isinstance(value, str) and node.style in ('"', "'"):
         new = json.dumps(value, ensure_ascii=False) if node.style == '"' else "'" + value.replace("'", "''") + "'"
-    return text[:start] + new + text[end:]
+    return start, end, new
+
+
+def _flow_close(text: str, mapping: MappingNode) -> int:
+    close = mapping.end_mark.index - 1
+    while close > mapping.start_mark.index and text[close] != "}":
+        close -= 1
+    return close
 
 
 def _insert(text: str, mapping: MappingNode, parts: list[str], value: Any) -> str:
     if mapping.flow_style:
-        close = mapping.end_mark.index - 1
-        while close > mapping.start_mark.index and text[close] != "}":
-            close -= 1
+        close = _flow_close(text, mapping)
         inner = text[mapping.start_mark.index + 1: close].strip()
         entry = f"{parts[0]}: {render(_nested(parts[1:], value) if len(parts) > 1 else value)}"
         return text[:close] + (", " if inner else "") + entry + text[close:]

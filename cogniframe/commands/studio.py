@@ -1,7 +1,8 @@
 """`cogniframe studio PARAMS [--port N] [--no-browser]`: edit a design in the browser.
 
 A local web app on 127.0.0.1 (cogniframe/studio/): the params as a form, the figures of
-`check` live as you type, the 3D view, Save (comments kept) and Build. It runs until Ctrl-C.
+`check` live as you type, the 3D view, Save (comments kept) and Build, each tab's design in its
+address (undo, snapshots, compare). It runs until Ctrl-C; its errors go to its log (docs/studio.md).
 ``register(app)`` adds the command to a Typer app.
 """
 

@@ -37,8 +37,11 @@ class Field:
     def parse(self, raw: Any) -> Any:
         """The value the browser sent (text, or a bool for a checkbox) as the YAML value to write.
         Text that is not a number stays text: the validator then names the key and the fix."""
-        if self.kind == "boolean":
-            return raw if isinstance(raw, bool) else str(raw).strip().lower() in ("true", "1", "yes", "on")
+        if self.kind == "boolean":  # true/false; anything else goes to the validator as written, as in the file
+            if isinstance(raw, bool):
+                return raw
+            word = "" if raw is None else str(raw).strip()
+            return {"true": True, "false": False}.get(word.lower(), word if raw is not None else None)
         text = "" if raw is None else str(raw).strip()
         if text == "" and (self.nullable or self.kind == "enum" and "" in self.options):
             return None

@@ -2,7 +2,9 @@
 
 The socket is bound here, to 127.0.0.1 only (never 0.0.0.0 or ::), before uvicorn starts, so the
 address printed is the one listening (also with `--port 0`, any free port) and a port in use is
-a plain message (exit 2). Ctrl-C (or SIGTERM) stops the server and the studio exits 0.
+a plain message (exit 2). Ctrl-C (or SIGTERM) stops the server and the studio exits 0. The
+server's errors (a bug, a page that sent something odd) go to the studio's log,
+$COGNIFRAME_CACHE/studio/studio.log (else ~/.cache/cogniframe/...), not as tracebacks on the terminal.
 """
 
 from __future__ import annotations
@@ -17,6 +19,31 @@ from pathlib import Path
 from ..errors import UserError
 
 HOST = "127.0.0.1"
+LOGGERS = ("cogniframe.studio", "uvicorn", "uvicorn.error", "uvicorn.asgi", "websockets")
+
+
+def log_to_file() -> Path:
+    """The studio's log: its errors and uvicorn's, with their tracebacks, in a file of the cache
+    (kept small: two files of 1 MB at most), none on the terminal."""
+    import logging
+    import logging.handlers
+
+    from ..cache import cache_dir
+
+    folder = cache_dir() / "studio"
+    path = folder / "studio.log"
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        handler: logging.Handler = logging.handlers.RotatingFileHandler(path, maxBytes=1 << 20, backupCount=1, encoding="utf-8")
+    except OSError:
+        handler = logging.NullHandler()  # no writable cache: the errors are dropped, still never a traceback
+    handler.setFormatter(logging.Formatter("%(asctime)s %(name)s %(levelname)s %(message)s"))
+    for name in LOGGERS:
+        logger = logging.getLogger(name)
+        logger.handlers = [handler]
+        logger.propagate = False
+        logger.setLevel(logging.WARNING if name.startswith(("uvicorn", "websockets")) else logging.INFO)
+    return path
 
 
 def bind(port: int) -> socket.socket:
@@ -44,6 +71,7 @@ def serve(params: str | Path, port: int = 8765, open_browser: bool = True, serve
     session = Session(params, server=server)  # a bad params file: the CLI's message, exit 2, nothing served
     sock = bind(port)
     url = f"http://{HOST}:{sock.getsockname()[1]}/"
+    log_path = log_to_file()
     app = create_app(session)
 
     class Server(uvicorn.Server):
@@ -51,9 +79,13 @@ def serve(params: str | Path, port: int = 8765, open_browser: bool = True, serve
             super().handle_exit(sig, frame)
             self._captured_signals.clear()
 
-    config = uvicorn.Config(app, log_level="warning", lifespan="on", ws="auto", access_log=False)
+    # log_config None: uvicorn keeps its hands off logging (log_to_file set it up); ws_max_size: a
+    # message over the studio's own limit still arrives whole enough to be refused in a sentence
+    config = uvicorn.Config(app, log_level="warning", lifespan="on", ws="auto", access_log=False, log_config=None,
+                            ws_max_size=4 << 20)
     srv = Server(config)
     print(f"cogniframe studio: editing {params} at {url} (only this computer can connect; Ctrl-C to stop)", flush=True)
+    print(f"cogniframe studio: errors are logged to {log_path}", file=sys.stderr, flush=True)
     if open_browser:
         def opener():
             while not srv.started and not srv.should_exit:

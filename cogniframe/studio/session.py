@@ -1,33 +1,48 @@
 """The studio's state and its background work, independent of the web server.
 
-One `Session` per `cogniframe studio PARAMS`. The browser sends the values it changed (dotted
-key -> what was typed) and gets events back (`publish(event)`: a JSON-able dict):
+One `Session` per `cogniframe studio PARAMS`. The design a page shows lives in that page (and in
+its address): the file's text it started from (`base`, the SHA-256 of that text) and the values
+it changed (dotted key -> what was typed). Every message of a page carries both, so the server
+holds no design state that one page could change under another: a page that connects, reloads
+or edits never touches what another page shows. The server keeps the file texts pages started
+from (`bases`), the newest evaluation of each page (to check it again once a joint's FE is
+solved) and the 3D views. Events (`Page.send(event)`, a JSON-able dict):
 
-    figures   the `check --json` object of the edited design (`model`: "fe", or "analytic" while a
-              new joint geometry's FE is solved: `pending_fe` true), `seq` of the edit, `ms`
+    figures   the `check --json` object of the page's design (`model`: "fe", or "analytic" while
+              a new joint geometry's FE is solved: `pending_fe` true), `seq` of the edit, `ms`
+              (from the message to the figures) and `cpu_ms` (the check's own CPU time)
     invalid   the CLI's message for the edited file, the key it names and the field edited
-    scene     a new 3D view is ready at `url` (the viewer's items, packed)
+    refused   a message the studio does not take (too large, too many keys, an unknown key)
+    scene     a new 3D view is ready at `url` (the viewer's items, packed); every page, by `key`
     progress  background work: `task` ("view", "fe", "build"), `done`/`total`, `text`
-    saved     the params file was written; built / build-error: the build's outcome
+    saved     the params file now holds the page's design (read back); `base` its new text's hash
+    save-error  nothing was written, and why (changed on disk, a value refused)
+    file-saved  (to the other pages) the file was saved from another page: their Save now
+              refuses until they take the saved file under their edits (`rebase`)
+    compared  the figures of several designs side by side
 
-Work, by thread: `evaluator` validates and checks the newest edit (older edits that queued up
-meanwhile are skipped: only the last one counts), in about a tenth of a second when no joint
-needs its FE; `geometry` makes the parts of the newest geometry through the build graph (and the
-joints' FE with them), then publishes the view and, after a FE, checks the current design again;
-`build` runs `cogniframe build` into out/<name>. Nothing is written but the params file (Save)
-and the build folder (Build); the parts of the 3D view go to a temporary folder, removed on exit.
+Work, by thread: `evaluator` validates and checks the newest edit of each page (older edits of a
+page that queued up meanwhile are skipped), in about a tenth of a second when no joint needs its
+FE; `geometry` makes the parts of the newest geometry through the build graph (and the joints'
+FE with them), then publishes the view and, after a FE, checks the waiting pages again; `build`
+runs `cogniframe build` into out/<name>. Nothing is written but the params file (Save), the build
+folder (Build) and the studio's log; the parts of the 3D view go to a temporary folder, removed
+on exit.
 """
 
 from __future__ import annotations
 
+import collections
 import hashlib
+import itertools
 import json
+import logging
 import shutil
 import tempfile
 import threading
 import time
-import traceback
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -36,6 +51,31 @@ from ..errors import UserError
 from . import form
 
 Event = dict
+log = logging.getLogger("cogniframe.studio")
+
+# What one message may hold. The form has about 100 fields; a page sends only the ones it changed.
+MAX_MESSAGE_BYTES = 256 * 1024
+MAX_KEYS = 400
+MAX_VALUE_CHARS = 1000  # a name is at most 64 characters, a list of numbers a few dozen
+MAX_DESIGNS = 8  # designs in one compare
+MAX_SHOWN = 600  # characters of a message a page shows: a huge value is never echoed whole
+BASES_KEPT = 32  # file texts that pages started from
+
+
+class Refused(Exception):
+    """A message the studio does not take: the plain reason, for the page."""
+
+
+def text_hash(text: str) -> str:
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def shorten(text: str, limit: int = MAX_SHOWN) -> str:
+    """`text`, with its long runs cut so that a 1 MB value in a message is not sent back whole."""
+    if len(text) <= limit:
+        return text
+    keep = limit // 2
+    return f"{text[:keep]}… ({len(text) - 2 * keep} characters left out) …{text[-keep:]}"
 
 
 class _Latest:
@@ -51,13 +91,6 @@ class _Latest:
             self._item = item
             self._cond.notify_all()
 
-    def offer(self, item) -> None:
-        """`put`, unless something newer is already waiting."""
-        with self._cond:
-            if self._item is None:
-                self._item = item
-                self._cond.notify_all()
-
     def take(self):
         with self._cond:
             while self._item is None and not self._closed:
@@ -71,6 +104,48 @@ class _Latest:
             self._cond.notify_all()
 
 
+class _PerPage:
+    """One slot per page: `put` replaces that page's waiting job; `take` hands out the pages'
+    jobs in the order they first came, so one busy page cannot starve another."""
+
+    def __init__(self):
+        self._cond = threading.Condition()
+        self._jobs: collections.OrderedDict[int, Any] = collections.OrderedDict()
+        self._closed = False
+
+    def put(self, page: int, job, replace: bool = True) -> None:
+        with self._cond:
+            if replace or page not in self._jobs:
+                self._jobs[page] = job
+            self._cond.notify_all()
+
+    def take(self):
+        with self._cond:
+            while not self._jobs and not self._closed:
+                self._cond.wait()
+            if not self._jobs:
+                return None
+            return self._jobs.popitem(last=False)[1]
+
+    def close(self) -> None:
+        with self._cond:
+            self._closed = True
+            self._cond.notify_all()
+
+
+@dataclass
+class Page:
+    """One connected page: where its events go, and the newest design it asked for."""
+
+    id: int
+    send: Callable[[Event], None]
+    seq: int = 0  # the page's number of its newest edit
+    job: tuple | None = None  # (base, overrides, edited): the newest edit, to check again after a FE
+    pending_fe: bool = False  # its figures are the fast model's, waiting for a joint's FE
+    geometry: str | None = None  # the geometry key of its newest valid design
+    closed: bool = False
+
+
 class Session:
     def __init__(self, params: str | Path, publish: Callable[[Event], None] | None = None,
                  server: bool | None = None, out_root: Path | None = None, view: bool = True):
@@ -79,22 +154,22 @@ class Session:
         self.base = api.load(self.path)  # ParamsError: the CLI says so and exits 2
         self.server = server
         self.out_root = out_root  # None: out/<name>, as the CLI's build
-        self.publish_fn = publish or (lambda event: None)
+        self.broadcast_fn = publish or (lambda event: None)  # events for every page (and the tests)
         self.lock = threading.RLock()
-        self.overrides: dict[str, Any] = {}
-        self.seq = 0
-        self.client = 0
-        self.current: api.Design = self.base  # the newest valid design
-        self.invalid: Event | None = None
-        self.last: dict[str, Event] = {}  # the newest event of each type, for a page that connects later
-        self.scenes: dict[str, tuple[dict, bytes]] = {}
-        self.scene_key: str | None = None  # the geometry the newest scene shows
+        self.save_lock = threading.Lock()
+        self.bases: collections.OrderedDict[str, api.Design] = collections.OrderedDict()
+        self._keep_base(self.base)
+        self.pages: dict[int, Page] = {}
+        self._ids = itertools.count(1)
+        self.disk_error: str | None = None  # the file on disk no longer loads: why
+        self.last: dict[str, Event] = {}  # the newest shared events (scene, build), for a page that connects later
+        self.scenes: collections.OrderedDict[str, tuple[dict, bytes]] = collections.OrderedDict()
         self.requested_key: str | None = None  # the geometry the 3D view is being made for
         self.build_dir: Path | None = None
         self.building = False
         self.schema = None
         self.tmp = Path(tempfile.mkdtemp(prefix="cogniframe-studio-"))
-        self._edits = _Latest()
+        self._edits = _PerPage()
         self._geometry = _Latest()
         self._closed = False
         self._threads = [threading.Thread(target=self._evaluator, name="studio-evaluate", daemon=True),
@@ -102,202 +177,327 @@ class Session:
         for t in self._threads:
             t.start()
 
-    # -- the form -------------------------------------------------------------------------------
-    def form_groups(self):
+    # -- the file ---------------------------------------------------------------------------------
+    def _keep_base(self, d: api.Design) -> str:
+        key = text_hash(d.text)
+        with self.lock:
+            self.bases[key] = d
+            self.bases.move_to_end(key)
+            while len(self.bases) > BASES_KEPT:
+                self.bases.popitem(last=False)
+        return key
+
+    @property
+    def base_hash(self) -> str:
+        return text_hash(self.base.text)
+
+    def refresh(self) -> api.Design:
+        """The file as it is on disk now, for a page that loads: a new valid version becomes the
+        base of new pages; one that no longer loads leaves the last good one (and `disk_error`)."""
+        try:
+            text = self.path.read_bytes().decode("utf-8-sig")
+        except (OSError, UnicodeDecodeError) as e:
+            with self.lock:
+                self.disk_error = f"{self.path} cannot be read now ({e}); the page shows the version the studio read last."
+            return self.base
+        if text == self.base.text:
+            with self.lock:
+                self.disk_error = None
+            return self.base
+        try:
+            d = api.load(self.path)
+        except api.ParamsError as e:
+            with self.lock:
+                self.disk_error = (f"{self.path} changed on disk and does not load now; the page shows the version the "
+                                   f"studio read last (Save refuses until the file loads again).\n{shorten(str(e))}")
+            return self.base
+        with self.lock:
+            self.base, self.disk_error = d, None
+        self._keep_base(d)
+        return d
+
+    def base_of(self, key: Any) -> api.Design:
+        with self.lock:
+            d = self.bases.get(key) if isinstance(key, str) else None
+        if d is None:
+            raise Refused("this page started from a version of the file the studio no longer holds; reload the page "
+                          "(its edits are kept in the address).")
+        return d
+
+    def field_values(self, d: api.Design) -> dict[str, str]:
+        """What each input of the form shows for design `d` (text; a checkbox: "true"/"false")."""
+        values = d.spec.model_dump(mode="json")
+        return {key: form.shown(form.value_at(values, key)) for key in self._fields()}
+
+    # -- the form ---------------------------------------------------------------------------------
+    def form_groups(self, d: api.Design | None = None):
         from .. import spec as spec_mod
 
         if self.schema is None:
             self.schema = spec_mod.json_schema()
-        return form.build(self.schema, self.base.spec.model_dump(mode="json"))
+        return form.build(self.schema, (d or self.base).spec.model_dump(mode="json"))
 
-    def form_html(self) -> str:
-        groups = self.form_groups()
-        self.fields = form.fields(groups)
-        return form.render(groups, self.base.spec.model_dump(mode="json"))
+    def form_html(self, d: api.Design | None = None) -> str:
+        d = d or self.base
+        groups = self.form_groups(d)
+        fields = form.fields(groups)
+        with self.lock:
+            self.fields = {**getattr(self, "fields", {}), **fields}
+        return form.render(groups, d.spec.model_dump(mode="json"))
+
+    def _fields(self) -> dict[str, form.Field]:
+        with self.lock:
+            if not hasattr(self, "fields"):
+                self.fields = form.fields(self.form_groups())
+            return self.fields
 
     def field(self, key: str) -> form.Field | None:
-        if not hasattr(self, "fields"):
-            self.fields = form.fields(self.form_groups())
-        return self.fields.get(key)
+        return self._fields().get(key)
 
-    # -- events ---------------------------------------------------------------------------------
-    def publish(self, event: Event) -> None:
+    def parse_values(self, values: Any) -> dict[str, Any]:
+        """The values a page sent, as the YAML values to write. Refused (a plain message, in well
+        under a second whatever was sent): not a mapping, too many keys, a key that is not an input
+        of the form, a value that is not text, a number, true/false or null, or a very long one."""
+        if values is None:
+            return {}
+        if not isinstance(values, dict):
+            raise Refused("refused: `values` must be a mapping of dotted keys to values.")
+        if len(values) > MAX_KEYS:
+            raise Refused(f"refused: {len(values)} keys in one message; the studio takes at most {MAX_KEYS} "
+                          f"(the form has {len(self._fields())} inputs).")
+        fields = self._fields()
+        parsed = {}
+        for key, raw in values.items():
+            f = fields.get(key)
+            if f is None:
+                raise Refused(f"refused: {shorten(str(key), 80)!s} is not an input of the form.")
+            if raw is not None and not isinstance(raw, (str, bool, int, float)):
+                raise Refused(f"refused: {key}: a value is text, a number, true/false or null, not a {type(raw).__name__}.")
+            if isinstance(raw, str) and len(raw) > MAX_VALUE_CHARS:
+                raise Refused(f"refused: {key}: a value of {len(raw)} characters; the studio takes at most {MAX_VALUE_CHARS}.")
+            parsed[key] = f.parse(raw)
+        return parsed
+
+    # -- pages ------------------------------------------------------------------------------------
+    def connect(self, send: Callable[[Event], None]) -> Page:
+        page = Page(next(self._ids), send)
         with self.lock:
-            self.last[event["type"]] = event
-            if event["type"] == "figures":
-                self.last.pop("invalid", None)
-            elif event["type"] == "invalid":
-                self.last.pop("figures-stale", None)
+            self.pages[page.id] = page
+            replay = [self.last[t] for t in ("progress-build", "built", "build-error") if t in self.last]
+        for event in replay:
+            page.send(event)
+        return page
+
+    def disconnect(self, page: Page) -> None:
+        with self.lock:
+            page.closed = True
+            self.pages.pop(page.id, None)
+
+    def _send(self, page: Page | None, event: Event) -> None:
+        if page is None or page.closed:
+            return
         try:
-            self.publish_fn(event)
+            page.send(event)
         except Exception:  # noqa: BLE001 - a page that went away must not stop the work
-            traceback.print_exc()
+            log.exception("sending an event to page %s", page.id)
 
-    def replay(self) -> list[Event]:
-        """What a page that connects now needs to show the current state."""
+    def publish(self, event: Event) -> None:
+        """An event for every page."""
         with self.lock:
-            order = ("figures", "invalid", "scene", "progress", "saved", "built", "build-error")
-            return [self.last[t] for t in order if t in self.last]
+            pages = list(self.pages.values())
+            if event["type"] in ("built", "build-error"):
+                self.last[event["type"]] = event
+                self.last.pop("build-error" if event["type"] == "built" else "built", None)
+            elif event["type"] == "progress" and event.get("task") == "build":
+                self.last["progress-build"] = event
+        try:
+            self.broadcast_fn(event)
+        except Exception:  # noqa: BLE001
+            log.exception("publishing an event")
+        for p in pages:
+            self._send(p, event)
 
-    # -- edits ----------------------------------------------------------------------------------
+    # -- edits ------------------------------------------------------------------------------------
     def start(self) -> None:
-        """The first figures and view, for the file as loaded."""
-        self.edit({}, replace=True)
+        """The file's 3D view (and its joints' FE) made before the first page asks for it."""
 
-    def edit(self, changes: dict[str, Any], replace: bool = False, client: int = 0, edited: str | None = None) -> int:
-        """Queue an edit: `changes` (dotted key -> what the browser sent) on top of the earlier
-        ones (`replace`: instead of them). `client`: the page's number for the edit, sent back
-        with its events. Returns the edit's sequence number here."""
+        def warm():
+            try:
+                d = self.base
+                key, fe = geometry_key(d), d.needs_fe()
+            except Exception:  # noqa: BLE001 - the first page's edit tries again and says why
+                log.exception("the first view")
+                return
+            with self.lock:
+                if self.requested_key is not None or key in self.scenes:
+                    return
+                self.requested_key = key
+            self._geometry.put((d, key, fe))
+
+        threading.Thread(target=warm, name="studio-warm", daemon=True).start()
+
+    def edit(self, page: Page, values: Any, base: Any, seq: int = 0, edited: str | None = None) -> None:
+        """Queue a check of the page's design: `values` (what the page changed) on the file text
+        `base`. Refused: see `parse_values`."""
+        d0 = self.base_of(base)
+        overrides = self.parse_values(values)
         with self.lock:
-            parsed = {}
-            for key, raw in changes.items():
-                f = self.field(key)
-                parsed[key] = f.parse(raw) if f is not None else raw
-            self.overrides = dict(parsed) if replace else {**self.overrides, **parsed}
-            self.seq += 1
-            self.client = client
-            job = (self.seq, client, dict(self.overrides), edited or next(reversed(changes), None), time.perf_counter(), False)
-        self._edits.put(job)
-        return job[0]
+            page.seq = seq
+            page.job = (d0, overrides, edited if isinstance(edited, str) and edited in overrides else None)
+        self._edits.put(page.id, (page, seq, d0, overrides, page.job[2], time.perf_counter(), False))
 
     def _evaluator(self) -> None:
         while True:
             job = self._edits.take()
             if job is None:
                 return
+            page, seq = job[0], job[1]
             try:
                 self._evaluate(*job)
             except Exception as e:  # noqa: BLE001 - a bug: say so on the page, keep serving
-                traceback.print_exc()
-                self.publish({"type": "invalid", "seq": job[0], "client": job[1], "key": None, "edited": job[3],
-                              "message": f"internal error: {type(e).__name__}: {e} (a bug in cogniframe, not in your input)"})
+                log.exception("checking an edit")
+                self._send(page, {"type": "invalid", "seq": seq, "key": None, "edited": job[4],
+                                  "message": f"internal error: {type(e).__name__}: {shorten(str(e))} (a bug in cogniframe, "
+                                             f"not in your input; the studio's log has the details)"})
 
-    def _evaluate(self, seq: int, client: int, overrides: dict, edited: str | None, t0: float, after_fe: bool) -> None:
+    def _evaluate(self, page: Page, seq: int, d0: api.Design, overrides: dict, edited: str | None, t0: float,
+                  after_fe: bool) -> None:
+        if page.closed or (seq < page.seq and not after_fe):
+            return
+        cpu0 = time.thread_time()  # the check's own work, whatever else the machine runs
         try:
-            d = self.base.with_values(overrides) if overrides else self.base
+            d = d0.with_values(overrides) if overrides else d0
         except api.ParamsError as e:
-            with self.lock:
-                self.invalid = {"type": "invalid", "seq": seq, "client": client, "key": e.key, "edited": edited, "message": str(e)}
-            self.publish(dict(self.invalid, ms=round(1000 * (time.perf_counter() - t0), 1)))
+            self._send(page, {"type": "invalid", "seq": seq, "key": e.key, "edited": edited, "message": shorten(str(e), 4000),
+                              "ms": round(1000 * (time.perf_counter() - t0), 1)})
             return
         pending_fe = d.needs_fe()
         shown = d.with_fast_model() if pending_fe else d
         try:
             result = shown.check()
         except api.ParamsError as e:
-            self.publish({"type": "invalid", "seq": seq, "client": client, "key": e.key, "edited": edited, "message": str(e)})
+            self._send(page, {"type": "invalid", "seq": seq, "key": e.key, "edited": edited, "message": shorten(str(e), 4000)})
             return
-        with self.lock:
-            if seq < self.seq and not after_fe:
-                return  # a newer edit is queued: it will show its own figures
-            self.current, self.invalid = d, None
-        self.publish({"type": "figures", "seq": seq, "client": client, "check": result.to_dict(), "model": result.stiffness_model,
-                      "pending_fe": pending_fe, "after_fe": after_fe, "modified": d.modified,
-                      "ms": round(1000 * (time.perf_counter() - t0), 1)})
         key = geometry_key(d)
         with self.lock:
-            wanted = pending_fe or key not in (self.scene_key, self.requested_key)
+            if seq < page.seq and not after_fe:
+                return  # a newer edit of this page is queued: it will show its own figures
+            page.pending_fe, page.geometry = pending_fe, key
+        self._send(page, {"type": "figures", "seq": seq, "check": result.to_dict(), "model": result.stiffness_model,
+                          "pending_fe": pending_fe, "after_fe": after_fe, "geometry": key,
+                          "ms": round(1000 * (time.perf_counter() - t0), 1),
+                          "cpu_ms": round(1000 * (time.thread_time() - cpu0), 1)})
+        with self.lock:
+            ready = self.scenes.get(key)
+            wanted = pending_fe or (ready is None and key != self.requested_key)
             if wanted:
                 self.requested_key = key
+        if ready is not None:
+            self._send(page, {"type": "scene", "url": f"/scene/{key}.json", "key": key, "objects": len(ready[0]["objects"])})
         if wanted:
-            self._geometry.put((seq, d, key, pending_fe))
+            self._geometry.put((d, key, pending_fe))
 
-    # -- geometry: parts, 3D view, joint FE --------------------------------------------------------
+    # -- geometry: parts, 3D view, joint FE ---------------------------------------------------------
     def _geometry_worker(self) -> None:
-        from ..api import view
-        from ..report.viewer import pack
-
         n = 0
         while True:
             job = self._geometry.take()
             if job is None:
                 return
-            seq, d, key, fe = job
+            d, key, fe = job
             if not self.view:
                 if fe:
                     self._solve_fe(d)
                 continue
             n += 1
-            out = self.tmp / f"view-{n}"
-            t0 = time.perf_counter()
-            self.publish({"type": "progress", "task": "view", "done": 0, "total": 1, "fe": fe,
-                          "text": "making the parts" + (" and solving the joints' FE" if fe else "")})
-            n_parts = len(d.derived.parts)
-            parts_done: list[str] = []
-            shown: list[threading.Thread] = []
-
-            def show_view(values: dict, d=d, out=out, key=key, seq=seq, t0=t0) -> None:
-                """The 3D view as soon as the parts are made (the joints' FE may still run)."""
-                try:
-                    packed = pack(view.items(d.spec, d.derived, out, values))
-                except Exception as e:  # noqa: BLE001
-                    traceback.print_exc()
-                    self._view_failed(key)
-                    self.publish({"type": "progress", "task": "view", "done": 1, "total": 1, "text": f"the 3D view failed: {e}",
-                                  "error": f"{type(e).__name__}: {e}"})
-                    return
-                with self.lock:
-                    self.scenes = {key: packed}  # only the newest is kept
-                    self.scene_key = key
-                    current = geometry_key(self.current) == key
-                if current:
-                    self.publish({"type": "scene", "seq": seq, "url": f"/scene/{key}.json", "key": key,
-                                  "objects": len(packed[0]["objects"]), "seconds": round(time.perf_counter() - t0, 2)})
-
-            def step(task: str, done: int, total: int, part_values=None, parts_done=parts_done, n_parts=n_parts,
-                     fe=fe, shown=shown, show_view=show_view) -> None:
-                is_part = task.startswith("part:")
-                if is_part:
-                    parts_done.append(task)
-                all_parts = is_part and len(parts_done) == n_parts
-                what = f"made the {task.rsplit('/', 1)[-1]}" if is_part else "solved the joints' FE"
-                if fe and all_parts:
-                    what += "; solving the joints' FE"
-                self.publish({"type": "progress", "task": "view", "done": done, "total": total, "fe": fe,
-                              "text": f"{what} ({done}/{total})"})
-                if all_parts and part_values is not None:
-                    t = threading.Thread(target=show_view, args=(part_values(),), name="studio-view", daemon=True)
-                    shown.append(t)
-                    t.start()
-
             try:
-                view.build_parts(d.spec, d.derived, out, fe=fe, server=self.server, on_step=step)
-            except UserError as e:
-                self._view_failed(key)
-                self.publish({"type": "progress", "task": "view", "done": 1, "total": 1, "error": str(e), "text": str(e)})
-                if fe:  # the figures wait for the FE: solve it on its own, or say why it cannot be
-                    self._solve_fe(d)
-                continue
+                self._make_view(d, key, fe, self.tmp / f"view-{n}")
+            except Exception:  # noqa: BLE001 - logged; the next edit tries again
+                log.exception("making the 3D view")
+
+    def _make_view(self, d: api.Design, key: str, fe: bool, out: Path) -> None:
+        from ..api import view
+        from ..report.viewer import pack
+
+        t0 = time.perf_counter()
+        self.publish({"type": "progress", "task": "view", "key": key, "done": 0, "total": 1, "fe": fe,
+                      "text": "making the parts" + (" and solving the joints' FE" if fe else "")})
+        n_parts = len(d.derived.parts)
+        parts_done: list[str] = []
+        shown: list[threading.Thread] = []
+
+        def show_view(values: dict) -> None:
+            """The 3D view as soon as the parts are made (the joints' FE may still run)."""
+            try:
+                packed = pack(view.items(d.spec, d.derived, out, values))
             except Exception as e:  # noqa: BLE001
-                traceback.print_exc()
+                log.exception("packing the 3D view")
                 self._view_failed(key)
-                self.publish({"type": "progress", "task": "view", "done": 1, "total": 1, "text": f"the 3D view failed: {e}",
-                              "error": f"{type(e).__name__}: {e}"})
-                if fe:
-                    self._solve_fe(d)
-                continue
-            finally:
-                for t in shown:
-                    t.join()
-                shutil.rmtree(out, ignore_errors=True)
-            self.publish({"type": "progress", "task": "view", "done": 1, "total": 1, "text": "", "fe": False})
-            if fe:  # the joints are in the cache now: the figures of the current design, FE this time
-                self._after_fe()
+                self.publish({"type": "progress", "task": "view", "key": key, "done": 1, "total": 1,
+                              "text": f"the 3D view failed: {shorten(str(e))}", "error": f"{type(e).__name__}: {shorten(str(e))}"})
+                return
+            with self.lock:
+                self.scenes[key] = packed
+                self.scenes.move_to_end(key)
+                while len(self.scenes) > 4:  # the pages' newest views
+                    self.scenes.popitem(last=False)
+            self.publish({"type": "scene", "url": f"/scene/{key}.json", "key": key,
+                          "objects": len(packed[0]["objects"]), "seconds": round(time.perf_counter() - t0, 2)})
+
+        def step(task: str, done: int, total: int, part_values=None) -> None:
+            is_part = task.startswith("part:")
+            if is_part:
+                parts_done.append(task)
+            all_parts = is_part and len(parts_done) == n_parts
+            what = f"made the {task.rsplit('/', 1)[-1]}" if is_part else "solved the joints' FE"
+            if fe and all_parts:
+                what += "; solving the joints' FE"
+            self.publish({"type": "progress", "task": "view", "key": key, "done": done, "total": total, "fe": fe,
+                          "text": f"{what} ({done}/{total})"})
+            if all_parts and part_values is not None:
+                t = threading.Thread(target=show_view, args=(part_values(),), name="studio-view", daemon=True)
+                shown.append(t)
+                t.start()
+
+        try:
+            view.build_parts(d.spec, d.derived, out, fe=fe, server=self.server, on_step=step)
+        except Exception as e:  # noqa: BLE001
+            if not isinstance(e, UserError):
+                log.exception("making the parts of the 3D view")
+            self._view_failed(key)
+            text = str(e) if isinstance(e, UserError) else f"the 3D view failed: {type(e).__name__}: {e}"
+            self.publish({"type": "progress", "task": "view", "key": key, "done": 1, "total": 1,
+                          "error": shorten(text), "text": shorten(text)})
+            if fe:  # the figures wait for the FE: solve it on its own, or say why it cannot be
+                self._solve_fe(d)
+            return
+        finally:
+            for t in shown:
+                t.join()
+            shutil.rmtree(out, ignore_errors=True)
+        self.publish({"type": "progress", "task": "view", "key": key, "done": 1, "total": 1, "text": "", "fe": False})
+        if fe:  # the joints are in the cache now: the figures of the waiting pages, FE this time
+            self._after_fe()
 
     def _solve_fe(self, d: api.Design) -> None:
         self.publish({"type": "progress", "task": "fe", "done": 0, "total": 1, "text": "solving the joints' FE"})
         try:
             d.check()  # solves the new joints into the cache
         except Exception as e:  # noqa: BLE001
-            self.publish({"type": "progress", "task": "fe", "done": 1, "total": 1, "text": "", "error": f"{type(e).__name__}: {e}"})
+            if not isinstance(e, UserError):
+                log.exception("solving the joints' FE")
+            self.publish({"type": "progress", "task": "fe", "done": 1, "total": 1, "text": "",
+                          "error": shorten(f"{type(e).__name__}: {e}")})
             return
         self.publish({"type": "progress", "task": "fe", "done": 1, "total": 1, "text": ""})
         self._after_fe()
 
     def _after_fe(self) -> None:
         with self.lock:
-            job = (self.seq, self.client, dict(self.overrides), None, time.perf_counter(), True)
-        self._edits.offer(job)  # a queued edit already stands for the current design
+            waiting = [p for p in self.pages.values() if p.pending_fe and p.job is not None]
+        for p in waiting:  # a queued edit of the page already stands for its current design
+            d0, overrides, edited = p.job
+            self._edits.put(p.id, (p, p.seq, d0, overrides, None, time.perf_counter(), True), replace=False)
 
     def _view_failed(self, key: str) -> None:
         with self.lock:
@@ -309,37 +509,72 @@ class Session:
             return self.scenes.get(key)
 
     # -- save and build ---------------------------------------------------------------------------
-    def save(self) -> Event:
-        """Write the edited params to the file (comments and order kept). Refused while the newest
-        edit is invalid, or when the file changed on disk since the studio read it."""
-        with self.lock:
-            if self.invalid is not None:
-                return {"type": "save-error", "message": "not saved: " + self.invalid["message"]}
-            d = self.current
+    def save(self, values: Any, base: Any, page: Page | None = None) -> Event:
+        """Write the page's design (`values` on the file text `base`) to the file, comments and order
+        kept, and read it back. Refused, with nothing written, when a value is refused or when the
+        file on disk is no longer the text the page started from (another page saved, an editor):
+        a Save never writes over what it has not shown."""
+        try:
+            d0 = self.base_of(base)
+            overrides = self.parse_values(values)
+        except Refused as e:
+            return {"type": "save-error", "message": "not saved: " + str(e)}
+        with self.save_lock:
             try:
                 on_disk = self.path.read_bytes().decode("utf-8-sig")
             except (OSError, UnicodeDecodeError) as e:
-                return {"type": "save-error", "message": f"not saved: {self.path} cannot be read ({e})."}
-            if on_disk != self.base.text:
-                return {"type": "save-error", "message": f"not saved: {self.path} changed on disk since the studio read it; "
-                                                          f"nothing was written. Restart the studio to edit the new version."}
-            d.save()
-            self.base = api.load(self.path)
-            self.overrides = {}
-            self.current = self.base
-        event = {"type": "saved", "path": str(self.path)}
-        self.publish(event)
+                return {"type": "save-error", "message": f"not saved: {self.path} cannot be read ({e}); nothing was written."}
+            if on_disk != d0.text:
+                return {"type": "save-error", "reason": "changed-on-disk",
+                        "message": f"not saved: {self.path} changed on disk since this page loaded it (a Save from "
+                                   f"another page, or an editor); nothing was written. Your edits are kept here: "
+                                   f"\"Take the saved file\" puts them on the file as it is now, then Save again."}
+            try:
+                d = d0.with_values(overrides) if overrides else d0
+            except api.ParamsError as e:
+                return {"type": "save-error", "message": "not saved: " + shorten(str(e), 4000)}
+            try:
+                d.save()
+                written = self.path.read_bytes().decode("utf-8-sig")
+            except (OSError, UnicodeDecodeError, UserError) as e:
+                return {"type": "save-error", "message": f"not saved: writing {self.path} failed ({shorten(str(e))})."}
+            if written != d.text:
+                return {"type": "save-error", "message": f"not saved: {self.path} does not hold what this page shows after "
+                                                          f"writing it (another program wrote it at the same moment?)."}
+            with self.lock:
+                self.base = d
+            key = self._keep_base(d)
+        event = {"type": "saved", "path": str(self.path), "base": key}
+        with self.lock:
+            others = [p for p in self.pages.values() if p is not page]
+        for p in others:
+            self._send(p, {"type": "file-saved", "path": str(self.path), "base": key})
         return event
 
-    def build(self) -> Event:
-        """Start `cogniframe build` of the current design into out/<name> (a thread)."""
+    def rebase(self) -> Event:
+        """The file as it is on disk now, for a page that takes it under its edits: its hash and
+        what every input shows for it."""
+        d = self.refresh()
         with self.lock:
-            if self.invalid is not None:
-                return {"type": "build-error", "message": "not built: " + self.invalid["message"]}
+            problem = self.disk_error
+        if problem:
+            return {"type": "rebase-error", "message": problem}
+        return {"type": "rebased", "base": text_hash(d.text), "values": self.field_values(d)}
+
+    def build(self, values: Any, base: Any) -> Event:
+        """Start `cogniframe build` of the page's design into out/<name> (a thread)."""
+        try:
+            d0 = self.base_of(base)
+            overrides = self.parse_values(values)
+            d = d0.with_values(overrides) if overrides else d0
+        except Refused as e:
+            return {"type": "build-error", "message": "not built: " + str(e)}
+        except api.ParamsError as e:
+            return {"type": "build-error", "message": "not built: " + shorten(str(e), 4000)}
+        with self.lock:
             if self.building:
                 return {"type": "build-error", "message": "a build is already running"}
             self.building = True
-            d = self.current
         threading.Thread(target=self._build, args=(d,), name="studio-build", daemon=True).start()
         return {"type": "build-started", "name": d.name}
 
@@ -359,10 +594,11 @@ class Session:
             self.publish({"type": "built", "out_dir": str(result.out_dir), "verdict": result.verdict, "files": files,
                           "up_to_date": result.up_to_date, "count": len(result.files)})
         except UserError as e:
-            self.publish({"type": "build-error", "message": str(e)})
+            self.publish({"type": "build-error", "message": shorten(str(e), 4000)})
         except Exception as e:  # noqa: BLE001
-            traceback.print_exc()
-            self.publish({"type": "build-error", "message": f"internal error: {type(e).__name__}: {e} (a bug in cogniframe)"})
+            log.exception("building")
+            self.publish({"type": "build-error", "message": f"internal error: {type(e).__name__}: {shorten(str(e))} "
+                                                            f"(a bug in cogniframe; the studio's log has the details)"})
         finally:
             with self.lock:
                 self.building = False
@@ -389,11 +625,71 @@ class Session:
         listed = {f["path"] for f in manifest.get("files", [])}
         return folder / rel if rel in listed and (folder / rel).is_file() else None
 
+    # -- compare ----------------------------------------------------------------------------------
+    def compare(self, designs: Any) -> Event:
+        """The compare table's figures of each design ({"name", "base", "values"}); a design that
+        does not validate gets its message instead. Each is checked as `cogniframe check` checks it
+        (a joint geometry never solved: its FE first, seconds)."""
+        if not isinstance(designs, list) or not designs:
+            raise Refused("refused: `designs` must be a list of designs to compare.")
+        if len(designs) > MAX_DESIGNS:
+            raise Refused(f"refused: {len(designs)} designs; the compare takes at most {MAX_DESIGNS}.")
+        prepared = []
+        for i, item in enumerate(designs):
+            if not isinstance(item, dict):
+                raise Refused("refused: each design to compare is {name, base, values}.")
+            name = shorten(str(item.get("name") or f"design {i + 1}"), 80)
+            prepared.append((name, self.base_of(item.get("base")), self.parse_values(item.get("values"))))
+        columns = []
+        for name, d0, overrides in prepared:
+            try:
+                d = d0.with_values(overrides) if overrides else d0
+                columns.append({"name": name, "figures": compare_figures(d.check().to_dict())})
+            except api.ParamsError as e:
+                columns.append({"name": name, "error": shorten(str(e), 2000)})
+        return {"type": "compared", "columns": columns}
+
     def close(self) -> None:
         self._closed = True
         self._edits.close()
         self._geometry.close()
         shutil.rmtree(self.tmp, ignore_errors=True)
+
+
+# the compare's rows: label, unit, digits, which is better ("lower", "higher", None)
+COMPARE_ROWS = (
+    ("mass_g", "all-up weight", "g", 1),
+    ("margin_g", "margin to the limit", "g", 1),
+    ("k_n_per_m", "stiffness k", "N/m", 0),
+    ("safe_drop_cm", "max safe drop", "cm", 1),
+    ("one_drop_peak_g", "one drop's peak at the design drop (median)", "G", 0),
+    ("hover_time_min", "hover time", "min", 1),
+    ("thrust_to_weight", "thrust / weight", "", 2),
+    ("first_mode_hz", "first mode", "Hz", 1),
+    ("verdict", "verdict", "", None),
+)
+
+
+def compare_figures(check: dict) -> dict[str, Any]:
+    """The compare's figures from a `check --json` object (None where the check has none)."""
+
+    def at(*path):
+        node: Any = check
+        for p in path:
+            if isinstance(node, list) and isinstance(p, int) and p < len(node):
+                node = node[p]
+            elif isinstance(node, dict) and p in node:
+                node = node[p]
+            else:
+                return None
+        return node
+
+    design = at("stiffness", "design_drop_height_cm")
+    peak = next((h.get("peak_g_drop_median") for h in at("peak_g", "heights") or [] if h.get("height_cm") == design), None)
+    return {"mass_g": at("mass", "total_g"), "margin_g": at("mass", "margin_g"), "k_n_per_m": at("stiffness", "k_n_per_m"),
+            "safe_drop_cm": at("drop", "max_safe_height_cm"), "one_drop_peak_g": peak,
+            "hover_time_min": at("flight", "hover_time_min"), "thrust_to_weight": at("flight", "thrust_to_weight"),
+            "first_mode_hz": at("stiffness", "modes_hz", 0), "verdict": check.get("verdict")}
 
 
 class _Lines:

@@ -1,6 +1,9 @@
-// cogniframe studio: the page's side. Sends the edited values over a WebSocket, shows the figures
-// (every element with data-metric="<dotted path in check --json>"), the CLI's message beside a bad
-// value's field, the 3D view (the report's viewer, cogniframe/report/viewer/viewer.js) and the
+// cogniframe studio: the page's side. The design this page shows lives here: the file's text it
+// started from (`base`, its hash) and the values changed from it (`changes`), also kept in the
+// address (#frame.width=220&...), so a reload, a bookmark or a link shows the same design, and no
+// other page can change it. Every message to the server carries both; the server checks them and
+// sends back the figures (every element with data-metric="<dotted path in check --json>"), the
+// CLI's message beside a bad value's field, the 3D view (the report's viewer, viewer.js) and the
 // progress of the background work. Nothing is fetched from anywhere but this server.
 import * as THREE from "three";
 import { OrbitControls } from "/viewer/OrbitControls.js";
@@ -10,51 +13,190 @@ const form = document.getElementById("params");
 const statusEl = document.getElementById("status");
 const saveBtn = document.getElementById("save");
 const buildBtn = document.getElementById("build");
+const undoBtn = document.getElementById("undo");
+const redoBtn = document.getElementById("redo");
 const modelEl = document.getElementById("model");
 const banner = document.getElementById("error-banner");
 const timing = document.getElementById("timing");
+const notice = document.getElementById("notice");
+const rebaseBtn = document.getElementById("rebase");
+const inputs = [...form.querySelectorAll("[name]")];
+const byName = new Map(inputs.map((el) => [el.name, el]));
+const paramsPath = document.body.dataset.params;
 
-const changed = {};          // dotted key -> what the field holds, for every field edited since the last save
+let base = document.body.dataset.base;  // the hash of the file text this page's design starts from
+const baseValues = new Map(inputs.map((el) => [el.name, fieldValue(el)]));  // what each field shows for `base`
 let seq = 0;                 // the newest edit sent
-let shownSeq = -1;           // the edit the figures show
-let lastEdited = null;
 let valid = true;
-const sentAt = {};           // seq -> performance.now() when sent
-window.cogniframeStudio = { latencies: [], events: [] };
+let stale = false;           // the file was saved from another page: Save refuses until `rebase`
+let editStart = null;        // performance.now() of the first input event not sent yet
+const sentAt = {};           // seq -> the first input event of that edit (or the send)
+let requests = 0;            // ids of save / rebase / compare
+const past = [];             // undo: what every field showed before each edit
+const future = [];           // redo
+let committed = {};          // what every field showed at the newest edit sent
+let wantedScene = null;      // the geometry of the figures shown: the 3D view to show
+const sceneUrls = {};        // scenes the server said are ready: key -> url
+let lastFigures = null;
+const pendingSaves = {};  // save id -> the changes it saves
+window.cogniframeStudio = { latencies: [], events: [], changes: () => changes(), base: () => base };
 
-const ws = new WebSocket(`ws://${location.host}/ws`);
-ws.addEventListener("open", () => setStatus("connected"));
-ws.addEventListener("close", () => setStatus("disconnected: restart `cogniframe studio` and reload", "bad"));
-ws.addEventListener("message", (m) => handle(JSON.parse(m.data)));
+function fieldValue(el) {
+  return el.type === "checkbox" ? (el.checked ? "true" : "false") : el.value;
+}
+
+function setField(el, value) {
+  if (el.type === "checkbox") el.checked = value === "true";
+  else el.value = value;
+}
+
+// the values that differ from the file the page started from: the design, in short
+function changes() {
+  const out = {};
+  for (const el of inputs) {
+    const v = fieldValue(el);
+    if (v !== baseValues.get(el.name)) out[el.name] = v;
+  }
+  return out;
+}
+
+function sendable(state) {  // a checkbox as true/false, everything else as typed
+  const out = {};
+  for (const [k, v] of Object.entries(state)) out[k] = byName.get(k)?.type === "checkbox" ? v === "true" : v;
+  return out;
+}
+
+function showState(state) {  // `state`: changed values; the other fields show the file's
+  for (const el of inputs) setField(el, Object.hasOwn(state, el.name) ? state[el.name] : baseValues.get(el.name));
+}
+
+function fields() {  // what every field shows: undo, redo and snapshots keep this, so a Save between changes nothing
+  return Object.fromEntries(inputs.map((el) => [el.name, fieldValue(el)]));
+}
+
+function showFields(all) {
+  for (const el of inputs) if (Object.hasOwn(all, el.name)) setField(el, all[el.name]);
+}
+
+function changesOf(all) {  // the changed values of a full set of fields, against the file this page is on now
+  const out = {};
+  for (const [k, v] of Object.entries(all)) if (baseValues.has(k) && v !== baseValues.get(k)) out[k] = v;
+  return out;
+}
+
+function sameState(a, b) {
+  const ka = Object.keys(a), kb = Object.keys(b);
+  return ka.length === kb.length && ka.every((k) => b[k] === a[k]);
+}
+
+// the address holds the changed values only: #frame.width=220&core.battery.mass=70
+function stateFromAddress() {
+  const state = {}, unknown = [];
+  for (const [k, v] of new URLSearchParams(location.hash.slice(1))) {
+    if (byName.has(k)) state[k] = v; else unknown.push(k);
+  }
+  if (unknown.length) showNotice(`The address names values this form does not have (${unknown.slice(0, 5).join(", ")}); they are left out.`);
+  return state;
+}
+
+function writeAddress(state) {
+  const text = new URLSearchParams(Object.entries(state)).toString();
+  const url = location.pathname + location.search + (text ? `#${text}` : "");
+  if (url !== location.pathname + location.search + location.hash) history.replaceState(null, "", url);
+}
 
 function setStatus(text, cls = "") {
   statusEl.textContent = text;
   statusEl.className = cls;
 }
 
-function fieldValue(el) {
-  return el.type === "checkbox" ? el.checked : el.value;
+// a refusal stays on the page until it is dismissed (the next status does not replace it)
+function showNotice(text, { rebase = false } = {}) {
+  notice.querySelector(".notice-text").textContent = text;
+  rebaseBtn.hidden = !rebase;
+  notice.hidden = false;
+}
+document.getElementById("dismiss").addEventListener("click", () => { notice.hidden = true; });
+
+function showDirty() {
+  const dirty = Object.keys(changes()).length > 0;
+  saveBtn.disabled = !valid || !dirty;
+  undoBtn.disabled = past.length === 0;
+  redoBtn.disabled = future.length === 0;
+  return dirty;
+}
+
+const ws = new WebSocket(`ws://${location.host}/ws?token=${encodeURIComponent(document.body.dataset.token)}`);
+ws.addEventListener("open", () => { setStatus("connected"); send(); });
+ws.addEventListener("close", () => setStatus("disconnected: restart `cogniframe studio` and reload (your edits are in the address)", "bad"));
+ws.addEventListener("message", (m) => handle(JSON.parse(m.data)));
+
+function post(message) {
+  if (ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(message));
 }
 
 let timer = null;
+let lastEdited = null;
 function onEdit(ev) {
   const el = ev.target;
   if (!el.name) return;
-  changed[el.name] = fieldValue(el);
   lastEdited = el.name;
+  if (editStart === null) editStart = performance.now();
   clearTimeout(timer);
-  timer = setTimeout(send, el.type === "checkbox" || el.tagName === "SELECT" ? 0 : 30);  // typing: one check per pause
+  timer = setTimeout(commit, el.type === "checkbox" || el.tagName === "SELECT" ? 0 : 30);  // typing: one check per pause
 }
 form.addEventListener("input", onEdit);
 form.addEventListener("change", onEdit);
 
+function commit() {  // an edit: into the undo history, the address, and to the server
+  if (sameState(fields(), committed)) { editStart = null; return; }  // e.g. the change event of a field left: nothing new
+  past.push(committed);
+  future.length = 0;
+  send();
+}
+
 function send() {
+  clearTimeout(timer);
+  const state = changes();
+  committed = fields();
+  writeAddress(state);
   seq += 1;
-  sentAt[seq] = performance.now();
-  ws.send(JSON.stringify({ type: "edit", seq, values: changed, replace: true, edited: lastEdited }));
-  saveBtn.disabled = true;
+  sentAt[seq] = editStart ?? performance.now();
+  editStart = null;
+  post({ type: "edit", seq, base, values: sendable(state), edited: lastEdited });
+  showDirty();
+  saveBtn.disabled = true;  // until this edit's figures say it is valid
   setStatus("checking…");
 }
+
+function undo() {
+  if (!past.length) return;
+  future.push(fields());
+  showFields(past.pop());
+  lastEdited = null;
+  send();
+}
+function redo() {
+  if (!future.length) return;
+  past.push(fields());
+  showFields(future.pop());
+  lastEdited = null;
+  send();
+}
+undoBtn.addEventListener("click", undo);
+redoBtn.addEventListener("click", redo);
+document.addEventListener("keydown", (e) => {
+  if (!(e.ctrlKey || e.metaKey) || e.key.toLowerCase() !== "z" || e.target.closest?.("input, select, textarea")) return;
+  e.preventDefault();
+  (e.shiftKey ? redo : undo)();
+});
+
+// leaving with unsaved edits asks first (a reload keeps them: they are in the address)
+window.addEventListener("beforeunload", (e) => {
+  if (Object.keys(changes()).length === 0) return;
+  e.preventDefault();
+  e.returnValue = "";
+});
 
 function lookup(obj, path) {
   let node = obj;
@@ -91,7 +233,7 @@ function showFigures(ev) {
   modelEl.textContent = ev.pending_fe ? "fast model (analytic joints): solving the joints' FE…"
     : ev.model === "fe" ? (ev.after_fe ? "FE joints (just solved)" : "FE joints")
     : ev.model === "analytic" ? "analytic joints (model.stiffness_model)" : (ev.model || "");
-  document.body.dataset.figuresSeq = String(ev.client);
+  document.body.dataset.figuresSeq = String(ev.seq);
   document.body.dataset.model = modelEl.dataset.model;
 }
 
@@ -116,41 +258,78 @@ function showError(ev) {
   if (first) first.closest("details")?.setAttribute("open", "");
 }
 
+
 function handle(ev) {
   window.cogniframeStudio.events.push(ev.type);
   if (ev.type === "figures") {
-    if (ev.client < seq && !ev.after_fe) return;  // a newer edit is on its way
-    shownSeq = ev.client;
+    if (ev.seq < seq) return;  // a newer edit is on its way
     valid = true;
+    lastFigures = ev;
     document.body.dataset.state = "valid";
     clearErrors();
     showFigures(ev);
-    if (sentAt[ev.client] !== undefined && !ev.after_fe) {
-      const ms = performance.now() - sentAt[ev.client];
-      delete sentAt[ev.client];
-      window.cogniframeStudio.latencies.push({ seq: ev.client, ms, server_ms: ev.ms, pending_fe: ev.pending_fe });
+    if (sentAt[ev.seq] !== undefined && !ev.after_fe) {
+      const ms = performance.now() - sentAt[ev.seq];
+      delete sentAt[ev.seq];
+      window.cogniframeStudio.latencies.push({ seq: ev.seq, ms, server_ms: ev.ms, cpu_ms: ev.cpu_ms, pending_fe: ev.pending_fe });
       timing.textContent = `updated ${ms.toFixed(0)} ms after the edit (check: ${ev.ms.toFixed(0)} ms)`;
     }
-    const dirty = Object.keys(changed).length > 0;
-    saveBtn.disabled = !dirty;
-    setStatus(dirty ? "edited, not saved" : "saved", dirty ? "dirty" : "");
+    wantedScene = ev.geometry;
+    if (sceneUrls[wantedScene]) loadScene({ key: wantedScene, url: sceneUrls[wantedScene] });
+    const dirty = showDirty();
+    if (dirty || !statusEl.textContent.startsWith("saved")) setStatus(dirty ? "edited, not saved" : "as in the file", dirty ? "dirty" : "");
   } else if (ev.type === "invalid") {
-    if (ev.client < seq) return;
+    if (ev.seq < seq) return;
     valid = false;
     document.body.dataset.state = "invalid";  // the figures shown are the last valid design's
     showError(ev);
-    saveBtn.disabled = true;
+    showDirty();
     setStatus("not saved: fix the value marked in red", "bad");
+  } else if (ev.type === "refused") {
+    showNotice(ev.message);
+    setStatus("refused", "bad");
   } else if (ev.type === "scene") {
-    loadScene(ev);
+    sceneUrls[ev.key] = ev.url;
+    if (ev.key === wantedScene) loadScene(ev);
   } else if (ev.type === "progress") {
+    if (ev.task === "view" && ev.key && ev.key !== wantedScene) return;  // another page's view
     progress(ev);
   } else if (ev.type === "saved") {
-    for (const k of Object.keys(changed)) delete changed[k];
-    saveBtn.disabled = true;
-    setStatus(`saved ${ev.path}`, "ok");
+    const saved = pendingSaves[ev.id] || {};
+    delete pendingSaves[ev.id];
+    base = ev.base;
+    document.body.dataset.base = base;
+    for (const [k, v] of Object.entries(saved)) baseValues.set(k, v);
+    stale = false;
+    const dirty = showDirty();
+    writeAddress(changes());
+    setStatus(dirty ? `saved ${ev.path} (edits made since are not saved)` : `saved ${ev.path}`, dirty ? "dirty" : "ok");
+    document.body.dataset.saved = String(ev.id);
   } else if (ev.type === "save-error") {
-    setStatus(ev.message, "bad");
+    delete pendingSaves[ev.id];
+    showNotice(ev.message, { rebase: ev.reason === "changed-on-disk" });
+    setStatus("not saved", "bad");
+  } else if (ev.type === "file-saved") {
+    if (ev.base === base) return;
+    stale = true;
+    if (Object.keys(changes()).length === 0) { rebase(); return; }  // nothing to lose: follow the file
+    showNotice(`Another page saved ${ev.path}. This page's edits are not in it, and its Save refuses until you take the saved file under them.`,
+      { rebase: true });
+  } else if (ev.type === "rebased") {
+    const state = changes();  // this page's edits, put on the file as it is now
+    base = ev.base;
+    document.body.dataset.base = base;
+    for (const [k, v] of Object.entries(ev.values)) if (baseValues.has(k)) baseValues.set(k, v);
+    past.push(fields());
+    future.length = 0;
+    showState(state);
+    stale = false;
+    notice.hidden = true;
+    send();
+  } else if (ev.type === "rebase-error") {
+    showNotice(ev.message, { rebase: true });
+  } else if (ev.type === "compared") {
+    showCompare(ev);
   } else if (ev.type === "build-started") {
     document.getElementById("build-box").hidden = false;
     document.getElementById("downloads").replaceChildren();
@@ -176,9 +355,16 @@ function handle(ev) {
     buildBtn.disabled = false;
     document.getElementById("build-box").hidden = false;
     document.getElementById("downloads").replaceChildren(Object.assign(document.createElement("li"), { className: "error", textContent: ev.message }));
+    showNotice(ev.message);
     setStatus("build failed", "bad");
   }
 }
+
+function rebase() {
+  requests += 1;
+  post({ type: "rebase", id: requests });
+}
+rebaseBtn.addEventListener("click", rebase);
 
 function progress(ev) {
   const box = document.getElementById(ev.task === "build" ? "build-progress" : "view-progress");
@@ -232,12 +418,108 @@ async function loadScene(ev) {
   }
 }
 
+
 saveBtn.addEventListener("click", () => {
   if (!valid) return;
-  ws.send(JSON.stringify({ type: "save" }));
+  const state = changes();
+  requests += 1;
+  pendingSaves[requests] = state;
+  post({ type: "save", id: requests, base, values: sendable(state) });
   setStatus("saving…");
 });
 buildBtn.addEventListener("click", () => {
-  ws.send(JSON.stringify({ type: "build" }));
+  post({ type: "build", base, values: sendable(changes()) });
   setStatus("building…");
 });
+
+// -- snapshots and compare: kept in this browser (localStorage), per params file --------------------
+const snapKey = `cogniframe-studio:snapshots:${paramsPath}`;
+const compareRows = JSON.parse(document.body.dataset.compareRows);
+
+function snapshots() {
+  try { return JSON.parse(localStorage.getItem(snapKey) || "[]"); } catch { return []; }
+}
+
+function storeSnapshots(list) {
+  try { localStorage.setItem(snapKey, JSON.stringify(list)); } catch (e) { showNotice(`The snapshot could not be kept: ${e}`); }
+  listSnapshots();
+}
+
+function listSnapshots() {
+  const ul = document.getElementById("snapshots");
+  const items = [["now", "now (this page's design)"], ...snapshots().map((s, i) => [String(i), s.name])];
+  ul.replaceChildren(...items.map(([id, name]) => {
+    const li = document.createElement("li");
+    li.dataset.snapshot = id;
+    const box = Object.assign(document.createElement("input"), { type: "checkbox", value: id, title: "compare this one" });
+    const label = Object.assign(document.createElement("label"), { textContent: ` ${name}` });
+    label.prepend(box);
+    li.append(label);
+    if (id !== "now") {
+      const open = Object.assign(document.createElement("button"), { type: "button", textContent: "open", className: "snap-open",
+        title: "show this design in the form (Undo goes back)" });
+      open.addEventListener("click", () => {
+        const snap = snapshots()[Number(id)];
+        past.push(fields());
+        future.length = 0;
+        showFields(snap.fields);
+        send();
+      });
+      const del = Object.assign(document.createElement("button"), { type: "button", textContent: "delete", className: "snap-delete" });
+      del.addEventListener("click", () => storeSnapshots(snapshots().filter((_, j) => j !== Number(id))));
+      li.append(" ", open, " ", del);
+    }
+    return li;
+  }));
+}
+
+document.getElementById("snapshot-take").addEventListener("click", () => {
+  const input = document.getElementById("snapshot-name");
+  const list = snapshots();
+  const name = input.value.trim() || `snapshot ${list.length + 1}`;
+  list.push({ name, fields: fields() });
+  input.value = "";
+  storeSnapshots(list);
+});
+
+document.getElementById("compare-go").addEventListener("click", () => {
+  const picked = [...document.querySelectorAll("#snapshots input:checked")].map((b) => b.value);
+  if (picked.length < 2) { showNotice("Tick two or more designs to compare."); return; }
+  const list = snapshots();
+  // each design as its fields' values on the file this page is on now
+  const designs = picked.map((id) => id === "now" ? { name: "now", base, values: sendable(changes()) }
+    : { name: list[Number(id)].name, base, values: sendable(changesOf(list[Number(id)].fields || {})) });
+  requests += 1;
+  post({ type: "compare", id: requests, designs });
+  document.getElementById("compare").replaceChildren(Object.assign(document.createElement("p"), { className: "note", textContent: "comparing…" }));
+});
+
+function showCompare(ev) {
+  const table = document.createElement("table");
+  table.className = "compare";
+  const head = table.createTHead().insertRow();
+  head.append(document.createElement("th"));
+  for (const c of ev.columns) head.append(Object.assign(document.createElement("th"), { textContent: c.name }));
+  const body = table.createTBody();
+  for (const [key, label, unit, digits] of compareRows) {
+    const row = body.insertRow();
+    row.dataset.row = key;
+    row.append(Object.assign(document.createElement("th"), { textContent: unit ? `${label} (${unit})` : label }));
+    const texts = ev.columns.map((c) => c.error ? "–" : format(c.figures[key], digits ?? undefined));
+    ev.columns.forEach((c, i) => {
+      const td = row.insertCell();
+      td.textContent = texts[i];
+      if (c.error) { td.className = "error"; td.title = c.error; }
+      else if (texts.some((t) => t !== texts[0])) td.classList.add("differs");  // the row differs: highlighted
+      if (key === "verdict") td.dataset.verdict = texts[i];
+    });
+  }
+  const box = document.getElementById("compare");
+  box.replaceChildren(table, ...ev.columns.filter((c) => c.error).map((c) =>
+    Object.assign(document.createElement("p"), { className: "error", textContent: `${c.name}: ${c.error}` })));
+}
+
+// the design in the address (a link, a bookmark, a reload) before the first edit is sent
+showState(stateFromAddress());
+committed = fields();
+listSnapshots();
