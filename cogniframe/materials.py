@@ -215,45 +215,77 @@ class MotorPreset:
         return tuple((round(x, 9) + 0.0, round(y, 9) + 0.0) for x, y in out)
 
 
-# Thread depths: no maker of these motors prints one; the figure is the motor base's tapped
-# depth the class leaves under the stator (the authors warn that long screws reach the windings).
-# Typical thrusts: the class on its usual propeller and pack, for motors.max_thrust_g's default
-# when analysis/flight.py has no bench table for the motor.
-_NOT_CHECKED = "maker's product page, not re-checked here"
+# Where the numbers come from. The stored sources reachable here hold no maker's product page for
+# these motors; what they hold are public build notes and part records that quote a maker's page
+# (named in each `source` with the page they cite). A figure no source gives stays as the class's
+# estimate and the source says so. Thread depth: no maker of these motors prints one; it is the
+# motor base's tapped depth the class leaves under the stator (the authors warn that long screws
+# reach the windings). Bell diameter and height over the base and the shaft boss: no source found
+# gives them, so they stay estimates for every class. Typical thrust: the class on its usual
+# propeller and pack, for motors.max_thrust_g's default when analysis/flight.py has no bench table.
+_EST = "bell, height, shaft boss and thread depth are estimates (no maker figure found)"
+# The 6.6 mm class: tiny-whoop motors commonly carry THREE M1.4 holes at 120 deg on a 6.6 mm
+# circle (a public FPV glossary's motor-mounting entry; a public CadQuery tiny-whoop frame puts
+# n_holes = 3 on a 6.6 mm circle), while hole_points draws four: a plate drilled from these
+# entries must be checked against the motor in hand.
+_WHOOP = ("pattern NOT confirmed by any maker's page in the stored sources: whoop-class motors are "
+          "commonly three M1.4 holes on a 6.6 mm circle, and hole_points draws four -- measure the motor")
 
 # fmt: off
 MOTOR_PRESETS: dict[str, MotorPreset] = {m.name: m for m in (
     MotorPreset("1103", (6.6, 6.6), "M1.4", 13.5, 11.0, 3.7, 4.0, 1.5, 90.0,
-                f"Happymodel EX1103 / BetaFPV 1103: 6.6 mm M1.4 (opposite holes), ~3.7 g ({_NOT_CHECKED})"),
+                f"reference Happymodel EX1103 / BetaFPV 1103 (not found in the stored sources); {_WHOOP}; "
+                f"mass 3.7 g and thrust 90 g are estimates; {_EST}"),
     # 1104 class (the paper's carbon build): the authors' motor base (CogniFly_v8 Flex_MotorBase_Shorter)
     # has its four 2.0 mm holes 4.5 mm from the centre -- the 9x9 pattern read across the shaft -- and a
     # 4.1 mm shaft hole; the seat under the motor is 2.5 mm thick there.
-    MotorPreset("1104", (9.0, 9.0), "M2", 14.0, 13.0, 6.0, 5.0, 2.5, 190.0,
+    MotorPreset("1104", (9.0, 9.0), "M2", 14.0, 13.0, 5.3, 5.0, 2.5, 190.0,
                 "the authors' motor base (CogniFly-STL v8 Flex_MotorBase_Shorter: holes 4.5 mm from the axis); "
-                "1104 class 9x9 M2, ~6 g (BetaFPV / Racerstar 1104 pages)"),
-    MotorPreset("1105", (9.0, 9.0), "M2", 14.0, 13.5, 5.8, 5.0, 2.5, 210.0,
-                f"BetaFPV 1105: 9x9 M2 (opposite holes), ~5.8 g ({_NOT_CHECKED})"),
+                "reference BetaFPV LAVA 1104 5500KV: 4 x M2 on a 9 mm circle, 1.5 mm shaft, 5.3 g (BetaFPV page "
+                "betafpv.com/products/lava-series-1104-brushless-motors as quoted in a public Pavo20 Pro motor survey); "
+                "thrust 190 g is an estimate for 3025 on 3S (BetaFPV's only figure, >230 g, is on 4S with a Gemfan "
+                "D2.2-3); not every 1104 is 9x9 M2 (the same survey: DarwinFPV Bling 1104 is 8.5 mm M1.6); " + _EST),
+    MotorPreset("1105", (9.0, 9.0), "M2", 14.0, 13.5, 5.2, 5.0, 2.5, 210.0,
+                "reference BetaFPV 1105 5000KV: 9 mm, M2, 5.2 g (BetaFPV page betafpv.com/products/1105-6000kv-motors-4-pcs "
+                "as quoted in a public Pavo20 Pro motor survey); thrust 210 g is an estimate (no published figure "
+                f"found); {_EST}"),
     MotorPreset("1106", (9.0, 9.0), "M2", 14.4, 14.0, 6.6, 5.0, 2.5, 240.0,
-                f"BetaFPV 1106 / EMAX RS1106: 9x9 M2 (opposite holes), ~6.6 g ({_NOT_CHECKED})"),
+                "reference BetaFPV 1106 / EMAX RS1106: pattern NOT confirmed by any maker's page in the stored "
+                "sources (9x9 M2 is the class's recollection); mass 6.6 g and thrust 240 g are estimates (a public "
+                f"script puts an EMAX RS1106 7500KV at 7 g, not a maker's figure); {_EST}"),
     MotorPreset("1202", (6.6, 6.6), "M1.4", 15.0, 10.5, 3.6, 4.0, 1.5, 110.0,
-                f"BetaFPV 1202.5: 6.6 mm M1.4 (opposite holes), ~3.6 g ({_NOT_CHECKED})"),
+                f"reference BetaFPV 1202.5 (not found in the stored sources); {_WHOOP}; mass 3.6 g and thrust "
+                f"110 g are estimates; {_EST}"),
     MotorPreset("1203", (6.6, 6.6), "M1.4", 15.0, 11.5, 4.0, 4.0, 1.5, 130.0,
-                f"1203 class (e.g. Happymodel EX1203): 6.6 mm M1.4, ~4 g ({_NOT_CHECKED})"),
-    MotorPreset("1204", (9.0, 9.0), "M2", 15.5, 12.5, 6.3, 5.0, 2.5, 200.0,
-                f"1204 class (e.g. Racerstar BR1204): 9x9 M2 (opposite holes), ~6.3 g ({_NOT_CHECKED})"),
+                f"reference Happymodel EX1203 (not found in the stored sources); {_WHOOP}; mass 4 g and thrust "
+                f"130 g are estimates; {_EST}"),
+    MotorPreset("1204", (9.0, 9.0), "M2", 15.5, 12.5, 6.2, 5.0, 2.5, 200.0,
+                "reference Flashhobby A1204 5200KV: 9 mm, M2, 6.2 g (Rotorama's product page "
+                "rotorama.com/product/flashhobby-a1204-5200kv as quoted in a public Pavo20 Pro motor survey; a "
+                "retailer's page, not the maker's); thrust 200 g is an estimate (no published figure found); " + _EST),
     # 1404 class (the bamboo build): iFlight XING2 1404 (product page via its part record): 9x9 mm M2
     # base pattern, 1.5 mm shaft.
-    MotorPreset("1404", (9.0, 9.0), "M2", 18.0, 15.0, 9.0, 5.5, 3.0, 200.0,
-                "iFlight XING2 1404 product page: 9 x 9 mm M2 base pattern, 1.5 mm shaft; T-Motor F1404 and "
-                "EMAX ECO 1404 quote the same 9x9 M2; ~9 g"),
+    MotorPreset("1404", (9.0, 9.0), "M2", 18.0, 15.0, 9.34, 5.5, 3.0, 200.0,
+                "reference iFlight XING2 1404 3800KV Unibell: 9 x 9 mm M2 base pattern, 1.5 mm shaft (protoboard.xyz "
+                "part record iflight-xing2-1404-3800kv-unibell, citing shop.iflight.com/xing2-1404-toothpick-ultralight-"
+                "build-unibell-pro1482); mass from T-Motor F1404 3800KV: 9.34 g with leads, 7.75 g without (Pyrodrone's "
+                "product page as quoted in a public sub-250 g build survey; no XING2 1404 mass found); thrust 200 g is "
+                f"an estimate (no published figure found); {_EST}"),
     MotorPreset("1406", (9.0, 9.0), "M2", 18.5, 16.0, 10.5, 5.5, 3.0, 260.0,
-                f"1406 class (e.g. BrotherHobby 1406): 9x9 M2 (opposite holes), ~10.5 g ({_NOT_CHECKED})"),
+                "reference BrotherHobby 1406 (not found in the stored sources): pattern NOT confirmed by any maker's "
+                f"page (9x9 M2 is the class's recollection); mass 10.5 g and thrust 260 g are estimates; {_EST}"),
     MotorPreset("1407", (9.0, 9.0), "M2", 18.5, 16.5, 11.0, 5.5, 3.0, 290.0,
-                f"T-Motor F1407: 9x9 M2 (opposite holes), ~11 g ({_NOT_CHECKED})"),
+                "reference T-Motor F1407 (not found in the stored sources): pattern NOT confirmed by any maker's page "
+                f"(9x9 M2 is the class's recollection); mass 11 g and thrust 290 g are estimates; {_EST}"),
     MotorPreset("1408", (12.0, 12.0), "M2", 19.0, 17.0, 12.5, 6.0, 3.0, 330.0,
-                f"1408 class (e.g. iFlight XING 1408): 12x12 M2 (opposite holes), ~12.5 g ({_NOT_CHECKED})"),
-    MotorPreset("1505", (12.0, 12.0), "M2", 20.0, 16.5, 12.0, 6.0, 3.0, 340.0,
-                f"iFlight XING2 1505: 12x12 M2 (opposite holes), ~12 g ({_NOT_CHECKED})"),
+                "reference iFlight XING 1408 (not found in the stored sources): pattern NOT confirmed by any maker's "
+                f"page (12x12 M2 is the class's recollection); mass 12.5 g and thrust 330 g are estimates; {_EST}"),
+    MotorPreset("1505", (12.0, 12.0), "M2", 20.0, 16.5, 12.8, 6.0, 3.0, 554.0,
+                "reference Diatone MAMBA TOKA 1505 3800KV: 12 x 12 mm M2, 1.5 mm shaft (Diatone's page), 12.8 g "
+                "(retail listings), both as quoted in a public sub-250 g build's compatibility notes (an earlier "
+                "revision of the same notes said 9 mm and 6.5 g and was corrected); thrust: DeepSpace Aether 1505 "
+                "4000KV, 554 g at full throttle on a 3.5 in prop and 4S (the maker's bench test, as quoted in the "
+                f"same notes; no Diatone thrust found); {_EST}"),
 )}
 # fmt: on
 
