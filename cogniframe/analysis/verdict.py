@@ -27,6 +27,7 @@ class CheckResult:
     clash: object | None = None  # analysis.clash.ClashResult, from `build` only
     notes: tuple[str, ...] = ()  # warnings that do not fail the design (joints outside the surrogate's training box)
     survival: object | None = None  # analysis.survival.Survival: what breaks first, at what drop height
+    flight_model: dict | None = None  # flight.for_check: centre of gravity, inertia, resonance flags
 
     @property
     def verdict(self) -> str:
@@ -76,7 +77,12 @@ def complete(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=N
     # the survival sweep informs (the report warns when a part fails below the design drop); the
     # PASS/FAIL stays with the requirements' own checks
     problems = _problems(spec, budget, drop) + _physics_problems(spec, stiffness, peak) + _aircraft_problems(spec, flight)
-    return CheckResult(d, budget, drop, tuple(problems), stiffness, peak, flight, survival=surv, notes=tuple(_notes(spec, d)))
+    from .. import flight as flight_files
+
+    # the flight files' mass properties and resonance flags: a flagged mode WARNs (a note), never FAILs
+    model, warn = flight_files.for_check(spec, d, budget, stiffness)
+    return CheckResult(d, budget, drop, tuple(problems), stiffness, peak, flight, survival=surv,
+                       notes=tuple(_notes(spec, d)) + warn, flight_model=model)
 
 
 def _notes(spec: Spec, d: Design) -> list[str]:
@@ -215,7 +221,7 @@ def check_dict(result: CheckResult) -> dict:
     if result.peak is not None:
         out["peak_g"] = result.peak
     if result.flight is not None:
-        out["flight"] = result.flight.summary()
+        out["flight"] = result.flight.summary() | (result.flight_model or {})
     if result.survival is not None:
         out["survival"] = result.survival.to_dict()
     if result.clash is not None:
