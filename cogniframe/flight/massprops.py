@@ -55,7 +55,7 @@ class MassProps:
         return np.asarray(self.inertia_kg_m2, float)
 
     def to_dict(self) -> dict:
-        return {"mass_kg": round(self.mass_kg, 6), "cg_mm": [round(c, 3) for c in self.cg_mm],
+        return {"mass_kg": round(self.mass_kg, 6), "cg_mm": [round(c, 3) + 0.0 for c in self.cg_mm],
                 "inertia_kg_m2": [[float(f"{v:.6g}") for v in row] for row in self.inertia_kg_m2], "source": self.source}
 
 
@@ -124,9 +124,10 @@ def combine(bodies, source: str) -> MassProps:
     for b, mi, ci in zip(bodies, m, c):
         r = ci - cg
         inertia += np.asarray(b.inertia) + mi * (float(r @ r) * np.eye(3) - np.outer(r, r))
-    # g mm^2 -> kg m^2; exact zeros for round-off below 1e-15 of the largest term (symmetric frames)
+    # g mm^2 -> kg m^2; products of inertia below 1e-6 of the largest term are round-off of
+    # symmetric solids (a mesh's facets): exact zeros, so a symmetric frame writes symmetric files
     inertia = 1e-9 * inertia
-    inertia[np.abs(inertia) < 1e-12 * np.abs(inertia).max()] = 0.0
+    inertia[np.abs(inertia) < 1e-6 * np.abs(inertia).max()] = 0.0
     inertia = (inertia + inertia.T) / 2
     return MassProps(total / 1000.0, _t3(cg / 1000.0), _m3(inertia), source)
 

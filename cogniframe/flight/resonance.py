@@ -147,8 +147,6 @@ def mode_shapes(spec, design, total_mass_g: float, n: int | None = None) -> tupl
     from the same modal problem as `check`'s `stiffness.modes_hz` (analysis/load_cases._modes:
     rods in 4 elements, the joint models, the play springs of the predicted k), solved densely with
     its mode shapes."""
-    import scipy.linalg
-
     from ..analysis import drop as drop_mod
     from ..analysis import stiffness as st
     from ..analysis.load_cases import N_MODES
@@ -162,12 +160,14 @@ def mode_shapes(spec, design, total_mass_g: float, n: int | None = None) -> tupl
     masses = st.masses_g(spec, frame, parts, total_mass_g)
     mdl = st.build_model(spec, frame, parts, session.joints, rod_segments=4, masses=masses, play=play)
     fe = mdl.fe
-    K = fe.stiffness(sparse=True).toarray()
-    M = fe.mass(sparse=True).toarray()
-    keep = np.abs(np.diag(K)) > 1e-12
-    K, M = K[np.ix_(keep, keep)], M[np.ix_(keep, keep)]
-    M = M + np.diag(np.where(np.diag(M) <= 0, 1e-12, 0.0))
-    w2, vecs = scipy.linalg.eigh(K, M, subset_by_index=[0, 6 + n - 1])
+    K = fe.stiffness(sparse=True)
+    M = fe.mass(sparse=True)
+    keep = np.abs(K.diagonal()) > 1e-12
+    K, M = K[keep][:, keep].tocsc(), M[keep][:, keep].tocsc()
+    from scipy.sparse import diags
+
+    M = (M + diags(np.where(M.diagonal() <= 0, 1e-12, 0.0))).tocsc()  # as load_cases._modal_matrices
+    w2, vecs = _lowest_modes(K, M, 6 + n)
     full = np.zeros((keep.size, vecs.shape[1]))
     full[keep] = vecs
     idx = fe.index()
@@ -184,6 +184,28 @@ def mode_shapes(spec, design, total_mass_g: float, n: int | None = None) -> tupl
         tilt = max(float(np.linalg.norm(np.mean([rot(nn, j)[:2] for nn in nodes], axis=0))) for nodes in motor_nodes)
         part.append(fc / max(fc, tilt) if max(fc, tilt) > 0 else 0.0)
     return hz, part
+
+
+def _lowest_modes(K, M, count: int):
+    """The `count` lowest eigenpairs of K x = lambda M x, ascending: shift-invert Lanczos with the
+    shift and factors of framefe.lowest_eigenvalues (below the rigid-body modes, so the low end
+    is the well-conditioned one), the dense solver where Lanczos does not converge."""
+    from scipy.sparse.linalg import ArpackNoConvergence, LinearOperator, eigsh
+
+    from ..analysis.framefe import _shift, factor
+
+    sigma = _shift(K, M)
+    lu = factor(K - sigma * M)
+    op = LinearOperator(K.shape, matvec=lambda x: lu.solve(np.ravel(x)), dtype=float)
+    v0 = np.random.default_rng(0).standard_normal(K.shape[0])  # deterministic
+    try:
+        w, v = eigsh(K, k=count, M=M, sigma=sigma, OPinv=op, which="LM", v0=v0, tol=1e-10)
+    except ArpackNoConvergence:
+        import scipy.linalg
+
+        return scipy.linalg.eigh(K.toarray(), M.toarray(), subset_by_index=[0, count - 1])
+    order = np.argsort(w)
+    return w[order], v[:, order]
 
 
 # -- the Campbell plot --------------------------------------------------------------------------
