@@ -273,7 +273,7 @@ class Design:
         result = self.check().result
         try:
             with self._spec.blamed():
-                v = flight.vehicle(self._spec, result)
+                v = flight.make_vehicle(self._spec, result)
         except UserError as e:
             raise _params_error(e, self._source) from None
         final.parent.mkdir(parents=True, exist_ok=True)

@@ -19,7 +19,7 @@ FILES = ("inav.txt", "betaflight.txt", "ardupilot/frame.json", "ardupilot/params
          "gazebo/model.sdf", "gazebo/model.config", "rotorpy.json", "resonance.json", "resonance.png")
 
 
-def vehicle(spec, result, world_meshes=None, shapes: bool = True):
+def make_vehicle(spec, result, world_meshes=None, shapes: bool = True):
     """The Vehicle of a checked design (`verdict.CheckResult`): mass properties from the CAD
     solids when `world_meshes` ({part: [world mesh per copy]}) is given, else from the estimates;
     the modes' flight-controller participation from their shapes when `shapes`."""
