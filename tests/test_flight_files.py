@@ -144,7 +144,6 @@ def test_rotorpy_model_hovers_and_follows_a_1_m_step_with_se3control(flown, name
     """The plant is rotorpy.json as written, checked against `check` (mass and hover rotor
     speed above); rotorpy's own SE3Control, fed the same file, settles the 1 m step within 5 cm
     in under 2.5 s and holds it to 1 cm."""
-    pytest.importorskip("rotorpy")
     from cogniframe.flight.rotorpy_params import load
 
     p = load(flown[name][0] / "rotorpy.json")
@@ -158,7 +157,6 @@ def test_rotorpy_model_hovers_and_follows_a_1_m_step_with_se3control(flown, name
 def test_rotorpy_step_fails_with_a_wrong_inertia_or_thrust_coefficient(flown, wrong):
     """The same flight with the controller given a 10x inertia or half the thrust coefficient
     misses the goal: the test above can fail."""
-    pytest.importorskip("rotorpy")
     from cogniframe.flight.rotorpy_params import load
 
     p = load(flown["carbon"][0] / "rotorpy.json")
@@ -344,3 +342,60 @@ def test_fly_never_overwrites_a_folder_it_did_not_make(tmp_path, run_cli):
     (out / "notes.txt").write_text("keep me")
     code, _, err = run_cli("fly", str(_params("carbon")), "-o", str(out))
     assert code == 2 and (out / "notes.txt").read_text() == "keep me"
+
+
+# -- the build's flight/ folder: the CAD solids ----------------------------------------------------
+
+@pytest.fixture(scope="module")
+def built_carbon(tmp_path_factory):
+    from cogniframe import spec as spec_mod
+    from cogniframe.build import run_build
+
+    params = _params("carbon")
+    out = tmp_path_factory.mktemp("build") / "carbon"
+    run_build(spec_mod.load(params), params, out, jobs=2)
+    return out
+
+
+@pytest.mark.slow
+def test_build_writes_the_flight_folder_with_cad_inertia_within_3_percent_of_the_estimate(built_carbon, flown):
+    """The build's mass properties come from the CAD solids (each part's STL carrying its budget
+    mass); the part list's estimate (fly, check) agrees within 3 % on every principal moment, and
+    the mass is the build's check.json all-up mass."""
+    cad = json.loads((built_carbon / "flight" / "resonance.json").read_text())["mass"]
+    est = json.loads((flown["carbon"][0] / "resonance.json").read_text())["mass"]
+    assert cad["source"] == "cad" and est["source"] == "estimate"
+    check = json.loads((built_carbon / "check.json").read_text())
+    assert cad["mass_kg"] == pytest.approx(check["mass"]["total_g"] / 1000, abs=1e-5)  # check.json: 0.01 g
+    assert np.diag(cad["inertia_kg_m2"]) == pytest.approx(np.diag(est["inertia_kg_m2"]), rel=0.03)
+    assert cad["cg_mm"] == pytest.approx(est["cg_mm"], abs=1.0)
+    for rel in ("inav.txt", "px4/sih.params", "gazebo/model.sdf", "rotorpy.json", "resonance.png"):
+        assert (built_carbon / "flight" / rel).is_file(), rel
+    html = (built_carbon / "report.html").read_text()
+    assert 'href="flight/inav.txt"' in html and "Campbell diagram" in html
+
+
+@pytest.mark.slow
+def test_rotor_positions_are_the_motors_places_in_assembly_glb(built_carbon):
+    """Each rotor (rotorpy.json, FLU from the centre of gravity) sits on its motor's axis and its
+    propeller's disc as assembly.glb draws them (glTF y up: world (x, y, z) is (x, z, -y))."""
+    import trimesh
+
+    rp = json.loads((built_carbon / "flight" / "rotorpy.json").read_text())
+    cg = np.asarray(json.loads((built_carbon / "flight" / "resonance.json").read_text())["mass"]["cg_mm"]) / 1000
+    scene = trimesh.load(built_carbon / "assembly.glb", force="scene")
+
+    def world_bounds(node: str) -> np.ndarray:
+        tf, geom = scene.graph[node]
+        m = scene.geometry[geom].copy()
+        m.apply_transform(tf)
+        lo, hi = m.bounds  # glTF axes
+        return np.array([[lo[0], -hi[2], lo[1]], [hi[0], -lo[2], hi[1]]]) / 1000.0  # world, m
+
+    for key, corner in zip(("r1", "r2", "r3", "r4"), ("rr", "fr", "rl", "fl")):
+        x_f, y_l, z = rp["rotor_pos"][key]
+        hub = np.array([-y_l, x_f, z]) + cg  # FLU -> frame axes, from the origin
+        motor = world_bounds(f"motor_{corner}").mean(axis=0)
+        disc = world_bounds(f"propeller_{corner}").mean(axis=0)
+        assert hub[:2] == pytest.approx(motor[:2], abs=1e-5)
+        assert hub == pytest.approx(disc, abs=1e-5)
