@@ -317,8 +317,8 @@ def test_resonance_modes_are_checks_and_flags_follow_the_15_percent_rule(flown, 
 
 def test_check_warns_on_a_flagged_mode_and_does_not_fail(flown):
     folder, result = flown["carbon"]
-    warns = [n for n in result.notes if n.startswith("WARN resonance")]
-    assert warns and result.verdict == "PASS"
+    warns = [w for w in result.warnings if w.startswith("resonance:")]
+    assert warns and result.verdict == "PASS" and not result.problems
     from cogniframe.analysis.verdict import check_dict
 
     f = check_dict(result)["flight"]

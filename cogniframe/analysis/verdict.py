@@ -28,6 +28,7 @@ class CheckResult:
     notes: tuple[str, ...] = ()  # warnings that do not fail the design (joints outside the surrogate's training box)
     survival: object | None = None  # analysis.survival.Survival: what breaks first, at what drop height
     flight_model: dict | None = None  # flight.for_check: centre of gravity, inertia, resonance flags
+    warnings: tuple[str, ...] = ()  # WARN, not FAIL: frame modes near the rotors or in the attitude loop's band
 
     @property
     def verdict(self) -> str:
@@ -82,7 +83,7 @@ def complete(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=N
     # the flight files' mass properties and resonance flags: a flagged mode WARNs (a note), never FAILs
     model, warn = flight_files.for_check(spec, d, budget, stiffness)
     return CheckResult(d, budget, drop, tuple(problems), stiffness, peak, flight, survival=surv,
-                       notes=tuple(_notes(spec, d)) + warn, flight_model=model)
+                       notes=tuple(_notes(spec, d)), flight_model=model, warnings=warn)
 
 
 def _notes(spec: Spec, d: Design) -> list[str]:
@@ -228,4 +229,6 @@ def check_dict(result: CheckResult) -> dict:
         out["clash"] = result.clash.to_dict()
     if result.notes:
         out["notes"] = list(result.notes)
+    if result.warnings:
+        out["warnings"] = list(result.warnings)
     return out

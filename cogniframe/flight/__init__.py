@@ -65,7 +65,7 @@ def write(v, folder: Path) -> tuple[str, ...]:
 
 def for_check(spec, design, budget, stiffness: dict | None) -> tuple[dict, tuple[str, ...]]:
     """What `check` adds: (`flight` keys cg_mm, inertia_kg_m2 and the resonance flags from the
-    estimates and `stiffness.modes_hz`; the WARN notes of flagged modes). Nothing when the flight
+    estimates and `stiffness.modes_hz`; the warnings of flagged modes: WARN, not FAIL). Nothing when the flight
     tables have no entry for the motor (the flight files need one; `check` does not)."""
     from ..errors import UserError
     from . import massprops, resonance, rotors
@@ -85,7 +85,7 @@ def for_check(spec, design, budget, stiffness: dict | None) -> tuple[dict, tuple
         fl = [f for f in res.flags if f.band == band]
         if fl:
             b = next(x for x in res.bands if x.name == band)
-            notes.append(f"WARN resonance: mode{'s' if len(fl) > 1 else ''} {', '.join(str(f.mode) for f in fl)} "
+            notes.append(f"resonance: mode{'s' if len(fl) > 1 else ''} {', '.join(str(f.mode) for f in fl)} "
                          f"({', '.join(f'{f.hz:.1f}' for f in fl)} Hz) within {resonance.FLAG_MARGIN:.0%} of the {band} band "
                          f"({b.lo_hz:.0f}-{b.hi_hz:.0f} Hz); `cogniframe fly` writes the filter advice and resonance.png")
     return out, tuple(notes)

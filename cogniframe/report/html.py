@@ -239,6 +239,12 @@ def _verdicts(result: "CheckResult", cd: Mapping, plates, slice_report) -> list[
         if not ok:
             words += f", below the {spec.requirements.design_drop_height_cm:g} cm design drop"
         out.append(Verdict("survival", "What breaks first", "PASS" if ok else "WARN", html.escape(words), words))
+    flags = cd.get("flight", {}).get("resonance_flags")
+    if flags is not None:  # the frame's modes against the rotors and the attitude loop: WARN, never FAIL
+        text = (f"{len(flags)} frame mode(s) within 15 % of a rotor or attitude-controller band: "
+                + ", ".join(f"{f['hz']:.1f} Hz ({f['band']})" for f in flags) if flags else
+                "no frame mode within 15 % of a rotor or attitude-controller band")
+        out.append(Verdict("resonance", "Vibration against the motors", "WARN" if flags else "PASS", html.escape(text), text))
     out.append(Verdict("overall", "Design verdict", cd["verdict"],
                        html.escape("; ".join(cd["problems"]) or "all requirements met"),
                        "; ".join(cd["problems"]) or "all requirements met"))
@@ -511,9 +517,7 @@ def _flight_blocks(cd: Mapping, files: Sequence[str], figs: Mapping) -> list:
         blocks.append(("p", f"Centre of gravity (x, y, z) {cg[0]:.1f}, {cg[1]:.1f}, {cg[2]:.1f} mm; inertia about it "
                             f"Ixx {i[0][0]:.3g}, Iyy {i[1][1]:.3g}, Izz {i[2][2]:.3g} kg m^2 (part-list estimates; the files "
                             "below use the CAD solids)."))
-    for n in cd.get("notes", []):
-        if n.startswith("WARN resonance"):
-            blocks.append(("warn", n))
+    blocks += [("warn", w) for w in cd.get("warnings", [])]
     if files:
         blocks.append(("links", [(p, FLIGHT_FILE_WHAT.get(p.removeprefix("flight/"), "")) for p in files]))
     blocks += [("img", c, p) for c, p in figs.get("flight", [])]
