@@ -399,3 +399,13 @@ def test_rotor_positions_are_the_motors_places_in_assembly_glb(built_carbon):
         disc = world_bounds(f"propeller_{corner}").mean(axis=0)
         assert hub[:2] == pytest.approx(motor[:2], abs=1e-5)
         assert hub == pytest.approx(disc, abs=1e-5)
+
+
+def test_fly_without_a_thrust_table_is_exit_2_naming_motors_kv_and_writes_nothing(run_cli, tmp_path):
+    p = tmp_path / "odd.yaml"
+    p.write_text(_params("carbon").read_text().replace("  kv: 6000 ", "  kv: 5000 "))
+    assert "kv: 5000" in p.read_text()
+    out = tmp_path / "out"
+    code, _, err = run_cli("fly", str(p), "-o", str(out))
+    assert code == 2 and not out.exists()
+    assert "odd.yaml: motors.kv (line" in err and "Fix:" in err and "Traceback" not in err

@@ -32,7 +32,12 @@ def make_flight(ctx) -> Made:
         world[p.name] = []
     for p, sm in zip([p for p in d.parts for _ in p.placements], world_meshes(d.parts, meshes, pfl)):
         world[p.name].append(sm.mesh)
-    v = flight.make_vehicle(ctx.spec, ctx["check"], world)
+    from ..errors import UserError
+
+    try:
+        v = flight.make_vehicle(ctx.spec, ctx["check"], world)
+    except UserError as e:  # no thrust table for this motor: the build goes on without flight files
+        return Made((), {"skipped": str(e)})
     files = flight.write(v, ctx.out / "flight")
     return Made(tuple(f"flight/{f}" for f in files), {"mass": v.mass.to_dict(), "flags": [f.why for f in v.resonance.flags]})
 

@@ -131,10 +131,12 @@ def report(ctx) -> Made:
     images |= {f"part {p}": ctx.out / "renders" / "parts" / f"{p}.png" for p in sorted(x.name for x in ctx.design.parts)}
     from ..flight import FILES as FLIGHT_FILES
 
-    figures["flight"] = [("Campbell diagram: frame modes against the rotors and the attitude controller",
-                          ctx.out / "flight" / "resonance.png")]
+    flown = "skipped" not in ctx["flight"]  # no flight files without a thrust table for the motor
+    if flown:
+        figures["flight"] = [("Campbell diagram: frame modes against the rotors and the attitude controller",
+                              ctx.out / "flight" / "resonance.png")]
     html.write_report(ctx["check"], ctx.out, images, lines, steps, plates, sliced, figures=figures,
-                      viewer_html=ctx["viewer"], flight_files=tuple(f"flight/{f}" for f in FLIGHT_FILES))
+                      viewer_html=ctx["viewer"], flight_files=tuple(f"flight/{f}" for f in FLIGHT_FILES) if flown else ())
     return Made(("report.html", "report.md"))
 
 def _plate_files(ctx):

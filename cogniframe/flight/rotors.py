@@ -104,16 +104,16 @@ def rotors(spec, frame, cg_m) -> tuple[Rotor, ...]:
 
 def model(spec, mass_kg: float, n_rotors: int = 4) -> RotorModel:
     """The rotor constants for the design's motor, propeller and pack (see the module docstring).
-    Raises UserError when the flight tables have no entry for them."""
+    Raises UserError (naming motors.kv) when the flight tables have no entry for them."""
     from ..analysis import flight
     from ..analysis.load_cases import PROP_CT
-    from ..errors import UserError
-
     p = flight.propulsion(spec)
     if p is None:
-        raise UserError(f"the flight files need a propulsion table, and analysis/flight.py has none for motors.model "
-                        f"{spec.motor.name}, kv {spec.motors.kv}, prop {flight.prop_name(spec)}. Fix: set motors.kv and "
-                        f"motors.prop to a tabled pair (1104 6000/7500 KV with 3025; 1404 3000 KV with 4024)")
+        tabled = "; ".join(f"{m} {k} KV with {pr}" for m, k, pr, _ in sorted(flight.TABLES))
+        raise spec.error("motors.kv", f"the flight files need a thrust table for the motor, KV and propeller, and "
+                                      f"analysis/flight.py has none for {spec.motor.name} {spec.motors.kv or flight.default_kv(spec.motor.name)} KV "
+                                      f"with {flight.prop_name(spec)}", f"set motors.model, motors.kv and motors.prop to a tabled "
+                                      f"set ({tabled})")
     d = spec.motors.prop_diameter / 1000.0
     k_eta = PROP_CT * RHO_AIR * d**4 / (4 * math.pi**2)
     t_max = flight.max_thrust_g(spec) / 1000.0 * G
