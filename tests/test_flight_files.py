@@ -69,6 +69,23 @@ def test_inertia_of_a_box_and_two_rods_matches_the_closed_form():
     assert shifted.inertia == pytest.approx(mp.inertia, rel=1e-9, abs=1e-15)
 
 
+def test_mesh_solid_props_match_the_box_closed_form():
+    """The build's STL path: a 40 x 20 x 10 mm box as 12 triangles, turned and moved, carrying
+    8 g: the box's m (b^2 + c^2) / 12 about each of its own axes."""
+    import trimesh
+
+    m = trimesh.creation.box(extents=(40, 20, 10))
+    props = massprops.solid_props(m.triangles)
+    assert props.volume == pytest.approx(8000) and props.centroid == pytest.approx((0, 0, 0), abs=1e-12)
+    tf = trimesh.transformations.rotation_matrix(0.7, (1, 2, 3))
+    tf[:3, 3] = (5, -3, 40)
+    body = massprops.placed_body("box", 8.0, props, tf)
+    r = tf[:3, :3]
+    assert body.centroid == pytest.approx((5, -3, 40))
+    assert r.T @ np.asarray(body.inertia) @ r == pytest.approx(np.diag([8 * (400 + 100), 8 * (1600 + 100), 8 * (1600 + 400)]) / 12,
+                                                               abs=1e-9)
+
+
 def test_cylinder_and_propeller_closed_forms():
     c = massprops.cylinder("c", 6.0, (0, 0, 0), (0, 0, 1), 7.0, 13.0)
     assert np.diag(c.inertia) == pytest.approx([6 * (3 * 49 + 169) / 12] * 2 + [6 * 49 / 2])

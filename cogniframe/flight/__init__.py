@@ -19,15 +19,16 @@ FILES = ("inav.txt", "betaflight.txt", "ardupilot/frame.json", "ardupilot/params
          "gazebo/model.sdf", "gazebo/model.config", "rotorpy.json", "resonance.json", "resonance.png")
 
 
-def make_vehicle(spec, result, world_meshes=None, shapes: bool = True):
+def make_vehicle(spec, result, solids=None, shapes: bool = True):
     """The Vehicle of a checked design (`verdict.CheckResult`): mass properties from the CAD
-    solids when `world_meshes` ({part: [world mesh per copy]}) is given, else from the estimates;
-    the modes' flight-controller participation from their shapes when `shapes`."""
+    solids when `solids` ({part: (massprops.SolidProps as printed, print-from-local 4 x 4)}) is
+    given, else from the estimates; the modes' flight-controller participation from their shapes
+    when `shapes`."""
     from . import massprops, resonance, rotors
     from .vehicle import build
 
     d, budget = result.design, result.mass
-    mp = massprops.from_meshes(spec, d, budget, world_meshes) if world_meshes is not None else massprops.estimate(spec, d, budget)
+    mp = massprops.from_solids(spec, d, budget, solids) if solids is not None else massprops.estimate(spec, d, budget)
     rm = rotors.model(spec, mp.mass_kg, len(d.frame.motors))
     hz = list((result.stiffness or {}).get("modes_hz") or [])
     part = None

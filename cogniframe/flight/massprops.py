@@ -1,13 +1,13 @@
 """Mass properties of the aircraft: mass, centre of gravity and the inertia tensor about it.
 
 Every mass line of the budget becomes one or more rigid bodies (a point, a box, a cylinder, a rod,
-a propeller or a mesh), each with its own mass, centroid and inertia about that centroid; the
+a propeller or a closed mesh), each with its own mass, centroid and inertia about that centroid; the
 parallel-axis theorem sums them about the common centre of gravity. Two sources:
 
 - `estimate`: the part list's estimates (pure numpy, for `check`): printed core parts as solid
   boxes of their frame boxes, joints and mounts as points at their places;
-- `from_meshes`: the CAD solids of the printed parts (`build`), each carrying its budget mass
-  spread evenly over its volume.
+- `from_solids`: the CAD solids of the printed parts (`build`: their STLs), each carrying its
+  budget mass spread evenly over its volume.
 
 Rods, vitamins (motors, battery, boards) and propellers are the same in both. Masses are the
 budget's own lines, so the total is `check`'s all-up mass exactly. Body axes are the frame's
@@ -107,11 +107,48 @@ def propeller(name: str, mass_g: float, centre, diameter: float) -> Body:
     return Body(name, mass_g, _t3(centre), _m3(np.diag([i_z / 2, i_z / 2, i_z])))
 
 
-def mesh_body(name: str, mass_g: float, mesh) -> Body:
-    """A closed mesh (trimesh, world mm) carrying `mass_g` evenly over its volume."""
-    mp = mesh.mass_properties  # unit density: mass = volume, inertia about the centre of mass
-    vol = float(mp["volume"])
-    return Body(name, mass_g, _t3(mp["center_mass"]), _m3(np.asarray(mp["inertia"], float) * (mass_g / vol)))
+@dataclass(frozen=True)
+class SolidProps:
+    """A closed triangle mesh's volume (mm^3), centroid (mm) and second moment of volume about
+    its centroid (mm^5, the inertia at unit density), in the mesh's own frame."""
+
+    volume: float
+    centroid: tuple[float, float, float]
+    inertia: tuple[tuple[float, float, float], ...]
+
+
+def solid_props(triangles: np.ndarray) -> SolidProps:
+    """Volume, centroid and inertia of a closed, outward-facing triangle mesh ((n, 3, 3) corners):
+    the signed tetrahedra from the origin to each face. A tetrahedron (0, a, b, c) has volume
+    det/6 (det = a . (b x c)) and second moment det/120 (S S^T + a a^T + b b^T + c c^T), S = a + b + c."""
+    t = np.asarray(triangles, float)
+    origin = t.reshape(-1, 3).mean(axis=0)  # near the solid: less cancellation than the print origin
+    a, b, c = t[:, 0] - origin, t[:, 1] - origin, t[:, 2] - origin
+    det = np.einsum("ij,ij->i", a, np.cross(b, c))
+    vol = float(det.sum() / 6.0)
+    ssum = a + b + c
+    centroid = (det[:, None] * ssum).sum(axis=0) / 24.0 / vol
+    cov = (np.einsum("i,ij,ik->jk", det, ssum, ssum) + sum(np.einsum("i,ij,ik->jk", det, v, v) for v in (a, b, c))) / 120.0
+    cov_c = cov - vol * np.outer(centroid, centroid)  # about the centroid
+    inertia = np.trace(cov_c) * np.eye(3) - cov_c
+    return SolidProps(vol, _t3(centroid + origin), _m3(inertia))
+
+
+def read_stl_triangles(path) -> np.ndarray:
+    """A binary STL's triangles, (n, 3, 3) mm, with numpy only (the build writes binary STLs)."""
+    data = open(path, "rb").read()
+    n = int.from_bytes(data[80:84], "little")
+    rec = np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
+    return np.frombuffer(data, rec, n, 84)["v"].astype(float)
+
+
+def placed_body(name: str, mass_g: float, props: SolidProps, world_from_mesh) -> Body:
+    """The solid `props` moved by the 4 x 4 `world_from_mesh`, carrying `mass_g` evenly."""
+    m = np.asarray(world_from_mesh, float)
+    r, t = m[:3, :3], m[:3, 3]
+    centre = r @ np.asarray(props.centroid) + t
+    inertia = r @ np.asarray(props.inertia) @ r.T * (mass_g / props.volume)
+    return Body(name, mass_g, _t3(centre), _m3(inertia))
 
 
 def combine(bodies, source: str) -> MassProps:
@@ -212,15 +249,18 @@ def estimate(spec, design, budget) -> MassProps:
     return combine(bodies, "estimate")
 
 
-def from_meshes(spec, design, budget, world_meshes) -> MassProps:
-    """From the CAD solids: `world_meshes` is {part name: [world mesh of each copy]} (trimesh, mm)."""
+def from_solids(spec, design, budget, solids) -> MassProps:
+    """From the CAD solids: `solids` is {part name: (SolidProps of its mesh as printed, the 4 x 4
+    print-from-local transform)}; each copy goes where its placement puts it."""
     frame = design.frame
     bodies = _rod_bodies(spec, frame, budget)
     vit, used = _vitamin_bodies(spec, frame, budget)
     bodies += vit
     items = {i.name: i for i in budget.items}
     for p in design.parts:
-        for m in world_meshes[p.name]:
-            bodies.append(mesh_body(p.name, items[p.name].mass_g_each, m))
+        props, pfl = solids[p.name]
+        local_from_print = np.linalg.inv(np.asarray(pfl, float))
+        for pl in p.placements:
+            bodies.append(placed_body(p.name, items[p.name].mass_g_each, props, pl.matrix() @ local_from_print))
     bodies += _rest_bodies(spec, frame, budget, used, {p.name for p in design.parts})
     return combine(bodies, "cad")
