@@ -143,6 +143,20 @@ def coupon(params: ParamsArg,
 
 
 @app.command()
+def fly(params: ParamsArg,
+        out: Annotated[Optional[Path], typer.Option("-o", "--out", help="output folder (default out/<name>-flight)")] = None) -> None:
+    """Flight-controller setup (INAV, Betaflight, ArduPilot, PX4), simulator models (ArduPilot SITL,
+    PX4 SIH, Gazebo, rotorpy) and the frame's vibration against the motors, from the estimates."""
+    from . import api
+
+    design = api.load(params)
+    with _progress_to_stderr():
+        folder = design.fly(out)
+    Console().print(f"wrote {folder}: INAV and Betaflight CLI, ArduPilot SITL frame and params, PX4 SIH and airframe, "
+                    f"Gazebo model, rotorpy.json, resonance.json and resonance.png")
+
+
+@app.command()
 def schema() -> None:
     """Print the JSON Schema of a params file (for editor autocompletion)."""
     from . import spec as spec_mod

@@ -125,6 +125,7 @@ class MotorsSection(_M):
     max_thrust_g: Annotated[float, Field(gt=0, le=5000, description="static thrust of one motor at full throttle, g (thrust load case and thrust-to-weight); null = the flight tables' value for motors.model, kv, prop and the pack, else the motor class's typical value (1104 on 3S with 3025 props: 190 g; 1404 on 2S with 4 in props: 200 g)")] | None = None
     kv: Annotated[int, Field(ge=100, le=50000, description="motor KV (rpm per volt); null = the preset's")] | None = None
     prop: str | None = Field(None, description="propeller for the flight tables, e.g. 3025 or 4024; null = the one matching prop_diameter")
+    props_out: bool = Field(False, description="propeller spin for the flight-controller mix and the simulator models (`cogniframe fly`): false = props in, Betaflight's and INAV's quad-X default (rear right and front left clockwise seen from above); true = props out, every motor reversed")
 
 
 class Component(_M):

@@ -147,7 +147,10 @@ def test_verdicts_on_top(written):
     text = html_path.read_text(encoding="utf-8")
     assert text.index('id="verdicts"') < text.index('id="mass-budget"')
     rows = {r[0]: r for r in page.tables["verdicts"][1:]}
-    assert set(rows) == {"Mass", "Crash margin", "What breaks first", "Printability", "Design verdict"}
+    assert set(rows) == {"Mass", "Crash margin", "What breaks first", "Printability", "Vibration against the motors",
+                         "Design verdict"}
+    # the presets' frame modes sit in the attitude loop's band: WARN, the design verdict unchanged
+    assert rows["Vibration against the motors"][1] == ("WARN" if result.warnings else "PASS")
     f = result.survival.first_failure
     assert rows["What breaks first"][2].startswith("first to fail" if f else "nothing fails in flat drops up to")
     assert rows["Mass"][1] == ("PASS" if result.mass.total_g <= result.mass.limit_g else "FAIL")

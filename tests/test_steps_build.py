@@ -116,6 +116,7 @@ def test_a_damaged_cache_entry_is_rebuilt_in_a_real_build(warm, tmp_path):
 
 MASS = {"plots", "figures"}  # what a change of the mass budget or the drop model reruns
 VIEW = {"viewer"}  # the report's 3D view: it shows each part's and rod's grams and material
+FLIGHT = {"flight"}  # the flight files: the mass properties, the modes, the rotors (not the drop model)
 
 
 @pytest.mark.skipif(not __import__("sys").platform.startswith("linux"), reason="the CAD server is Linux-only")
@@ -158,7 +159,7 @@ def test_builds_through_the_cad_server_give_the_same_bytes(warm, tmp_path, monke
 
 def _part_change(*parts: str) -> set[str]:
     """Steps that rerun when exactly these parts' geometry changes (their mass changes too)."""
-    out = set(MASS) | {"assembly", "glb", "renders", "viewer", "clash"}  # clash: issue 13, keyed like the assembly
+    out = set(MASS) | FLIGHT | {"assembly", "glb", "renders", "viewer", "clash"}  # clash: issue 13, keyed like the assembly
     for p in parts:
         m = TPU if p in TPU_PARTS else ABS
         out |= {f"part:{m}/{p}", f"render:{p}", f"plates:{m}", f"previews:{m}"}
@@ -167,11 +168,11 @@ def _part_change(*parts: str) -> set[str]:
 
 CHANGES = [
     # (key, new value, slice?, steps that must rerun (slice:* only listed when sliced))
-    ("core.battery.mass", 61, False, MASS),
+    ("core.battery.mass", 61, False, MASS | FLIGHT),
     ("requirements.design_drop_height_cm", 80, False, set()),  # the verdict and report only
     ("rods.kerf", 1.5, False, set()),  # the stock plan only
     ("model.damping_ratio", 0.6, False, MASS),
-    ("rods.material", "bamboo", False, MASS | VIEW),  # same diameter: no part changes
+    ("rods.material", "bamboo", False, MASS | VIEW | FLIGHT),  # same diameter: no part changes
     ("motors.bolt_spacing", 9.5, False, _part_change("motor_mount")),
     ("joints.wall", 1.4, False, _part_change(*TPU_PARTS)),
     ("frame.height", 130, False, _part_change(*TPU_PARTS)),
@@ -180,8 +181,8 @@ CHANGES = [
     ("printer.margin", 5, True, {f"plates:{TPU}", f"plates:{ABS}", f"previews:{TPU}", f"previews:{ABS}",
                                  f"slice:{TPU}", f"slice:{ABS}"}),
     # print settings: no part changes; the plates carry them in the 3MF (issue 14), the previews stay
-    ("core.infill", 0.15, True, MASS | VIEW | {f"plates:{ABS}", f"slice:{ABS}"}),
-    ("printer.layer_height", 0.25, True, MASS | VIEW | {f"plates:{TPU}", f"plates:{ABS}", f"slice:{TPU}", f"slice:{ABS}"}),
+    ("core.infill", 0.15, True, MASS | VIEW | FLIGHT | {f"plates:{ABS}", f"slice:{ABS}"}),
+    ("printer.layer_height", 0.25, True, MASS | VIEW | FLIGHT | {f"plates:{TPU}", f"plates:{ABS}", f"slice:{TPU}", f"slice:{ABS}"}),
 ]
 
 
@@ -210,7 +211,7 @@ def test_a_change_reruns_exactly_its_dependents_and_matches_a_cold_build(warm, t
 
 def test_a_no_geometry_change_imports_no_cad_mesh_or_render_library(warm, tmp_path):
     """The battery's mass moves no part: a fresh `cogniframe build` process on the warm cache reruns
-    only plots and figures, and never imports CadQuery, OCP, trimesh, pyvista or vtk."""
+    only plots, figures and the flight files, and never imports CadQuery, OCP, trimesh, pyvista or vtk."""
     import os
     import subprocess
     import sys
@@ -229,5 +230,5 @@ def test_a_no_geometry_change_imports_no_cad_mesh_or_render_library(warm, tmp_pa
     assert {kind: len(list((root / "cache" / kind).glob("*.json"))) - n for kind, n in solved.items()} == {"cases": 1, "peaks": 1}
     ran = {line.split("]", 1)[1].split()[0] for line in proc.stderr.splitlines()
            if line.startswith("[") and not line.endswith("cached")}
-    assert ran == ({"estimate", "budget", "physics", "check", "plots", "figures", "bom", "report"}
+    assert ran == ({"estimate", "budget", "physics", "check", "plots", "figures", "flight", "bom", "report"}
                    | ({"slice:tpu_95a", "slice:abs"} if not HAVE_SLICER else set()))

@@ -28,6 +28,8 @@ class CheckResult:
     notes: tuple[str, ...] = ()  # warnings that do not fail the design (joints outside the surrogate's training box)
     survival: object | None = None  # analysis.survival.Survival: what breaks first, at what drop height
     fit: object | None = None  # analysis.fit_check.FitResult: the screws, holes and motor patterns
+    flight_model: dict | None = None  # flight.for_check: centre of gravity, inertia, resonance flags
+    warnings: tuple[str, ...] = ()  # WARN, not FAIL: frame modes near the rotors or in the attitude loop's band
 
     @property
     def verdict(self) -> str:
@@ -79,8 +81,12 @@ def complete(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=N
     # PASS/FAIL stays with the requirements' own checks
     problems = (_problems(spec, budget, drop) + _physics_problems(spec, stiffness, peak) + _aircraft_problems(spec, flight)
                 + fit.messages())
+    from .. import flight as flight_files
+
+    # the flight files' mass properties and resonance flags: a flagged mode WARNs, never FAILs
+    model, warn = flight_files.for_check(spec, d, budget, stiffness)
     return CheckResult(d, budget, drop, tuple(problems), stiffness, peak, flight, survival=surv, notes=tuple(_notes(spec, d)),
-                       fit=fit)
+                       fit=fit, flight_model=model, warnings=warn)
 
 
 def fit_of(spec: Spec, d: Design):
@@ -228,7 +234,7 @@ def check_dict(result: CheckResult) -> dict:
     if result.peak is not None:
         out["peak_g"] = result.peak
     if result.flight is not None:
-        out["flight"] = result.flight.summary()
+        out["flight"] = result.flight.summary() | (result.flight_model or {})
     if result.survival is not None:
         out["survival"] = result.survival.to_dict()
     if result.clash is not None:
@@ -237,4 +243,6 @@ def check_dict(result: CheckResult) -> dict:
         out["fit"] = result.fit.to_dict()
     if result.notes:
         out["notes"] = list(result.notes)
+    if result.warnings:
+        out["warnings"] = list(result.warnings)
     return out

@@ -262,6 +262,31 @@ class Design:
 
         return temp()
 
+    def fly(self, out: str | Path | None = None) -> Path:
+        """`cogniframe fly`: the flight-controller setup and simulator models (INAV, Betaflight,
+        ArduPilot SITL, PX4 SIH and airframe, Gazebo, rotorpy) and the resonance check, from the
+        part list's estimates, into `out` (default out/<name>-flight). Only a folder cogniframe
+        made is replaced, whole. Returns the folder."""
+        import json
+
+        from .. import flight, outdir
+        from ..cache import file_sha256
+
+        final = Path(out) if out is not None else Path("out") / f"{self._spec.name}-flight"
+        result = self.check().result
+        try:
+            with self._spec.blamed():
+                v = flight.make_vehicle(self._spec, result)
+        except UserError as e:
+            raise _params_error(e, self._source) from None
+        final.parent.mkdir(parents=True, exist_ok=True)
+        with outdir.writing(final) as tmp:
+            files = flight.write(v, tmp)
+            listed = [{"path": f, "size": (tmp / f).stat().st_size, "sha256": file_sha256(tmp / f)} for f in sorted(files)]
+            (tmp / outdir.MANIFEST).write_text(json.dumps({"generator": outdir.GENERATOR, "files": listed}, indent=2) + "\n",
+                                               encoding="utf-8")
+        return final
+
     def view_html(self) -> str:
         """The 3D view (the report's three.js viewer) as one self-contained HTML fragment: three.js,
         the viewer and the geometry inline, no network. The parts are built through the build

@@ -129,8 +129,14 @@ def report(ctx) -> Made:
     plates = _plate_files(ctx)
     images = {f"assembly {v}": ctx.out / "renders" / f"assembly_{v}.png" for v in ctx["renders"]}
     images |= {f"part {p}": ctx.out / "renders" / "parts" / f"{p}.png" for p in sorted(x.name for x in ctx.design.parts)}
+    from ..flight import FILES as FLIGHT_FILES
+
+    flown = "skipped" not in ctx["flight"]  # no flight files without a thrust table for the motor
+    if flown:
+        figures["flight"] = [("Campbell diagram: frame modes against the rotors and the attitude controller",
+                              ctx.out / "flight" / "resonance.png")]
     html.write_report(ctx["check"], ctx.out, images, lines, steps, plates, sliced, figures=figures,
-                      viewer_html=ctx["viewer"])
+                      viewer_html=ctx["viewer"], flight_files=tuple(f"flight/{f}" for f in FLIGHT_FILES) if flown else ())
     return Made(("report.html", "report.md"))
 
 def _plate_files(ctx):
@@ -182,5 +188,5 @@ VIEWER = Step("viewer", ("check", "plates:*"), make_viewer, viewer_key,
               ("report/viewer/*", "export/plates.py", "report/assembly_steps.py", "report/renders.py", "vitamins.py", "fasteners.py"),
               reads="STL hashes, placements, grams each, plates, rods, cut list")
 BOM = Step("bom", ("check", "slice:*"), bom, reads="(always: BOM, assembly steps)")
-REPORT = Step("report", ("check", "bom", "plots", "figures", "previews:*", "render:*", "renders", "viewer"), report,
+REPORT = Step("report", ("check", "bom", "plots", "figures", "previews:*", "render:*", "renders", "viewer", "flight"), report,
               reads="(always: HTML and Markdown from the files above)")

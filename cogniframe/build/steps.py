@@ -15,7 +15,7 @@ that run.
 
 from __future__ import annotations
 
-from . import cad, physics, plates, report
+from . import cad, flight, physics, plates, report
 
 
 STEPS = (
@@ -29,6 +29,7 @@ STEPS = (
     cad.ASSEMBLY,
     cad.GLB,
     physics.CHECK,
+    flight.FLIGHT,
     report.PLOTS,
     report.FIGURES,
     plates.PREVIEWS,

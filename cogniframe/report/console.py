@@ -46,6 +46,8 @@ def print_check(result: CheckResult, console: Console) -> None:
                       f"throttle, {f.hover_current_a:.1f} A, {f.hover_time_min:.1f} min on {f.usable_mah:.0f} mAh usable")
     for n in getattr(result, "notes", ()):
         console.print(f"[yellow]note:[/] {n}")
+    for w in getattr(result, "warnings", ()):
+        console.print(f"[yellow]WARN:[/] {w}")
     if result.problems:
         for p in result.problems:
             console.print(f"[red]problem:[/] {p}")

@@ -239,6 +239,12 @@ def _verdicts(result: "CheckResult", cd: Mapping, plates, slice_report) -> list[
         if not ok:
             words += f", below the {spec.requirements.design_drop_height_cm:g} cm design drop"
         out.append(Verdict("survival", "What breaks first", "PASS" if ok else "WARN", html.escape(words), words))
+    flags = cd.get("flight", {}).get("resonance_flags")
+    if flags is not None:  # the frame's modes against the rotors and the attitude loop: WARN, never FAIL
+        text = (f"{len(flags)} frame mode(s) within 15 % of a rotor or attitude-controller band: "
+                + ", ".join(f"{f['hz']:.1f} Hz ({f['band']})" for f in flags) if flags else
+                "no frame mode within 15 % of a rotor or attitude-controller band")
+        out.append(Verdict("resonance", "Vibration against the motors", "WARN" if flags else "PASS", html.escape(text), text))
     out.append(Verdict("overall", "Design verdict", cd["verdict"],
                        html.escape("; ".join(cd["problems"]) or "all requirements met"),
                        "; ".join(cd["problems"]) or "all requirements met"))
@@ -412,7 +418,8 @@ def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str
                  bom: Sequence["BomLine"] = (), steps: Sequence["Step"] = (), plates: Sequence["PlateFile"] = (),
                  slice_report: "SliceReport | None" = None,
                  figures: Mapping[str, Sequence[tuple[str, Path]]] | None = None,
-                 viewer_items: Sequence["ViewerItem"] = (), viewer_html: str | None = None) -> tuple[Path, Path]:
+                 viewer_items: Sequence["ViewerItem"] = (), viewer_html: str | None = None,
+                 flight_files: Sequence[str] = ()) -> tuple[Path, Path]:
     """Write `report.html` and `report.md` into out_dir (charts go to out_dir/report_files/).
 
     `figures`: {"mass": [(caption, png)], "drop": [...]} already drawn (the build draws and caches
@@ -468,6 +475,8 @@ def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str
         sections.append(("plates-section", "Print plates", blocks))
     if "assembly" in tables:
         sections.append(("assembly-section", "Assembly", [tables["assembly"]]))
+    if flight_files or "flight" in figs:
+        sections.append(("flight", "Fly it: flight-controller setup, simulator models, vibration", _flight_blocks(cd, flight_files, figs)))
     if images:
         sections.append(("renders", "Renders", [("img", c, p) for c, p in images.items()]))
 
@@ -484,6 +493,35 @@ def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str
         md = md.replace("\n## ", "\nThe interactive 3D view of the assembly is in report.html (open it in a browser).\n\n## ", 1)
     md_path.write_text(md, encoding="utf-8")
     return html_path, md_path
+
+
+FLIGHT_FILE_WHAT = {
+    "inav.txt": "INAV CLI: motor mix and gyro filters (paste into the Configurator's CLI tab)",
+    "betaflight.txt": "Betaflight CLI: motor mix and gyro filters",
+    "ardupilot/frame.json": "ArduPilot SITL frame model (sim_vehicle.py -f quad:frame.json)",
+    "ardupilot/params.parm": "ArduCopter frame, hover throttle, harmonic notch",
+    "px4/sih.params": "PX4 SIH simulator: mass, inertia, thrust and torque limits, arm lengths",
+    "px4/airframe": "PX4 airframe: control allocation, hover thrust, gyro filters",
+    "gazebo/model.sdf": "Gazebo model with the multicopter motor model", "gazebo/model.config": "Gazebo model description",
+    "rotorpy.json": "rotorpy vehicle parameters (Multirotor, SE3Control)",
+    "resonance.json": "frame modes, flight-controller participation, rotor and controller bands, flags, filter advice",
+    "resonance.png": "Campbell diagram",
+}
+
+
+def _flight_blocks(cd: Mapping, files: Sequence[str], figs: Mapping) -> list:
+    f = cd.get("flight", {})
+    blocks: list = []
+    if "cg_mm" in f:
+        cg, i = f["cg_mm"], f["inertia_kg_m2"]
+        blocks.append(("p", f"Centre of gravity (x, y, z) {cg[0]:.1f}, {cg[1]:.1f}, {cg[2]:.1f} mm; inertia about it "
+                            f"Ixx {i[0][0]:.3g}, Iyy {i[1][1]:.3g}, Izz {i[2][2]:.3g} kg m^2 (part-list estimates; the files "
+                            "below use the CAD solids)."))
+    blocks += [("warn", w) for w in cd.get("warnings", [])]
+    if files:
+        blocks.append(("links", [(p, FLIGHT_FILE_WHAT.get(p.removeprefix("flight/"), "")) for p in files]))
+    blocks += [("img", c, p) for c, p in figs.get("flight", [])]
+    return blocks
 
 
 def _render_html(name: str, cd: Mapping, verdicts: list[Verdict], sections, warnings: list[str], viewer_html: str = "") -> str:
@@ -510,6 +548,9 @@ def _render_html(name: str, cd: Mapping, verdicts: list[Verdict], sections, warn
                 out.append(_img_html(b[2], b[1]))
             elif b[0] == "warn":
                 out.append(f'<p class="warn">warning: {html.escape(b[1])}</p>')
+            elif b[0] == "links":
+                out.append("<ul>" + "".join(f'<li><a href="{html.escape(p)}">{html.escape(p)}</a>: {html.escape(t)}</li>'
+                                            for p, t in b[1]) + "</ul>")
             else:
                 out.append(f"<p>{html.escape(b[1])}</p>")
         out.append("</section>")
@@ -532,6 +573,8 @@ def _render_md(name: str, cd: Mapping, verdicts: list[Verdict], sections, warnin
                 out += [_img_md(b[2], b[1], base), ""]
             elif b[0] == "warn":
                 out += [f"> warning: {b[1]}", ""]
+            elif b[0] == "links":
+                out += [f"- [{p}]({p}): {t}" for p, t in b[1]] + [""]
             else:
                 out += [b[1], ""]
     return "\n".join(out).rstrip() + "\n"
