@@ -41,7 +41,7 @@ class Session:
         if self._parts is None:
             from .. import partlist
 
-            self._parts = partlist.build(self.spec, self.frame)
+            self._parts = partlist.part_list(self.spec, self.frame)
         return self._parts
 
     @property
