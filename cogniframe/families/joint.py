@@ -234,46 +234,57 @@ def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict |
             vol += j.hinge_thickness * 2.7 * top
             a_v += 2 * 2.7 * top
         else:
-            s_back = sockets[par[0]].seat - j.wall
-            t = float(params.get("tab_thickness", spec.core.plate_thickness))
-            hole_d = float(params.get("screw_clearance", 2.4))
-            bolt = np.asarray(params.get("bolt_hole", (0.0, 0.0, 0.0)), float)
-            r_tab = hole_d / 2 + j.wall
-            tab_len = float(np.hypot(bolt[0], bolt[1])) + r_tab + 1.0
-            tab_h = float(bolt @ w - zc.min() + r + r_tab)
-            vol += tab_len * t * tab_h - math.pi / 4 * hole_d**2 * t
-            a_h += tab_len * t
-            a_v += 2 * tab_len * tab_h
-            # Hub: a prism over the convex hull of the sleeves' back faces and the tab root.
-            x = dirs[par[0]] - w * (dirs[par[0]] @ w)
-            x /= np.linalg.norm(x)
-            y = np.cross(w, x)
-            pts = []
-            for i in [par[0]] + rest:
-                d = dirs[i]
-                lat = np.cross(w, d)
-                lat /= np.linalg.norm(lat)
-                c = ports[i] + d * (sockets[i].seat - j.wall)
-                pts += [c + lat * r, c - lat * r]
-            e_u = bolt - w * (bolt @ w)
-            e_u[2] = 0.0
-            e_u /= max(float(np.linalg.norm(e_u)), 1e-9)
-            v0 = float(params.get("plate_top_z", 0.0))
-            pts += [e_u * 0.5 + np.array([0, 0, v0]), e_u * 0.5 + np.array([0, 0, v0 + t])]
-            hub_area = _hull_area(np.array([[p_ @ x, p_ @ y] for p_ in pts]))
-            hub_h = max(top, tab_h)
-            vol += hub_area * hub_h
-            a_h += hub_area
-            a_v += 2 * s_back * hub_h
-            seat_area = _seat_area(params, ports[par], z[par], dirs[par[0]], sockets[par[0]].seat - j.wall, r,
-                                   min(float(z[par].max() + r - 0.5), tab_h))
-            vol += seat_area * 2 * v0
-            a_v += 2 * seat_area
+            vol, a_h, a_v = _link_pieces(spec, params, sockets, dirs, ports, z, zc, w, par, rest, top, r,
+                                         vol, a_h, a_v)
         ext = np.array([np.ptp(np.vstack([ports, ports + dirs * L[:, None]]) @ np.eye(3), axis=0).max() + 2 * r,
                         2 * r + float(L.max()), float(z.max() + r)])
     a_v += sum(math.pi * spec.bore * s.depth for s in sockets)
     env = tuple(sorted(float(x) for x in ext))
     return Estimate(vol, a_h, a_v, (env[2], env[1], env[0]))
+
+
+def _link_pieces(spec: Spec, params: dict, sockets: list[Socket], dirs: np.ndarray, ports: np.ndarray, z: np.ndarray,
+                 zc: np.ndarray, w: np.ndarray, par: list[int], rest: list[int], top: float, r: float,
+                 vol: float, a_h: float, a_v: float) -> tuple[float, float, float]:
+    """A core link's bolt tab, hub and plate seat added to the running volume and areas (the
+    arm block's print plane normal `w`, axis heights `z`, parallel arm sockets `par`)."""
+    j = spec.joints
+    s_back = sockets[par[0]].seat - j.wall
+    t = float(params.get("tab_thickness", spec.core.plate_thickness))
+    hole_d = float(params.get("screw_clearance", 2.4))
+    bolt = np.asarray(params.get("bolt_hole", (0.0, 0.0, 0.0)), float)
+    r_tab = hole_d / 2 + j.wall
+    tab_len = float(np.hypot(bolt[0], bolt[1])) + r_tab + 1.0
+    tab_h = float(bolt @ w - zc.min() + r + r_tab)
+    vol += tab_len * t * tab_h - math.pi / 4 * hole_d**2 * t
+    a_h += tab_len * t
+    a_v += 2 * tab_len * tab_h
+    # Hub: a prism over the convex hull of the sleeves' back faces and the tab root.
+    x = dirs[par[0]] - w * (dirs[par[0]] @ w)
+    x /= np.linalg.norm(x)
+    y = np.cross(w, x)
+    pts = []
+    for i in [par[0]] + rest:
+        d = dirs[i]
+        lat = np.cross(w, d)
+        lat /= np.linalg.norm(lat)
+        c = ports[i] + d * (sockets[i].seat - j.wall)
+        pts += [c + lat * r, c - lat * r]
+    e_u = bolt - w * (bolt @ w)
+    e_u[2] = 0.0
+    e_u /= max(float(np.linalg.norm(e_u)), 1e-9)
+    v0 = float(params.get("plate_top_z", 0.0))
+    pts += [e_u * 0.5 + np.array([0, 0, v0]), e_u * 0.5 + np.array([0, 0, v0 + t])]
+    hub_area = _hull_area(np.array([[p_ @ x, p_ @ y] for p_ in pts]))
+    hub_h = max(top, tab_h)
+    vol += hub_area * hub_h
+    a_h += hub_area
+    a_v += 2 * s_back * hub_h
+    seat_area = _seat_area(params, ports[par], z[par], dirs[par[0]], sockets[par[0]].seat - j.wall, r,
+                           min(float(z[par].max() + r - 0.5), tab_h))
+    vol += seat_area * 2 * v0
+    a_v += 2 * seat_area
+    return vol, a_h, a_v
 
 
 def link_plate_corner(params: dict) -> tuple[np.ndarray, np.ndarray]:
