@@ -75,6 +75,15 @@ def _camera_mount(spec: Spec, frame: Frame) -> PartSpec:
                     (Placement("core", 0.0, rounded(origin)),), (), g["wall"], est, params, hw)
 
 
+
+# -- the assembly's words ------------------------------------------------------------------
+
+def fitting(spec: Spec) -> str:
+    """How the builder fits the camera mount and the camera."""
+    return (f"Set the camera mount's base on the core plate, its holes over the stack screws, so the upright stands "
+            f"at the plate's front edge ({spec.core.camera.tilt_deg:g} deg tilt); the FC/ESC stack goes on top of the "
+            "base. Screw the Pi camera v2 to the upright with its lens forward (4 x M2) and run the ribbon up to the computer.")
+
 # -- the solid --------------------------------------------------------------------------------
 
 def print_from_local(part: PartSpec) -> np.ndarray:

@@ -214,6 +214,26 @@ def _motor_mount(spec: Spec, frame: Frame) -> PartSpec:
                     est, params, hw)
 
 
+
+# -- the assembly's words ------------------------------------------------------------------
+
+def fitting(spec: Spec) -> str:
+    """How the builder fits the motor mounts on the arms."""
+    return ("Clip a motor mount onto each pair of arm rods (the two rods of one arm run parallel, "
+            f"{spec.frame.arm_spacing:g} mm apart), then push both arm rods into the knee's arm sockets. Slide the mount "
+            f"to {spec.motors.radius:g} mm from the frame centre. Leave the inner ends free.")
+
+
+def screw_words(mount: PartSpec | None) -> str:
+    """The motor screws as the builder needs them: how many, which, into what and how deep."""
+    if mount is None or "holes" not in dict(mount.params):
+        return "the screws that come with the motors, no longer than the seat plus the motor's thread"
+    n = len(mount.param("holes"))
+    which = "the pair of opposite holes on the arm's axis" if n == 2 else "all four holes"
+    return (f"{n} {mount.param('screw')} x {mount.param('screw_length'):g} screws per motor, up through {which} "
+            f"into the motor's thread ({mount.param('engagement'):g} mm deep; a longer screw reaches the windings)")
+
+
 # -- the solid --------------------------------------------------------------------------------
 
 HOLE_CLEAR = 0.2  # mm: a hole's side never within this of a clip web's flat face

@@ -94,6 +94,15 @@ def _sensor_mount(spec: Spec, frame: Frame) -> PartSpec:
                     (Placement("core", 0.0, rounded((box.centre[0], box.centre[1], box.lo[2]))),), (), t, est, params, hw)
 
 
+
+# -- the assembly's words ------------------------------------------------------------------
+
+def fitting(spec: Spec) -> str:
+    """How the builder fits the flow sensor and the receiver on the sensor mount."""
+    return ("Zip-tie the Matek 3901-L0X under the sensor mount's rear pad, sensors facing the ground (the pad sits "
+            "behind the battery holder, so nothing is in their view), with the receiver on top of the pad in the same "
+            "two ties; tie the antenna leads through the two slots at the pad's rear edge.")
+
 # -- the solid --------------------------------------------------------------------------------
 
 def solid(part: PartSpec) -> Built:
