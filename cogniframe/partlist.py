@@ -14,14 +14,14 @@ import json
 from dataclasses import replace
 
 from .families.base import PartSpec  # noqa: F401  (the part record: the later stages import it from here)
-from .families.registry import FAMILIES
+from .families import registry
 from .frame import Frame
 from .spec import Spec
 
 
 def part_list(spec: Spec, frame: Frame) -> tuple[PartSpec, ...]:
     """All distinct printed parts of the design, in a stable order (the registry's, then each plan's)."""
-    return tuple(_with_digest(p) for family in FAMILIES for p in family.plan(spec, frame))
+    return tuple(_with_digest(p) for family in registry.FAMILIES for p in family.plan(spec, frame))
 
 
 def infill_by_material(parts) -> dict[str, float]:

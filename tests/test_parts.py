@@ -199,6 +199,28 @@ def test_registry_lists_families_and_rejects_unknown_ones():
         assert f in str(e.value)
 
 
+def test_a_new_family_is_one_module_and_one_registry_line(monkeypatch):
+    """A family module registered in `registry.FAMILIES` is planned into the part list (after the
+    others, with its digest), found by name and listed: nothing else needs to know it."""
+    import types
+
+    from cogniframe.families.base import Estimate, PartSpec, Placement
+
+    fam = types.ModuleType("gps_mount")
+    fam.NAME, fam.SIZE_KEY, fam.DOC = "gps_mount", "core.plate_size", "ABS/PLA GPS puck mount"
+    fam.plan = lambda spec, frame: (PartSpec("gps_mount", "gps_mount", "core", spec.core.material, spec.core.infill,
+                                             (Placement("core", 0.0, (0.0, 0.0, 30.0)),), (), 1.6,
+                                             Estimate(1000.0, 500.0, 200.0, (20.0, 20.0, 2.5))),)
+    fam.print_from_local = lambda part: np.eye(4)
+    monkeypatch.setattr(registry, "FAMILIES", (*registry.FAMILIES, fam))
+    spec, frame, before = planned("carbon")
+    after = partlist.part_list(spec, frame)
+    assert [p.name for p in after] == [*PART_NAMES["carbon"], "gps_mount"]
+    assert after[:-1] == before and len(after[-1].digest) == 16
+    assert registry.get("gps_mount") is fam and registry.sizes()["gps_mount"] == fam.DOC
+    assert np.array_equal(registry.print_from_local(after[-1]), np.eye(4))
+
+
 def test_part_larger_than_the_bed_is_a_user_error(tmp_path):
     from cogniframe.export.part_files import build_parts
 
