@@ -33,7 +33,7 @@ for key, value in json.loads(sys.argv[4]).items():
     data[section][name] = value
 spec = spec_mod.from_dict(data)
 fr = frame_mod.build(spec)
-parts = partlist.build(spec, fr)
+parts = partlist.part_list(spec, fr)
 t1 = time.perf_counter()
 built_names = []
 import cogniframe.export.part_files as b

@@ -35,7 +35,7 @@ def main(argv: list[str] | None = None) -> int:
 
     s = spec.load(args.params)
     f = frame.build(s)
-    parts = partlist.build(s, f)
+    parts = partlist.part_list(s, f)
     inputs = {}
     real = solid_fe.condense
 

@@ -56,7 +56,7 @@ def main(argv: list[str] | None = None) -> int:
 
         s = spec_mod.load(args.params)
         f = frame_mod.build(s)
-        parts = partlist.build(s, f)
+        parts = partlist.part_list(s, f)
         if not args.skip_cold:
             print(f"cold `check` process (joint FE + load cases):  {_check_process(args.params, env):7.2f} s")
             for p in st.joint_parts(parts):

@@ -25,7 +25,7 @@ class Design:
 
 def design(spec: Spec) -> Design:
     frame = frame_mod.build(spec)
-    parts = partlist_mod.build(spec, frame)
+    parts = partlist_mod.part_list(spec, frame)
     _check_printer_fit(spec, parts)
     cut = cutlist_mod.build(spec, frame)
     return Design(spec, frame, parts, cut)

@@ -98,7 +98,7 @@ def camera_screws(spec, frame, parts) -> list[Fastener]:
     """The camera board's screws: from its front face through the board and the mount's upright,
     nuts behind the upright."""
     from .materials import BOARDS
-    from .partlist import CAMERA_WALL
+    from .families.camera_mount import CAMERA_WALL
     from .vitamins import _camera_world
 
     mount = next((p for p in parts if p.family == "camera_mount"), None)

@@ -215,7 +215,7 @@ def computer_vitamin(spec: Spec, frame: Frame) -> Vitamin | None:
 
 def camera_vitamin(spec: Spec, frame: Frame) -> Vitamin | None:
     """The camera board on the camera mount's upright, lens forward, tilted with the upright."""
-    from .partlist import camera_mount_geometry
+    from .families.camera_mount import camera_mount_geometry
 
     if spec.core.camera is None:
         return None
@@ -237,7 +237,7 @@ def camera_vitamin(spec: Spec, frame: Frame) -> Vitamin | None:
 
 
 def _camera_world(spec: Spec, frame: Frame, g: dict) -> np.ndarray:
-    """4x4 world <- camera-upright frame (shared with parts/core.camera_upright_matrix)."""
+    """4x4 world <- camera-upright frame (shared with families/camera_mount.camera_upright_matrix)."""
     a = math.radians(float(g["tilt_deg"]))
     m = np.eye(4)
     m[:3, :3] = [[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]]
@@ -268,7 +268,7 @@ def fastener_vitamins(spec: Spec, frame: Frame, parts=None) -> list[Vitamin]:
     if parts is None:
         from . import partlist
 
-        parts = partlist.build(spec, frame)
+        parts = partlist.part_list(spec, frame)
     out = []
     for f in fasteners(spec, frame, parts):
         sc = SCREWS[f.size]
@@ -290,7 +290,7 @@ def thread_pairs(spec: Spec, frame: Frame, parts=None) -> frozenset:
     if parts is None:
         from . import partlist
 
-        parts = partlist.build(spec, frame)
+        parts = partlist.part_list(spec, frame)
     out = set()
     for f in fasteners(spec, frame, parts):
         if f.thread:

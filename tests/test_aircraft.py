@@ -12,6 +12,7 @@ import trimesh
 
 from cogniframe import frame as frame_mod
 from cogniframe import partlist
+from cogniframe.families import battery_holder
 from cogniframe.analysis import verdict
 from cogniframe import spec as spec_mod
 from cogniframe.errors import UserError
@@ -327,7 +328,7 @@ def test_battery_slides_out_along_its_axis_without_meeting_any_solid(scenes, pre
 def test_holder_has_strap_slots_and_a_lead_exit_that_passes_the_connector():
     spec = spec_mod.load(ROOT / "params" / "carbon.yaml")
     fr = frame_mod.build(spec)
-    f = partlist.holder_features(spec, fr)
+    f = battery_holder.holder_features(spec, fr)
     ys, _, s_len, s_w = f["strap_slot"]
     assert s_len == spec.core.strap_width + 1.0
     # the slot lies wholly in front of the pack (so a strap through it crosses the mouth)
@@ -338,7 +339,7 @@ def test_holder_has_strap_slots_and_a_lead_exit_that_passes_the_connector():
     data = spec.model_dump(mode="json")
     data["core"]["battery"]["connector"] = "XT60"
     s60 = spec_mod.from_dict(data)
-    assert partlist.holder_features(s60, frame_mod.build(s60))["lead_exit"][0] > 15.8
+    assert battery_holder.holder_features(s60, frame_mod.build(s60))["lead_exit"][0] > 15.8
     data["core"]["battery"]["connector"] = "EC5"
     with pytest.raises(UserError, match="connector"):
         spec_mod.from_dict(data)
@@ -511,7 +512,7 @@ def test_tilted_camera_mount_prints_without_support_and_carries_the_camera(tilt,
     data["core"]["camera"]["tilt_deg"] = tilt
     s = spec_mod.from_dict(data)
     fr = frame_mod.build(s)
-    part = next(p for p in partlist.build(s, fr) if p.name == "front_camera_mount")
+    part = next(p for p in partlist.part_list(s, fr) if p.name == "front_camera_mount")
     (b,) = build_parts(s, fr, [part], tmp_path)
     m = load_stl(tmp_path / b.stl)
     assert m.is_watertight and m.body_count == 1 and m.bounds[0, 2] == pytest.approx(0.0, abs=1e-6)

@@ -25,7 +25,7 @@ def _design(preset="carbon", **changes):
         data[section][name] = value
     spec = spec_mod.from_dict(data)
     fr = frame_mod.build(spec)
-    return spec, fr, partlist.build(spec, fr)
+    return spec, fr, partlist.part_list(spec, fr)
 
 
 @pytest.mark.parametrize("preset", PRESETS)

@@ -41,7 +41,7 @@ def _spec(name: str, **changes) -> spec_mod.Spec:
 
 def _design(spec):
     fr = frame_mod.build(spec)
-    return fr, partlist.build(spec, fr)
+    return fr, partlist.part_list(spec, fr)
 
 
 def _mount(parts):
@@ -318,12 +318,12 @@ def test_built_1104_mount_holes_are_4p5mm_from_the_axis_and_clear_the_rods(spaci
     """On the CAD solid: the screw holes' cylinder axes lie 4.5 mm from the shaft hole's axis, each
     hole's wall stays within the seat plate (it never runs through a clip sleeve), and the hole and
     the head's seat keep at least two extrusion lines of TPU to every rod bore."""
-    from cogniframe.parts import motor_mount
+    from cogniframe.families import motor_mount
 
     spec = _spec("carbon", frame__arm_spacing=spacing, joints__wall=wall)
     fr, parts = _design(spec)
     mount = _mount(parts)
-    built = motor_mount.build(mount)
+    built = motor_mount.solid(mount)
     shape = built.shape
     (shaft,) = {(round(x, 3), round(y, 3)): (x, y) for x, y, *_ in _hole_faces(shape, mount.param("shaft_hole") / 2)}.values()
     holes = _hole_faces(shape, mount.param("screw_clearance") / 2)

@@ -72,9 +72,9 @@ def _one_watertight_solid(part):
     import tempfile
 
     from cogniframe.export.mesh import write_stl
-    from cogniframe.parts import registry
+    from cogniframe.families import registry
 
-    built = registry.build(part)  # the builders raise unless it is one solid
+    built = registry.solid(part)  # the builders raise unless it is one solid
     assert built.shape.isValid() and len(built.shape.Solids()) == 1, part.name
     with tempfile.TemporaryDirectory() as tmp:
         mesh = write_stl(built.shape, Path(tmp) / "part.stl", name=part.name)  # raises unless watertight
@@ -115,10 +115,10 @@ def test_straight_sides_check_with_closed_form_joints(run_cli, tmp_path):
 @pytest.mark.slow
 @pytest.mark.parametrize("base", ["carbon", "bamboo"])
 def test_straight_sides_build_every_joint_as_one_solid(base):
-    from cogniframe.parts import registry
+    from cogniframe.families import registry
 
     for part in _joints(_variant(base, frame__knee_inset=0)):
-        built = registry.build(part)  # finish() raises unless it is one solid
+        built = registry.solid(part)  # finish() raises unless it is one solid
         assert built.shape.isValid() and built.shape.Volume() > 100, part.name
 
 
@@ -128,10 +128,10 @@ def test_straight_sides_build_every_joint_as_one_solid(base):
 @pytest.mark.parametrize("base", ["carbon", "bamboo"])
 @pytest.mark.parametrize("height", [91, 92])
 def test_thin_rods_in_a_short_frame_keep_the_knee_in_one_piece(base, height):
-    from cogniframe.parts import registry
+    from cogniframe.families import registry
 
     (knee,) = _joints(_variant(base, rods__diameter=2.3, frame__height=height), ["knee"])
-    built = registry.build(knee)
+    built = registry.solid(knee)
     assert built.shape.isValid() and built.shape.Volume() > 100
 
 
@@ -141,12 +141,12 @@ def test_thin_rods_core_links_mesh_watertight(base, height):
     """With 2.3 mm rods the bore (2.4 mm) equals the M2 clearance, so the core link's tab top met the
     strut sleeve's top exactly and the STL of one of the two links had open edges (build: MeshError)."""
     from cogniframe.export.mesh import tessellate
-    from cogniframe.parts import registry
+    from cogniframe.families import registry
 
     links = _joints(_variant(base, rods__diameter=2.3, frame__height=height), ["core_link", "core_link_mirrored"])
     assert len(links) == 2
     for part in links:
-        mesh = tessellate(registry.build(part).shape)
+        mesh = tessellate(registry.solid(part).shape)
         assert mesh.is_watertight and mesh.volume > 0, part.name
 
 
@@ -189,11 +189,11 @@ def test_rectangle_joints_have_no_sliver_faces(box):
     """Every joint of a near-square and of a clearly rectangular box is one valid solid with no
     face under 1e-4 mm^2 (the arm sleeves 1e-5 mm apart gave faces of 1e-8 mm^2 and 0 mm^2, and
     gmsh: 'Invalid boundary mesh (overlapping facets)')."""
-    from cogniframe.parts import registry
+    from cogniframe.families import registry
 
     width, depth = box
     for part in _joints(_variant("carbon", frame__width=width, frame__depth=depth)):
-        shape = registry.build(part).shape
+        shape = registry.solid(part).shape
         assert shape.isValid(), part.name
         assert min(f.Area() for f in shape.Faces()) > 1e-4, part.name
 
@@ -239,7 +239,7 @@ def _in_polygon(p, poly) -> bool:
 
 @pytest.mark.slow
 def test_d22_knees_build_in_one_piece():
-    """The reported case: `registry.build` raised "joint geometry produced 2 solids instead of 1"
+    """The reported case: `registry.solid` raised "joint geometry produced 2 solids instead of 1"
     for knee and knee_mirrored."""
     for knee in _parts(_variant("carbon", **D22), ["knee", "knee_mirrored"]):
         built = _one_watertight_solid(knee)
@@ -339,7 +339,7 @@ def test_knee_web_top_clears_the_legs_top():
     ("carbon", {"joints__wall": 1.45}),  # OCC's exact cut gave the mount and a phantom 210 mm^3 solid
 ])
 def test_motor_mount_builds(base, change):
-    from cogniframe.partlist import MOUNT_CLEAR
+    from cogniframe.families.motor_mount import MOUNT_CLEAR
 
     spec = _variant(base, **change)
     (mount,) = _parts(spec, ["motor_mount"])
@@ -354,7 +354,7 @@ def test_motor_mount_builds(base, change):
 def test_motor_mount_clips_are_built_on_one_line():
     """Pure numpy: the second clip's rod is moved onto the line exactly parallel to the first (the
     stored rods of a rectangle are 2e-6 mm out of line); the presets' pair is kept as it is."""
-    from cogniframe.parts.motor_mount import _parallel
+    from cogniframe.families.motor_mount import _parallel
 
     rect = _variant("carbon", frame__width=242.8, frame__depth=188.5, frame__height=143.8, motors__radius=73.6,
                     motors__prop_diameter=68.4)
@@ -375,7 +375,7 @@ def test_camera_mount_keeps_its_upright_on_a_thick_plate(thickness):
     """core.plate_thickness 6.05 on the 40 mm carbon plate: the base's corner cuts met on the centre
     line in front of the upright ("camera_mount geometry produced 2 solids instead of 1"); the base
     keeps a spine 2 x CAMERA_SPINE wide."""
-    from cogniframe.partlist import CAMERA_SPINE
+    from cogniframe.families.camera_mount import CAMERA_SPINE
 
     (mount,) = _parts(_variant("carbon", core__plate_thickness=thickness), ["front_camera_mount"])
     built = _one_watertight_solid(mount)

@@ -1,4 +1,6 @@
-"""Every printed part of both presets: closed, printable without supports, on the bed, estimated right.
+"""One suite over every registered part family: each part the presets plan, whatever its family,
+is closed, printable without supports, on the bed and estimated right; each family module offers
+what the registry promises. A new family is tested here by being registered.
 
 The builds are shared (one per preset per test session) through `built_preset`, which the other
 CAD test files import too.
@@ -19,18 +21,25 @@ from cogniframe import frame as frame_mod
 from cogniframe import partlist
 from cogniframe import spec as spec_mod
 from cogniframe.errors import UserError
+from cogniframe.families import registry
 
 ROOT = Path(__file__).resolve().parents[1]
 PRESETS = ("carbon", "bamboo")
-FAMILIES = ("joint", "motor_mount", "core_plate", "battery_holder", "sensor_mount", "camera_mount", "computer_mount")
-PART_NAMES = {
-    "carbon": ("corner_top", "corner_bottom", "knee", "core_link", "core_link_mirrored", "motor_mount", "core_plate",
-               "battery_holder", "sensor_mount", "front_camera_mount", "computer_mount"),
-    "bamboo": ("corner_top", "corner_bottom", "knee", "core_link", "core_link_mirrored", "motor_mount", "core_plate",
-               "battery_holder", "core_spacer"),
-}
-CASES = [(p, n) for p in PRESETS for n in PART_NAMES[p]]
+FAMILIES = registry.families()
 OVERHANG_MAX = 0.01  # unsupported fraction of the downward-facing area
+
+
+@functools.lru_cache(maxsize=None)
+def planned(name: str):
+    """A preset's spec, frame and part list (no CAD)."""
+    spec = spec_mod.load(ROOT / "params" / f"{name}.yaml")
+    frame = frame_mod.build(spec)
+    return spec, frame, partlist.part_list(spec, frame)
+
+
+# Every part of every preset, named by the registry's plans: the suite's cases.
+PART_NAMES = {p: tuple(part.name for part in planned(p)[2]) for p in PRESETS}
+CASES = [(p, n) for p in PRESETS for n in PART_NAMES[p]]
 
 
 @functools.lru_cache(maxsize=None)
@@ -39,9 +48,7 @@ def built_preset(name: str):
     from cogniframe.export.part_files import build_parts
     from cogniframe.export.mesh import load_stl
 
-    spec = spec_mod.load(ROOT / "params" / f"{name}.yaml")
-    frame = frame_mod.build(spec)
-    parts = partlist.build(spec, frame)
+    spec, frame, parts = planned(name)
     out = Path(tempfile.mkdtemp(prefix=f"cogniframe-test-{name}-"))
     built = build_parts(spec, frame, parts, out)
     meshes = {b.name: load_stl(out / b.stl) for b in built}
@@ -50,10 +57,32 @@ def built_preset(name: str):
 
 
 def test_presets_have_the_expected_parts():
-    for p in PRESETS:
-        d = built_preset(p)
-        assert tuple(d.parts) == PART_NAMES[p]
-        assert {x.family for x in d.parts.values()} <= set(FAMILIES)
+    """The plans, in the registry's order: the carbon preset carries every family."""
+    assert PART_NAMES == {
+        "carbon": ("corner_top", "corner_bottom", "knee", "core_link", "core_link_mirrored", "motor_mount", "core_plate",
+                   "battery_holder", "sensor_mount", "front_camera_mount", "computer_mount"),
+        "bamboo": ("corner_top", "corner_bottom", "knee", "core_link", "core_link_mirrored", "motor_mount", "core_plate",
+                   "battery_holder", "core_spacer"),
+    }
+
+
+@pytest.mark.parametrize("family", FAMILIES)
+def test_family_module_keeps_the_registry_contract(family):
+    """Each family's module names itself, sizes from a real params key, plans its own parts (every
+    family is planned by the carbon preset, so every family runs through the CAD cases below) and
+    gives, without CAD, the same print orientation its solid is built in."""
+    mod = registry.get(family)
+    assert mod.NAME == family and mod.DOC
+    spec, frame, _ = planned("carbon")
+    value = spec
+    for key in mod.SIZE_KEY.split("."):
+        value = getattr(value, key)
+    assert value is not None
+    parts = mod.plan(spec, frame)
+    assert parts and all(p.family == family for p in parts)
+    d = built_preset("carbon")
+    for p in parts:
+        assert np.allclose(mod.print_from_local(p), d.built[p.name].print_from_local, atol=1e-9)
 
 
 @pytest.mark.parametrize("preset,name", CASES)
@@ -161,9 +190,8 @@ def test_flat_contact_ratio_of_a_ball_is_tiny():
 # -- registry, bed fit ---------------------------------------------------------------------
 
 def test_registry_lists_families_and_rejects_unknown_ones():
-    from cogniframe.parts import registry
-
-    assert registry.families() == tuple(sorted(FAMILIES))
+    assert registry.families() == ("battery_holder", "camera_mount", "computer_mount", "core_plate", "joint",
+                                   "motor_mount", "sensor_mount")
     assert set(registry.sizes()) == set(FAMILIES)
     with pytest.raises(ValueError) as e:
         registry.get("wing")
@@ -171,12 +199,34 @@ def test_registry_lists_families_and_rejects_unknown_ones():
         assert f in str(e.value)
 
 
+def test_a_new_family_is_one_module_and_one_registry_line(monkeypatch):
+    """A family module registered in `registry.FAMILIES` is planned into the part list (after the
+    others, with its digest), found by name and listed: nothing else needs to know it."""
+    import types
+
+    from cogniframe.families.base import Estimate, PartSpec, Placement
+
+    fam = types.ModuleType("gps_mount")
+    fam.NAME, fam.SIZE_KEY, fam.DOC = "gps_mount", "core.plate_size", "ABS/PLA GPS puck mount"
+    fam.plan = lambda spec, frame: (PartSpec("gps_mount", "gps_mount", "core", spec.core.material, spec.core.infill,
+                                             (Placement("core", 0.0, (0.0, 0.0, 30.0)),), (), 1.6,
+                                             Estimate(1000.0, 500.0, 200.0, (20.0, 20.0, 2.5))),)
+    fam.print_from_local = lambda part: np.eye(4)
+    monkeypatch.setattr(registry, "FAMILIES", (*registry.FAMILIES, fam))
+    spec, frame, before = planned("carbon")
+    after = partlist.part_list(spec, frame)
+    assert [p.name for p in after] == [*PART_NAMES["carbon"], "gps_mount"]
+    assert after[:-1] == before and len(after[-1].digest) == 16
+    assert registry.get("gps_mount") is fam and registry.sizes()["gps_mount"] == fam.DOC
+    assert np.array_equal(registry.print_from_local(after[-1]), np.eye(4))
+
+
 def test_part_larger_than_the_bed_is_a_user_error(tmp_path):
     from cogniframe.export.part_files import build_parts
 
     spec = spec_mod.from_dict({"printer": {"bed": [60, 60, 60]}})
     frame = frame_mod.build(spec)
-    parts = [p for p in partlist.build(spec, frame) if p.name == "computer_mount"]
+    parts = [p for p in partlist.part_list(spec, frame) if p.name == "computer_mount"]
     with pytest.raises(UserError) as e:
         build_parts(spec, frame, parts, tmp_path)
     msg = str(e.value)
@@ -190,7 +240,7 @@ def test_part_that_fits_only_turned_is_turned(tmp_path):
 
     spec = spec_mod.from_dict({"printer": {"bed": [40, 70, 60]}})
     frame = frame_mod.build(spec)
-    parts = [p for p in partlist.build(spec, frame) if p.name == "computer_mount"]
+    parts = [p for p in partlist.part_list(spec, frame) if p.name == "computer_mount"]
     (b,) = build_parts(spec, frame, parts, tmp_path)
     m = load_stl(tmp_path / b.stl)
     assert m.extents[0] <= 40 and m.extents[1] <= 70
@@ -246,7 +296,7 @@ def test_knee_living_hinge_is_a_thin_web_between_slots():
     for h in (1.2, 1.6):
         part = dataclasses.replace(knee, params=tuple((k, h if k == "hinge_thickness" else v) for k, v in knee.params))
         web = joint.knee_hinge(part)
-        m = tessellate(joint.build(part).shape)
+        m = tessellate(joint.solid(part).shape)
         mid = np.r_[web.probe, web.height / 2]
         n = np.r_[web.normal, 0.0]
         # through the web: material exactly hinge_thickness thick ...

@@ -20,7 +20,7 @@ import yaml
 
 from cogniframe import design as design_mod
 from cogniframe import spec as spec_mod
-from cogniframe.partlist import CORNER_ROTATION
+from cogniframe.families.base import CORNER_ROTATION
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "rect-240x180.yaml"
@@ -160,7 +160,7 @@ def test_every_joint_socket_placed_coincides_with_its_rod_end(any_box):
 
 
 def test_every_motor_mount_clips_its_own_arm_rods(any_box):
-    from cogniframe.partlist import mount_rods
+    from cogniframe.families.motor_mount import mount_rods
 
     frame = any_box.frame
     mount = next(p for p in any_box.parts if p.family == "motor_mount")

@@ -135,7 +135,7 @@ def test_rod_diameter_drives_every_bore_and_the_cut_list(tmp_path):
 
     def bores(spec, out):
         fr = frame_mod.build(spec)
-        parts = [p for p in partlist.build(spec, fr) if p.family == "joint"]
+        parts = [p for p in partlist.part_list(spec, fr) if p.family == "joint"]
         built = build_parts(spec, fr, parts, out)
         found = []
         for p, b in zip(parts, built):

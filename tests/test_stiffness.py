@@ -34,7 +34,7 @@ def _variant(base: str = "carbon", **sections) -> spec_mod.Spec:
 
 def _design(s):
     f = frame_mod.build(s)
-    return s, f, partlist.build(s, f)
+    return s, f, partlist.part_list(s, f)
 
 
 def _k(s, method="analytic", **kw) -> float:
@@ -602,7 +602,7 @@ def test_the_joint_fe_meshes_the_shape_the_part_build_shared_to_the_same_bits(tm
     meta = export_build.build_part_files(part, tuple(s.printer.bed), str(out), share_shape=True)
     assert (out / meta["stl"]).is_file()
     shared = shapes.shared_brep(part)
-    assert shared == shapes.brep_text(joint_cad.build(part).shape)  # the un-turned shape, as the FE builds it
+    assert shared == shapes.brep_text(joint_cad.solid(part).shape)  # the un-turned shape, as the FE builds it
     assert "CASCADE Topology" in shared
 
     def no_cad(part):

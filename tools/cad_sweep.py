@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Build every printed part of many in-schema designs and say which do not come out as one solid
-with a watertight STL (the build's own checks: `registry.build`, `export.mesh.write_stl`).
+with a watertight STL (the build's own checks: `registry.solid`, `export.mesh.write_stl`).
 
     python tools/cad_sweep.py random --n 600        # tests/design_space.py's random designs, seeds 0..n-1 (--first: from another)
     python tools/cad_sweep.py keys --n 11           # each geometry key alone across its schema bounds
@@ -118,7 +118,7 @@ def main() -> int:
     from cogniframe.design import design
     from cogniframe.errors import UserError
     from cogniframe.export.mesh import write_stl
-    from cogniframe.parts import registry
+    from cogniframe.families import registry
     from cogniframe.parts.shapes import geometry_digest
 
     if a.check_fuse:
@@ -145,7 +145,7 @@ def main() -> int:
                     g = geometry_digest(p)
                     if g not in seen:
                         try:
-                            mesh = write_stl(registry.build(p).shape, Path(tmp) / "part.stl", name=p.name)
+                            mesh = write_stl(registry.solid(p).shape, Path(tmp) / "part.stl", name=p.name)
                             seen[g] = None if mesh.body_count == 1 else f"{mesh.body_count} shells"
                         except Exception as e:  # noqa: BLE001
                             seen[g] = f"{type(e).__name__}: {e}".replace(tmp, "<tmp>")

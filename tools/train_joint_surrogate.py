@@ -90,7 +90,7 @@ def design_parts(overrides: dict):
 
     s = spec.from_dict(apply_overrides(base_params(), overrides))
     f = frame.build(s)
-    return s, f, partlist.build(s, f)
+    return s, f, partlist.part_list(s, f)
 
 
 def valid(overrides: dict) -> bool:

@@ -21,7 +21,7 @@ from . import impact
 # the sources the frame model, the load cases and the peaks are made by (their cache keys)
 _MODULES = ("analysis/stiffness.py", "analysis/load_cases.py", "analysis/impact_nl.py", "analysis/impact.py", "analysis/framefe.py",
             "analysis/joints/*.py", "analysis/flight.py", "analysis/constants.py",
-            "frame.py", "partlist.py", "parts/joint.py", "materials.py", "spec.py")
+            "frame.py", "partlist.py", "families/*.py", "parts/joint.py", "materials.py", "spec.py")
 
 
 class Session:
@@ -41,7 +41,7 @@ class Session:
         if self._parts is None:
             from .. import partlist
 
-            self._parts = partlist.build(self.spec, self.frame)
+            self._parts = partlist.part_list(self.spec, self.frame)
         return self._parts
 
     @property

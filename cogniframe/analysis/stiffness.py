@@ -506,7 +506,7 @@ def predict_stiffness(spec, frame, parts=None, *, joint_model: str = "fe", facto
     if parts is None:
         from .. import partlist
 
-        parts = partlist.build(spec, frame)
+        parts = partlist.part_list(spec, frame)
     joints = joints if joints is not None else joint_models(spec, parts, joint_model, factor)
     play = _play(spec, frame, parts, joints, design_force_n)[0] if design_force_n else {}
     # built afresh with the final springs, as `secant_solution` and the load cases build it
@@ -590,7 +590,7 @@ def calibrate_tpu_factor(spec, frame, target_n_per_m: float = PAPER_K_N_PER_M,
     fixed-point iteration f <- f * target / k converges in a few steps."""
     from .. import partlist
 
-    parts = partlist.build(spec, frame)
+    parts = partlist.part_list(spec, frame)
     f = start
     for _ in range(12):
         k = secant_k(spec, frame, parts, joint_models(spec, parts, joint_model, f))

@@ -118,12 +118,12 @@ def _built(p: PartSpec, m: dict) -> BuiltPart:
 def build_part_files(part: PartSpec, bed, out_dir: str, share_shape: bool = False) -> dict:
     """Build one part's CAD, fit it on the bed, write its STL and STEP; return its metrics.
     `share_shape`: also store the shape's BREP text in the cache for the joint FE (`shared_brep`)."""
-    from ..parts import registry
+    from ..families import registry
     from ..parts.joint import apply
     from . import mesh as mesh_mod
     from .step import write_step
 
-    built = registry.build(part)
+    built = registry.solid(part)
     shape = built.shape
     if share_shape:
         from ..cache import store_text
@@ -139,7 +139,7 @@ def build_part_files(part: PartSpec, bed, out_dir: str, share_shape: bool = Fals
         bb = shape.BoundingBox()
         size = np.array([bb.xlen, bb.ylen, bb.zlen])
     if not fits(size, bed):
-        key = registry.get(part.family).size_key
+        key = registry.get(part.family).SIZE_KEY
         raise UserError(
             f"{part.name}: {size[0]:.1f} x {size[1]:.1f} x {size[2]:.1f} mm in print orientation does not fit the "
             f"{bed[0]:g} x {bed[1]:g} x {bed[2]:g} mm printer bed. Fix: set printer.bed to at least "

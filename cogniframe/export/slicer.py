@@ -184,7 +184,7 @@ def project_configs(spec: Spec, infill: Mapping[str, float] | None = None) -> di
 def default_infill(spec: Spec) -> dict[str, float]:
     """Infill by material, as the design's parts print (`partlist.infill_by_material`)."""
     from ..frame import build as frame
-    from ..partlist import build as parts, infill_by_material
+    from ..partlist import infill_by_material, part_list as parts
 
     return infill_by_material(parts(spec, frame(spec)))
 

@@ -43,7 +43,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..frame import HINGE_GAP
-from ..partlist import PARALLEL_TOL, PartSpec, link_plate_corner, seat_plan
+from ..families.base import PARALLEL_TOL, PartSpec
+from ..families.joint import link_plate_corner, seat_plan
 
 CHAMFER = 0.5  # mm, 45 deg, at every socket mouth
 JOIN = 0.4  # mm, least overlap of the knee's rigid leg sleeve with the arm block, each way (one 0.4 mm line)
@@ -295,7 +296,7 @@ def finish(body, cutters):
 
 # -- the joints ------------------------------------------------------------------------------
 
-def build(part: PartSpec) -> Built:
+def solid(part: PartSpec) -> Built:
     m = print_from_local(part)
     socks = map_sockets(part, m)
     r = (part.sockets[0].bore + 2 * part.wall) / 2

@@ -11,14 +11,14 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from ..partlist import PartSpec
+from ..families.base import PartSpec
 
 
 # Bump when any part's CAD changes shape: it is part of every cache key.
 CAD_VERSION = "cad-2025.3"
 
 # Everything the part CAD and its files are made by: editing any of these invalidates the part cache.
-PART_CODE = ("parts/*.py", "export/part_files.py", "export/mesh.py", "export/step.py", "partlist.py")  # joint.py reads PARALLEL_TOL
+PART_CODE = ("parts/*.py", "families/*.py", "export/part_files.py", "export/mesh.py", "export/step.py", "partlist.py")
 
 
 # PartSpec fields the CAD does not read (where copies go, the mass model's inputs, the BOM): a change
@@ -39,7 +39,7 @@ SHAPE_KIND = "shapes"  # cache folder of the shared BREP texts
 
 
 def shape_key(part: PartSpec) -> str:
-    """Key of the shape `registry.build(part)` makes (before any turn on the bed): the part's CAD
+    """Key of the shape `registry.solid(part)` makes (before any turn on the bed): the part's CAD
     inputs, the CAD code and CadQuery's and OpenCascade's versions."""
     from .. import cache
     from ..stack import installed

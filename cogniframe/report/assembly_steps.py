@@ -20,6 +20,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Sequence
 
+from ..families import camera_mount, motor_mount, sensor_mount
+
 if TYPE_CHECKING:
     from ..partlist import PartSpec
     from ..design import Design
@@ -62,9 +64,7 @@ def assembly_steps(design: "Design") -> tuple[Step, ...]:
     """The numbered steps for a design (frame graph + part list + cut list)."""
     frame, spec = design.frame, design.spec
     cut = {name: row.length_mm for row in design.cut.rows for name in row.rods}
-    rods_by_role: dict[str, list[str]] = {}
-    for r in frame.rods.values():
-        rods_by_role.setdefault(r.role, []).append(r.name)
+    rods_by_role = _rods_by_role(frame)
     parts = {p.name: p for p in design.parts}
     labels = {p.name: copy_labels(p) for p in design.parts}
     used_parts: set[str] = set()
@@ -114,12 +114,7 @@ def assembly_steps(design: "Design") -> tuple[Step, ...]:
         note = mirror_note(kind)
         return f" ({note})" if note else ""
 
-    square = spec.frame.width == spec.frame.depth
-    ring_text = ("to form a square ring (rod_cage_top_front between corner_top_fl and corner_top_fr, and so on round the "
-                 "square). Check the ring is square (equal diagonals)" if square else
-                 f"to form a {spec.frame.width:g} x {spec.frame.depth:g} mm rectangular ring: the front and rear rods are "
-                 f"the {'longer' if spec.frame.width > spec.frame.depth else 'shorter'} pair (rod_cage_top_front between "
-                 "corner_top_fl and corner_top_fr, and so on round the ring). Check the corners are square (equal diagonals)")
+    ring_text = _ring_text(spec)
     add("Top ring", ["corner_top", "corner_top_mirrored"], ring("top"), f"ring sockets: {GLUE_CA}",
         f"Lay the four top corners flat, open side up{aside('corner_top')}. Push the four top cage rods into them "
         f"{ring_text} before the glue sets.")
@@ -135,14 +130,10 @@ def assembly_steps(design: "Design") -> tuple[Step, ...]:
     add("Fold the sides", [], lower, f"leg sockets (top corners, knees, bottom corners): {GLUE_CA}",
         "Push a lower leg rod into each knee. Stand the top ring over the bottom ring, then fold each side inwards "
         "at the knees (the hourglass) and push the lower legs into the bottom corners one corner at a time. "
-        + ("The sides are straight (frame.knee_inset 0): each knee sits on the line between its two corners."
-           if spec.frame.knee_inset == 0 else f"Each knee sits {spec.frame.knee_inset:g} mm inside its corner." if square else
-           f"Each knee sits {spec.frame.knee_inset * 2 ** 0.5:.1f} mm in from its corner, towards its core link."))
+        + _knee_text(spec))
     arms = rods_by_role.get("arm", [])
     add("Arms and motor mounts", ["motor_mount"], arms, f"knee end of each arm rod only: {GLUE_CA}; motor mounts: none",
-        "Clip a motor mount onto each pair of arm rods (the two rods of one arm run parallel, "
-        f"{spec.frame.arm_spacing:g} mm apart), then push both arm rods into the knee's arm sockets. Slide the mount "
-        f"to {spec.motors.radius:g} mm from the frame centre. Leave the inner ends free.")
+        motor_mount.fitting(spec))
     struts = rods_by_role.get("strut", [])
     if struts:
         add("Struts", [], struts, f"bottom-corner end of each strut: {GLUE_CA}",
@@ -151,45 +142,84 @@ def assembly_steps(design: "Design") -> tuple[Step, ...]:
     core_parts = [n for n in ("core_plate", spacer, "battery_holder", "core_link", "core_link_mirrored") if n and n in parts]
     mirrored = "core_link_mirrored" in parts
     add("Core", core_parts, [], "none: the core links are bolted, so the core stays removable",
-        "Bolt a TPU core link onto each corner of the core plate"
-        + (" (core_link at front-left and rear-right, its mirror image core_link_mirrored at front-right and rear-left)"
-           if mirrored else "")
-        + ": screw down through the link tab and the plate"
-        + (f", nut in the hex trap under the {spacer}" if spacer else ", nut underneath") + ". "
-        + (f"Lay the {spacer} on the battery holder and the plate on it; " if spacer else "Put the plate on the battery holder; ")
-        + "screw them together with the stack screws. The holder's open end faces the front so the battery slides in.",
+        _core_text(spacer, mirrored),
         hw("core_link", "core_link_mirrored", "core_plate", "battery_holder", *([spacer] if spacer else [])))
     add("Hang the core", [], [], "none: arm and strut ends are only pushed into the core links",
         "Hold the core in the middle of the frame and push the free ends of both arm rods"
         + (" and the strut" if struts else "") + " of each corner into its core link. To remove the core later, pull "
         "the rods out of the links.")
     if "front_camera_mount" in parts or spec.core.flow_sensor:
-        text = []
-        if "front_camera_mount" in parts:
-            text.append(f"Set the camera mount's base on the core plate, its holes over the stack screws, so the upright stands "
-                        f"at the plate's front edge ({spec.core.camera.tilt_deg:g} deg tilt); the FC/ESC stack goes on top of the "
-                        "base. Screw the Pi camera v2 to the upright with its lens forward (4 x M2) and run the ribbon up to the computer.")
-        if spec.core.flow_sensor:
-            text.append("Zip-tie the Matek 3901-L0X under the sensor mount's rear pad, sensors facing the ground (the pad sits "
-                        "behind the battery holder, so nothing is in their view), with the receiver on top of the pad in the same "
-                        "two ties; tie the antenna leads through the two slots at the pad's rear edge.")
-        add("Camera and sensors", [n for n in ("front_camera_mount",) if n in parts], [], "none", " ".join(text), hw("front_camera_mount"))
+        add("Camera and sensors", [n for n in ("front_camera_mount",) if n in parts], [], "none", _sensors_text(spec, parts),
+            hw("front_camera_mount"))
     rest = [n for n in parts if n not in used_parts]
-    comps = ", ".join(f"{c.qty} x {c.name}" if c.qty > 1 else c.name for c in spec.components)
     add("Electronics", rest, [], "none",
-        f"Screw the {spec.motor.name} motors onto the motor mounts: {_motor_screws(parts)}. Mount the flight controller / "
-        "ESC stack on the core plate standoffs"
-        + (f", the {spec.core.computer.name} on the computer mount" if spec.core.computer else "")
-        + (f"; fit {comps}" if comps else "") + ". Solder the motors to the ESC, route wires along the arm rods, fit "
-        "the propellers (2 CW, 2 CCW) last. Battery: "
-        f"slide the pack in from the front, lead last, lay its {spec.core.battery.connector} lead up through the notch at the "
-        f"top of the holder's mouth, close the {spec.core.strap_width:g} mm hook-and-loop strap across the mouth through the two 45 deg slots "
-        "(no tools: open the strap to swap the pack).",
+        _electronics_text(spec, parts),
         hw("motor_mount", *rest))
     leftover = [n for n in frame.rods if n not in used_rods]
     if leftover:  # a rod role this module does not know yet: still tell the builder to fit it
         add("Remaining rods", [], leftover, "none", "Fit these rods where the assembly drawing shows them.")
     return tuple(steps)
+
+
+
+def _rods_by_role(frame) -> dict[str, list[str]]:
+    out: dict[str, list[str]] = {}
+    for r in frame.rods.values():
+        out.setdefault(r.role, []).append(r.name)
+    return out
+
+
+def _core_text(spacer: str | None, mirrored: bool) -> str:
+    """Bolting the core links to the plate and stacking plate, spacer and holder."""
+    return ("Bolt a TPU core link onto each corner of the core plate"
+            + (" (core_link at front-left and rear-right, its mirror image core_link_mirrored at front-right and rear-left)"
+               if mirrored else "")
+            + ": screw down through the link tab and the plate"
+            + (f", nut in the hex trap under the {spacer}" if spacer else ", nut underneath") + ". "
+            + (f"Lay the {spacer} on the battery holder and the plate on it; " if spacer else "Put the plate on the battery holder; ")
+            + "screw them together with the stack screws. The holder's open end faces the front so the battery slides in.")
+
+
+def _knee_text(spec) -> str:
+    """Where each knee sits, from its corner."""
+    square = spec.frame.width == spec.frame.depth
+    return ("The sides are straight (frame.knee_inset 0): each knee sits on the line between its two corners."
+            if spec.frame.knee_inset == 0 else f"Each knee sits {spec.frame.knee_inset:g} mm inside its corner." if square else
+            f"Each knee sits {spec.frame.knee_inset * 2 ** 0.5:.1f} mm in from its corner, towards its core link.")
+
+
+def _sensors_text(spec, parts: dict) -> str:
+    """The camera (its mount's words) and the flow sensor (the sensor mount's)."""
+    text = []
+    if "front_camera_mount" in parts:
+        text.append(camera_mount.fitting(spec))
+    if spec.core.flow_sensor:
+        text.append(sensor_mount.fitting(spec))
+    return " ".join(text)
+
+
+def _ring_text(spec) -> str:
+    """How the four cage rods of a ring go round it, square or rectangular."""
+    square = spec.frame.width == spec.frame.depth
+    return ("to form a square ring (rod_cage_top_front between corner_top_fl and corner_top_fr, and so on round the "
+            "square). Check the ring is square (equal diagonals)" if square else
+            f"to form a {spec.frame.width:g} x {spec.frame.depth:g} mm rectangular ring: the front and rear rods are "
+            f"the {'longer' if spec.frame.width > spec.frame.depth else 'shorter'} pair (rod_cage_top_front between "
+            "corner_top_fl and corner_top_fr, and so on round the ring). Check the corners are square (equal diagonals)")
+
+
+def _electronics_text(spec, parts: dict) -> str:
+    """The motors, the stack, the computer, the other components and the battery."""
+    comps = ", ".join(f"{c.qty} x {c.name}" if c.qty > 1 else c.name for c in spec.components)
+    screws = motor_mount.screw_words(parts.get("motor_mount"))
+    return (f"Screw the {spec.motor.name} motors onto the motor mounts: {screws}. Mount the flight controller / "
+            "ESC stack on the core plate standoffs"
+            + (f", the {spec.core.computer.name} on the computer mount" if spec.core.computer else "")
+            + (f"; fit {comps}" if comps else "") + ". Solder the motors to the ESC, route wires along the arm rods, fit "
+            "the propellers (2 CW, 2 CCW) last. Battery: "
+            f"slide the pack in from the front, lead last, lay its {spec.core.battery.connector} lead up through the notch at the "
+            f"top of the holder's mouth, close the {spec.core.strap_width:g} mm hook-and-loop strap across the mouth through the two 45 deg slots "
+            "(no tools: open the strap to swap the pack).")
 
 
 def to_markdown(steps: Sequence[Step], title: str = "Assembly") -> str:
@@ -209,14 +239,3 @@ def to_markdown(steps: Sequence[Step], title: str = "Assembly") -> str:
         out.append("")
     return "\n".join(out)
 
-
-def _motor_screws(parts: dict) -> str:
-    """The motor screws as the builder needs them (`parts`: name -> PartSpec): how many, which,
-    into what and how deep."""
-    mount = parts.get("motor_mount")
-    if mount is None or "holes" not in dict(mount.params):
-        return "the screws that come with the motors, no longer than the seat plus the motor's thread"
-    n = len(mount.param("holes"))
-    which = "the pair of opposite holes on the arm's axis" if n == 2 else "all four holes"
-    return (f"{n} {mount.param('screw')} x {mount.param('screw_length'):g} screws per motor, up through {which} "
-            f"into the motor's thread ({mount.param('engagement'):g} mm deep; a longer screw reaches the windings)")

@@ -55,7 +55,7 @@ with imports_frozen():  # the forks start with nothing for the collector to walk
     import cadquery  # noqa: E402,F401
     import trimesh  # noqa: E402,F401
 
-    from ..parts import registry  # noqa: E402,F401
+    from ..families import registry  # noqa: E402,F401
 
 # OpenCascade's own thread pool, which CadQuery's booleans (SetRunParallel) and the tessellation
 # use, with the calling thread only: the build runs one worker per core already, and the pool's

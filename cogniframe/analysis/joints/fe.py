@@ -85,12 +85,12 @@ def joint_problem(spec, part, factor: float | None = None, mesh_mm: float | None
     # the shape the build's part step stored (the same text), else built here
     shared = shared_brep(part)
     try:
-        pts, tets = meshing.mesh_brep_text(shared or brep_text(joint_cad.build(part).shape), mesh_mm, FE_CURVATURE)
+        pts, tets = meshing.mesh_brep_text(shared or brep_text(joint_cad.solid(part).shape), mesh_mm, FE_CURVATURE)
     except RuntimeError:
         if shared is None:
             raise
         # a damaged cache file is a miss, never an error
-        pts, tets = meshing.mesh_brep_text(brep_text(joint_cad.build(part).shape), mesh_mm, FE_CURVATURE)
+        pts, tets = meshing.mesh_brep_text(brep_text(joint_cad.solid(part).shape), mesh_mm, FE_CURVATURE)
     R, o = m[:3, :3], m[:3, 3]
     ties = []
     refs_local = []

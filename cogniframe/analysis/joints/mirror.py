@@ -16,11 +16,11 @@ import numpy as np
 
 from .model import JointStiffness, joint_kind
 
-MIRROR_TOL = 1e-4  # mm (and unit vectors): sockets are stored rounded to 1e-6 mm (`partlist._t`)
+MIRROR_TOL = 1e-4  # mm (and unit vectors): sockets are stored rounded to 1e-6 mm (`families.base.rounded`)
 
 
 def is_mirror(part) -> bool:
-    """A joint whose print is the mirror image of another part's (`partlist._joint`, param ``mirror``)."""
+    """A joint whose print is the mirror image of another part's (`families.joint._joint`, param ``mirror``)."""
     return bool(dict(part.params).get("mirror"))
 
 

@@ -1,0 +1,355 @@
+"""The TPU joints (corner_top, corner_bottom, knee, core_link): which parts, where their sockets
+are, and their closed-form volume and surfaces. Pure numpy; the solid is parts/joint.py (the
+joint CAD and the helpers the motor mount shares), imported only when a solid is asked for.
+
+Rectangular boxes. A corner's sockets are the rotation of the fl corner's only when they are
+symmetric about the corner's 45 deg diagonal. In a square box they are (one part per kind); in a
+rectangle the arms (knee -> core link) and the struts (bottom corner -> core link) run off the
+diagonal, so the fr and rl corners are the MIRROR image of fl and rr (fl and rr are always a
+180 deg rotation apart: the box is symmetric about both centre planes). Which corners a part
+serves is tested on the frame graph itself (`_fit_error`): a kind whose fr corner is not the
+rotation of its fl corner gets a second part `<kind>_mirrored` (params kind + mirror, prototype
+fr) for fr and rl, as the core link always does.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..frame import CORNER_SIGN, CORNERS, STACK_BOTTOM, Frame
+from ..materials import SCREWS, STACK_PATTERNS
+from ..spec import Spec
+from .base import (
+    CORNER_ROTATION,
+    FIT_TOL,
+    PARALLEL_TOL,
+    Estimate,
+    HardwareLine,
+    PartSpec,
+    Placement,
+    Socket,
+    link_hole,
+    polygon_area,
+    rot_z,
+    rounded,
+)
+
+NAME = "joint"
+SIZE_KEY = "joints.socket_depth"  # the params key that drives its size (for "does not fit the bed" errors)
+DOC = "TPU joint (corner_top, corner_bottom, knee, core_link) generated from its sockets"
+
+
+def plan(spec: Spec, frame: Frame) -> tuple[PartSpec, ...]:
+    """The joint parts, in a stable order."""
+    return (
+        *_joints(spec, frame, "corner_top"),
+        *_joints(spec, frame, "corner_bottom"),
+        *_joints(spec, frame, "knee"),
+        # The core links are chiral (printed on their side, D-section sleeves standing on the bed),
+        # and the battery holder is a rectangle, not a square: a link rotated from fl to fr meets
+        # the holder differently. So fr and rl get the mirror image of the fl/rr link.
+        _joint(spec, frame, "core_link", "core_link", corners=("fl", "rr")),
+        _joint(spec, frame, "core_link_mirrored", "core_link", proto="fr", corners=("fr", "rl")),
+    )
+
+
+def solid(part: PartSpec):
+    """The joint's solid in print orientation (a `parts.joint.Built`)."""
+    from ..parts import joint as cad
+
+    return cad.solid(part)
+
+
+def print_from_local(part: PartSpec) -> np.ndarray:
+    from ..parts import joint as cad
+
+    return cad.print_from_local(part)
+
+def node_sockets(spec: Spec, frame: Frame, node: str) -> list[Socket]:
+    """The sockets of a joint node, in the frame's axes with the node at the origin (from the graph)."""
+    n = frame.nodes[node]
+    origin = np.asarray(n.pos)
+    sockets = []
+    for rname in n.rods:
+        rod = frame.rods[rname]
+        end = rod.end_at(node)
+        sockets.append(Socket(rname, rounded(np.asarray(end.port) - origin), rounded(rod.socket_direction(node)),
+                              end.seat, end.depth, round(spec.bore, 4)))
+    return sockets
+
+
+def _fit_error(sockets, rotation_deg: float, target) -> float:
+    """How far `sockets` turned about z by `rotation_deg` are from the sockets `target` (both in
+    their node's axes): the worst port (mm) + direction error of the best one-to-one matching,
+    inf when the counts or the seats, depths or bores differ."""
+    if len(sockets) != len(target):
+        return math.inf
+    left = list(target)
+    worst = 0.0
+    for s in sockets:
+        p, d = rot_z(np.asarray(s.port, float), rotation_deg), rot_z(np.asarray(s.direction, float), rotation_deg)
+        errs = [float(np.linalg.norm(p - np.asarray(t.port)) + np.linalg.norm(d - np.asarray(t.direction)))
+                if (t.seat, t.depth, t.bore) == (s.seat, s.depth, s.bore) else math.inf for t in left]
+        i = int(np.argmin(errs))
+        worst = max(worst, errs[i])
+        left.pop(i)
+    return worst
+
+
+def _joints(spec: Spec, frame: Frame, kind: str) -> list[PartSpec]:
+    """The part(s) of one joint kind: one for all four corners when each corner is the fl corner
+    turned about z (a square box), else the part for fl and rr and its mirror image
+    `<kind>_mirrored` for fr and rl (a rectangle: module docstring)."""
+    fl = node_sockets(spec, frame, f"{kind}_fl")
+    if all(_fit_error(fl, CORNER_ROTATION[k], node_sockets(spec, frame, f"{kind}_{k}")) <= FIT_TOL for k in CORNERS):
+        return [_joint(spec, frame, kind, kind)]
+    return [_joint(spec, frame, kind, kind, corners=("fl", "rr")),
+            _joint(spec, frame, f"{kind}_mirrored", kind, proto="fr", corners=("fr", "rl"))]
+
+
+def _joint(spec: Spec, frame: Frame, name: str, kind: str, proto: str = "fl", corners: tuple[str, ...] = CORNERS) -> PartSpec:
+    """A joint part: the `proto` corner's node in its own axes, placed at `corners` by rotation about z.
+    A prototype other than fl is the mirror image of the fl part (its side normal is mirrored too).
+    Raises RuntimeError (a bug) if a placed copy's sockets miss the rods of its node."""
+    corner = proto
+    proto = frame.nodes[f"{kind}_{corner}"]
+    origin = np.asarray(proto.pos)
+    sockets = node_sockets(spec, frame, proto.name)
+    base = CORNER_ROTATION[corner]
+    placements = tuple(Placement(f"{kind}_{k}", (CORNER_ROTATION[k] - base + 180.0) % 360.0 - 180.0,
+                                 rounded(frame.nodes[f"{kind}_{k}"].pos)) for k in corners)
+    for pl in placements:
+        err = _fit_error(sockets, pl.rotation_deg, node_sockets(spec, frame, pl.instance))
+        if err > FIT_TOL:
+            raise RuntimeError(f"part {name}: its sockets placed at {pl.instance} miss the frame's rods by {err:.3g} mm")
+    hardware: tuple[HardwareLine, ...] = ()
+    params: list[tuple[str, object]] = [("hinge_thickness", spec.joints.hinge_thickness)]
+    if name != kind:
+        params += [("kind", kind), ("mirror", corner != "fl")]
+    if kind == "core_link":
+        # The link bolts onto the top of the core plate corner with one screw.
+        screw = SCREWS[spec.core.stack_screw]
+        hole = link_hole(spec)
+        sx, sy = CORNER_SIGN[corner]
+        params += [("screw", screw.name), ("screw_clearance", screw.clearance_d),
+                   # plate-corner hole and plate top, in the link's local frame (its node is at plate mid-height)
+                   ("bolt_hole", rounded(np.array([sx * hole, sy * hole, 0.0]) - np.array([origin[0], origin[1], 0.0]))),
+                   ("plate_top_z", round(spec.core.plate_thickness / 2, 4)), ("tab_thickness", LINK_TAB),
+                   # the plate corner the link seats against (its two edge faces), same frame
+                   ("plate_corner", rounded(np.array([sx, sy, 0.0]) * spec.core.plate_size / 2 - np.array([origin[0], origin[1], 0.0]))),
+                   # the ESC board's footprint (its centre, at the height of its underside less
+                   # 0.5 mm) and half-side, same frame: the tab keeps below the board
+                   ("esc_keepout", rounded(np.array([0.0, 0.0, float(frame.core.stack.lo[2]) + STACK_BOTTOM - 0.5]) - origin)),
+                   ("esc_half", STACK_PATTERNS[spec.core.stack_pattern][1] / 2 + 0.5)]
+        # tab + plate + spacer, nut in the spacer's nut trap: round up to a stock length
+        grip = LINK_TAB + spec.core.plate_thickness + spec.core.spacer_thickness
+        length = next((n for n in (8, 10, 12, 14, 16, 20) if n >= grip), 20)
+        hardware = (HardwareLine(f"{screw.name} x {length} socket-head screw + nut (core link to plate)", 1, screw.mass_g * length / 6 + 0.1),)
+    if kind == "corner_bottom":
+        params.append(("foot", True))  # the bottom corners are the feet: flat pad on the ground side
+    return PartSpec(name, "joint", "exoskeleton", spec.joints.material, 1.0, placements, tuple(sockets),
+                    spec.joints.wall, _joint_estimate(spec, sockets, kind, dict(params)), tuple(params), hardware)
+
+
+# The core link's tab: it carries an arm's thrust moment from the arm block, across the seat at
+# the plate corner, onto the plate top. Its bending there is the hinge the bare arms hang on
+# (cubic in its depth: at 3 mm the bare arms folded at full thrust; docs/stiffness-model.md).
+LINK_TAB = 6.0  # mm
+
+
+def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict | None = None) -> Estimate:
+    """Closed-form volume/areas of the joint as parts/joint.py builds it, in print orientation.
+
+    Pieces (r = OD/2 = bore/2 + wall, L = seat + depth): a sleeve parallel to the bed is a D
+    section (2r wide, flat on the bed up to its axis height h, round top: 2 r h + pi r^2 / 2); a
+    steep one a cylinder; a sloped one half a cylinder on a 0.9 x OD web down to the bed. Corners
+    add a round hub (and the foot pad), knee and core link stack the arm sockets in one block,
+    the core link adds a hub between the sleeves and its bolt tab. Minus the bores.
+    """
+    params = params or {}
+    j = spec.joints
+    r = spec.bore / 2 + j.wall
+    hole = math.pi / 4 * spec.bore**2
+    dirs = np.array([s.direction for s in sockets], float)
+    ports = np.array([s.port for s in sockets], float)
+    L = np.array([s.seat + s.depth for s in sockets], float)
+
+    def d_area(h: float) -> float:
+        return 2 * r * h + math.pi * r**2 / 2
+
+    vol = -sum(hole * s.depth for s in sockets)
+    a_h = a_v = 0.0
+    if kind in ("corner_top", "corner_bottom"):
+        up = -1.0 if dirs[np.abs(dirs[:, 2]) > 1e-6, 2].sum() < 0 else 1.0
+        vol += 2 * math.pi * r**3  # hub
+        a_h += 2 * math.pi * r**2
+        a_v += 4 * math.pi * r**2
+        for d, n in zip(dirs, L):
+            dz = d[2] * up
+            if abs(dz) < 1e-6:
+                vol += d_area(r) * n - math.pi * r**2 / 2 * (r + math.pi * r / 4)
+                a_h += (2 * r + math.pi * r / 2) * n
+                a_v += (2 * r + math.pi * r / 2) * n
+            elif dz >= math.cos(math.radians(45)):
+                vol += math.pi * r**2 * (n - r)
+                a_v += 2 * math.pi * r * n
+            else:
+                run = n * math.sqrt(1 - dz * dz)
+                h_mean = r + dz * n / 2
+                vol += math.pi * r**2 / 2 * n + 1.8 * r * h_mean * run - math.pi * r**2 / 2 * r
+                a_h += 1.8 * r * run + math.pi * r * n / 2
+                a_v += 2 * h_mean * run + math.pi * r * n / 2
+        if params.get("foot"):
+            vol += 1.5 * math.pi * r**2 * j.wall
+            a_h += 2.2 * math.pi * r**2
+        ext = np.ptp(np.vstack([ports, ports + dirs * L[:, None]]), axis=0) + 2 * r
+    else:
+        _, sv, vt = np.linalg.svd(dirs)
+        w = vt[-1]
+        if sv[1] < 1e-6 * sv[0]:  # parallel arm sockets only (no strut): the SVD's normal is arbitrary;
+            off = ports[1] - ports[0]  # use the one across the pair, as parts/joint.py prints it
+            w = np.cross(dirs[0], np.cross(dirs[0], off))
+            w /= np.linalg.norm(w)
+        zc = ports @ w
+        z = zc - zc.min() + r  # axis heights in print orientation
+        par = [i for i in range(len(sockets)) if sum(dirs[i] @ dirs[k] > 1 - PARALLEL_TOL for k in range(len(sockets))) > 1]
+        rest = [i for i in range(len(sockets)) if i not in par]
+        sleeve_l = [sockets[i].depth + j.wall for i in range(len(sockets))]
+        blocks = [(z[par].max(), sleeve_l[par[0]])] + [(z[i], sleeve_l[i]) for i in rest]
+        for h, n in blocks:
+            vol += d_area(h) * n
+            a_h += (2 * r + math.pi * r / 2) * n
+            a_v += (2 * h + math.pi * r / 2) * n
+        for i in (rest if kind == "core_link" else []):  # a sleeve leaving at a small angle to the arm block runs partly inside it
+            sin_t = float(np.linalg.norm(np.cross(dirs[i], dirs[par[0]])))
+            s0, s1 = sockets[i].seat - j.wall, sockets[i].seat + sockets[i].depth
+            s_end = min(s1, 2 * r / sin_t) if sin_t > 1e-9 else s1
+            if s_end > s0:
+                overlap = 2 * r * (s_end - s0) - sin_t * (s_end**2 - s0**2) / 2
+                vol -= overlap * (z[i] + math.pi * r / 4)
+        top = float(z[rest].max() + r) if rest else float(z[par].max() + r)  # no strut: arm sockets only
+        if kind == "knee":
+            vol += j.hinge_thickness * 2.7 * top
+            a_v += 2 * 2.7 * top
+        else:
+            vol, a_h, a_v = _link_pieces(spec, params, sockets, dirs, ports, z, zc, w, par, rest, top, r,
+                                         vol, a_h, a_v)
+        ext = np.array([np.ptp(np.vstack([ports, ports + dirs * L[:, None]]) @ np.eye(3), axis=0).max() + 2 * r,
+                        2 * r + float(L.max()), float(z.max() + r)])
+    a_v += sum(math.pi * spec.bore * s.depth for s in sockets)
+    env = tuple(sorted(float(x) for x in ext))
+    return Estimate(vol, a_h, a_v, (env[2], env[1], env[0]))
+
+
+def _link_pieces(spec: Spec, params: dict, sockets: list[Socket], dirs: np.ndarray, ports: np.ndarray, z: np.ndarray,
+                 zc: np.ndarray, w: np.ndarray, par: list[int], rest: list[int], top: float, r: float,
+                 vol: float, a_h: float, a_v: float) -> tuple[float, float, float]:
+    """A core link's bolt tab, hub and plate seat added to the running volume and areas (the
+    arm block's print plane normal `w`, axis heights `z`, parallel arm sockets `par`)."""
+    j = spec.joints
+    s_back = sockets[par[0]].seat - j.wall
+    t = float(params.get("tab_thickness", spec.core.plate_thickness))
+    hole_d = float(params.get("screw_clearance", 2.4))
+    bolt = np.asarray(params.get("bolt_hole", (0.0, 0.0, 0.0)), float)
+    r_tab = hole_d / 2 + j.wall
+    tab_len = float(np.hypot(bolt[0], bolt[1])) + r_tab + 1.0
+    tab_h = float(bolt @ w - zc.min() + r + r_tab)
+    vol += tab_len * t * tab_h - math.pi / 4 * hole_d**2 * t
+    a_h += tab_len * t
+    a_v += 2 * tab_len * tab_h
+    # Hub: a prism over the convex hull of the sleeves' back faces and the tab root.
+    x = dirs[par[0]] - w * (dirs[par[0]] @ w)
+    x /= np.linalg.norm(x)
+    y = np.cross(w, x)
+    pts = []
+    for i in [par[0]] + rest:
+        d = dirs[i]
+        lat = np.cross(w, d)
+        lat /= np.linalg.norm(lat)
+        c = ports[i] + d * (sockets[i].seat - j.wall)
+        pts += [c + lat * r, c - lat * r]
+    e_u = bolt - w * (bolt @ w)
+    e_u[2] = 0.0
+    e_u /= max(float(np.linalg.norm(e_u)), 1e-9)
+    v0 = float(params.get("plate_top_z", 0.0))
+    pts += [e_u * 0.5 + np.array([0, 0, v0]), e_u * 0.5 + np.array([0, 0, v0 + t])]
+    hub_area = _hull_area(np.array([[p_ @ x, p_ @ y] for p_ in pts]))
+    hub_h = max(top, tab_h)
+    vol += hub_area * hub_h
+    a_h += hub_area
+    a_v += 2 * s_back * hub_h
+    seat_area = _seat_area(params, ports[par], z[par], dirs[par[0]], sockets[par[0]].seat - j.wall, r,
+                           min(float(z[par].max() + r - 0.5), tab_h))
+    vol += seat_area * 2 * v0
+    a_v += 2 * seat_area
+    return vol, a_h, a_v
+
+
+def link_plate_corner(params: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The plate corner a core link seats against, in the link's local frame (x, y), and the
+    signs (sx, sy) pointing out of the plate: the plate is {sx (x - cx) <= 0, sy (y - cy) <= 0}."""
+    corner = np.asarray(params["plate_corner"], float)[:2]
+    return corner, np.sign(corner - np.asarray(params["bolt_hole"], float)[:2])  # the bolt is inside the plate
+
+
+def seat_plan(params: dict, ports, d: np.ndarray, s_back: float, r: float) -> list[np.ndarray]:
+    """A core link's seat in plan, in its local frame, before the plate's corner is cut out and the
+    print height clips it: the quadrilateral from 1 mm inside the arm block's back (the arm
+    `ports`, direction `d`, sockets' backs `s_back` out) to past the plate corner, a millimetre
+    past the block's width on both sides."""
+    corner, _ = link_plate_corner(params)
+    e_in = -np.array([d[0], d[1]]) / np.hypot(d[0], d[1])  # horizontal, toward the core
+    e_w = np.array([-e_in[1], e_in[0]])
+    u_b = min(float((np.asarray(p) + d * s_back)[:2] @ e_in) for p in ports) - 1.0
+    w_half = max(abs(float(np.asarray(p)[:2] @ e_w)) for p in ports) + r + 1.0
+    u_far = float(corner @ e_in) + w_half + 1.0
+    return [e_in * u_b - e_w * w_half, e_in * u_far - e_w * w_half, e_in * u_far + e_w * w_half, e_in * u_b + e_w * w_half]
+
+
+def _seat_area(params: dict, ports: np.ndarray, heights: np.ndarray, d: np.ndarray, s_back: float, r: float,
+               height: float) -> float:
+    """Plan area (mm^2) of a core link's seat as parts/joint.py builds it (`seat_plan`, less the
+    plate's corner quadrant), from the bed up to `height` in print (the arm pair's two `ports`
+    print at `heights`: print height runs across the pair)."""
+    corner, sign = link_plate_corner(params)
+    quad = seat_plan(params, ports, d, s_back, r)
+    across = ports[1, :2] - ports[0, :2]
+    g = across * (heights[1] - heights[0]) / float(across @ across)  # print height per mm in plan
+    h0 = float(heights[0] - ports[0, :2] @ g)  # print height = h0 + p . g
+    band = _clip(_clip(quad, -g, h0), g, height - h0)
+    inside = _clip(_clip(band, np.array([sign[0], 0.0]), sign[0] * corner[0]), np.array([0.0, sign[1]]), sign[1] * corner[1])
+    return polygon_area(band) - polygon_area(inside) if len(band) > 2 else 0.0
+
+
+def _clip(poly, a: np.ndarray, b: float) -> list:
+    """The part of a convex polygon where a . p <= b (Sutherland-Hodgman, one edge)."""
+    out = []
+    for i, p in enumerate(poly):
+        q = poly[i - 1]
+        fp, fq = float(a @ p) - b, float(a @ q) - b
+        if fp <= 0:
+            if fq > 0:
+                out.append(q + (p - q) * fq / (fq - fp))
+            out.append(p)
+        elif fq <= 0:
+            out.append(q + (p - q) * fq / (fq - fp))
+    return out
+
+
+def _hull_area(pts: np.ndarray) -> float:
+    """Area of the convex hull of 2-D points (monotone chain + shoelace)."""
+    pts = sorted(map(tuple, np.round(pts, 9)))
+
+    def half(seq):
+        out: list = []
+        for p in seq:
+            while len(out) >= 2 and (out[-1][0] - out[-2][0]) * (p[1] - out[-2][1]) - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0]) <= 0:
+                out.pop()
+            out.append(p)
+        return out[:-1]
+
+    hull = np.array(half(pts) + half(pts[::-1]))
+    x, y = hull[:, 0], hull[:, 1]
+    return float(abs(x @ np.roll(y, -1) - y @ np.roll(x, -1)) / 2)

@@ -1,0 +1,134 @@
+"""The sensor mount / core spacer (ABS/PLA): an X of two rails between the battery holder and
+the core plate, with a neck back to a pad for the flow board and zip-tie slots, printed flat as it
+sits (its local origin: the plate square's centre, z = 0 its bottom). Named core_spacer when the
+design has no flow sensor.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..frame import Frame
+from ..materials import SCREWS, STACK_PATTERNS
+from ..parts.blocks import prism_xy
+from ..parts.joint import Built, transform
+from ..spec import Spec
+from .base import Estimate, HardwareLine, PartSpec, Placement, link_hole, polygon_perimeter, rounded
+
+NAME = "sensor_mount"
+SIZE_KEY = "core.spacer_thickness"
+DOC = "ABS/PLA X spacer between holder and plate, with the flow board pad and zip-tie slots, printed flat"
+
+
+def plan(spec: Spec, frame: Frame) -> tuple[PartSpec, ...]:
+    return (_sensor_mount(spec, frame),) if spec.core.spacer_thickness > 0 else ()
+
+ZIP_SLOT = (3.2, 1.8)  # zip-tie slot for 2.5 x 1.0 mm ties, mm
+
+
+SPACER_RAIL = 7.0  # width of the spacer's diagonal rails, mm (carry the stack and link holes)
+SPACER_NECK = 10.0  # width of the neck to the rear pad, mm
+
+
+def _rect(p0, p1, width: float) -> tuple:
+    d = np.subtract(p1, p0) / np.linalg.norm(np.subtract(p1, p0))
+    n = np.array([-d[1], d[0]]) * width / 2
+    return tuple(tuple(round(float(v), 4) for v in q) for q in (p0 - n, p1 - n, p1 + n, p0 + n))
+
+
+def sensor_mount_outline(spec: Spec, frame: Frame) -> dict:
+    """The sensor mount / spacer in its local frame (centre of the plate square, z = 0 its bottom): an X
+    of two diagonal rails under the plate (the stack holes and the link bolts with their nut traps
+    lie on the diagonals), a neck running back and a pad behind the holder (flow board underneath,
+    zip-tie slots for the receiver, the antenna and the board). Each piece is a polygon (x, y)."""
+    c = spec.core
+    hole = link_hole(spec)
+    reach = hole + 3.5 / math.sqrt(2) + SPACER_RAIL / 2 / math.sqrt(2)
+    rails = (_rect(np.array([-reach, -reach]), np.array([reach, reach]), SPACER_RAIL),
+             _rect(np.array([reach, -reach]), np.array([-reach, reach]), SPACER_RAIL))
+    rear = frame.core.holder.lo[1]
+    flow = frame.core.flow_sensor
+    if flow is not None:
+        pad_half, pad_y0, pad_y1 = flow.size[0] / 2 + 3.0, rear - 1.5, flow.lo[1] - 2.0
+    else:
+        pad_half, pad_y0, pad_y1 = 10.0, rear - 1.5, rear - 12.0
+    h = SPACER_NECK / 2
+    neck = ((-h, pad_y0 - 1.0), (h, pad_y0 - 1.0), (h, 0.0), (-h, 0.0))
+    pad = ((-pad_half, pad_y1), (pad_half, pad_y1), (pad_half, pad_y0), (-pad_half, pad_y0))
+    pitch, _ = STACK_PATTERNS[c.stack_pattern]
+    stack = tuple((sx * pitch / 2, sy * pitch / 2) for sx in (-1, 1) for sy in (-1, 1))
+    links = tuple((sx * hole, sy * hole) for sx in (-1, 1) for sy in (-1, 1))
+    yc = (pad_y0 + pad_y1) / 2
+    sx_ = pad_half - 1.5 - ZIP_SLOT[1] / 2
+    zips = ((-sx_, yc), (sx_, yc), (-3.5, pad_y1 + 2.5), (3.5, pad_y1 + 2.5))  # receiver + flow board; antenna
+    pieces = tuple(tuple((round(float(x), 4), round(float(y), 4)) for x, y in poly) for poly in (*rails, neck, pad))
+    area = 2 * SPACER_RAIL * 2 * reach * math.sqrt(2) - SPACER_RAIL**2 + SPACER_NECK * (-pad_y0 - SPACER_RAIL) + 2 * pad_half * (pad_y0 - pad_y1)
+    return {"pieces": pieces, "stack_holes": stack, "link_holes": links,
+            "zip_slots": tuple((round(x, 4), round(y, 4)) for x, y in zips), "pad": (pad_half, pad_y0, pad_y1), "area": area,
+            "extent": (2 * max(reach + SPACER_RAIL / 2, pad_half), reach + SPACER_RAIL / 2 - pad_y1)}
+
+
+def _sensor_mount(spec: Spec, frame: Frame) -> PartSpec:
+    c = spec.core
+    o = sensor_mount_outline(spec, frame)
+    t = c.spacer_thickness
+    screw = SCREWS[c.stack_screw]
+    n_holes = len(o["stack_holes"]) + len(o["link_holes"])
+    hole_a = math.pi / 4 * screw.clearance_d**2
+    zip_a = ZIP_SLOT[0] * ZIP_SLOT[1]
+    nut_a = math.sqrt(3) / 2 * (screw.nut_af + 0.4) ** 2
+    area = o["area"] - n_holes * hole_a - len(o["zip_slots"]) * zip_a
+    nut_depth = round(min(screw.d * 0.8 + 0.2, t - 0.6), 4)
+    vol = area * t - len(o["link_holes"]) * (nut_a - hole_a) * nut_depth
+    per = sum(polygon_perimeter(p) for p in o["pieces"]) * 0.8 + n_holes * math.pi * screw.clearance_d + len(o["zip_slots"]) * 2 * sum(ZIP_SLOT)
+    est = Estimate(vol, 2 * area, per * t, (o["extent"][0], o["extent"][1], t))
+    box = frame.core.spacer
+    name = "sensor_mount" if c.flow_sensor else "core_spacer"
+    params = (("pieces", o["pieces"]), ("thickness", t), ("stack_holes", o["stack_holes"]), ("link_holes", o["link_holes"]),
+              ("hole_d", screw.clearance_d), ("nut_af", screw.nut_af + 0.4), ("nut_depth", nut_depth),
+              ("zip_slots", o["zip_slots"]), ("zip_slot", ZIP_SLOT))
+    hw = (HardwareLine("zip tie 2.5 x 100 mm (receiver, antenna, flow board)", 2, 0.3),)
+    return PartSpec(name, "sensor_mount", "core", c.material, c.infill,
+                    (Placement("core", 0.0, rounded((box.centre[0], box.centre[1], box.lo[2]))),), (), t, est, params, hw)
+
+
+
+# -- the assembly's words ------------------------------------------------------------------
+
+def fitting(spec: Spec) -> str:
+    """How the builder fits the flow sensor and the receiver on the sensor mount."""
+    return ("Zip-tie the Matek 3901-L0X under the sensor mount's rear pad, sensors facing the ground (the pad sits "
+            "behind the battery holder, so nothing is in their view), with the receiver on top of the pad in the same "
+            "two ties; tie the antenna leads through the two slots at the pad's rear edge.")
+
+# -- the solid --------------------------------------------------------------------------------
+
+def solid(part: PartSpec) -> Built:
+    """The X-shaped spacer with its neck and rear pad, printed flat as it sits; link-bolt nut traps
+    open on the bed side (their roofs are 4.4 mm bridges)."""
+    import cadquery as cq
+
+    t = float(part.param("thickness"))
+    first, *rest = (prism_xy(poly, 0.0, t) for poly in part.param("pieces"))
+    body = first.fuse(*rest) if rest else first
+    d = float(part.param("hole_d"))
+    cut = [cq.Solid.makeCylinder(d / 2, t + 2.0, cq.Vector(float(x), float(y), -1.0)) for x, y in
+           (*part.param("stack_holes"), *part.param("link_holes"))]
+    af, nd = float(part.param("nut_af")), float(part.param("nut_depth"))
+    for x, y in part.param("link_holes"):
+        hexagon = cq.Workplane("XY", origin=(float(x), float(y), -1.0)).polygon(6, af / np.cos(np.pi / 6)).extrude(nd + 1.0).val()
+        cut.append(hexagon)
+    zw, zl = (float(v) for v in part.param("zip_slot"))
+    for x, y in part.param("zip_slots"):
+        cut.append(cq.Solid.makeBox(zl, zw, t + 2.0, cq.Vector(float(x) - zl / 2, float(y) - zw / 2, -1.0)))
+    body = body.cut(*cut)  # one boolean with all 16 tools: 0.09 s instead of 0.17 s one by one
+    solids = body.clean().Solids()
+    if len(solids) != 1:
+        raise RuntimeError(f"{part.name} geometry produced {len(solids)} solids instead of 1")
+    return Built(solids[0], transform(np.eye(3), (0.0, 0.0, 0.0)))
+
+
+def print_from_local(part: PartSpec) -> np.ndarray:
+    return transform(np.eye(3), (0.0, 0.0, 0.0))
