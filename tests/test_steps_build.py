@@ -133,8 +133,13 @@ def test_builds_through_the_cad_server_give_the_same_bytes(warm, tmp_path, monke
     from cogniframe.runtime import server as cad_server
     from cogniframe.stack import versions as stack_versions
 
-    _, params, first = warm
+    root, params, first = warm
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))
+    # PrusaSlicer's time estimate moves by seconds between runs of one plate (a part's print time can
+    # then round to the next minute in bom.csv): the served build gets the first build's measurements
+    # of the plates, keyed by their bytes, and starts cold for the rest
+    if (root / "cache" / "slice").is_dir():
+        shutil.copytree(root / "cache" / "slice", tmp_path / "cache" / "slice")
     monkeypatch.setenv(cad_server.ENV, "1")
     early = []
     real = cad_server.prestart
@@ -149,7 +154,7 @@ def test_builds_through_the_cad_server_give_the_same_bytes(warm, tmp_path, monke
         assert _files(tmp_path / "served") == _files(first.out_dir)
         changed = _params(tmp_path / "params", ("motors.bolt_spacing", 9.7))
         again = _build(changed, tmp_path / "served", slicer=False, server=True, console=Console(file=io.StringIO()))
-        assert _ran(again) == _part_change("motor_mount")
+        assert _ran(again) == _part_change("motor_mount") - MASS
         assert cad_server.running(stack_versions()) == pid  # the same server, warm
     finally:
         cad_server.stop(stack_versions())
@@ -173,7 +178,9 @@ CHANGES = [
     ("rods.kerf", 1.5, False, set()),  # the stock plan only
     ("model.damping_ratio", 0.6, False, MASS),
     ("rods.material", "bamboo", False, MASS | VIEW | FLIGHT),  # same diameter: no part changes
-    ("motors.bolt_spacing", 9.5, False, _part_change("motor_mount")),
+    # the motor's holes move on their circle: the mount's shape changes, its volume (same holes) and so
+    # the mass budget do not
+    ("motors.bolt_spacing", 9.5, False, _part_change("motor_mount") - MASS),
     ("joints.wall", 1.4, False, _part_change(*TPU_PARTS)),
     ("frame.height", 130, False, _part_change(*TPU_PARTS)),
     ("core.plate_size", 44, False, _part_change("core_plate", "core_link", "core_link_mirrored", "corner_bottom", "knee",

@@ -40,5 +40,5 @@ def make_flight(ctx) -> Made:
 
 
 FLIGHT = Step("flight", ("check", "part:*"), make_flight, flight_key,
-              ("flight/*", "vitamins.py", "analysis/flight.py", "analysis/stiffness.py", "analysis/load_cases.py"),
+              ("flight/*", "vitamins.py", "errors.py", "analysis/flight.py", "analysis/stiffness.py", "analysis/load_cases.py"),
               reads="STL hashes, copies and placements, rods, vitamins, mass budget, modes, flight numbers, motors")
