@@ -169,31 +169,17 @@ def _plain(value: Any) -> Any:
 
 
 def set_value(text: str, key: str, value: Any) -> str:
-    parts = key.split(".")
-    if not key or any(p == "" for p in parts):
+    if not key or any(p == "" for p in key.split(".")):
         raise KeyError(f"{key!r} is not a dotted key such as rods.diameter")
     root = yaml.compose(text, Loader=_LOADER) if text.strip() else None
     if root is None:  # an empty file (or only comments): the key goes at the end
-        return _append_lines(text, len(text), 0, parts, value)
-    node: Node = root
-    key_node: Node | None = None
-    for i, part in enumerate(parts):
-        last = i == len(parts) - 1
-        if isinstance(node, MappingNode):
-            found = next(((k, v) for k, v in node.value if isinstance(k, ScalarNode) and k.value == part), None)
-            if found is None:
-                return _insert(text, node, parts[i:], value)
-            key_node, node = found
-        elif isinstance(node, SequenceNode) and part.isdigit():
-            index = int(part)
-            if index >= len(node.value):
-                raise KeyError(f"{'.'.join(parts[:i])} has {len(node.value)} entries; there is no entry {index}")
-            key_node, node = None, node.value[index]
-        else:  # a scalar (null, a number) where a section is wanted: it becomes a flow mapping
-            return _replace(text, node, key_node, _nested(parts[i:], value))
-        if last:
-            return _replace(text, node, key_node, value)
-    raise AssertionError("unreachable")
+        return _append_lines(text, len(text), 0, key.split("."), value)
+    how, node, key_node, rest = _locate(root, key)
+    if how == "insert":
+        return _insert(text, node, rest, value)
+    if how == "nest":  # a scalar (null, a number) where a section is wanted: it becomes a flow mapping
+        return _replace(text, node, key_node, _nested(rest, value))
+    return _replace(text, node, key_node, value)
 
 
 def _nested(parts: list[str], value: Any) -> dict:
