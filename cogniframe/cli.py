@@ -111,7 +111,7 @@ def build(params: ParamsArg,
         from .runtime.heap import imports_frozen
 
         with imports_frozen():
-            from . import build as _build  # noqa: F401  (its imports, frozen with the others)
+            from . import pipeline as _pipeline  # noqa: F401  (its imports, frozen with the others)
             from . import api
 
         design = api._load(params, validate=False)  # run_build validates the frame and parts, as before

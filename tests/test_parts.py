@@ -40,7 +40,7 @@ def built_preset(name: str):
     from cogniframe.export.mesh import load_stl
 
     spec = spec_mod.load(ROOT / "params" / f"{name}.yaml")
-    frame = frame_mod.build(spec)
+    frame = frame_mod.frame_of(spec)
     parts = partlist.build(spec, frame)
     out = Path(tempfile.mkdtemp(prefix=f"cogniframe-test-{name}-"))
     built = build_parts(spec, frame, parts, out)
@@ -175,7 +175,7 @@ def test_part_larger_than_the_bed_is_a_user_error(tmp_path):
     from cogniframe.export.part_files import build_parts
 
     spec = spec_mod.from_dict({"printer": {"bed": [60, 60, 60]}})
-    frame = frame_mod.build(spec)
+    frame = frame_mod.frame_of(spec)
     parts = [p for p in partlist.build(spec, frame) if p.name == "computer_mount"]
     with pytest.raises(UserError) as e:
         build_parts(spec, frame, parts, tmp_path)
@@ -189,7 +189,7 @@ def test_part_that_fits_only_turned_is_turned(tmp_path):
     from cogniframe.export.mesh import load_stl
 
     spec = spec_mod.from_dict({"printer": {"bed": [40, 70, 60]}})
-    frame = frame_mod.build(spec)
+    frame = frame_mod.frame_of(spec)
     parts = [p for p in partlist.build(spec, frame) if p.name == "computer_mount"]
     (b,) = build_parts(spec, frame, parts, tmp_path)
     m = load_stl(tmp_path / b.stl)

@@ -9,7 +9,7 @@ import pytest
 
 from cogniframe import design as design_mod
 from cogniframe import spec as spec_mod
-from cogniframe.build import run_build
+from cogniframe.pipeline import run_build
 from cogniframe.errors import UserError
 
 

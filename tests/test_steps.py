@@ -16,8 +16,8 @@ from pathlib import Path
 import pytest
 
 from cogniframe import cache
-from cogniframe.build import graph
-from cogniframe.build.graph import Made, Step
+from cogniframe.pipeline import graph
+from cogniframe.pipeline.graph import Made, Step
 
 
 @pytest.fixture
@@ -180,11 +180,11 @@ def test_an_error_stops_the_graph_and_is_raised(tmp_path):
 
 def test_code_changes_are_part_of_the_key(tmp_path, private_cache, monkeypatch):
     ran = []
-    steps = (Step("s", (), lambda ctx: ran.append(1) or Made(), key=lambda ctx: 1, code=("build/graph.py",)),)
+    steps = (Step("s", (), lambda ctx: ran.append(1) or Made(), key=lambda ctx: 1, code=("pipeline/graph.py",)),)
     for _ in range(2):
         graph.run(graph.expand(steps, [{}]), graph.Context(tmp_path, {}))
     assert ran == [1]
-    monkeypatch.setitem(cache._CODE, ("build/graph.py",), "edited")  # as if graph.py had been edited
+    monkeypatch.setitem(cache._CODE, ("pipeline/graph.py",), "edited")  # as if graph.py had been edited
     graph.run(graph.expand(steps, [{}]), graph.Context(tmp_path, {}))
     assert ran == [1, 1]
 

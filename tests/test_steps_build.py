@@ -18,7 +18,7 @@ import pytest
 import yaml
 
 from cogniframe import spec as spec_mod
-from cogniframe.build import run_build
+from cogniframe.pipeline import run_build
 from cogniframe.export import slicer as slicer_mod
 
 pytestmark = pytest.mark.slow

@@ -72,7 +72,7 @@ class Design:
     """One validated design: its params (`spec`), the YAML text they come from, and where that
     text lives. Immutable: `with_values` returns a new Design."""
 
-    def __init__(self, spec: Spec, text: str, source: str, path: Path | None, design: design_mod.Design | None = None):
+    def __init__(self, spec: Spec, text: str, source: str, path: Path | None, design: design_mod.Derived | None = None):
         self._spec = spec
         self._text = text
         self._source = source
@@ -105,8 +105,8 @@ class Design:
         return self._source
 
     @property
-    def derived(self) -> design_mod.Design:
-        """Frame graph, part list and cut list (`design_mod.Design`): what the checks and the CAD use."""
+    def derived(self) -> design_mod.Derived:
+        """Frame graph, part list and cut list (`design_mod.Derived`): what the checks and the CAD use."""
         if self._design is None:
             from .. import design as design_mod
 
@@ -228,7 +228,7 @@ class Design:
         only when the build succeeded. `server`: CAD workers from the CAD server (None: the CLI's
         default, COGNIFRAME_CAD_SERVER). `console`: a rich Console for the progress lines
         (default: stderr)."""
-        from ..build import run_build
+        from ..pipeline import run_build
         from ..runtime import server as cad_server
 
         out_path = Path(out) if out is not None else None
@@ -369,9 +369,9 @@ def write_text_atomic(path: Path, text: str) -> None:
 
 class CheckResult:
     """What `cogniframe check` finds. The figures are read from `to_dict()` (the `check --json`
-    object), so they equal the CLI's JSON exactly. `result` is the check's own object (`analysis.verdict.CheckResult`)."""
+    object), so they equal the CLI's JSON exactly. `result` is the check's own object (`analysis.verdict.Findings`)."""
 
-    def __init__(self, result: verdict.CheckResult):
+    def __init__(self, result: verdict.Findings):
         self.result = result
         self._json: dict | None = None
 
@@ -518,7 +518,7 @@ def sweep(sweep_file_or_dict: str | Path | Mapping[str, Any], scheduler: str | N
     import pandas as pd
 
     from ..sweep import run as sweep_run
-    from ..sweep import spec as sweep_spec
+    from ..sweep import sweepfile
 
     with tempfile.TemporaryDirectory(prefix="cogniframe-sweep-") as tmp:
         if isinstance(sweep_file_or_dict, Mapping):
@@ -529,11 +529,11 @@ def sweep(sweep_file_or_dict: str | Path | Mapping[str, Any], scheduler: str | N
                 p.parent.mkdir()
                 p.write_text(base.text, encoding="utf-8")
                 data["base"] = str(p)
-            sw = sweep_spec.from_dict(data, source="<sweep>", text=None, folder=Path.cwd())
+            sw = sweepfile.from_dict(data, source="<sweep>", text=None, folder=Path.cwd())
             folder = Path(out) if out is not None else Path(tmp) / "sweep"
             reports = out is not None
         else:
-            sw = sweep_spec.load(sweep_file_or_dict)
+            sw = sweepfile.load(sweep_file_or_dict)
             folder = Path(out) if out is not None else sweep_run.default_out(sw)
             reports = True
         result = sweep_run.run_sweep(sw, folder, scheduler=scheduler, workers=workers, progress=progress, reports=reports)

@@ -39,8 +39,8 @@ def build_parts(spec, design, out: Path, *, fe: bool = False, server: bool | Non
     part_values)` after each step; `part_values()` gives the values once every part step is done
     (the files are in `out` then, while the FE may still run)."""
     from .. import stack
-    from ..build import graph, steps
-    from ..build.context import BuildContext
+    from ..pipeline import graph, steps
+    from ..pipeline.context import BuildContext
     from ..runtime import BuildRuntime
     from ..runtime import server as cad_server
 

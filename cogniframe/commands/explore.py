@@ -22,9 +22,9 @@ WorkersOpt = Annotated[Optional[int], typer.Option("--workers", min=1, help="loc
 def sweep(sweep_file: SweepArg, out: OutOpt = None, scheduler: SchedulerOpt = None, workers: WorkersOpt = None,
           json_out: Annotated[bool, typer.Option("--json", help="print one JSON object: designs, pass, fail, invalid, seconds, scheduler, workers")] = False) -> None:
     """Check every design of a sweep file on Dask: results.parquet, pareto.png, sensitivity.png, summary.md."""
-    from cogniframe.sweep import run, spec
+    from cogniframe.sweep import run, sweepfile
 
-    sw = spec.load(sweep_file)
+    sw = sweepfile.load(sweep_file)
     result = run.run_sweep(sw, out, scheduler=scheduler, workers=workers, progress=run.progress_printer())
     if json_out:
         sys.stdout.write(json.dumps(result.as_dict()) + "\n")
@@ -48,9 +48,9 @@ def optimize(sweep_file: SweepArg,
              json_out: Annotated[bool, typer.Option("--json", help="print one JSON object with the best design and the run's numbers")] = False) -> None:
     """Optimise over the sweep file's vary box with optuna on Dask: trials.parquet and best.yaml (passes `check`)."""
     from cogniframe.sweep import optimize as opt
-    from cogniframe.sweep import run, spec
+    from cogniframe.sweep import run, sweepfile
 
-    sw = spec.load(sweep_file)
+    sw = sweepfile.load(sweep_file)
     objectives = opt.parse_objectives(minimize or [], maximize or [])
     constraints = [opt.parse_constraint(c) for c in constraint or []]
     result = opt.run_optimize(sw, objectives, constraints, out_dir=out, trials=trials, scheduler=scheduler,
@@ -66,9 +66,9 @@ def optimize(sweep_file: SweepArg,
 
 def sweep_schema() -> None:
     """Print the JSON Schema of a sweep file (for editor autocompletion)."""
-    from cogniframe.sweep import spec
+    from cogniframe.sweep import sweepfile
 
-    sys.stdout.write(json.dumps(spec.json_schema(), indent=2) + "\n")
+    sys.stdout.write(json.dumps(sweepfile.json_schema(), indent=2) + "\n")
 
 
 def register(app: typer.Typer) -> None:

@@ -183,7 +183,7 @@ def project_configs(spec: Spec, infill: Mapping[str, float] | None = None) -> di
 
 def default_infill(spec: Spec) -> dict[str, float]:
     """Infill by material, as the design's parts print (`partlist.infill_by_material`)."""
-    from ..frame import build as frame
+    from ..frame import frame_of as frame
     from ..partlist import build as parts, infill_by_material
 
     return infill_by_material(parts(spec, frame(spec)))

@@ -20,7 +20,7 @@ FILES = ("inav.txt", "betaflight.txt", "ardupilot/frame.json", "ardupilot/params
 
 
 def make_vehicle(spec, result, solids=None, shapes: bool = True):
-    """The Vehicle of a checked design (`verdict.CheckResult`): mass properties from the CAD
+    """The Vehicle of a checked design (`verdict.Findings`): mass properties from the CAD
     solids when `solids` ({part: (massprops.SolidProps as printed, print-from-local 4 x 4)}) is
     given, else from the estimates; the modes' flight-controller participation from their shapes
     when `shapes`."""

@@ -1,6 +1,6 @@
 """The physics steps: the mass-independent stiffness while the parts are built, the mass budget
 with the CAD volumes, the load cases for that mass, and the check that joins them to the clash
-check. Each step's row sits beside its make function; build/steps.py lists them in order."""
+check. Each step's row sits beside its make function; pipeline/steps.py lists them in order."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """`cogniframe build`: the whole fabrication folder, built in a temp dir and moved into place whole.
 
-The work is the graph of cached steps in build/steps.py (part CAD, check with CAD volumes, plates,
+The work is the graph of cached steps in pipeline/steps.py (part CAD, check with CAD volumes, plates,
 slicer, assembly, plots, previews, renders, BOM, report; docs/build.md), then the manifest.
 Nothing appears in the output folder unless every step succeeded, and a folder
 cogniframe did not make is never touched (outdir.py: lock, ownership check, atomic swap).
@@ -25,17 +25,17 @@ from ..spec import Spec
 
 
 @dataclass(frozen=True)
-class BuildResult:
+class Outcome:
     out_dir: Path
     files: int
     verdict: str
-    check: verdict.CheckResult | None  # None when the folder was already up to date
+    check: verdict.Findings | None  # None when the folder was already up to date
     built: tuple
     steps: tuple = ()  # (step, "ran" | "cached" | "always") in the order they finished; () when up to date
 
 
 def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None = None, use_cache: bool = True,
-              console: Console | None = None, gcode: bool = False, server: bool = False, early=None) -> BuildResult:
+              console: Console | None = None, gcode: bool = False, server: bool = False, early=None) -> Outcome:
     """Build `spec` into `out`. `server`: CAD workers from the CAD server that outlives this build
     (`runtime.server`; the CLI's default) instead of a process pool of its own. `early`: the
     server the CLI started before it validated the params (`runtime.server.prestart`); the caller
@@ -49,11 +49,11 @@ def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None 
         verdict = json.loads((final / "check.json").read_text())["verdict"]
         console.print(f"{final} is up to date (same params, same cogniframe): nothing rebuilt", markup=False)
         files = len(json.loads((final / "manifest.json").read_text())["files"]) + 1
-        return BuildResult(final, files, verdict, None, ())
+        return Outcome(final, files, verdict, None, ())
     with outdir.writing(final) as tmp, spec.blamed():
         result = _build_into(spec, params_path, tmp, jobs, use_cache, console, key, gcode=gcode, design=design,
                              server=server, early=early)
-    return BuildResult(final, result[0], result[1].verdict, result[1], result[2], result[3])
+    return Outcome(final, result[0], result[1].verdict, result[1], result[2], result[3])
 
 
 def build_key(spec: Spec, params_path: Path) -> str:
@@ -77,10 +77,10 @@ def _up_to_date(final: Path, key: str) -> bool:
 
 
 def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_cache: bool, console: Console,
-                key: str, gcode: bool = False, design: design_mod.Design | None = None, server: bool = False,
+                key: str, gcode: bool = False, design: design_mod.Derived | None = None, server: bool = False,
                 early=None):
     """Run the build graph (steps.py) into `out`, then write the manifest. `gcode`: keep the
-    sliced G-code per plate (`build --gcode`; read by build.plates.make_slice).
+    sliced G-code per plate (`build --gcode`; read by pipeline.plates.make_slice).
 
     Returns (files, check result, built parts, ((step, "ran" | "cached" | "always"), ...))."""
     from . import graph, steps
