@@ -36,8 +36,8 @@ def _word_steps(ran: list):
 
     def word(ctx, w):
         ran.append(f"word:{w}")
-        (ctx.out / f"{w}.txt").write_text(ctx.text[w])
-        return Made((f"{w}.txt",), {"letters": len(ctx.text[w])})
+        (ctx.out / f"{w}.txt").write_text(ctx.inputs["text"][w])
+        return Made((f"{w}.txt",), {"letters": len(ctx.inputs["text"][w])})
 
     def letters(ctx):
         ran.append("letters")
@@ -51,7 +51,7 @@ def _word_steps(ran: list):
         return Made((f"{w}.upper.txt",))
 
     return (
-        Step("word:{w}", (), word, key=lambda ctx, w: ctx.text[w]),
+        Step("word:{w}", (), word, key=lambda ctx, w: ctx.inputs["text"][w]),
         Step("letters", ("word:*",), letters, key=lambda ctx: [v["letters"] for v in ctx.each("word:*").values()]),
         Step("shout:{w}", ("word:{w}",), shout, key=lambda ctx, w: _sha(ctx.out / f"{w}.txt")),
         Step("summary", ("letters", "shout:*"), lambda ctx: Made((), f"{ctx['letters']} letters")),

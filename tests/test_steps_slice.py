@@ -41,8 +41,7 @@ def _ctx(out: Path, plates: list[pl.Plate], use_cache: bool = True):
         def get(self):
             return ("prusa-slicer", "PrusaSlicer-test")
 
-    ctx = steps.BuildContext(out, {"spec": spec, "design": design_mod.design(spec), "slicer": FakeSlicer(), "gcode": False},
-                             use_cache=use_cache)
+    ctx = steps.BuildContext(out, steps.Inputs(spec, design_mod.design(spec), slicer=FakeSlicer()), use_cache=use_cache)
     ctx.values["plates:tpu_95a"] = value
     return ctx
 

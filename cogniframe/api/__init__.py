@@ -190,11 +190,10 @@ class Design:
         try:
             with self._spec.blamed(), one_blas_thread():  # as `build` computes it: same numbers
                 if self.needs_fe():  # new joint geometries: their FE on worker processes first
-                    from ..analysis.joints import fe_joints, solve_missing
-                    from ..analysis.stiffness import joint_parts
+                    from ..analysis.joints import solve_fe
 
                     with joint_fe_workers() as submit:
-                        solve_missing(self._spec, fe_joints(self._spec, joint_parts(d.parts)), submit=submit)
+                        solve_fe(self._spec, d.parts, submit)
                 result = verdict.check(self._spec, design_=d)
         except UserError as e:
             raise _params_error(e, self._source) from None
@@ -204,12 +203,9 @@ class Design:
         """Whether `check` would solve a joint's finite-element model first (a joint geometry not in
         the cache yet, with `model.stiffness_model: fe`, or outside the surrogate's training box
         with `surrogate`): seconds instead of a tenth of one."""
-        if self._spec.model.stiffness_model == "analytic":
-            return False
-        from ..analysis.joints import fe_joints, has_unsolved
-        from ..analysis.stiffness import joint_parts
+        from ..analysis.joints import needs_fe
 
-        return has_unsolved(self._spec, fe_joints(self._spec, joint_parts(self.derived.parts)))
+        return needs_fe(self._spec, self.derived.parts)
 
     def with_fast_model(self) -> Design:
         """This design with `model.stiffness_model: analytic` (the joints' closed forms, milliseconds):
