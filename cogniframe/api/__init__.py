@@ -322,6 +322,34 @@ def _load(path: str | Path, validate: bool = True) -> Design:
     return d
 
 
+def build_file(path: str | Path, out: str | Path | None = None, *, jobs: int | None = None, use_cache: bool = True,
+               gcode: bool = False, server: bool | None = None, console=None) -> BuildResult:
+    """`cogniframe build PATH`: `load(path).build(...)`, with the CAD server (when wanted) started
+    before the params are read, so that its seconds of imports overlap this process's own and
+    the validation; the server is let go again when the build did not connect to it (bad
+    params, nothing to build, Ctrl-C)."""
+    from ..runtime import server as cad_server
+
+    use_server = cad_server.wanted(server)
+    early = None
+    if use_server:
+        from ..stack import versions
+
+        early = cad_server.prestart(versions())
+    try:
+        from ..runtime.heap import imports_frozen
+
+        with imports_frozen():
+            from .. import pipeline  # noqa: F401  (its imports, frozen with the others)
+
+        design = _load(path, validate=False)  # the build validates the frame and parts before any folder is touched
+        return design.build(out, jobs=jobs, use_cache=use_cache, gcode=gcode, server=use_server, console=console,
+                            early=early)
+    finally:
+        if early is not None:
+            early.release()
+
+
 def from_text(text: str, source: str = "<params>", path: Path | None = None) -> Design:
     """A Design from YAML text; messages name `source` (e.g. the file the text will be saved to)."""
     from .. import spec as spec_mod
