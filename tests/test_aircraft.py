@@ -44,8 +44,8 @@ def scenes():
 @pytest.mark.parametrize("preset", PRESETS)
 def test_assembly_is_clash_free(scenes, preset):
     """Every pair of printed parts, rods and vitamins overlaps < 0.5 mm^3 and every propeller clears
-    everything by prop_margin. (Before issue 13: core_link_fr/rl cut 11.9 mm^3 into the carbon
-    battery holder, 36.0 mm^3 on bamboo.)"""
+    everything by prop_margin (the core links once cut 11.9 mm^3 into the carbon battery holder,
+    36.0 mm^3 on bamboo)."""
     d, bodies, r = scenes[preset]
     assert r.ok, r.messages()
     names = {b.name for b in bodies}

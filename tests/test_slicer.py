@@ -267,7 +267,7 @@ def test_slice_command_table(run_cli, tmp_path):
     on_disk = {p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*") if p.is_file()} - {"manifest.json"}
     assert "plates/slice.json" in listed and listed == on_disk  # what slice wrote stays cogniframe's
     manifest = json.loads((tmp_path / "manifest.json").read_text())
-    assert manifest["not_reproducible"] == ["plates/abs_1.gcode", "plates/tpu_95a_1.gcode"]  # issue 14
+    assert manifest["not_reproducible"] == ["plates/abs_1.gcode", "plates/tpu_95a_1.gcode"]
     assert "tpu_95a_1" in out and "abs_1" in out and "total" in out
     assert "check.json" in out  # compared with the build's own mass budget
     data = json.loads((tmp_path / "plates" / "slice.json").read_text())

@@ -326,7 +326,7 @@ def test_k_key_ignores_what_only_weighs_and_follows_the_geometry():
 
 
 def test_a_battery_mass_change_reuses_the_cached_k(tmp_path, monkeypatch):
-    # issue 11: a heavier battery re-runs the drop and the load cases, not the frame's k
+    # a heavier battery re-runs the drop and the load cases, not the frame's k
     from cogniframe.analysis import verdict
 
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path))

@@ -297,7 +297,7 @@ def test_optimize_verifies_closed_form_screens_by_default_and_surrogate_sweeps_n
 def test_optimize_two_objectives_gives_a_pareto_set(tcp_cluster, tmp_path):
     from cogniframe.sweep import optimize as opt
 
-    # the cluster tests' box (it has PASS rows): most of the issue's example box is over 250 g since issue 13
+    # the cluster tests' box (it has PASS rows): most of a wider box is over 250 g with the vitamins counted
     (tmp_path / "p.yaml").write_text(SWEEP)
     sweep = sweepfile.load(tmp_path / "p.yaml")
     objs = opt.parse_objectives(["mass_g"], ["max_safe_drop_cm"])
