@@ -79,28 +79,17 @@ def design_html(d) -> str:
     return inline_html(meta, buf, title=f"{d.name}: 3D view")
 
 
-_LOADER = """
-const uid = %(uid)s;
-const text = (name) => document.getElementById(uid + "-" + name).textContent;
-const url = (src) => URL.createObjectURL(new Blob([src], {type: "text/javascript"}));
-const threeUrl = url(text("three"));
-const orbitUrl = url(text("orbit").replace(/from\\s*['"]three['"]/g, "from '" + threeUrl + "'"));
-const viewerUrl = url(text("viewer-js"));
-const root = document.getElementById(uid);
-try {
-  const [THREE, orbit, viewer] = await Promise.all([import(threeUrl), import(orbitUrl), import(viewerUrl)]);
-  viewer.start(THREE, orbit.OrbitControls, root, JSON.parse(text("scene")), text("geometry"));
-} catch (e) {
-  root.dataset.error = String(e);
-  root.querySelector(".cf-info").textContent = "The 3D view could not start here (" + e + ").";
-}
-"""
+
+
+def _view_id(name: str) -> str:
+    """The fragment's ids of the viewer's text scripts, after its uid."""
+    return json.dumps("viewer-js" if name == "viewer" else name)
 
 
 def inline_html(meta: dict, buf: bytes, title: str = "3D view") -> str:
     """The viewer with three.js, OrbitControls, viewer.js and the scene inline, under ids made
     for this fragment (the report's section uses fixed ids: one per page)."""
-    from ..report.viewer import CSS, THREE_VERSION, _read, _script_text
+    from ..report.viewer import CSS, THREE_VERSION, _read, _script_text, module_loader
 
     uid = "cfv-" + secrets.token_hex(6)
     code = {n: _script_text(_read(n), n) for n in ("three.module.min.js", "OrbitControls.js", "viewer.js")}
@@ -125,6 +114,6 @@ def inline_html(meta: dict, buf: bytes, title: str = "3D view") -> str:
         f'<script type="text/plain" id="{uid}-viewer-js">{code["viewer.js"]}</script>',
         f'<script type="application/json" id="{uid}-scene">{data}</script>',
         f'<script type="text/plain" id="{uid}-geometry">{b64}</script>',
-        f'<script type="module">{_LOADER % {"uid": json.dumps(uid)}}</script>',
+        f'<script type="module">{module_loader(_view_id, "uid", uid=json.dumps(uid))}</script>',
         "</div>",
     ])
