@@ -18,21 +18,10 @@ from cogniframe import spec as spec_mod
 from cogniframe.export import bambu3mf
 from cogniframe.export.plates import PlateItem, pack_plates, plate_3mf, read_3mf_items
 from threemf import NS, check_3mf
+from meshes import box as _box, cylinder as _cyl
 
 ROOT = Path(__file__).resolve().parents[1]
 BED = (180.0, 180.0, 180.0)  # the A1 mini's
-
-
-def _box(x, y, z):
-    m = trimesh.creation.box((x, y, z))
-    m.apply_translation(-m.bounds[0])
-    return m
-
-
-def _cyl(r, h):
-    m = trimesh.creation.cylinder(radius=r, height=h, sections=32)
-    m.apply_translation(-m.bounds[0])
-    return m
 
 
 def _plates():

@@ -15,6 +15,7 @@ from cogniframe import spec as spec_mod
 from cogniframe.errors import UserError
 from cogniframe.export import slicer
 from cogniframe.export.plates import PlateItem, pack_plates, write_plates
+from meshes import box as _box
 
 needs_slicer = pytest.mark.skipif(shutil.which("prusa-slicer") is None, reason="prusa-slicer is not installed")
 
@@ -22,12 +23,6 @@ needs_slicer = pytest.mark.skipif(shutil.which("prusa-slicer") is None, reason="
 @pytest.fixture(scope="module")
 def spec():
     return spec_mod.from_dict({"name": "t"})
-
-
-def _box(x, y, z):
-    m = trimesh.creation.box((x, y, z))
-    m.apply_translation(-m.bounds[0])
-    return m
 
 
 def _cyl(r, h):
