@@ -91,8 +91,8 @@ def tcp_cluster(tmp_path_factory):
 
 _SERIAL = """
 import json, sys
-from cogniframe.sweep import evaluate as ev, run, spec
-sw = spec.load(sys.argv[1])
+from cogniframe.sweep import evaluate as ev, run, sweepfile
+sw = sweepfile.load(sys.argv[1])
 json.dump([ev.evaluate_one(sw.base_data, o, sw.settings.timeout_s, "serial", sw.base_text, sw.base_label)
            for _, o in run.plan(sw)], sys.stdout)
 """

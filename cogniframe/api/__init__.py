@@ -566,3 +566,35 @@ def sweep(sweep_file_or_dict: str | Path | Mapping[str, Any], scheduler: str | N
     df.attrs["out_dir"] = str(result.out_dir) if out is not None or not isinstance(sweep_file_or_dict, Mapping) else None
     df.attrs["summary"] = result.as_dict()
     return df
+
+
+def optimize(sweep_file: str | Path, *, minimize=(), maximize=(), constraints=(), trials: int | None = None,
+             out: str | Path | None = None, scheduler: str | None = None, workers: int | None = None, cad: int = 0,
+             verify: int | None = None, progress: Callable[[Any], None] | None = None):
+    """`cogniframe optimize` from Python: optuna over the sweep file's vary box on Dask, into `out`
+    (default out/sweeps/<file name>: trials.parquet, best.yaml). `minimize`/`maximize`: output
+    names (e.g. "mass_g"); `constraints`: "OUT >= V" / "OUT <= V". Returns the run's result
+    (`best`, `as_dict()`, `text()`)."""
+    from ..sweep import optimize as opt
+    from ..sweep import sweepfile
+
+    sw = sweepfile.load(sweep_file)
+    objectives = opt.parse_objectives(list(minimize), list(maximize))
+    parsed = [opt.parse_constraint(c) for c in constraints]
+    return opt.run_optimize(sw, objectives, parsed, out_dir=Path(out) if out is not None else None, trials=trials,
+                            scheduler=scheduler, workers=workers, cad=cad, verify=verify, progress=progress)
+
+
+def sweep_progress() -> Callable[[Any], None]:
+    """The command line's progress display for `sweep` and `optimize`: a bar on a terminal, one
+    line per batch otherwise (on stderr)."""
+    from ..sweep import run as sweep_run
+
+    return sweep_run.progress_printer()
+
+
+def sweep_schema() -> dict:
+    """The JSON Schema of a sweep file (for editor autocompletion)."""
+    from ..sweep import sweepfile
+
+    return sweepfile.json_schema()
