@@ -32,7 +32,7 @@ for key, value in json.loads(sys.argv[4]).items():
     section, name = key.split(".")
     data[section][name] = value
 spec = spec_mod.from_dict(data)
-fr = frame_mod.build(spec)
+fr = frame_mod.frame_of(spec)
 parts = partlist.part_list(spec, fr)
 t1 = time.perf_counter()
 built_names = []

@@ -34,7 +34,7 @@ def main(argv: list[str] | None = None) -> int:
     from cogniframe.analysis.numerics import one_blas_thread
 
     s = spec.load(args.params)
-    f = frame.build(s)
+    f = frame.frame_of(s)
     parts = partlist.part_list(s, f)
     inputs = {}
     real = solid_fe.condense

@@ -38,8 +38,8 @@ def main(argv=None) -> None:
     sys.path.insert(0, str(ROOT))
     from rich.console import Console
 
-    from cogniframe.build import steps
-    from cogniframe.build import run_build
+    from cogniframe.pipeline import steps
+    from cogniframe.pipeline import run_build
     from cogniframe.spec import load as load_spec
 
     times: dict[str, list[float]] = {}

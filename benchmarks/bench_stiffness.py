@@ -55,7 +55,7 @@ def main(argv: list[str] | None = None) -> int:
         from cogniframe.analysis import stiffness as st
 
         s = spec_mod.load(args.params)
-        f = frame_mod.build(s)
+        f = frame_mod.frame_of(s)
         parts = partlist.part_list(s, f)
         if not args.skip_cold:
             print(f"cold `check` process (joint FE + load cases):  {_check_process(args.params, env):7.2f} s")

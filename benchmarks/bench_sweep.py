@@ -86,7 +86,7 @@ class Cluster:
 def one_run(n: int, workers: int, seed: int, port: int, preload: bool = False) -> dict:
     import pandas as pd
 
-    from cogniframe.sweep import spec
+    from cogniframe.sweep import sweepfile
     from cogniframe.sweep.run import run_sweep
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -94,7 +94,7 @@ def one_run(n: int, workers: int, seed: int, port: int, preload: bool = False) -
         cluster = Cluster(workers, tmp / "cache", port, preload)
         try:
             (tmp / "s.yaml").write_text(sweep_text(n, seed))
-            sweep = spec.load(tmp / "s.yaml")
+            sweep = sweepfile.load(tmp / "s.yaml")
             marks = []
             t0 = time.perf_counter()
             run_sweep(sweep, tmp / "out", scheduler=cluster.address, progress=lambda b: marks.append((b.done, b.seconds)))

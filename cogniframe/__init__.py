@@ -13,7 +13,7 @@ module is made callable when it is first reached through this attribute.
 import sys as _sys
 import types as _types
 
-__version__ = "0.1.0"
+from .version import __version__
 
 __all__ = ["BuildResult", "CheckResult", "Design", "ParamsError", "UserError", "__version__", "load", "sweep"]
 

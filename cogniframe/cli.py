@@ -98,29 +98,11 @@ def build(params: ParamsArg,
           gcode: Annotated[bool, typer.Option("--gcode", help="also keep the sliced G-code per plate (plates/*.gcode; not byte-stable)")] = False,
           server: Annotated[Optional[bool], typer.Option("--server/--no-server", help="CAD workers from a server kept between builds (default; COGNIFRAME_CAD_SERVER=0: off)")] = None) -> None:
     """Build every printable part (STL, STEP), the assembly, cut list, mass budget and manifest."""
-    from .runtime import server as cad_server
+    from . import api
 
-    use_server = cad_server.wanted(server)
-    if use_server:  # first thing: the server's imports then overlap this process's own and the validation
-        from .stack import versions
-
-        early = cad_server.prestart(versions())
-    else:
-        early = None
-    try:
-        from .runtime.heap import imports_frozen
-
-        with imports_frozen():
-            from . import build as _build  # noqa: F401  (its imports, frozen with the others)
-            from . import api
-
-        design = api._load(params, validate=False)  # run_build validates the frame and parts, as before
-        result = design.build(out, jobs=jobs, use_cache=not no_cache, console=Console(stderr=True), gcode=gcode,
-                              server=use_server, early=early).raw
-    finally:
-        if early is not None:
-            early.release()  # unless the build connected to it: bad params, nothing to build, Ctrl-C
-    Console().print(f"wrote {result.out_dir} ({result.files} files); verdict {result.verdict}")
+    result = api.build_file(params, out, jobs=jobs, use_cache=not no_cache, gcode=gcode, server=server,
+                            console=Console(stderr=True))
+    Console().print(f"wrote {result.out_dir} ({len(result.files)} files); verdict {result.verdict}")
     raise typer.Exit(0 if result.verdict == "PASS" else 1)
 
 

@@ -77,7 +77,7 @@ class CutList:
 ROLE_ORDER = {"cage": 0, "leg": 1, "arm": 2, "strut": 3}
 
 
-def build(spec: Spec, frame: Frame) -> CutList:
+def cut_list(spec: Spec, frame: Frame) -> CutList:
     """Group the frame's rods by (role, cut length) and plan the stock."""
     mat = spec.material(spec.rods.material)
     groups: dict[tuple[str, float], list[str]] = {}

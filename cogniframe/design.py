@@ -14,7 +14,7 @@ from .spec import Spec
 
 
 @dataclass(frozen=True)
-class Design:
+class Derived:
     """Everything derived from the params without CAD."""
 
     spec: Spec
@@ -23,12 +23,12 @@ class Design:
     cut: cutlist_mod.CutList
 
 
-def design(spec: Spec) -> Design:
-    frame = frame_mod.build(spec)
+def design(spec: Spec) -> Derived:
+    frame = frame_mod.frame_of(spec)
     parts = partlist_mod.part_list(spec, frame)
     _check_printer_fit(spec, parts)
-    cut = cutlist_mod.build(spec, frame)
-    return Design(spec, frame, parts, cut)
+    cut = cutlist_mod.cut_list(spec, frame)
+    return Derived(spec, frame, parts, cut)
 
 
 def _check_printer_fit(spec: Spec, parts) -> None:

@@ -203,7 +203,7 @@ class Frame:
 
 # -- construction ----------------------------------------------------------------------------
 
-def build(spec: Spec) -> Frame:
+def frame_of(spec: Spec) -> Frame:
     """Derive the frame graph from a validated spec. Raises UserError if the props do not clear."""
     f, j, c = spec.frame, spec.joints, spec.core
     d, bore = spec.rods.diameter, spec.bore

@@ -12,7 +12,7 @@ import functools
 import json
 from importlib import metadata
 
-from . import __version__
+from .version import __version__
 
 # listed in the manifest
 LIBRARIES = ("cadquery", "cadquery-ocp", "trimesh", "manifold3d", "numpy", "scipy", "pynitefea", "pyvista", "vtk", "matplotlib")

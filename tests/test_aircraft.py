@@ -45,8 +45,8 @@ def scenes():
 @pytest.mark.parametrize("preset", PRESETS)
 def test_assembly_is_clash_free(scenes, preset):
     """Every pair of printed parts, rods and vitamins overlaps < 0.5 mm^3 and every propeller clears
-    everything by prop_margin. (Before issue 13: core_link_fr/rl cut 11.9 mm^3 into the carbon
-    battery holder, 36.0 mm^3 on bamboo.)"""
+    everything by prop_margin (the core links once cut 11.9 mm^3 into the carbon battery holder,
+    36.0 mm^3 on bamboo)."""
     d, bodies, r = scenes[preset]
     assert r.ok, r.messages()
     names = {b.name for b in bodies}
@@ -164,7 +164,7 @@ def test_motor_and_prop_solids_follow_the_presets():
     from cogniframe.vitamins import PROP_DISC_T, to_trimesh, vitamins
 
     spec = spec_mod.load(ROOT / "params" / "bamboo.yaml")
-    fr = frame_mod.build(spec)
+    fr = frame_mod.frame_of(spec)
     v = {x.name: x for x in vitamins(spec, fr)}
     motor, prop = to_trimesh(v["motor_fl"]), to_trimesh(v["propeller_fl"])
     m = fr.motors[0]
@@ -238,7 +238,7 @@ def test_camera_tilt_turns_the_camera_and_its_upright():
     for tilt in (0.0, 20.0):
         data["core"]["camera"]["tilt_deg"] = tilt
         s = spec_mod.from_dict(data)
-        v = camera_vitamin(s, frame_mod.build(s))
+        v = camera_vitamin(s, frame_mod.frame_of(s))
         apex, axis, _ = v.view
         axes[tilt] = np.asarray(axis)
     assert axes[0.0] == pytest.approx([0, 1, 0])  # default: looking straight forward
@@ -327,7 +327,7 @@ def test_battery_slides_out_along_its_axis_without_meeting_any_solid(scenes, pre
 
 def test_holder_has_strap_slots_and_a_lead_exit_that_passes_the_connector():
     spec = spec_mod.load(ROOT / "params" / "carbon.yaml")
-    fr = frame_mod.build(spec)
+    fr = frame_mod.frame_of(spec)
     f = battery_holder.holder_features(spec, fr)
     ys, _, s_len, s_w = f["strap_slot"]
     assert s_len == spec.core.strap_width + 1.0
@@ -339,7 +339,7 @@ def test_holder_has_strap_slots_and_a_lead_exit_that_passes_the_connector():
     data = spec.model_dump(mode="json")
     data["core"]["battery"]["connector"] = "XT60"
     s60 = spec_mod.from_dict(data)
-    assert battery_holder.holder_features(s60, frame_mod.build(s60))["lead_exit"][0] > 15.8
+    assert battery_holder.holder_features(s60, frame_mod.frame_of(s60))["lead_exit"][0] > 15.8
     data["core"]["battery"]["connector"] = "EC5"
     with pytest.raises(UserError, match="connector"):
         spec_mod.from_dict(data)
@@ -440,7 +440,7 @@ def test_a_build_with_a_clash_exits_1_naming_both_solids(run_cli, tmp_path, monk
 
     import yaml
 
-    from cogniframe.build import steps
+    from cogniframe.pipeline import steps
 
     keep = ("estimate", "part:{material}/{part}", "budget", "physics", "clash", "check")
     monkeypatch.setattr(steps, "STEPS", tuple(s for s in steps.STEPS if s.name in keep))
@@ -493,7 +493,7 @@ def test_vitamin_bom_rows_name_their_budget_lines():
     from cogniframe.vitamins import bom_rows
 
     spec = spec_mod.load(ROOT / "params" / "carbon.yaml")
-    rows = {bom: (qty, line) for bom, qty, line in bom_rows(spec, frame_mod.build(spec))}
+    rows = {bom: (qty, line) for bom, qty, line in bom_rows(spec, frame_mod.frame_of(spec))}
     motor = next(k for k in rows if k.startswith("brushless motor 1104 6000KV"))
     assert rows[motor] == (4, "motor 1104")
     assert rows["Raspberry Pi camera module v2"] == (1, "Raspberry Pi camera v2 + ribbon")
@@ -511,7 +511,7 @@ def test_tilted_camera_mount_prints_without_support_and_carries_the_camera(tilt,
     data = spec_mod.load(ROOT / "params" / "carbon.yaml").model_dump(mode="json")
     data["core"]["camera"]["tilt_deg"] = tilt
     s = spec_mod.from_dict(data)
-    fr = frame_mod.build(s)
+    fr = frame_mod.frame_of(s)
     part = next(p for p in partlist.part_list(s, fr) if p.name == "front_camera_mount")
     (b,) = build_parts(s, fr, [part], tmp_path)
     m = load_stl(tmp_path / b.stl)

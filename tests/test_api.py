@@ -268,3 +268,16 @@ def test_sweep_from_a_dict_returns_a_dataframe(carbon):
     ordered = df.sort_values("rods.diameter")
     assert ordered["mass_g"].is_monotonic_increasing
     assert df.attrs["summary"]["designs"] == 3 and df.attrs["out_dir"] is None
+
+
+def test_build_file_refuses_bad_params_before_it_writes_anything(tmp_path):
+    """`cogniframe build`'s entry in the API: a bad params file is a ParamsError naming the key,
+    and no output folder appears."""
+    from cogniframe import api
+
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("rods:\n  diametr: 3\n")
+    with pytest.raises(api.ParamsError) as e:
+        api.build_file(bad, tmp_path / "out", server=False)
+    assert "rods.diametr (line 2)" in str(e.value) and "diameter" in str(e.value)
+    assert not (tmp_path / "out").exists()

@@ -18,21 +18,10 @@ from cogniframe import spec as spec_mod
 from cogniframe.export import bambu3mf
 from cogniframe.export.plates import PlateItem, pack_plates, plate_3mf, read_3mf_items
 from threemf import NS, check_3mf
+from meshes import box as _box, cylinder as _cyl
 
 ROOT = Path(__file__).resolve().parents[1]
 BED = (180.0, 180.0, 180.0)  # the A1 mini's
-
-
-def _box(x, y, z):
-    m = trimesh.creation.box((x, y, z))
-    m.apply_translation(-m.bounds[0])
-    return m
-
-
-def _cyl(r, h):
-    m = trimesh.creation.cylinder(radius=r, height=h, sections=32)
-    m.apply_translation(-m.bounds[0])
-    return m
 
 
 def _plates():
@@ -171,7 +160,7 @@ def test_prusaslicer_measures_an_orca_plate_as_the_prusaslicer_plate(a1_mini, tm
 def test_build_for_the_a1_mini_writes_orca_bambu_plates(tmp_path):
     """The acceptance check: `printer: {preset: bambu_a1_mini}` builds plates that lib3mf loads, each
     object with its filament slot, the TPU objects at 100 % infill and the rigid ones at core.infill."""
-    from cogniframe.build import run_build
+    from cogniframe.pipeline import run_build
 
     doc = yaml.safe_load((ROOT / "params" / "carbon.yaml").read_text(encoding="utf-8"))
     doc["name"] = "a1mini"

@@ -13,7 +13,7 @@ import pytest
 import yaml
 
 from cogniframe import spec as spec_mod
-from cogniframe.build import run_build
+from cogniframe.pipeline import run_build
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -153,7 +153,7 @@ def test_build_runs_the_clash_check_and_reports_flight(built):
     from cogniframe.vitamins import vitamins
 
     spec = spec_mod.load(ROOT / "params" / f"{name}.yaml")
-    n = len(vitamins(spec, frame_mod.build(spec)))
+    n = len(vitamins(spec, frame_mod.frame_of(spec)))
     assert f"{n} vitamins" in (out / "report.html").read_text(encoding="utf-8")
 
 

@@ -1,4 +1,4 @@
-"""The build's step table (build/steps.py): the docs show it as it is, and every cached step's key
+"""The build's step table (pipeline/steps.py): the docs show it as it is, and every cached step's key
 covers the source files its make function imports (a forgotten one would leave the
 cache stale without an error)."""
 
@@ -13,13 +13,13 @@ from pathlib import Path
 
 import pytest
 
-from cogniframe.build import steps
+from cogniframe.pipeline import steps
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "cogniframe"
 # Modules whose code cannot change a step's files: the cache and graph machinery, the process
 # machinery, and the cache-key helpers.
-NO_OUTPUT = ("cache.py", "build/graph.py", "build/context.py", "runtime/*", "stack.py")
+NO_OUTPUT = ("cache.py", "pipeline/graph.py", "pipeline/context.py", "runtime/*", "stack.py")
 
 
 def _functions(fn) -> list:

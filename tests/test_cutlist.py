@@ -13,8 +13,8 @@ from cogniframe.errors import UserError
 
 
 def test_rows_cover_every_rod_once(preset):
-    f = frame_mod.build(preset)
-    cut = cutlist.build(preset, f)
+    f = frame_mod.frame_of(preset)
+    cut = cutlist.cut_list(preset, f)
     names = [n for r in cut.rows for n in r.rods]
     assert sorted(names) == sorted(f.rods) and cut.count == len(f.rods) == 28
     for r in cut.rows:
@@ -22,14 +22,14 @@ def test_rows_cover_every_rod_once(preset):
 
 
 def test_rod_mass_is_length_section_density(carbon):
-    cut = cutlist.build(carbon, frame_mod.build(carbon))
+    cut = cutlist.cut_list(carbon, frame_mod.frame_of(carbon))
     row = cut.rows[0]
     assert row.mass_g == pytest.approx(row.length_mm * math.pi / 4 * 3.0**2 * 1.55e-3)
     assert cut.total_mass_g == pytest.approx(sum(r.mass_g * r.qty for r in cut.rows))
 
 
 def test_stock_plan_never_exceeds_stock(preset):
-    cut = cutlist.build(preset, frame_mod.build(preset))
+    cut = cutlist.cut_list(preset, frame_mod.frame_of(preset))
     plan = cut.stock
     for s in plan.rods:
         assert s.used_mm == pytest.approx(sum(c + plan.kerf_mm for _, c in s.cuts))
@@ -40,7 +40,7 @@ def test_stock_plan_never_exceeds_stock(preset):
 
 
 def test_stock_plan_shares_stock_rods(carbon):
-    plan = cutlist.build(carbon, frame_mod.build(carbon)).stock
+    plan = cutlist.cut_list(carbon, frame_mod.frame_of(carbon)).stock
     assert plan.count == plan.lower_bound == 4  # 28 cuts, ~3.1 m, into 1 m rods: optimal
     assert max(len(s.cuts) for s in plan.rods) > 5
 
@@ -65,7 +65,7 @@ def test_piece_longer_than_stock_is_a_clear_error():
 
 
 def test_csv_and_markdown(carbon):
-    cut = cutlist.build(carbon, frame_mod.build(carbon))
+    cut = cutlist.cut_list(carbon, frame_mod.frame_of(carbon))
     rows = list(csv.DictReader(io.StringIO(cutlist.to_csv(cut))))
     assert len(rows) == len(cut.rows) and float(rows[0]["length_mm"]) == cut.rows[0].length_mm
     md = cutlist.to_markdown(cut)

@@ -24,7 +24,7 @@ def _design(preset="carbon", **changes):
         section, name = key.split("__")
         data[section][name] = value
     spec = spec_mod.from_dict(data)
-    fr = frame_mod.build(spec)
+    fr = frame_mod.frame_of(spec)
     return spec, fr, partlist.part_list(spec, fr)
 
 

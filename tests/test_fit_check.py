@@ -40,7 +40,7 @@ def _spec(name: str, **changes) -> spec_mod.Spec:
 
 
 def _design(spec):
-    fr = frame_mod.build(spec)
+    fr = frame_mod.frame_of(spec)
     return fr, partlist.part_list(spec, fr)
 
 

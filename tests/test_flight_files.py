@@ -366,7 +366,7 @@ def test_fly_never_overwrites_a_folder_it_did_not_make(tmp_path, run_cli):
 @pytest.fixture(scope="module")
 def built_carbon(tmp_path_factory):
     from cogniframe import spec as spec_mod
-    from cogniframe.build import run_build
+    from cogniframe.pipeline import run_build
 
     params = _params("carbon")
     out = tmp_path_factory.mktemp("build") / "carbon"

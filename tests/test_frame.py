@@ -13,7 +13,7 @@ from cogniframe.errors import UserError
 
 
 def test_counts_and_roles(preset):
-    f = frame_mod.build(preset)
+    f = frame_mod.frame_of(preset)
     roles = [r.role for r in f.rods.values()]
     assert (roles.count("cage"), roles.count("leg"), roles.count("arm"), roles.count("strut")) == (8, 8, 8, 4)
     kinds = [n.kind for n in f.nodes.values()]
@@ -22,14 +22,14 @@ def test_counts_and_roles(preset):
 
 
 def test_readable_stable_names(carbon):
-    f = frame_mod.build(carbon)
+    f = frame_mod.frame_of(carbon)
     assert {"knee_fl", "corner_top_rr", "core_link_rl"} <= set(f.nodes)
     assert {"rod_cage_top_front", "rod_cage_bottom_left", "rod_leg_upper_fr", "rod_arm_fl_2", "rod_strut_rl"} <= set(f.rods)
-    assert list(f.rods) == list(frame_mod.build(carbon).rods)  # deterministic order
+    assert list(f.rods) == list(frame_mod.frame_of(carbon).rods)  # deterministic order
 
 
 def test_box_extent_is_the_outside_size(carbon):
-    f = frame_mod.build(carbon)
+    f = frame_mod.frame_of(carbon)
     lo, hi = f.bbox()
     outer = carbon.bore / 2 + carbon.joints.wall  # joint wall beyond the node
     assert hi[0] - lo[0] + 2 * outer == pytest.approx(210)
@@ -38,14 +38,14 @@ def test_box_extent_is_the_outside_size(carbon):
 
 
 def test_incidence_is_consistent(preset):
-    f = frame_mod.build(preset)
+    f = frame_mod.frame_of(preset)
     for r in f.rods.values():
         assert r.name in f.nodes[r.a.node].rods and r.name in f.nodes[r.b.node].rods
     assert sum(len(n.rods) for n in f.nodes.values()) == 2 * len(f.rods)
 
 
 def test_fourfold_symmetry(preset):
-    f = frame_mod.build(preset)
+    f = frame_mod.frame_of(preset)
     rot = np.array([[0, 1, 0], [-1, 0, 0], [0, 0, 1]])  # -90 deg about z: fl -> fr -> rr -> rl
     for a, b in (("fl", "fr"), ("fr", "rr"), ("rr", "rl"), ("rl", "fl")):
         for kind in ("corner_top", "corner_bottom", "knee", "core_link"):
@@ -55,7 +55,7 @@ def test_fourfold_symmetry(preset):
 
 
 def test_hourglass_knees_bow_inwards(carbon):
-    f = frame_mod.build(carbon)
+    f = frame_mod.frame_of(carbon)
     top, knee, bottom = (np.array(f.nodes[f"{k}_fl"].pos) for k in ("corner_top", "knee", "corner_bottom"))
     assert abs(knee[0]) == pytest.approx(abs(top[0]) - carbon.frame.knee_inset)
     assert knee[2] == pytest.approx(carbon.frame.height / 2)
@@ -63,7 +63,7 @@ def test_hourglass_knees_bow_inwards(carbon):
 
 
 def test_cut_length_is_distance_minus_seats(carbon):
-    f = frame_mod.build(carbon)
+    f = frame_mod.frame_of(carbon)
     r = f.rods["rod_cage_top_front"]
     a, b = f.nodes["corner_top_fl"].pos, f.nodes["corner_top_fr"].pos
     assert r.length == pytest.approx(math.dist(a, b) - 2 * f.nodes["corner_top_fl"].seat)
@@ -72,14 +72,14 @@ def test_cut_length_is_distance_minus_seats(carbon):
 
 
 def test_arm_rods_are_parallel_and_spaced(carbon):
-    f = frame_mod.build(carbon)
+    f = frame_mod.frame_of(carbon)
     r1, r2 = f.rods["rod_arm_fl_1"], f.rods["rod_arm_fl_2"]
     np.testing.assert_allclose(r1.axis, r2.axis, atol=1e-12)
     assert np.linalg.norm(np.subtract(r1.a.port, r2.a.port)) == pytest.approx(carbon.frame.arm_spacing)
 
 
 def test_seat_raised_where_rods_meet_at_sharp_angles(carbon):
-    f = frame_mod.build(carbon)
+    f = frame_mod.frame_of(carbon)
     # Strut and lower leg leave the foot in the same plane at a narrow angle: their bores must not meet.
     foot = f.nodes["corner_bottom_fl"]
     r = carbon.bore / 2 + carbon.joints.wall / 2
@@ -97,13 +97,13 @@ def test_seat_raised_where_rods_meet_at_sharp_angles(carbon):
 
 def test_parallel_sockets_side_by_side_keep_the_base_seat(carbon):
     # Arm rods reach the core link 6 mm beside the strut, more than bore + 2 walls: no clash.
-    f = frame_mod.build(carbon)
+    f = frame_mod.frame_of(carbon)
     assert carbon.frame.arm_spacing / 2 >= carbon.bore + 2 * carbon.joints.wall
     assert f.nodes["core_link_fl"].seat == carbon.joints.seat
 
 
 def test_carbon_rods_resemble_the_papers(carbon):
-    f = frame_mod.build(carbon)
+    f = frame_mod.frame_of(carbon)
     cage = [r.cut_length for r in f.rods_of("cage")]
     assert len(cage) == 8 and all(abs(c - 195) <= 5 for c in cage)  # paper: 8 x 195
     arms = [r.cut_length for r in f.rods_of("arm")]
@@ -111,14 +111,14 @@ def test_carbon_rods_resemble_the_papers(carbon):
 
 
 def test_bamboo_rods_resemble_the_build(bamboo):
-    f = frame_mod.build(bamboo)
+    f = frame_mod.frame_of(bamboo)
     for role, target in (("cage", 230), ("leg", 50), ("arm", 110), ("strut", 130)):
         for r in f.rods_of(role):
             assert abs(r.cut_length - target) <= 0.06 * target, (r.name, r.cut_length, target)
 
 
 def test_clearance_from_geometry_is_the_holder_underside(preset):
-    f = frame_mod.build(preset)
+    f = frame_mod.frame_of(preset)
     assert f.clearance_mm == pytest.approx(preset.core.battery_clearance)
     assert f.core.battery.lo[2] > f.core.holder.lo[2]
 
@@ -127,14 +127,14 @@ def test_rod_diameter_changes_bore_and_cut_lengths(carbon):
     data = carbon.model_dump()
     data["rods"]["diameter"] = 4.0
     data["joints"]["wall"] = 1.6  # a 4 mm rod needs 40 % of its diameter in TPU
-    f3, f4 = frame_mod.build(carbon), frame_mod.build(spec_mod.from_dict(data))
+    f3, f4 = frame_mod.frame_of(carbon), frame_mod.frame_of(spec_mod.from_dict(data))
     assert all(r.diameter == 4.0 for r in f4.rods.values())
     # the joint grows with the bore, so the ring nodes move in and the ring rods get shorter
     assert f4.rods["rod_cage_top_front"].length < f3.rods["rod_cage_top_front"].length
 
 
 def test_prop_clearance_positive_and_reported(preset):
-    f = frame_mod.build(preset)
+    f = frame_mod.frame_of(preset)
     assert len(f.prop_clearances) == 4
     assert f.min_prop_margin > 0
 
@@ -151,14 +151,14 @@ def test_big_propellers_are_a_clear_error(carbon):
     data = carbon.model_dump()
     data["motors"]["prop_diameter"] = 180
     with pytest.raises(UserError, match=r"propeller of motor_.. hits the frame.*motors.prop_diameter"):
-        frame_mod.build(spec_mod.from_dict(data))
+        frame_mod.frame_of(spec_mod.from_dict(data))
 
 
 def test_motor_off_the_arm_is_a_clear_error(carbon):
     data = carbon.model_dump()
     data["motors"]["radius"] = 200
     with pytest.raises(UserError, match="motors.radius"):
-        frame_mod.build(spec_mod.from_dict(data))
+        frame_mod.frame_of(spec_mod.from_dict(data))
 
 
 def test_rod_axis_and_ends_computed_once_are_the_ports_geometry_and_read_only():

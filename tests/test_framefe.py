@@ -69,7 +69,7 @@ def test_cantilever_in_any_direction_matches_PL3_over_3EI(direction):
 
 def _carbon_model(rod_segments: int = 1, masses: bool = False):
     s = spec_mod.load(PARAMS / "carbon.yaml")
-    f = frame_mod.build(s)
+    f = frame_mod.frame_of(s)
     p = partlist.part_list(s, f)
     joints = st.joint_models(s, p, "analytic")
     play = st.play_springs(s, f, p, joints, st.PLAY_REFERENCE_N)

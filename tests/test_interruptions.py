@@ -1,4 +1,4 @@
-"""Real interrupted builds (issue 9): a `cogniframe build` subprocess killed with SIGKILL or
+"""Real interrupted builds: a `cogniframe build` subprocess killed with SIGKILL or
 interrupted with Ctrl-C (SIGINT to its process group, as a terminal sends it) mid-build, and a
 second build started while the first is writing.
 

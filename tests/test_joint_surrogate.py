@@ -28,7 +28,7 @@ HOLDOUT = json.loads((ROOT / "tests" / "data" / "joint_surrogate_holdout.json").
 def design(overrides: dict, **extra):
     data = yaml.safe_load((ROOT / "params" / "carbon.yaml").read_text())
     s = spec_mod.from_dict(apply_overrides(data, {**overrides, **extra}))
-    f = frame_mod.build(s)
+    f = frame_mod.frame_of(s)
     return s, f, partlist.part_list(s, f)
 
 
@@ -154,7 +154,7 @@ def test_live_fe_of_an_unseen_corner_agrees_with_the_surrogate():
 
 def test_carbon_preset_k_from_the_surrogate_within_5_percent_of_the_fe(carbon):
     s = carbon
-    f = frame_mod.build(s)
+    f = frame_mod.frame_of(s)
     parts = partlist.part_list(s, f)
     k_fe = stiffness.secant_solution(s, f, parts, stiffness.joint_models(s, parts, "fe")).k_n_per_m
     k_sur = stiffness.secant_solution(s, f, parts, stiffness.joint_models(s, parts, "surrogate")).k_n_per_m

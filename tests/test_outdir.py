@@ -1,4 +1,4 @@
-"""Output folders cogniframe owns (issue 9): it never deletes or overwrites what it did not make.
+"""Output folders cogniframe owns: it never deletes or overwrites what it did not make.
 
 Each test reproduces a way the earlier build destroyed a user's files, then checks the fix.
 The folder logic runs before any CAD, so most of these are fast; `fake_output` makes a folder

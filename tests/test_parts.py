@@ -33,7 +33,7 @@ OVERHANG_MAX = 0.01  # unsupported fraction of the downward-facing area
 def planned(name: str):
     """A preset's spec, frame and part list (no CAD)."""
     spec = spec_mod.load(ROOT / "params" / f"{name}.yaml")
-    frame = frame_mod.build(spec)
+    frame = frame_mod.frame_of(spec)
     return spec, frame, partlist.part_list(spec, frame)
 
 
@@ -225,7 +225,7 @@ def test_part_larger_than_the_bed_is_a_user_error(tmp_path):
     from cogniframe.export.part_files import build_parts
 
     spec = spec_mod.from_dict({"printer": {"bed": [60, 60, 60]}})
-    frame = frame_mod.build(spec)
+    frame = frame_mod.frame_of(spec)
     parts = [p for p in partlist.part_list(spec, frame) if p.name == "computer_mount"]
     with pytest.raises(UserError) as e:
         build_parts(spec, frame, parts, tmp_path)
@@ -239,7 +239,7 @@ def test_part_that_fits_only_turned_is_turned(tmp_path):
     from cogniframe.export.mesh import load_stl
 
     spec = spec_mod.from_dict({"printer": {"bed": [40, 70, 60]}})
-    frame = frame_mod.build(spec)
+    frame = frame_mod.frame_of(spec)
     parts = [p for p in partlist.part_list(spec, frame) if p.name == "computer_mount"]
     (b,) = build_parts(spec, frame, parts, tmp_path)
     m = load_stl(tmp_path / b.stl)

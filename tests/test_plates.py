@@ -12,21 +12,10 @@ import trimesh
 
 from cogniframe.errors import UserError
 from cogniframe.export.plates import PlateItem, pack_plates, parse_plate_name, part_of, plate_3mf_bytes, write_plates
+from meshes import box as _box, cylinder as _cyl
 
 BED = (120.0, 120.0, 120.0)
 MARGIN = 4.0
-
-
-def _box(x, y, z):
-    m = trimesh.creation.box((x, y, z))
-    m.apply_translation(-m.bounds[0])
-    return m
-
-
-def _cyl(r, h):
-    m = trimesh.creation.cylinder(radius=r, height=h, sections=32)
-    m.apply_translation(-m.bounds[0])
-    return m
 
 
 def _items():

@@ -237,7 +237,7 @@ def test_assembly_steps_name_the_mirrored_parts(rect):
 def test_build_of_the_example_is_watertight_and_clash_checked(tmp_path):
     import trimesh
 
-    from cogniframe.build import run_build
+    from cogniframe.pipeline import run_build
 
     out = tmp_path / "rect"
     result = run_build(spec_mod.load(EXAMPLE), EXAMPLE, out, jobs=2)

@@ -19,6 +19,7 @@ from cogniframe import spec as spec_mod
 from cogniframe.export.plates import PlateItem, pack_plates, write_plates
 from cogniframe.export.slicer import MaterialCheck, PlateSlice, SliceReport
 from cogniframe.report import assembly_steps, bom, html as report
+from meshes import box as _box
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -78,12 +79,6 @@ def _png(path: Path, colour=(200, 30, 30)) -> Path:
     img[10:50, 10:70] = colour
     Image.fromarray(img).save(path)
     return path
-
-
-def _box(x, y, z):
-    m = trimesh.creation.box((x, y, z))
-    m.apply_translation(-m.bounds[0])
-    return m
 
 
 @pytest.fixture(scope="module", params=("carbon", "bamboo"))

@@ -15,6 +15,7 @@ from cogniframe import spec as spec_mod
 from cogniframe.errors import UserError
 from cogniframe.export import slicer
 from cogniframe.export.plates import PlateItem, pack_plates, write_plates
+from meshes import box as _box
 
 needs_slicer = pytest.mark.skipif(shutil.which("prusa-slicer") is None, reason="prusa-slicer is not installed")
 
@@ -22,12 +23,6 @@ needs_slicer = pytest.mark.skipif(shutil.which("prusa-slicer") is None, reason="
 @pytest.fixture(scope="module")
 def spec():
     return spec_mod.from_dict({"name": "t"})
-
-
-def _box(x, y, z):
-    m = trimesh.creation.box((x, y, z))
-    m.apply_translation(-m.bounds[0])
-    return m
 
 
 def _cyl(r, h):
@@ -267,7 +262,7 @@ def test_slice_command_table(run_cli, tmp_path):
     on_disk = {p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*") if p.is_file()} - {"manifest.json"}
     assert "plates/slice.json" in listed and listed == on_disk  # what slice wrote stays cogniframe's
     manifest = json.loads((tmp_path / "manifest.json").read_text())
-    assert manifest["not_reproducible"] == ["plates/abs_1.gcode", "plates/tpu_95a_1.gcode"]  # issue 14
+    assert manifest["not_reproducible"] == ["plates/abs_1.gcode", "plates/tpu_95a_1.gcode"]
     assert "tpu_95a_1" in out and "abs_1" in out and "total" in out
     assert "check.json" in out  # compared with the build's own mass budget
     data = json.loads((tmp_path / "plates" / "slice.json").read_text())

@@ -134,7 +134,7 @@ def test_rod_diameter_drives_every_bore_and_the_cut_list(tmp_path):
     from cogniframe.parts.joint import map_sockets
 
     def bores(spec, out):
-        fr = frame_mod.build(spec)
+        fr = frame_mod.frame_of(spec)
         parts = [p for p in partlist.part_list(spec, fr) if p.family == "joint"]
         built = build_parts(spec, fr, parts, out)
         found = []
@@ -146,7 +146,7 @@ def test_rod_diameter_drives_every_bore_and_the_cut_list(tmp_path):
                 u /= np.linalg.norm(u)
                 dirs = np.array([u, -u, np.cross(s.direction, u), -np.cross(s.direction, u)])
                 found.append(2 * ray_first_hit(mesh, np.tile(mid, (4, 1)), dirs).mean())
-        return np.array(found), cutlist.build(spec, fr), fr
+        return np.array(found), cutlist.cut_list(spec, fr), fr
 
     base = spec_mod.load(__import__("test_parts").ROOT / "params" / "carbon.yaml")
     data = base.model_dump(mode="json")

@@ -1,5 +1,5 @@
-"""An error found by any later stage names the params file, the key with its line, and the fix
-(issue 9). The frame, part-list/printer-fit and cut-list stages are covered by the golden corpus
+"""An error found by any later stage names the params file, the key with its line, and the fix.
+The frame, part-list/printer-fit and cut-list stages are covered by the golden corpus
 (tests/bad_inputs/); here the CAD stage, which runs in worker processes that only see a part."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import pytest
 
 from cogniframe import design as design_mod
 from cogniframe import spec as spec_mod
-from cogniframe.build import run_build
+from cogniframe.pipeline import run_build
 from cogniframe.errors import UserError
 
 

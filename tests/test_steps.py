@@ -16,8 +16,8 @@ from pathlib import Path
 import pytest
 
 from cogniframe import cache
-from cogniframe.build import graph
-from cogniframe.build.graph import Made, Step
+from cogniframe.pipeline import graph
+from cogniframe.pipeline.graph import Made, Step
 
 
 @pytest.fixture
@@ -36,8 +36,8 @@ def _word_steps(ran: list):
 
     def word(ctx, w):
         ran.append(f"word:{w}")
-        (ctx.out / f"{w}.txt").write_text(ctx.text[w])
-        return Made((f"{w}.txt",), {"letters": len(ctx.text[w])})
+        (ctx.out / f"{w}.txt").write_text(ctx.inputs["text"][w])
+        return Made((f"{w}.txt",), {"letters": len(ctx.inputs["text"][w])})
 
     def letters(ctx):
         ran.append("letters")
@@ -51,7 +51,7 @@ def _word_steps(ran: list):
         return Made((f"{w}.upper.txt",))
 
     return (
-        Step("word:{w}", (), word, key=lambda ctx, w: ctx.text[w]),
+        Step("word:{w}", (), word, key=lambda ctx, w: ctx.inputs["text"][w]),
         Step("letters", ("word:*",), letters, key=lambda ctx: [v["letters"] for v in ctx.each("word:*").values()]),
         Step("shout:{w}", ("word:{w}",), shout, key=lambda ctx, w: _sha(ctx.out / f"{w}.txt")),
         Step("summary", ("letters", "shout:*"), lambda ctx: Made((), f"{ctx['letters']} letters")),
@@ -180,11 +180,11 @@ def test_an_error_stops_the_graph_and_is_raised(tmp_path):
 
 def test_code_changes_are_part_of_the_key(tmp_path, private_cache, monkeypatch):
     ran = []
-    steps = (Step("s", (), lambda ctx: ran.append(1) or Made(), key=lambda ctx: 1, code=("build/graph.py",)),)
+    steps = (Step("s", (), lambda ctx: ran.append(1) or Made(), key=lambda ctx: 1, code=("pipeline/graph.py",)),)
     for _ in range(2):
         graph.run(graph.expand(steps, [{}]), graph.Context(tmp_path, {}))
     assert ran == [1]
-    monkeypatch.setitem(cache._CODE, ("build/graph.py",), "edited")  # as if graph.py had been edited
+    monkeypatch.setitem(cache._CODE, ("pipeline/graph.py",), "edited")  # as if graph.py had been edited
     graph.run(graph.expand(steps, [{}]), graph.Context(tmp_path, {}))
     assert ran == [1, 1]
 

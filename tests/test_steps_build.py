@@ -18,7 +18,7 @@ import pytest
 import yaml
 
 from cogniframe import spec as spec_mod
-from cogniframe.build import run_build
+from cogniframe.pipeline import run_build
 from cogniframe.export import slicer as slicer_mod
 
 pytestmark = pytest.mark.slow
@@ -164,7 +164,7 @@ def test_builds_through_the_cad_server_give_the_same_bytes(warm, tmp_path, monke
 
 def _part_change(*parts: str) -> set[str]:
     """Steps that rerun when exactly these parts' geometry changes (their mass changes too)."""
-    out = set(MASS) | FLIGHT | {"assembly", "glb", "renders", "viewer", "clash"}  # clash: issue 13, keyed like the assembly
+    out = set(MASS) | FLIGHT | {"assembly", "glb", "renders", "viewer", "clash"}  # clash: keyed like the assembly
     for p in parts:
         m = TPU if p in TPU_PARTS else ABS
         out |= {f"part:{m}/{p}", f"render:{p}", f"plates:{m}", f"previews:{m}"}
@@ -187,7 +187,7 @@ CHANGES = [
                                                 "motor_mount", "sensor_mount", "front_camera_mount")),
     ("printer.margin", 5, True, {f"plates:{TPU}", f"plates:{ABS}", f"previews:{TPU}", f"previews:{ABS}",
                                  f"slice:{TPU}", f"slice:{ABS}"}),
-    # print settings: no part changes; the plates carry them in the 3MF (issue 14), the previews stay
+    # print settings: no part changes; the plates carry them in the 3MF, the previews stay
     ("core.infill", 0.15, True, MASS | VIEW | FLIGHT | {f"plates:{ABS}", f"slice:{ABS}"}),
     ("printer.layer_height", 0.25, True, MASS | VIEW | FLIGHT | {f"plates:{TPU}", f"plates:{ABS}", f"slice:{TPU}", f"slice:{ABS}"}),
 ]

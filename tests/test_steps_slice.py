@@ -1,4 +1,4 @@
-"""The build's slice step (build.plates.make_slice) slices each plate on its own key: when one
+"""The build's slice step (pipeline.plates.make_slice) slices each plate on its own key: when one
 plate of a material changes, the material's other plates keep their sliced numbers (no
 PrusaSlicer run), and the numbers are those of a fresh slice. PrusaSlicer is replaced by a
 recorder here; the real slicer runs in test_slicer.py and test_steps_build.py."""
@@ -13,10 +13,10 @@ import trimesh
 
 from cogniframe import spec as spec_mod
 from cogniframe import design as design_mod
-from cogniframe.build import context as steps
+from cogniframe.pipeline import context as steps
 from cogniframe.export import plates as pl
 from cogniframe.export import slicer
-from cogniframe.build.plates import make_slice
+from cogniframe.pipeline.plates import make_slice
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -41,8 +41,7 @@ def _ctx(out: Path, plates: list[pl.Plate], use_cache: bool = True):
         def get(self):
             return ("prusa-slicer", "PrusaSlicer-test")
 
-    ctx = steps.BuildContext(out, {"spec": spec, "design": design_mod.design(spec), "slicer": FakeSlicer(), "gcode": False},
-                             use_cache=use_cache)
+    ctx = steps.BuildContext(out, steps.Inputs(spec, design_mod.design(spec), slicer=FakeSlicer()), use_cache=use_cache)
     ctx.values["plates:tpu_95a"] = value
     return ctx
 

@@ -33,7 +33,7 @@ def _variant(base: str = "carbon", **sections) -> spec_mod.Spec:
 
 
 def _design(s):
-    f = frame_mod.build(s)
+    f = frame_mod.frame_of(s)
     return s, f, partlist.part_list(s, f)
 
 
@@ -230,7 +230,7 @@ def test_play_springs_vanish_for_an_interference_fit(carbon_fe):
     s, f, p, joints = carbon_fe
     assert st.play_springs(s, f, p, joints, 95.0)
     tight = _variant(joints={"fit_clearance": {"tpu_95a": -0.05}})
-    assert st.play_springs(tight, frame_mod.build(tight), p, joints, 95.0) == {}
+    assert st.play_springs(tight, frame_mod.frame_of(tight), p, joints, 95.0) == {}
 
 
 def test_load_cases_fields_and_physics(carbon_cases):
@@ -326,7 +326,7 @@ def test_k_key_ignores_what_only_weighs_and_follows_the_geometry():
 
 
 def test_a_battery_mass_change_reuses_the_cached_k(tmp_path, monkeypatch):
-    # issue 11: a heavier battery re-runs the drop and the load cases, not the frame's k
+    # a heavier battery re-runs the drop and the load cases, not the frame's k
     from cogniframe.analysis import verdict
 
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path))

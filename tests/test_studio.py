@@ -42,7 +42,7 @@ CARBON = ROOT / "params" / "carbon.yaml"
 def carbon_form():
     d = cf.load(CARBON)
     values = d.spec.model_dump(mode="json")
-    groups = form.build(spec_mod.json_schema(), values)
+    groups = form.groups_of(spec_mod.json_schema(), values)
     return d, groups, form.fields(groups), form.render(groups, values)
 
 
@@ -70,7 +70,7 @@ def test_form_has_one_input_per_schema_value_named_by_its_key(carbon_form):
 
 
 def test_field_parse():
-    f = {k: v for k, v in form.fields(form.build(spec_mod.json_schema(), cf.load(CARBON).spec.model_dump(mode="json"))).items()}
+    f = {k: v for k, v in form.fields(form.groups_of(spec_mod.json_schema(), cf.load(CARBON).spec.model_dump(mode="json"))).items()}
     assert f["rods.diameter"].parse("4") == 4 and f["rods.diameter"].parse(" 4.25 ") == 4.25
     assert f["rods.diameter"].parse("abc") == "abc"  # the validator says what is wrong with it
     assert f["motors.max_thrust_g"].parse("") is None and f["motors.max_thrust_g"].parse("null") is None
@@ -188,7 +188,7 @@ def test_set_values_makes_a_whole_edit_from_one_parse(monkeypatch):
 
     d = cf.load(CARBON)
     values = d.spec.model_dump(mode="json")
-    fields = form.fields(form.build(spec_mod.json_schema(), values))
+    fields = form.fields(form.groups_of(spec_mod.json_schema(), values))
     edit = {k: form.value_at(values, k) for k in fields}
     edit.update({"frame.width": 220, "core.battery.mass": 70, "model.new_section.a": 1, "model.new_section.b": [1, 2]})
     one_by_one = yamledit._one_by_one(d.text, edit)

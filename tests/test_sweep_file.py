@@ -16,7 +16,7 @@ from cogniframe.errors import UserError
 from cogniframe.sweep import evaluate as ev
 from cogniframe.sweep import run as run_mod
 from cogniframe.sweep import sample
-from cogniframe.sweep import spec as sweep_spec
+from cogniframe.sweep import sweepfile
 
 ROOT = Path(__file__).resolve().parents[1]
 CARBON = ROOT / "params" / "carbon.yaml"
@@ -41,12 +41,12 @@ vary:
 
 def error_of(path: Path) -> str:
     with pytest.raises(UserError) as e:
-        sweep_spec.load(path)
+        sweepfile.load(path)
     return str(e.value)
 
 
 def test_example_sweep_file_loads_with_its_five_keys():
-    sw = sweep_spec.load(ROOT / "examples" / "sweeps" / "carbon.yaml")
+    sw = sweepfile.load(ROOT / "examples" / "sweeps" / "carbon.yaml")
     assert [k.name for k in sw.keys] == ["rods.diameter", "joints.wall", "joints.socket_depth", "frame.height", "rods.material"]
     assert (sw.keys[0].lo, sw.keys[0].hi) == (2.5, 4.0) and sw.keys[4].choices == ("carbon_rod", "bamboo")
     assert sw.settings.samples == 300 and sw.settings.sampler == "lhs" and sw.base_data["name"] == "carbon"
@@ -111,7 +111,7 @@ def test_foreign_non_empty_folder_is_refused(tmp_path, run_cli):
 # -- samplers --------------------------------------------------------------------------------
 
 def test_lhs_puts_one_design_in_each_stratum_of_every_range_key(tmp_path):
-    sw = sweep_spec.load(sweep_file(tmp_path, GOOD))
+    sw = sweepfile.load(sweep_file(tmp_path, GOOD))
     d = sample.designs(sw)
     assert len(d) == 8 and d == sample.designs(sw)  # seeded: same file, same designs
     for key, lo, hi in (("rods.diameter", 2.5, 4.0), ("frame.height", 105, 140)):
@@ -121,7 +121,7 @@ def test_lhs_puts_one_design_in_each_stratum_of_every_range_key(tmp_path):
 
 
 def test_grid_is_the_full_product_with_ends(tmp_path):
-    sw = sweep_spec.load(sweep_file(tmp_path, GOOD.replace("sampler: lhs", "sampler: grid\nlevels: 3")))
+    sw = sweepfile.load(sweep_file(tmp_path, GOOD.replace("sampler: lhs", "sampler: grid\nlevels: 3")))
     d = sample.designs(sw)
     assert len(d) == 3 * 3 * 2
     assert sorted({x["rods.diameter"] for x in d}) == [2.5, 3.25, 4.0]
@@ -129,13 +129,13 @@ def test_grid_is_the_full_product_with_ends(tmp_path):
 
 
 def test_sobol_is_saltelli_n_times_keys_plus_two(tmp_path):
-    sw = sweep_spec.load(sweep_file(tmp_path, GOOD.replace("sampler: lhs", "sampler: sobol")))
+    sw = sweepfile.load(sweep_file(tmp_path, GOOD.replace("sampler: lhs", "sampler: sobol")))
     assert len(sample.designs(sw)) == 8 * (3 + 2)
 
 
 def test_random_sampler_is_seeded(tmp_path):
-    a = sample.designs(sweep_spec.load(sweep_file(tmp_path, GOOD.replace("sampler: lhs", "sampler: random"))))
-    b = sample.designs(sweep_spec.load(sweep_file(tmp_path, GOOD.replace("sampler: lhs", "sampler: random").replace("seed: 3", "seed: 4"))))
+    a = sample.designs(sweepfile.load(sweep_file(tmp_path, GOOD.replace("sampler: lhs", "sampler: random"))))
+    b = sample.designs(sweepfile.load(sweep_file(tmp_path, GOOD.replace("sampler: lhs", "sampler: random").replace("seed: 3", "seed: 4"))))
     assert len(a) == 8 and a != b
 
 
@@ -207,7 +207,7 @@ def test_timed_out_design_is_recorded_not_raised():
 
 
 def test_plan_ids_are_hashes_of_the_full_params(tmp_path):
-    sw = sweep_spec.load(sweep_file(tmp_path, GOOD))
+    sw = sweepfile.load(sweep_file(tmp_path, GOOD))
     ids = [i for i, _ in run_mod.plan(sw)]
     assert len(set(ids)) == 8 and all(len(i) == 16 for i in ids)
 
@@ -238,7 +238,7 @@ def _linear_table(sweep):
 def test_sobol_total_indices_match_the_variance_shares_of_a_linear_model(tmp_path):
     from cogniframe.sweep import report
 
-    sw = sweep_spec.load(sweep_file(tmp_path, LINEAR.replace("SAMPLES", "256").replace("SAMPLER", "sobol")))
+    sw = sweepfile.load(sweep_file(tmp_path, LINEAR.replace("SAMPLES", "256").replace("SAMPLER", "sobol")))
     method, inputs, outputs, m, _ = report.sensitivity(sw, _linear_table(sw))
     assert method.startswith("Sobol") and outputs == ["mass_g"]
     # Var(battery) = 30^2/12 = 75, Var(4 prop) = 16 * 2.5^2 / 12 = 8.33: ST = 0.9 and 0.1
@@ -248,7 +248,7 @@ def test_sobol_total_indices_match_the_variance_shares_of_a_linear_model(tmp_pat
 def test_src_of_a_linear_model_is_slope_times_sigma_ratio(tmp_path):
     from cogniframe.sweep import report
 
-    sw = sweep_spec.load(sweep_file(tmp_path, LINEAR.replace("SAMPLES", "200").replace("SAMPLER", "lhs")))
+    sw = sweepfile.load(sweep_file(tmp_path, LINEAR.replace("SAMPLES", "200").replace("SAMPLER", "lhs")))
     table = _linear_table(sw)
     method, inputs, outputs, m, r2 = report.sensitivity(sw, table)
     sb, sp = table["core.battery.mass"].std(ddof=0), table["motors.prop_mass"].std(ddof=0)
@@ -268,7 +268,7 @@ def test_pareto_front_is_the_passing_non_dominated_set():
 
 
 def test_set_values_apply_to_every_design_and_are_checked(tmp_path):
-    sw = sweep_spec.load(sweep_file(tmp_path, GOOD + "set:\n  core.battery.mass: 40\n  requirements.drop_heights_cm: [50, 120]\n"))
+    sw = sweepfile.load(sweep_file(tmp_path, GOOD + "set:\n  core.battery.mass: 40\n  requirements.drop_heights_cm: [50, 120]\n"))
     assert sw.base_data["core"]["battery"]["mass"] == 40
     # the sweep's default joint model comes after the file's set: values
     assert sw.fixed == ("core.battery.mass", "requirements.drop_heights_cm", "model.stiffness_model")
@@ -316,7 +316,7 @@ def test_second_sweep_into_a_folder_being_written_is_refused(tmp_path, run_cli):
 def test_best_yaml_edits_only_the_changed_values_and_keeps_comments(tmp_path):
     from cogniframe.sweep import optimize as opt
 
-    sw = sweep_spec.load(sweep_file(tmp_path, GOOD + "set:\n  requirements.drop_heights_cm: [50, 120]\n"))
+    sw = sweepfile.load(sweep_file(tmp_path, GOOD + "set:\n  requirements.drop_heights_cm: [50, 120]\n"))
     row = {"rods.diameter": np.float64(2.75), "frame.height": 120.0, "rods.material": "bamboo"}  # height unchanged
     changed = opt.write_best_yaml(sw, row, tmp_path / "best.yaml")
     assert changed == ["requirements.drop_heights_cm", "rods.diameter", "rods.material"]
@@ -331,6 +331,6 @@ def test_best_yaml_edits_only_the_changed_values_and_keeps_comments(tmp_path):
 
 
 def test_sobol_example_is_a_full_saltelli_design():
-    sw = sweep_spec.load(ROOT / "examples" / "sweeps" / "carbon-sobol.yaml")
+    sw = sweepfile.load(ROOT / "examples" / "sweeps" / "carbon-sobol.yaml")
     assert sw.settings.sampler == "sobol" and len(sw.keys) == 6
     assert len(sample.designs(sw)) == 64 * (6 + 2)

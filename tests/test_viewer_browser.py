@@ -175,7 +175,7 @@ def test_click_on_a_part_shows_its_data(carbon_report, page_factory, name):
 
 
 def test_vitamins_from_the_item_list_show_and_toggle(page_factory, tmp_path):
-    """Data-driven: a `vitamin` item (as issue 13 will add) appears, is clickable, and hides."""
+    """Data-driven: a `vitamin` item appears, is clickable, and hides."""
     spec = spec_mod.load(ROOT / "params" / "carbon.yaml")
     result = verdict.check(spec)
     battery = trimesh.creation.box((70, 35, 15))

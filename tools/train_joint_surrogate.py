@@ -89,7 +89,7 @@ def design_parts(overrides: dict):
     from cogniframe.sweep.evaluate import apply_overrides
 
     s = spec.from_dict(apply_overrides(base_params(), overrides))
-    f = frame.build(s)
+    f = frame.frame_of(s)
     return s, f, partlist.part_list(s, f)
 
 

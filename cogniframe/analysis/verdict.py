@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from ..design import Design, design
+from ..design import Derived, design
 from ..spec import Spec
 from . import mass as mass_mod
 from .numerics import one_blas_thread
@@ -16,8 +16,8 @@ from .numerics import one_blas_thread
 
 @dataclass(frozen=True)
 
-class CheckResult:
-    design: Design
+class Findings:
+    design: Derived
     mass: mass_mod.MassBudget
     drop: object | None  # analysis.impact.DropResult once the physics stage is available
     problems: tuple[str, ...]
@@ -36,8 +36,8 @@ class CheckResult:
         return "FAIL" if self.problems else "PASS"
 
 
-def check(spec: Spec, geometry: dict | None = None, clash=None, design_: Design | None = None,
-          peaks: bool = True, modes: bool = True, survival_margins: bool = True) -> CheckResult:
+def check(spec: Spec, geometry: dict | None = None, clash=None, design_: Derived | None = None,
+          peaks: bool = True, modes: bool = True, survival_margins: bool = True) -> Findings:
     """Mass budget, crash margin, flight and requirements; `geometry` = CAD volumes when known,
     `clash` = the build's clash check (analysis.clash.ClashResult) when known, `design_` = this
     spec's design when the caller has it. ``peaks=False`` leaves out the predicted peak
@@ -52,7 +52,7 @@ def check(spec: Spec, geometry: dict | None = None, clash=None, design_: Design 
                                survival_margins=survival_margins), clash)
 
 
-def mass_and_drop(spec: Spec, geometry: dict | None = None, design_: Design | None = None):
+def mass_and_drop(spec: Spec, geometry: dict | None = None, design_: Derived | None = None):
     """The first, cheap part of `check`: (design, mass budget, drop model, frame session): what the
     build's mass and drop figures draw while the load cases are still being solved."""
     d = design(spec) if design_ is None else design_
@@ -65,8 +65,8 @@ def mass_and_drop(spec: Spec, geometry: dict | None = None, design_: Design | No
     return d, budget, drop, session
 
 
-def complete(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=None, peaks: bool = True,
-             modes: bool = True, survival_margins: bool = True) -> CheckResult:
+def complete(spec: Spec, d: Derived, budget: mass_mod.MassBudget, drop, session=None, peaks: bool = True,
+             modes: bool = True, survival_margins: bool = True) -> Findings:
     """The rest of `check` for that mass budget and drop model: load cases, peaks, flight and the
     verdict (no clash check: `with_clash` adds the build's). ``peaks``, ``modes``,
     ``survival_margins``: as in `check`."""
@@ -85,11 +85,11 @@ def complete(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=N
 
     # the flight files' mass properties and resonance flags: a flagged mode WARNs, never FAILs
     model, warn = flight_files.for_check(spec, d, budget, stiffness)
-    return CheckResult(d, budget, drop, tuple(problems), stiffness, peak, flight, survival=surv, notes=tuple(_notes(spec, d)),
+    return Findings(d, budget, drop, tuple(problems), stiffness, peak, flight, survival=surv, notes=tuple(_notes(spec, d)),
                        fit=fit, flight_model=model, warnings=warn)
 
 
-def fit_of(spec: Spec, d: Design):
+def fit_of(spec: Spec, d: Derived):
     """The fit check of the design (analysis/fit_check.py): screws through their holes into their
     threads, holes clear of the rods, motor holes on the motor's pattern."""
     from ..fasteners import fasteners
@@ -98,7 +98,7 @@ def fit_of(spec: Spec, d: Design):
     return fit_check.check(spec, d.parts, fasteners(spec, d.frame, d.parts))
 
 
-def _notes(spec: Spec, d: Design) -> list[str]:
+def _notes(spec: Spec, d: Derived) -> list[str]:
     """Joints the surrogate model does not cover (solved by FE instead): a note, not a FAIL."""
     if spec.model.stiffness_model != "surrogate" or spec.model.k_n_per_m is not None:
         return []
@@ -135,7 +135,7 @@ def _survival(spec: Spec, budget: mass_mod.MassBudget, drop, stiffness: dict | N
     return survival.evaluate(spec, drop, stiffness, peaks)
 
 
-def with_clash(result: CheckResult, clash) -> CheckResult:
+def with_clash(result: Findings, clash) -> Findings:
     """`result` with the build's clash check: its clashes are FAIL problems, after the others."""
     if clash is None:
         return result
@@ -152,13 +152,13 @@ def _aircraft_problems(spec: Spec, flight) -> list[str]:
     return out
 
 
-def _drop(spec: Spec, d: Design, budget: mass_mod.MassBudget, session=None):
+def _drop(spec: Spec, d: Derived, budget: mass_mod.MassBudget, session=None):
     from . import drop as drop_mod
 
     return drop_mod.evaluate_design(spec, d.frame, budget.total_g, session)
 
 
-def _physics(spec: Spec, d: Design, budget: mass_mod.MassBudget, drop, session=None, peaks: bool = True,
+def _physics(spec: Spec, d: Derived, budget: mass_mod.MassBudget, drop, session=None, peaks: bool = True,
              modes: bool = True):
     """The frame's load cases and the predicted peak deceleration (both cached on disk)."""
     from . import drop as drop_mod
@@ -210,7 +210,7 @@ def _problems(spec: Spec, budget: mass_mod.MassBudget, drop) -> list[str]:
     return out
 
 
-def check_dict(result: CheckResult) -> dict:
+def check_dict(result: Findings) -> dict:
     """The stable JSON of `cogniframe check --json`."""
     d = result.design
     out = {

@@ -72,7 +72,7 @@ class Design:
     """One validated design: its params (`spec`), the YAML text they come from, and where that
     text lives. Immutable: `with_values` returns a new Design."""
 
-    def __init__(self, spec: Spec, text: str, source: str, path: Path | None, design: design_mod.Design | None = None):
+    def __init__(self, spec: Spec, text: str, source: str, path: Path | None, design: design_mod.Derived | None = None):
         self._spec = spec
         self._text = text
         self._source = source
@@ -105,8 +105,8 @@ class Design:
         return self._source
 
     @property
-    def derived(self) -> design_mod.Design:
-        """Frame graph, part list and cut list (`design_mod.Design`): what the checks and the CAD use."""
+    def derived(self) -> design_mod.Derived:
+        """Frame graph, part list and cut list (`design_mod.Derived`): what the checks and the CAD use."""
         if self._design is None:
             from .. import design as design_mod
 
@@ -190,11 +190,10 @@ class Design:
         try:
             with self._spec.blamed(), one_blas_thread():  # as `build` computes it: same numbers
                 if self.needs_fe():  # new joint geometries: their FE on worker processes first
-                    from ..analysis.joints import fe_joints, solve_missing
-                    from ..analysis.stiffness import joint_parts
+                    from ..analysis.joints import solve_fe
 
                     with joint_fe_workers() as submit:
-                        solve_missing(self._spec, fe_joints(self._spec, joint_parts(d.parts)), submit=submit)
+                        solve_fe(self._spec, d.parts, submit)
                 result = verdict.check(self._spec, design_=d)
         except UserError as e:
             raise _params_error(e, self._source) from None
@@ -204,12 +203,9 @@ class Design:
         """Whether `check` would solve a joint's finite-element model first (a joint geometry not in
         the cache yet, with `model.stiffness_model: fe`, or outside the surrogate's training box
         with `surrogate`): seconds instead of a tenth of one."""
-        if self._spec.model.stiffness_model == "analytic":
-            return False
-        from ..analysis.joints import fe_joints, has_unsolved
-        from ..analysis.stiffness import joint_parts
+        from ..analysis.joints import needs_fe
 
-        return has_unsolved(self._spec, fe_joints(self._spec, joint_parts(self.derived.parts)))
+        return needs_fe(self._spec, self.derived.parts)
 
     def with_fast_model(self) -> Design:
         """This design with `model.stiffness_model: analytic` (the joints' closed forms, milliseconds):
@@ -228,7 +224,7 @@ class Design:
         only when the build succeeded. `server`: CAD workers from the CAD server (None: the CLI's
         default, COGNIFRAME_CAD_SERVER). `console`: a rich Console for the progress lines
         (default: stderr)."""
-        from ..build import run_build
+        from ..pipeline import run_build
         from ..runtime import server as cad_server
 
         out_path = Path(out) if out is not None else None
@@ -326,6 +322,34 @@ def _load(path: str | Path, validate: bool = True) -> Design:
     return d
 
 
+def build_file(path: str | Path, out: str | Path | None = None, *, jobs: int | None = None, use_cache: bool = True,
+               gcode: bool = False, server: bool | None = None, console=None) -> BuildResult:
+    """`cogniframe build PATH`: `load(path).build(...)`, with the CAD server (when wanted) started
+    before the params are read, so that its seconds of imports overlap this process's own and
+    the validation; the server is let go again when the build did not connect to it (bad
+    params, nothing to build, Ctrl-C)."""
+    from ..runtime import server as cad_server
+
+    use_server = cad_server.wanted(server)
+    early = None
+    if use_server:
+        from ..stack import versions
+
+        early = cad_server.prestart(versions())
+    try:
+        from ..runtime.heap import imports_frozen
+
+        with imports_frozen():
+            from .. import pipeline  # noqa: F401  (its imports, frozen with the others)
+
+        design = _load(path, validate=False)  # the build validates the frame and parts before any folder is touched
+        return design.build(out, jobs=jobs, use_cache=use_cache, gcode=gcode, server=use_server, console=console,
+                            early=early)
+    finally:
+        if early is not None:
+            early.release()
+
+
 def from_text(text: str, source: str = "<params>", path: Path | None = None) -> Design:
     """A Design from YAML text; messages name `source` (e.g. the file the text will be saved to)."""
     from .. import spec as spec_mod
@@ -369,9 +393,9 @@ def write_text_atomic(path: Path, text: str) -> None:
 
 class CheckResult:
     """What `cogniframe check` finds. The figures are read from `to_dict()` (the `check --json`
-    object), so they equal the CLI's JSON exactly. `result` is the check's own object (`analysis.verdict.CheckResult`)."""
+    object), so they equal the CLI's JSON exactly. `result` is the check's own object (`analysis.verdict.Findings`)."""
 
-    def __init__(self, result: verdict.CheckResult):
+    def __init__(self, result: verdict.Findings):
         self.result = result
         self._json: dict | None = None
 
@@ -518,7 +542,7 @@ def sweep(sweep_file_or_dict: str | Path | Mapping[str, Any], scheduler: str | N
     import pandas as pd
 
     from ..sweep import run as sweep_run
-    from ..sweep import spec as sweep_spec
+    from ..sweep import sweepfile
 
     with tempfile.TemporaryDirectory(prefix="cogniframe-sweep-") as tmp:
         if isinstance(sweep_file_or_dict, Mapping):
@@ -529,11 +553,11 @@ def sweep(sweep_file_or_dict: str | Path | Mapping[str, Any], scheduler: str | N
                 p.parent.mkdir()
                 p.write_text(base.text, encoding="utf-8")
                 data["base"] = str(p)
-            sw = sweep_spec.from_dict(data, source="<sweep>", text=None, folder=Path.cwd())
+            sw = sweepfile.from_dict(data, source="<sweep>", text=None, folder=Path.cwd())
             folder = Path(out) if out is not None else Path(tmp) / "sweep"
             reports = out is not None
         else:
-            sw = sweep_spec.load(sweep_file_or_dict)
+            sw = sweepfile.load(sweep_file_or_dict)
             folder = Path(out) if out is not None else sweep_run.default_out(sw)
             reports = True
         result = sweep_run.run_sweep(sw, folder, scheduler=scheduler, workers=workers, progress=progress, reports=reports)
@@ -542,3 +566,35 @@ def sweep(sweep_file_or_dict: str | Path | Mapping[str, Any], scheduler: str | N
     df.attrs["out_dir"] = str(result.out_dir) if out is not None or not isinstance(sweep_file_or_dict, Mapping) else None
     df.attrs["summary"] = result.as_dict()
     return df
+
+
+def optimize(sweep_file: str | Path, *, minimize=(), maximize=(), constraints=(), trials: int | None = None,
+             out: str | Path | None = None, scheduler: str | None = None, workers: int | None = None, cad: int = 0,
+             verify: int | None = None, progress: Callable[[Any], None] | None = None):
+    """`cogniframe optimize` from Python: optuna over the sweep file's vary box on Dask, into `out`
+    (default out/sweeps/<file name>: trials.parquet, best.yaml). `minimize`/`maximize`: output
+    names (e.g. "mass_g"); `constraints`: "OUT >= V" / "OUT <= V". Returns the run's result
+    (`best`, `as_dict()`, `text()`)."""
+    from ..sweep import optimize as opt
+    from ..sweep import sweepfile
+
+    sw = sweepfile.load(sweep_file)
+    objectives = opt.parse_objectives(list(minimize), list(maximize))
+    parsed = [opt.parse_constraint(c) for c in constraints]
+    return opt.run_optimize(sw, objectives, parsed, out_dir=Path(out) if out is not None else None, trials=trials,
+                            scheduler=scheduler, workers=workers, cad=cad, verify=verify, progress=progress)
+
+
+def sweep_progress() -> Callable[[Any], None]:
+    """The command line's progress display for `sweep` and `optimize`: a bar on a terminal, one
+    line per batch otherwise (on stderr)."""
+    from ..sweep import run as sweep_run
+
+    return sweep_run.progress_printer()
+
+
+def sweep_schema() -> dict:
+    """The JSON Schema of a sweep file (for editor autocompletion)."""
+    from ..sweep import sweepfile
+
+    return sweepfile.json_schema()

@@ -15,19 +15,10 @@ from __future__ import annotations
 import base64
 import html
 import json
-import os
 import secrets
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
-
-
-class _NoWarmup:
-    """The build's idle-time imports (matplotlib, pyvista, trimesh for the plates, previews and
-    renders) are for main-thread steps; the part steps alone need none of them."""
-
-    def start(self) -> None:
-        pass
 
 
 def build_parts(spec, design, out: Path, *, fe: bool = False, server: bool | None = None,
@@ -38,31 +29,20 @@ def build_parts(spec, design, out: Path, *, fe: bool = False, server: bool | Non
     (its file names, volume, `print_from_local`, ...) by part name. `on_step(task, done, total,
     part_values)` after each step; `part_values()` gives the values once every part step is done
     (the files are in `out` then, while the FE may still run)."""
-    from .. import stack
-    from ..build import graph, steps
-    from ..build.context import BuildContext
-    from ..runtime import BuildRuntime
+    from .. import pipeline
     from ..runtime import server as cad_server
 
-    out.mkdir(parents=True, exist_ok=True)
-    versions = stack.versions()
-    log = log or (lambda message: None)
-    tasks = [t for t in graph.expand(steps.STEPS, steps.rows(design))
-             if t.name.startswith("part:") or (fe and t.name == "estimate")]
+    only = ("part:*", "estimate") if fe else ("part:*",)
+    total = len(design.parts) + (1 if fe else 0)
     done = [0]
 
-    with BuildRuntime(os.cpu_count() or 1, fe=fe, server=cad_server.wanted(server), stack=versions, log=log) as rt:
-        ctx = BuildContext(out, {"spec": spec, "design": design, "cad": rt.cad, "warm": _NoWarmup(), "log": log},
-                           stack=versions, use_cache=True)
+    def finished(record, ctx) -> None:
+        done[0] += 1
+        if on_step is not None:
+            on_step(record.task, done[0], total, lambda: {p.name: ctx.part_value(p.name) for p in design.parts})
 
-        def finished(record) -> None:
-            done[0] += 1
-            if on_step is not None:
-                on_step(record.task, done[0], len(tasks), lambda: {p.name: ctx.part_value(p.name) for p in design.parts})
-        if fe or any(graph.will_run(t, ctx) for t in tasks if t.name.startswith("part:")):
-            rt.cad.start_server()
-        graph.run(tasks, ctx, on_done=finished, on_error=rt.cancel)
-        return {p.name: ctx.part_value(p.name) for p in design.parts}
+    ctx, _ = pipeline.run(spec, design, out, only=only, server=cad_server.wanted(server), log=log, on_step=finished)
+    return {p.name: ctx.part_value(p.name) for p in design.parts}
 
 
 def items(spec, design, out: Path, values: dict[str, dict]) -> list:
@@ -99,28 +79,17 @@ def design_html(d) -> str:
     return inline_html(meta, buf, title=f"{d.name}: 3D view")
 
 
-_LOADER = """
-const uid = %(uid)s;
-const text = (name) => document.getElementById(uid + "-" + name).textContent;
-const url = (src) => URL.createObjectURL(new Blob([src], {type: "text/javascript"}));
-const threeUrl = url(text("three"));
-const orbitUrl = url(text("orbit").replace(/from\\s*['"]three['"]/g, "from '" + threeUrl + "'"));
-const viewerUrl = url(text("viewer-js"));
-const root = document.getElementById(uid);
-try {
-  const [THREE, orbit, viewer] = await Promise.all([import(threeUrl), import(orbitUrl), import(viewerUrl)]);
-  viewer.start(THREE, orbit.OrbitControls, root, JSON.parse(text("scene")), text("geometry"));
-} catch (e) {
-  root.dataset.error = String(e);
-  root.querySelector(".cf-info").textContent = "The 3D view could not start here (" + e + ").";
-}
-"""
+
+
+def _view_id(name: str) -> str:
+    """The fragment's ids of the viewer's text scripts, after its uid."""
+    return json.dumps("viewer-js" if name == "viewer" else name)
 
 
 def inline_html(meta: dict, buf: bytes, title: str = "3D view") -> str:
     """The viewer with three.js, OrbitControls, viewer.js and the scene inline, under ids made
     for this fragment (the report's section uses fixed ids: one per page)."""
-    from ..report.viewer import CSS, THREE_VERSION, _read, _script_text
+    from ..report.viewer import CSS, THREE_VERSION, _read, _script_text, module_loader
 
     uid = "cfv-" + secrets.token_hex(6)
     code = {n: _script_text(_read(n), n) for n in ("three.module.min.js", "OrbitControls.js", "viewer.js")}
@@ -145,6 +114,6 @@ def inline_html(meta: dict, buf: bytes, title: str = "3D view") -> str:
         f'<script type="text/plain" id="{uid}-viewer-js">{code["viewer.js"]}</script>',
         f'<script type="application/json" id="{uid}-scene">{data}</script>',
         f'<script type="text/plain" id="{uid}-geometry">{b64}</script>',
-        f'<script type="module">{_LOADER % {"uid": json.dumps(uid)}}</script>',
+        f'<script type="module">{module_loader(_view_id, "uid", uid=json.dumps(uid))}</script>',
         "</div>",
     ])

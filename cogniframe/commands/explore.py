@@ -1,6 +1,6 @@
 """`cogniframe sweep` and `cogniframe optimize`: explore the design space on Dask.
 
-Thin wrappers over cogniframe.sweep; `register(app)` adds both commands. Bad sweep files and
+Thin wrappers over the API (api.sweep, api.optimize, api.sweep_schema); `register(app)` adds both commands. Bad sweep files and
 options raise UserError (exit 2); a finished sweep exits 0 whatever its designs' verdicts.
 """
 
@@ -22,17 +22,16 @@ WorkersOpt = Annotated[Optional[int], typer.Option("--workers", min=1, help="loc
 def sweep(sweep_file: SweepArg, out: OutOpt = None, scheduler: SchedulerOpt = None, workers: WorkersOpt = None,
           json_out: Annotated[bool, typer.Option("--json", help="print one JSON object: designs, pass, fail, invalid, seconds, scheduler, workers")] = False) -> None:
     """Check every design of a sweep file on Dask: results.parquet, pareto.png, sensitivity.png, summary.md."""
-    from cogniframe.sweep import run, spec
+    from cogniframe import api
 
-    sw = spec.load(sweep_file)
-    result = run.run_sweep(sw, out, scheduler=scheduler, workers=workers, progress=run.progress_printer())
+    table = api.sweep(sweep_file, scheduler, out=out, workers=workers, progress=api.sweep_progress())
+    c = table.attrs["summary"]
     if json_out:
-        sys.stdout.write(json.dumps(result.as_dict()) + "\n")
+        sys.stdout.write(json.dumps(c) + "\n")
     else:
         from rich.console import Console
 
-        c = result.as_dict()
-        Console().print(f"wrote {result.out_dir}: {c['designs']} designs ({c['pass']} PASS, {c['fail']} FAIL, "
+        Console().print(f"wrote {table.attrs['out_dir']}: {c['designs']} designs ({c['pass']} PASS, {c['fail']} FAIL, "
                         f"{c['invalid']} INVALID, {c['timeout']} TIMEOUT, {c['error']} ERROR; {c['skipped']} reused) "
                         f"in {c['seconds']:.1f} s on {c['workers']} workers", highlight=False)
 
@@ -47,14 +46,11 @@ def optimize(sweep_file: SweepArg,
              verify: Annotated[Optional[int], typer.Option("--verify", min=0, help="re-check the N best with the base file's joint model when the sweep evaluates with another (0: off; default: 4 when screening with the closed forms, none with the surrogate)")] = None,
              json_out: Annotated[bool, typer.Option("--json", help="print one JSON object with the best design and the run's numbers")] = False) -> None:
     """Optimise over the sweep file's vary box with optuna on Dask: trials.parquet and best.yaml (passes `check`)."""
-    from cogniframe.sweep import optimize as opt
-    from cogniframe.sweep import run, spec
+    from cogniframe import api
 
-    sw = spec.load(sweep_file)
-    objectives = opt.parse_objectives(minimize or [], maximize or [])
-    constraints = [opt.parse_constraint(c) for c in constraint or []]
-    result = opt.run_optimize(sw, objectives, constraints, out_dir=out, trials=trials, scheduler=scheduler,
-                              workers=workers, cad=cad, verify=verify, progress=run.progress_printer())
+    result = api.optimize(sweep_file, minimize=minimize or (), maximize=maximize or (), constraints=constraint or (),
+                          trials=trials, out=out, scheduler=scheduler, workers=workers, cad=cad, verify=verify,
+                          progress=api.sweep_progress())
     if json_out:
         sys.stdout.write(json.dumps(result.as_dict()) + "\n")
     else:
@@ -66,9 +62,9 @@ def optimize(sweep_file: SweepArg,
 
 def sweep_schema() -> None:
     """Print the JSON Schema of a sweep file (for editor autocompletion)."""
-    from cogniframe.sweep import spec
+    from cogniframe import api
 
-    sys.stdout.write(json.dumps(spec.json_schema(), indent=2) + "\n")
+    sys.stdout.write(json.dumps(api.sweep_schema(), indent=2) + "\n")
 
 
 def register(app: typer.Typer) -> None:

@@ -294,8 +294,8 @@ def plate_3mf(plate: Plate, config: str | None = None) -> tuple[bytes, tuple[tup
     whose single component is that mesh, and each copy is a build item translated to its place on
     the bed, named after the copy (`knee_3`, also its `partnumber`). PrusaSlicer reads the shared
     mesh as one object with several instances (`Metadata/Slic3r_PE_model.config` says how many)
-    and slices it once: the TPU plate of the carbon preset slices in 1.4 s instead of 3.8 s with
-    the same grams and a print time within 0.2 %. Other slicers read the plain 3MF core spec.
+    and slices it once, in a fraction of the time and with the same grams (docs/measurements.md).
+    Other slicers read the plain 3MF core spec.
 
     `config`: PrusaSlicer project settings (`slicer.project_config`), stored as
     `Metadata/Slic3r_PE.config` so PrusaSlicer slices the plate with them and no .ini.

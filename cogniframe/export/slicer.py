@@ -126,11 +126,11 @@ def profile_ini(spec: Spec, material: str, infill: float) -> str:
         "support_material": "0",
         "skirts": "0",
         "brim_width": "0",
-        # PrusaSlicer 2.5's "aligned" seam placer takes ~80 % of the time on small joints (6 s vs 1.5 s
-        # for a motor mount); "rear" gives the same grams and puts every seam at the back.
+        # PrusaSlicer 2.5's "aligned" seam placer takes most of the slicing time on small joints
+        # (docs/measurements.md); "rear" gives the same grams and puts every seam at the back.
         "seam_position": "rear",
-        # Simplify sliced outlines to 0.0125 mm (PrusaSlicer's default 0 keeps every facet edge): a third
-        # less slicing time on the joint plate, the same grams and the print time within seconds.
+        # Simplify sliced outlines to 0.0125 mm (PrusaSlicer's default 0 keeps every facet edge): less
+        # slicing time on the joint plate, the same grams and the print time within seconds.
         "resolution": "0.0125",
         "filament_type": s.filament_type,
         "filament_diameter": f"{FILAMENT_DIAMETER:g}",
@@ -183,7 +183,7 @@ def project_configs(spec: Spec, infill: Mapping[str, float] | None = None) -> di
 
 def default_infill(spec: Spec) -> dict[str, float]:
     """Infill by material, as the design's parts print (`partlist.infill_by_material`)."""
-    from ..frame import build as frame
+    from ..frame import frame_of as frame
     from ..partlist import infill_by_material, part_list as parts
 
     return infill_by_material(parts(spec, frame(spec)))
@@ -334,8 +334,8 @@ def read_gcode_stats(path: Path | str) -> tuple[float, float]:
     """(filament grams, estimated print seconds) from a PrusaSlicer G-code's closing comments.
 
     Read from the file's last 64 kB, where PrusaSlicer writes them, and from the whole file only
-    when they are not there: a joint plate's G-code is 8 MB, and reading its 330 000 lines took
-    0.2-0.3 s of the build's interpreter per plate."""
+    when they are not there: a joint plate's G-code is megabytes, and reading all of it costs
+    the build's interpreter a noticeable part of a second per plate."""
     path = Path(path)
     with open(path, "rb") as f:
         size = f.seek(0, 2)
@@ -470,8 +470,8 @@ def slice_plate(plate: Path | str, profile: Path | str, bed: Sequence[float], ex
     gcode.unlink(missing_ok=True)
     cmd = [exe, "--loglevel", "1", "--export-gcode", "--load", str(profile), "--dont-arrange", str(plate), "-o", str(gcode)]
     t0 = time.perf_counter()
-    # PrusaSlicer starts first and the plate is checked while it loads (reading the 3MF back,
-    # 0.2-0.5 s, was at the head of the slicing); a plate that fails the check stops it
+    # PrusaSlicer starts first and the plate is checked while it loads (reading the 3MF back
+    # takes a fraction of a second, off the slicing's critical path); a plate that fails the check stops it
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     if started is not None:  # before PrusaSlicer has started its threads (they inherit its priority)
         started(proc.pid)

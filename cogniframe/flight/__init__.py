@@ -20,12 +20,12 @@ FILES = ("inav.txt", "betaflight.txt", "ardupilot/frame.json", "ardupilot/params
 
 
 def make_vehicle(spec, result, solids=None, shapes: bool = True):
-    """The Vehicle of a checked design (`verdict.CheckResult`): mass properties from the CAD
+    """The Vehicle of a checked design (`verdict.Findings`): mass properties from the CAD
     solids when `solids` ({part: (massprops.SolidProps as printed, print-from-local 4 x 4)}) is
     given, else from the estimates; the modes' flight-controller participation from their shapes
     when `shapes`."""
     from . import massprops, resonance, rotors
-    from .vehicle import build
+    from .vehicle import vehicle_of
 
     d, budget = result.design, result.mass
     mp = massprops.from_solids(spec, d, budget, solids) if solids is not None else massprops.estimate(spec, d, budget)
@@ -35,7 +35,7 @@ def make_vehicle(spec, result, solids=None, shapes: bool = True):
     if shapes and result.stiffness is not None:
         hz, part = resonance.mode_shapes(spec, d, budget.total_g, len(hz) or None)
     res = resonance.assess(hz, rm.hover_rotor_hz, rm.max_rotor_hz, part)
-    return build(spec, d, budget, mp, res)
+    return vehicle_of(spec, d, budget, mp, res)
 
 
 def texts(v) -> dict[str, str]:

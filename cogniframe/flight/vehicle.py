@@ -74,7 +74,7 @@ def inertia_in(axes: str, inertia: np.ndarray) -> np.ndarray:
     return out + 0.0  # no negative zeros in the files
 
 
-def build(spec, design, budget, mass: MassProps, resonance: Resonance) -> Vehicle:
+def vehicle_of(spec, design, budget, mass: MassProps, resonance: Resonance) -> Vehicle:
     from ..analysis import flight
     from . import rotors as rotors_mod
 

@@ -132,7 +132,7 @@ def kind_of(part: PartSpec) -> str:
 
 def _side_normal(part: PartSpec, dirs: np.ndarray) -> np.ndarray:
     """The lateral axis (vertical in print): normal to the legs' plane (knee) or to the arm and
-    strut (core link). Every socket lies in that plane (frame.build keeps each corner's fold in the
+    strut (core link). Every socket lies in that plane (frame.frame_of keeps each corner's fold in the
     vertical plane through the corner and its core link, in a rectangle too), and the arm pair is
     offset across it, so the two arm sockets stack into one block."""
     arm = _arm_direction(part)

@@ -24,7 +24,7 @@ from ..families import camera_mount, motor_mount, sensor_mount
 
 if TYPE_CHECKING:
     from ..partlist import PartSpec
-    from ..design import Design
+    from ..design import Derived
 
 CORNER_WORDS = {"fl": "front-left", "fr": "front-right", "rr": "rear-right", "rl": "rear-left"}
 GLUE_CA = "one drop of thin CA glue at each socket mouth once the rod is fully seated"
@@ -60,7 +60,7 @@ def copy_labels(part: "PartSpec") -> tuple[str, ...]:
     return tuple(out)
 
 
-def assembly_steps(design: "Design") -> tuple[Step, ...]:
+def assembly_steps(design: "Derived") -> tuple[Step, ...]:
     """The numbered steps for a design (frame graph + part list + cut list)."""
     frame, spec = design.frame, design.spec
     cut = {name: row.length_mm for row in design.cut.rows for name in row.rods}

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Mapping, Sequence
 if TYPE_CHECKING:
     from ..analysis.mass import MassBudget
     from ..export.slicer import SliceReport
-    from ..design import Design
+    from ..design import Derived
     from ..spec import Spec
 
 from .assembly_steps import copy_labels
@@ -58,7 +58,7 @@ def _screw_size(item: str) -> str:
     return f"{m.group(1)} x {m.group(2)} mm" if m else ""
 
 
-def build_bom(spec: "Spec", design: "Design", budget: "MassBudget",
+def build_bom(spec: "Spec", design: "Derived", budget: "MassBudget",
               slice_report: "SliceReport | None" = None,
               sizes: Mapping[str, Sequence[float]] | None = None) -> tuple[BomLine, ...]:
     """The bill of materials for a design; masses from `budget` (estimate or CAD volumes).

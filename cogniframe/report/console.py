@@ -5,10 +5,10 @@ from __future__ import annotations
 from rich.console import Console
 from rich.table import Table
 
-from ..analysis.verdict import CheckResult
+from ..analysis.verdict import Findings
 
 
-def print_check(result: CheckResult, console: Console) -> None:
+def print_check(result: Findings, console: Console) -> None:
     d, m = result.design, result.mass
     spec = d.spec
     t = Table(title=f"Mass budget: {spec.name}", show_footer=True)

@@ -23,7 +23,7 @@ from ..analysis.constants import G
 if TYPE_CHECKING:
     from ..export.plates import PlateFile
     from ..export.slicer import SliceReport
-    from ..analysis.verdict import CheckResult
+    from ..analysis.verdict import Findings
     from .assembly_steps import Step
     from .bom import BomLine
     from .viewer import ViewerItem
@@ -171,7 +171,7 @@ def survival_words(surv: Mapping) -> str:
     return f"first to fail: {f['part']} ({f['mode']}) at {f['at_drop_cm']:g} cm"
 
 
-def draw_figures(result: "CheckResult", files: Path) -> dict[str, list[tuple[str, Path]]]:
+def draw_figures(result: "Findings", files: Path) -> dict[str, list[tuple[str, Path]]]:
     """Draw the report's charts into `files` (FIGURES: section -> (caption, file name))."""
     from ..analysis.verdict import check_dict
 
@@ -191,7 +191,7 @@ def draw_figures(result: "CheckResult", files: Path) -> dict[str, list[tuple[str
 
 # -- content ---------------------------------------------------------------------------------
 
-def _verdicts(result: "CheckResult", cd: Mapping, plates, slice_report) -> list[Verdict]:
+def _verdicts(result: "Findings", cd: Mapping, plates, slice_report) -> list[Verdict]:
     out = []
     m = cd["mass"]
     total, limit, margin = (fmt_key(cd, k) for k in ("mass.total_g", "mass.limit_g", "mass.margin_g"))
@@ -257,7 +257,7 @@ def _dur(s: float) -> str:
     return format_duration(s)
 
 
-def _tables(result: "CheckResult", cd: Mapping, bom, steps, plates, slice_report) -> dict[str, Table]:
+def _tables(result: "Findings", cd: Mapping, bom, steps, plates, slice_report) -> dict[str, Table]:
     t: dict[str, Table] = {}
     m = cd["mass"]
     t["mass-budget"] = Table("mass-budget", "Mass budget", ("item", "group", "qty", "g each", "g", "material", "source"),
@@ -414,7 +414,7 @@ def _img_md(path: Path, caption: str, base: Path) -> str:
     return f"![{caption}]({rel})"
 
 
-def write_report(result: "CheckResult", out_dir: Path | str, images: Mapping[str, Path] | None = None,
+def write_report(result: "Findings", out_dir: Path | str, images: Mapping[str, Path] | None = None,
                  bom: Sequence["BomLine"] = (), steps: Sequence["Step"] = (), plates: Sequence["PlateFile"] = (),
                  slice_report: "SliceReport | None" = None,
                  figures: Mapping[str, Sequence[tuple[str, Path]]] | None = None,

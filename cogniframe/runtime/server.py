@@ -341,7 +341,7 @@ class ServerPool:
 def _serve_worker(conn, hello) -> None:
     """A forked worker: run the build's jobs until it hangs up (or dies: `die_with_build`), behind
     the build (`behind_the_build`)."""
-    from .pools import start_worker
+    from .lifecycle import start_worker
 
     _, build_pid, cwd = hello
     os.chdir(cwd)
@@ -374,7 +374,7 @@ def serve(root: Path, key: str, idle_s: float, fe: bool) -> None:
     importlib.import_module("cogniframe.runtime.worker")  # CadQuery, trimesh, the part builders (frozen there)
     if fe:
         from .heap import imports_frozen
-        from .pools import FE_PRELOAD
+        from .lifecycle import FE_PRELOAD
 
         with imports_frozen():
             for mod in FE_PRELOAD:

@@ -125,7 +125,7 @@ def suggestions() -> dict[str, tuple]:
             "core.stack_screw": tuple(SCREWS), "core.computer.screw": tuple(SCREWS), "motors.screw": tuple(SCREWS)}
 
 
-def build(schema: dict, values: dict) -> list[Group]:
+def groups_of(schema: dict, values: dict) -> list[Group]:
     """The form's groups for a design whose validated values (model_dump, json mode) are `values`."""
     defs = schema.get("$defs", {})
     known = suggestions()

@@ -235,7 +235,7 @@ class Session:
 
         if self.schema is None:
             self.schema = spec_mod.json_schema()
-        return form.build(self.schema, (d or self.base).spec.model_dump(mode="json"))
+        return form.groups_of(self.schema, (d or self.base).spec.model_dump(mode="json"))
 
     def form_html(self, d: api.Design | None = None) -> str:
         d = d or self.base

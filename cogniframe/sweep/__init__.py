@@ -1,6 +1,6 @@
 """Design-space exploration on Dask: `cogniframe sweep` and `cogniframe optimize`.
 
-    spec.py      the sweep file (pydantic model, JSON Schema, errors naming file/key/line/fix)
+    sweepfile.py the sweep file (pydantic model, JSON Schema, errors naming file/key/line/fix)
     sample.py    grid / lhs / sobol (Saltelli) / random designs as dotted overrides
     evaluate.py  one design (and one batch) on a worker: overrides -> validate -> check -> row
     run.py       Dask orchestration: batches, resume, results.parquet

@@ -34,7 +34,7 @@ from ..errors import UserError
 from . import evaluate as ev
 from . import run as run_mod
 from .sample import DECIMALS
-from .spec import Sweep
+from .sweepfile import Sweep
 
 _CONSTRAINT = re.compile(r"^\s*([A-Za-z_][\w.]*)\s*(>=|<=)\s*([-+]?(\d+(\.\d*)?|\.\d+)([eE][-+]?\d+)?)\s*$")
 

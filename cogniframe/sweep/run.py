@@ -38,7 +38,7 @@ from typing import Callable, Iterator, Sequence
 from ..errors import UserError
 from . import evaluate as ev
 from .sample import designs as sample_designs
-from .spec import Sweep
+from .sweepfile import Sweep
 
 MARKER = ".cogniframe-sweep.json"
 RESULTS = "results.parquet"

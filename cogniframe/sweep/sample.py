@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from .spec import Sweep, VaryKey
+from .sweepfile import Sweep, VaryKey
 
 DECIMALS = 3  # 1 um / 0.001 of a unit: far below what a printer or a saw holds
 

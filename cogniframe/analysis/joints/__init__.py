@@ -177,6 +177,32 @@ def solve_missing(spec, parts, mesh_mm: float | None = None, submit=None) -> dic
     return failed
 
 
+def needs_fe(spec, parts) -> bool:
+    """Whether checking a design with these printed parts solves a joint's FE first: the FE model
+    (or the surrogate outside its box) and a joint geometry not in the cache yet (milliseconds:
+    the cache keys are hashes of the parts' inputs). `check` and `build` both ask here."""
+    if spec.model.stiffness_model == "analytic":
+        return False
+    return has_unsolved(spec, fe_joints(spec, _joints(parts)))
+
+
+def solve_fe(spec, parts, submit) -> None:
+    """Solve and cache the FE of every joint of these printed parts that the cache lacks, on
+    `submit(fn, *args)` (the caller's worker processes): the one preparation `check` and the
+    build's `estimate` step share; the stiffness model then reads every joint from the cache."""
+    if spec.model.stiffness_model == "analytic":
+        return
+    todo = fe_joints(spec, _joints(parts))  # with the surrogate: those outside its box
+    if todo:
+        solve_missing(spec, todo, submit=submit)
+
+
+def _joints(parts) -> list:
+    """The printed parts that are joints (as stiffness.joint_parts; here so that this package
+    does not import the stiffness model, which imports it)."""
+    return [p for p in parts if p.family == "joint"]
+
+
 def _solve(spec, todo, mesh_mm: float, submit=None) -> dict[str, str]:
     """The FE of `todo` [(part, key)], cached; {part name: error} of those that failed.
     `submit(fn, *args) -> Future`: the caller's worker processes; None: here, one after another."""

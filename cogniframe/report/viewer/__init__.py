@@ -222,6 +222,37 @@ CSS = """
 """
 
 
+_LOADER = """
+%(prelude)sconst text = (%(arg)s) => document.getElementById(%(element)s).textContent;
+const url = (src) => URL.createObjectURL(new Blob([src], {type: "text/javascript"}));
+const threeUrl = url(text(%(three)s));
+const orbitUrl = url(text(%(orbit)s).replace(/from\\s*['"]three['"]/g, "from '" + threeUrl + "'"));
+const viewerUrl = url(text(%(viewer)s));
+const root = document.getElementById(%(root)s);
+try {
+  const [THREE, orbit, viewer] = await Promise.all([import(threeUrl), import(orbitUrl), import(viewerUrl)]);
+  viewer.start(THREE, orbit.OrbitControls, root, JSON.parse(text(%(scene)s)), text(%(geometry)s));
+} catch (e) {
+  root.dataset.error = String(e);
+  root.querySelector(".cf-info").textContent = "The 3D view could not start here (" + e + ")%(fallback)s.";
+}
+"""
+
+
+def module_loader(script_id, root: str, fallback: str = "", uid: str | None = None) -> str:
+    """The <script type="module"> that imports three.js, OrbitControls and viewer.js from the
+    page's text scripts (as blob URLs: the page fetches nothing) and starts the view. The
+    report's section and the notebook's fragment (api.view) differ only in how their elements
+    are named: `script_id(name)` is the JS expression of a text script's id for a name of
+    three, orbit, viewer, scene, geometry; `root` that of the viewer's element; with `uid`, the
+    ids are `uid + "-" + name`."""
+    names = ("three", "orbit", "viewer", "scene", "geometry")
+    return _LOADER % {"prelude": "" if uid is None else f"const uid = {uid};\n",
+                      "arg": "id" if uid is None else "name",
+                      "element": "id" if uid is None else 'uid + "-" + name',
+                      "root": root, "fallback": fallback, **{n: script_id(n) for n in names}}
+
+
 def viewer_section(items: Sequence[ViewerItem], title: str = "3D view") -> str:
     """The report's 3D-view <section> (HTML), with three.js, the viewer and the geometry inline."""
     meta, buf = pack(items)
@@ -230,21 +261,8 @@ def viewer_section(items: Sequence[ViewerItem], title: str = "3D view") -> str:
     data = json.dumps(meta, separators=(",", ":"), sort_keys=True).replace("</", "<\\/")
     toggles = "".join(f'<label><input type="checkbox" data-kind="{k}" checked> {k}s ({counts[k]})</label>' for k in TOGGLES)
     b64 = base64.b64encode(buf).decode("ascii")
-    loader = """
-const text = (id) => document.getElementById(id).textContent;
-const url = (src) => URL.createObjectURL(new Blob([src], {type: "text/javascript"}));
-const threeUrl = url(text("cf-three"));
-const orbitUrl = url(text("cf-orbit").replace(/from\\s*['"]three['"]/g, "from '" + threeUrl + "'"));
-const viewerUrl = url(text("cf-viewer-js"));
-const root = document.getElementById("cf-viewer");
-try {
-  const [THREE, orbit, viewer] = await Promise.all([import(threeUrl), import(orbitUrl), import(viewerUrl)]);
-  viewer.start(THREE, orbit.OrbitControls, root, JSON.parse(text("cf-scene")), text("cf-geometry"));
-} catch (e) {
-  root.dataset.error = String(e);
-  root.querySelector(".cf-info").textContent = "The 3D view could not start here (" + e + "); the renders below show the assembly.";
-}
-"""
+    loader = module_loader(lambda name: json.dumps(f"cf-{'viewer-js' if name == 'viewer' else name}"),
+                           '"cf-viewer"', "; the renders below show the assembly")
     return "\n".join([
         f'<section id="viewer-section"><h2>{html.escape(title)}</h2>',
         f"<style>{CSS}</style>",

@@ -1,15 +1,54 @@
-"""What the build's steps share: the context they read (the design, its parts and their files)
-and PrusaSlicer's path, looked up once per build."""
+"""What the build's steps share: the inputs they read (`Inputs`: the params, the design, the CAD
+workers), the memos of one build (`BuildContext`: meshes, plate items, the part plotter) and
+PrusaSlicer's path, looked up once per build."""
 
 from __future__ import annotations
 
 import threading
+from dataclasses import dataclass, field
+from typing import Any, Callable
 
 from . import graph
 
 
+class NoWarmup:
+    """Idle-time imports (matplotlib, pyvista, trimesh) serve main-thread steps; a run of the part
+    steps alone needs none of them."""
+
+    def start(self) -> None:
+        pass
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """What every step of one build reads besides the values of the steps before it."""
+
+    spec: Any  # spec.Spec
+    design: Any  # design.Derived
+    cad: Any = None  # runtime.BuildRuntime.cad: the CAD workers
+    warm: Any = field(default_factory=NoWarmup)  # runtime.warm's idle-time imports
+    log: Callable[[str], None] = lambda message: None
+    slicer: Any = None  # Slicer, or None when the run slices nothing
+    gcode: bool = False  # `build --gcode`: keep each plate's G-code
+
+
+@dataclass
 class BuildContext(graph.Context):
-    """graph.Context plus what many steps look up: parts by name, their step values and meshes."""
+    """graph.Context plus what many steps look up: parts by name, their step values and meshes.
+    The memos are per build: one off-screen plotter for the part renders, each part's mesh read
+    once, and the plate items the plates step read back."""
+
+    part_plotter: Any = field(default=None, init=False)
+    _meshes: dict = field(default_factory=dict, init=False)
+    _plate_items: dict = field(default_factory=dict, init=False)
+
+    spec = property(lambda self: self.inputs.spec)
+    design = property(lambda self: self.inputs.design)
+    cad = property(lambda self: self.inputs.cad)
+    warm = property(lambda self: self.inputs.warm)
+    log = property(lambda self: self.inputs.log)
+    slicer = property(lambda self: self.inputs.slicer)
+    gcode = property(lambda self: self.inputs.gcode)
 
     @property
     def bed(self) -> tuple[float, float, float]:
@@ -41,10 +80,10 @@ class BuildContext(graph.Context):
         """What reading a plate's 3MF back gives (`plates.read_3mf_items`), when the plates step
         wrote it in this build (`plates.plate_3mf` returns it with the bytes); None for a plate
         that came from the cache (its readers read the file). `plate`: a plates step's entry."""
-        return self.__dict__.get("_plate_items", {}).get(plate.get("model_sha256"))
+        return self._plate_items.get(plate.get("model_sha256"))
 
     def keep_plate_items(self, model_sha256: str, items) -> None:
-        self.__dict__.setdefault("_plate_items", {})[model_sha256] = items
+        self._plate_items[model_sha256] = items
 
     def mesh(self, name: str):
         """The part's STL as a trimesh, read once per build (plates, part renders and assembly
@@ -52,7 +91,7 @@ class BuildContext(graph.Context):
         import trimesh
 
         v = self.part_value(name)
-        memo = self.__dict__.setdefault("_meshes", {})
+        memo = self._meshes
         key = (name, v["stl_sha256"])
         if key not in memo:
             memo[key] = trimesh.load(self.out / v["stl"], force="mesh")
@@ -79,11 +118,8 @@ class Slicer:
             return self._found or None
 
 def needs_joint_fe(spec, design) -> bool:
-    """Whether this build meshes and solves a joint: the FE model and a joint geometry that is not
-    in the joint cache yet (a few milliseconds: the cache keys are hashes of the parts' inputs)."""
-    if spec.model.stiffness_model == "analytic":
-        return False
-    from ..analysis.joints import fe_joints, has_unsolved
-    from ..analysis.stiffness import joint_parts
+    """Whether this build meshes and solves a joint (analysis.joints.needs_fe, the question
+    `check` asks too): the runtime then prepares worker processes for the FE."""
+    from ..analysis.joints import needs_fe
 
-    return has_unsolved(spec, fe_joints(spec, joint_parts(design.parts)))
+    return needs_fe(spec, design.parts)

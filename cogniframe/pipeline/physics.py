@@ -1,6 +1,6 @@
 """The physics steps: the mass-independent stiffness while the parts are built, the mass budget
 with the CAD volumes, the load cases for that mass, and the check that joins them to the clash
-check. Each step's row sits beside its make function; build/steps.py lists them in order."""
+check. Each step's row sits beside its make function; pipeline/steps.py lists them in order."""
 
 from __future__ import annotations
 
@@ -17,17 +17,16 @@ def estimate(ctx) -> Made:
         # new joint FEs first, in parallel; the frame model below then reads every joint from the
         # cache. On the CAD server's workers after the parts (JOB_ORDER); a build's own process
         # pool runs its jobs in order, so there the FEs get workers of their own
-        from ..analysis.joints import fe_joints, solve_missing
-        from ..analysis.stiffness import joint_parts
+        from ..analysis.joints import needs_fe, solve_fe
 
-        solved = fe_joints(spec, joint_parts(ctx.design.parts))  # with the surrogate: those outside its box
-        if solved and ctx.cad.server:
-            solve_missing(spec, solved, submit=lambda fn, *a: ctx.cad.submit(fn, *a, priority=JOB_ORDER["joint FE"]))
-        elif solved:
+        parts = ctx.design.parts
+        if ctx.cad.server:
+            solve_fe(spec, parts, submit=lambda fn, *a: ctx.cad.submit(fn, *a, priority=JOB_ORDER["joint FE"]))
+        elif needs_fe(spec, parts):
             from ..runtime.pools import joint_fe_workers
 
             with joint_fe_workers() as submit:
-                solve_missing(spec, solved, submit=submit)
+                solve_fe(spec, parts, submit=submit)
     if spec.model.k_n_per_m is None:
         from ..analysis.drop import predicted_k_n_per_m
 

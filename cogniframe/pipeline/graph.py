@@ -80,19 +80,13 @@ class Context:
     """What steps read: the build folder, the caller's inputs, and the values of finished steps."""
 
     out: Path
-    inputs: Mapping[str, Any]
+    inputs: Any  # the caller's record of what the steps read (pipeline.context.Inputs for the build)
     stack: str = ""  # fingerprint of library versions, part of every key
     use_cache: bool = True
     values: dict[str, Any] = field(default_factory=dict)
 
     def __getitem__(self, name: str):
         return self.values[name]
-
-    def __getattr__(self, name: str):
-        try:
-            return self.__dict__["inputs"][name]
-        except KeyError:
-            raise AttributeError(name) from None
 
     def each(self, pattern: str) -> dict[str, Any]:
         """Values of the finished tasks matching `pattern`, by task name, in name order."""

@@ -1,5 +1,5 @@
 """The CAD steps: each printed part's files, the assembly STEP and GLB, and the clash check.
-Each step's row sits beside its make and key functions; build/steps.py lists them in order."""
+Each step's row sits beside its make and key functions; pipeline/steps.py lists them in order."""
 
 from __future__ import annotations
 

@@ -62,13 +62,12 @@ def _part_plotter(ctx):
     (renders.render_parts)."""
     from ..report import renders
 
-    plotter = ctx.__dict__.get("_part_plotter")
-    if plotter is None:
-        plotter = ctx.__dict__["_part_plotter"] = renders.part_plotter()
-    return plotter
+    if ctx.part_plotter is None:
+        ctx.part_plotter = renders.part_plotter()
+    return ctx.part_plotter
 
 def _close_part_plotter(ctx) -> None:
-    plotter = ctx.__dict__.pop("_part_plotter", None)
+    plotter, ctx.part_plotter = ctx.part_plotter, None
     if plotter is not None:
         plotter.close()
 

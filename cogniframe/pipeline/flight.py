@@ -1,7 +1,7 @@
 """The flight step: the flight-controller setup and simulator models (cogniframe/flight/) from
 the CAD solids: each printed part's STL (read with numpy: no mesh library), placed as the
 assembly places it, carries its budget mass; rods, vitamins and propellers as `fly` has them.
-Its row sits beside its make and key functions; build/steps.py lists it."""
+Its row sits beside its make and key functions; pipeline/steps.py lists it."""
 
 from __future__ import annotations
 

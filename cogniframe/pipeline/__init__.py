@@ -1,6 +1,6 @@
 """`cogniframe build`: the whole fabrication folder, built in a temp dir and moved into place whole.
 
-The work is the graph of cached steps in build/steps.py (part CAD, check with CAD volumes, plates,
+The work is the graph of cached steps in pipeline/steps.py (part CAD, check with CAD volumes, plates,
 slicer, assembly, plots, previews, renders, BOM, report; docs/build.md), then the manifest.
 Nothing appears in the output folder unless every step succeeded, and a folder
 cogniframe did not make is never touched (outdir.py: lock, ownership check, atomic swap).
@@ -25,17 +25,17 @@ from ..spec import Spec
 
 
 @dataclass(frozen=True)
-class BuildResult:
+class Outcome:
     out_dir: Path
     files: int
     verdict: str
-    check: verdict.CheckResult | None  # None when the folder was already up to date
+    check: verdict.Findings | None  # None when the folder was already up to date
     built: tuple
     steps: tuple = ()  # (step, "ran" | "cached" | "always") in the order they finished; () when up to date
 
 
 def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None = None, use_cache: bool = True,
-              console: Console | None = None, gcode: bool = False, server: bool = False, early=None) -> BuildResult:
+              console: Console | None = None, gcode: bool = False, server: bool = False, early=None) -> Outcome:
     """Build `spec` into `out`. `server`: CAD workers from the CAD server that outlives this build
     (`runtime.server`; the CLI's default) instead of a process pool of its own. `early`: the
     server the CLI started before it validated the params (`runtime.server.prestart`); the caller
@@ -49,11 +49,11 @@ def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None 
         verdict = json.loads((final / "check.json").read_text())["verdict"]
         console.print(f"{final} is up to date (same params, same cogniframe): nothing rebuilt", markup=False)
         files = len(json.loads((final / "manifest.json").read_text())["files"]) + 1
-        return BuildResult(final, files, verdict, None, ())
+        return Outcome(final, files, verdict, None, ())
     with outdir.writing(final) as tmp, spec.blamed():
         result = _build_into(spec, params_path, tmp, jobs, use_cache, console, key, gcode=gcode, design=design,
                              server=server, early=early)
-    return BuildResult(final, result[0], result[1].verdict, result[1], result[2], result[3])
+    return Outcome(final, result[0], result[1].verdict, result[1], result[2], result[3])
 
 
 def build_key(spec: Spec, params_path: Path) -> str:
@@ -77,35 +77,63 @@ def _up_to_date(final: Path, key: str) -> bool:
 
 
 def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_cache: bool, console: Console,
-                key: str, gcode: bool = False, design: design_mod.Design | None = None, server: bool = False,
+                key: str, gcode: bool = False, design: design_mod.Derived | None = None, server: bool = False,
                 early=None):
     """Run the build graph (steps.py) into `out`, then write the manifest. `gcode`: keep the
-    sliced G-code per plate (`build --gcode`; read by build.plates.make_slice).
+    sliced G-code per plate (`build --gcode`; read by pipeline.plates.make_slice).
 
     Returns (files, check result, built parts, ((step, "ran" | "cached" | "always"), ...))."""
-    from . import graph, steps
-    from .context import BuildContext, Slicer, needs_joint_fe
-
     design = design_mod.design(spec) if design is None else design
     log = lambda m: console.print(m, markup=False, highlight=False)  # noqa: E731
-    versions = stack.versions()
-    from ..report.renders import ensure_headless
-    from ..runtime import BuildRuntime
+    from . import graph, steps
 
-    ensure_headless()  # before any thread starts: the environment is not changed while one starts a process
-    slicer = Slicer(log)
-    with BuildRuntime(jobs or os.cpu_count() or 1, fe=needs_joint_fe(spec, design), server=server,
-                      stack=versions, log=log, early=early, warm_before=slicer.get) as rt:
-        ctx = BuildContext(out, {"spec": spec, "design": design, "cad": rt.cad, "warm": rt.warm, "slicer": slicer,
-                                        "log": log, "gcode": gcode}, stack=versions, use_cache=use_cache)
-        tasks = graph.expand(steps.STEPS, steps.rows(design))
-        if rt.cad.fe or any(graph.will_run(t, ctx) for t in tasks if t.name.startswith("part:")):
-            rt.cad.start_server()  # now, beside the set-up below, not when the first part step submits
-        with _StepProgress(console, len(tasks), spec.name) as progress:
-            records = graph.run(tasks, ctx, on_start=progress.start, on_done=progress.done, on_error=rt.cancel,
-                                main_lock=rt.main_lock)
+    total = len(graph.expand(steps.STEPS, steps.rows(design)))
+    with _StepProgress(console, total, spec.name) as progress:
+        ctx, records = run(spec, design, out, jobs=jobs, server=server, early=early, use_cache=use_cache, log=log,
+                           gcode=gcode, on_start=progress.start,
+                           on_step=lambda record, ctx: progress.done(record))
     n = _write_manifest(spec, params_path, out, key)
     return n, ctx["check"], ctx.built_parts(), tuple((r.task, r.status) for r in records)
+
+
+def run(spec: Spec, design: design_mod.Derived, out: Path, *, only: tuple[str, ...] | None = None,
+        jobs: int | None = None, server: bool = False, early=None, use_cache: bool = True, log=None,
+        gcode: bool = False, on_start=None, on_step=None):
+    """Run the build graph's steps for `design` into the folder `out`: the one place that wires
+    the steps, their inputs and the CAD runtime (the CLI's build, the API's and the studio's 3D
+    view all come here). `only`: task-name patterns (e.g. `("part:*", "estimate")`) to run a
+    part of the graph; None runs all of it. `on_start(task)` before and `on_step(record, ctx)` after
+    each task (`ctx.part_value` reads a finished part's files). Returns (the context, with every task's value, and the records in finishing order)."""
+    import fnmatch
+
+    from . import graph, steps
+    from .context import BuildContext, Inputs, NoWarmup, Slicer, needs_joint_fe
+    from .. import stack
+    from ..runtime import BuildRuntime
+
+    log = log or (lambda message: None)
+    tasks = graph.expand(steps.STEPS, steps.rows(design))
+    if only is not None:
+        tasks = [t for t in tasks if any(fnmatch.fnmatchcase(t.name, p) for p in only)]
+    whole = only is None
+    if whole:
+        from ..report.renders import ensure_headless
+
+        ensure_headless()  # before any thread starts: the environment is not changed while one starts a process
+    slicer = Slicer(log) if whole else None
+    fe = any(t.name == "estimate" for t in tasks) and needs_joint_fe(spec, design)
+    versions = stack.versions()
+    out.mkdir(parents=True, exist_ok=True)
+    with BuildRuntime(jobs or os.cpu_count() or 1, fe=fe, server=server, stack=versions, log=log, early=early,
+                      warm_before=slicer.get if slicer else None) as rt:
+        ctx = BuildContext(out, Inputs(spec, design, rt.cad, rt.warm if whole else NoWarmup(), log, slicer, gcode),
+                           stack=versions, use_cache=use_cache)
+        if rt.cad.fe or any(graph.will_run(t, ctx) for t in tasks if t.name.startswith("part:")):
+            rt.cad.start_server()  # now, beside the set-up below, not when the first part step submits
+        records = graph.run(tasks, ctx, on_start=on_start, on_error=rt.cancel,
+                            on_done=None if on_step is None else (lambda record: on_step(record, ctx)),
+                            main_lock=rt.main_lock if whole else None)
+    return ctx, records
 
 
 class _StepProgress:
