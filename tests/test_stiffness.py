@@ -608,7 +608,7 @@ def test_the_joint_fe_meshes_the_shape_the_part_build_shared_to_the_same_bits(tm
     def no_cad(part):
         raise AssertionError("the FE built the CAD although the part build shared it")
 
-    monkeypatch.setattr(joint_cad, "build", no_cad)
+    monkeypatch.setattr(joint_cad, "solid", no_cad)
     assert np.array_equal(JS.fe_joint(s, part, 1.0).matrix, own)
     # a part whose CAD inputs differ has another key: nothing shared for it
     other = next(x for x in st.joint_parts(p) if x.name == "knee")
