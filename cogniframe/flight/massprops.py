@@ -233,34 +233,38 @@ def estimate(spec, design, budget) -> MassProps:
     """From the part list's estimates (no CAD): `check --json`'s `flight.cg_mm` and
     `flight.inertia_kg_m2`."""
     frame = design.frame
-    bodies = _rod_bodies(spec, frame, budget)
-    vit, used = _vitamin_bodies(spec, frame, budget)
-    bodies += vit
-    items = {i.name: i for i in budget.items}
-    for p in design.parts:
-        each = items[p.name].mass_g_each
+
+    def copies(p, each):
         core_box = getattr(frame.core, CORE_BOX.get(p.family, ""), None)
-        for pl in p.placements:
-            if core_box is not None:
-                bodies.append(box(p.name, each, core_box.centre, core_box.size))
-            else:
-                bodies.append(point(p.name, each, pl.origin))
-    bodies += _rest_bodies(spec, frame, budget, used, {p.name for p in design.parts})
-    return combine(bodies, "estimate")
+        if core_box is not None:
+            return [box(p.name, each, core_box.centre, core_box.size) for _ in p.placements]
+        return [point(p.name, each, pl.origin) for pl in p.placements]
+
+    return _combined(spec, design, budget, copies, "estimate")
 
 
 def from_solids(spec, design, budget, solids) -> MassProps:
     """From the CAD solids: `solids` is {part name: (SolidProps of its mesh as printed, the 4 x 4
     print-from-local transform)}; each copy goes where its placement puts it."""
+
+    def copies(p, each):
+        props, pfl = solids[p.name]
+        local_from_print = np.linalg.inv(np.asarray(pfl, float))
+        return [placed_body(p.name, each, props, pl.matrix() @ local_from_print) for pl in p.placements]
+
+    return _combined(spec, design, budget, copies, "cad")
+
+
+def _combined(spec, design, budget, copies, source: str) -> MassProps:
+    """Rods, bought parts, every copy of every printed part (`copies(part, grams each)`) and the
+    budget's remaining lines, combined: the two sources differ only in how a printed part's copies
+    are modelled."""
     frame = design.frame
     bodies = _rod_bodies(spec, frame, budget)
     vit, used = _vitamin_bodies(spec, frame, budget)
     bodies += vit
     items = {i.name: i for i in budget.items}
     for p in design.parts:
-        props, pfl = solids[p.name]
-        local_from_print = np.linalg.inv(np.asarray(pfl, float))
-        for pl in p.placements:
-            bodies.append(placed_body(p.name, items[p.name].mass_g_each, props, pl.matrix() @ local_from_print))
+        bodies += copies(p, items[p.name].mass_g_each)
     bodies += _rest_bodies(spec, frame, budget, used, {p.name for p in design.parts})
-    return combine(bodies, "cad")
+    return combine(bodies, source)
