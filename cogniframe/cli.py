@@ -121,7 +121,8 @@ def coupon(params: ParamsArg,
         written, clearances = write_coupon(spec, path)
     Console().print(f"wrote {written}: sockets for clearances {', '.join(f'{c:+.2f}' for c in clearances)} mm. "
                     f"Print it in {spec.joints.material}, push a rod into each, and set "
-                    f"joints.fit_clearance.{spec.joints.material} to the loosest hole that still grips.")
+                    f"joints.fit_clearance.{spec.joints.material} to the loosest hole that still grips (blind sockets), "
+                    f"and joints.sleeve_clearance to the tightest one a rod slides through (motor mount sleeves).")
 
 
 @app.command()

@@ -6,10 +6,11 @@ rr = (+x, -y), rl = (-x, -y).
 
 Layout (the paper's CogniFly): a square rod ring on top and one at the bottom
 (`rod_cage_top_front` ...); at each corner an upper and a lower leg rod bow inwards to a
-mid-height knee (`knee_fl`), giving the hourglass side; from each knee a pair of parallel arm
-rods (`rod_arm_fl_1/2`) runs diagonally in and down to a TPU link on the core
-(`core_link_fl`) and carries a motor mount; a damping strut (`rod_strut_fl`) runs from each
-bottom corner to the same core link.
+knee (`knee_fl`), giving the hourglass side; from each knee a pair of parallel arm rods
+(`rod_arm_fl_1/2`) runs diagonally in to a TPU link on the core (`core_link_fl`) and carries a
+motor mount; a damping strut (`rod_strut_fl`) runs from each bottom corner to the same core link.
+The knees stand level with the core links unless `frame.knee_height` sets them (a fraction of the
+height), as the authors' arms run level from their knees to their core base.
 
 A rod end sits at `seat` mm from its joint centre (the socket bottom) and goes `depth` mm into
 the socket, so cut length = centre distance - seat_a - seat_b.
@@ -210,10 +211,13 @@ def frame_of(spec: Spec) -> Frame:
     inset = bore / 2 + j.wall  # joint outer wall flush with the box outside
     hx, hy = f.width / 2 - inset, f.depth / 2 - inset
     z_top, z_bot = f.height - inset, inset
-    z_knee = f.height * f.knee_height
-
     core = _core(spec)
     z_link = core.plate.centre[2]
+    z_knee = z_link if f.knee_height is None else f.height * f.knee_height
+    if f.knee_height is None and not 0.2 * f.height < z_knee < 0.8 * f.height:
+        raise spec.error("frame.knee_height", f"level arms put the knees at the core link's height, z = {z_knee:.0f} mm, "
+                         f"{z_knee / f.height:.2f} of the {f.height:g} mm frame height (outside 0.2 to 0.8)",
+                         "set frame.knee_height to a fraction between 0.2 and 0.8, or change frame.height")
     a_link = c.plate_size / 2 + inset  # link socket centre just outside the plate corner
 
     pos: dict[str, tuple[str, np.ndarray]] = {}
@@ -421,7 +425,7 @@ def _motor(k: str, rods: dict[str, Rod], spec: Spec) -> Motor:
     # The motor screws come up through the seat from below: leave room for their heads
     # (ISO 4762 head height = d) above the rod clips, plus the seat plate itself.
     head = SCREWS[spec.motor.screw].d
-    seat_z = float(axis[2]) + spec.bore / 2 + spec.joints.wall + head + spec.joints.wall
+    seat_z = float(axis[2]) + spec.sleeve_bore / 2 + spec.joints.wall + head + spec.joints.wall
     prop_z = seat_z + spec.motor.height
     return Motor(f"motor_{k}", k, (r1.name, r2.name), _t(axis), seat_z, prop_z, slope)
 

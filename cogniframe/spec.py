@@ -46,7 +46,7 @@ class FrameSection(_M):
     depth: Annotated[float, Field(ge=80, le=600, description="outside size along y (front-rear), mm")] = 210
     height: Annotated[float, Field(ge=50, le=400, description="outside height, mm")] = 120
     knee_inset: Annotated[float, Field(ge=0, le=80, description="how far each mid-height knee sits inside the corner, mm (the hourglass bow): along x and along y in a square box; in a rectangle the same distance (x sqrt 2) towards its core link, so that each corner folds in one plane; 0 = straight sides")] = 12
-    knee_height: Annotated[float, Field(gt=0.2, lt=0.8, description="knee height as a fraction of the frame height")] = 0.5
+    knee_height: Annotated[float, Field(gt=0.2, lt=0.8, description="knee height as a fraction of the frame height; null = level with the core link, so the arms run level from the knees to the core (the authors' build)")] | None = None
     arm_spacing: Annotated[float, Field(ge=6, le=40, description="centre distance between the two parallel rods of an arm, mm")] = 12
     struts: bool = Field(True, description="damping struts from the bottom corners to the core")
 
@@ -64,9 +64,12 @@ class JointsSection(_M):
     socket_depth: Annotated[float, Field(ge=4, le=40, description="how deep a rod goes into its socket, mm")] = 10
     seat: Annotated[float, Field(ge=0, le=20, description="minimum distance from a joint's centre to a socket bottom, mm (raised automatically where sockets meet at sharp angles)")] = 3.0
     fit_clearance: dict[str, Annotated[float, Field(ge=-0.4, le=1.0)]] = Field(
-        default_factory=lambda: {"tpu_95a": 0.1},
-        description="socket hole = rod diameter + this, per joint material, mm; tune with `cogniframe coupon`",
+        default_factory=lambda: {"tpu_95a": -0.15},
+        description="blind socket hole = rod diameter + this, per joint material, mm: negative is a press fit, the "
+                    "TPU stretches round the rod and grips it (the authors' sockets: 2.85 mm for 3 mm rods, -0.15); "
+                    "tune with `cogniframe coupon`",
     )
+    sleeve_clearance: Annotated[float, Field(ge=0.0, le=1.0, description="through-sleeve hole (a motor mount's sleeves, which a rod slides through) = rod diameter + this, mm (the authors' 3.20 mm for 3 mm rods: 0.20); tune with `cogniframe coupon`")] = 0.2
     hinge_thickness: Annotated[float, Field(ge=0.6, le=4, description="thickness of the living-hinge web where the frame folds, mm")] = 1.2
 
 
@@ -293,8 +296,13 @@ class Spec(_M):
 
     @property
     def bore(self) -> float:
-        """Socket hole diameter, mm."""
+        """Blind socket hole diameter, mm."""
         return self.rods.diameter + self.fit_clearance
+
+    @property
+    def sleeve_bore(self) -> float:
+        """Through-sleeve hole diameter (a rod slides through), mm."""
+        return self.rods.diameter + self.joints.sleeve_clearance
 
     @property
     def motor(self) -> MotorPreset:

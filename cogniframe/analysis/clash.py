@@ -3,8 +3,9 @@
 A pure function over named solids (trimesh meshes with a 4x4 world transform each):
 
 * every pair of solids may overlap by less than `tolerance_mm3` (0.5 mm^3: tessellation noise).
-  There is no exception for a rod in its socket: the socket's hole must clear the rod, so their
-  overlap is ~0 like any other pair;
+  A rod in its socket is no exception unless the socket is a declared press fit (`allowed`: the
+  pair's designed interference volume, a hole narrower than its rod); a socket that clears its
+  rod overlaps it by ~0 like any other pair;
 * every propeller disc (a body with `disc` set) must clear every other body by `prop_margin` mm,
   except the bodies named in `ignore` (its own motor, on whose shaft it sits).
 
@@ -23,7 +24,7 @@ checks give the same clash.json, largest overlap included, as the world-frame bo
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import MutableMapping, Sequence
+from typing import Mapping, MutableMapping, Sequence
 
 import numpy as np
 
@@ -152,8 +153,11 @@ def _pair_key(ka: str, kb: str, margin: float | None) -> str:
 
 
 def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_margin: float = 5.0,
-          ignore: frozenset[frozenset[str]] = frozenset(), memo: MutableMapping[str, list] | None = None) -> ClashResult:
-    """Test every pair of `bodies`; `ignore` holds name pairs not tested at all (a disc and its motor).
+          ignore: frozenset[frozenset[str]] = frozenset(), memo: MutableMapping[str, list] | None = None,
+          allowed: Mapping[frozenset[str], float] | None = None) -> ClashResult:
+    """Test every pair of `bodies`; `ignore` holds name pairs not tested at all (a disc and its motor);
+    `allowed` the pairs that overlap by design (a rod pressed into a narrower socket) and by how
+    much, mm^3: such a pair clashes only past that volume plus the tolerance.
 
     `memo`: pair results from earlier checks (key -> [overlap mm^3, gap mm or None]), read and
     filled here; the key is the hash of both bodies' meshes and transforms (`body_key`) and, for a
@@ -225,7 +229,7 @@ def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_mar
                     gaps[disc.name] = (other.name, gap)
                 if gap < prop_margin:
                     clashes.append(Clash(disc.name, other.name, "prop_margin", vol, gap))
-            elif vol >= tolerance_mm3:
+            elif vol >= tolerance_mm3 + (allowed or {}).get(frozenset((a.name, b.name)), 0.0):
                 clashes.append(Clash(a.name, b.name, "overlap", vol))
     clashes.sort(key=lambda c: (-c.volume_mm3, c.a, c.b))
     return ClashResult(tuple(clashes), n, n * (n - 1) // 2, tested, tolerance_mm3, prop_margin, worst,

@@ -15,6 +15,7 @@ material: TPU red, ABS/PLA (any other filament) dark grey, rods black.
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Sequence
 
@@ -230,6 +231,17 @@ def not_clashes(spec: Spec, frame, parts: Sequence[PartSpec]) -> frozenset:
     return own_motor_pairs(frame) | thread_pairs(spec, frame, parts)
 
 
+def press_fits(spec: Spec, frame) -> dict[frozenset, float]:
+    """The rod ends pressed into a narrower blind socket (joints.fit_clearance < 0), as (joint, rod)
+    name pairs, each with its designed interference volume: the ring between the rod and the hole
+    along the socket's depth, mm^3. The clash check lets those pairs overlap by that much."""
+    d, bore = spec.rods.diameter, spec.bore
+    if bore >= d:
+        return {}
+    ring = math.pi / 4 * (d * d - bore * bore)
+    return {frozenset((end.node, rod.name)): ring * end.depth for rod in frame.rods.values() for end in (rod.a, rod.b)}
+
+
 def check_clashes(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path,
                   memo: tuple[str, str] | None = None):
     """The build's clash check: part meshes read back from their STL files; returns
@@ -247,7 +259,7 @@ def check_clashes(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: 
 
         store = Memo("clash-pairs", memo[1], memo[0])
     return clash.check(bodies(spec, frame, parts, built, meshes), prop_margin=spec.requirements.prop_margin,
-                       ignore=not_clashes(spec, frame, parts), memo=store)
+                       ignore=not_clashes(spec, frame, parts), memo=store, allowed=press_fits(spec, frame))
 
 
 def _vitamin_key(spec: Spec, frame) -> list:
