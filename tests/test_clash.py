@@ -94,3 +94,36 @@ def test_turn_to_z_is_a_rotation_taking_the_axis_to_z():
 def test_long_axis_of_a_rod_mesh_is_its_axis():
     rod = clash._manifold(_slanted_rod())
     assert abs(float(clash._long_axis(rod) @ SLANT)) == pytest.approx(1.0, abs=1e-9)
+
+
+def test_a_declared_press_fit_may_overlap_by_its_interference_ring_and_no_more():
+    # the authors' press fit, scaled to this rod: a bore 5 % under the rod; the allowance is the
+    # closed-form ring pi/4 (d^2 - bore^2) x length, which the 48-gons' ring stays under
+    bodies = [_clip(2.85), _slanted_rod()]
+    ring = math.pi * (3.0**2 - 2.85**2) * 12.0
+    pair = frozenset(("clip", "rod_arm"))
+    assert not clash.check(bodies).ok  # undeclared: a clash
+    assert clash.check(bodies, allowed={pair: ring}).ok
+    # the same clip 0.4 mm off the rod's axis overlaps it by more than the ring: still a clash
+    off = _clip(2.85)
+    T = off.transform.copy()
+    T[:3, 3] += 0.4 * np.cross(SLANT, [0.0, 0.0, 1.0]) / np.linalg.norm(np.cross(SLANT, [0.0, 0.0, 1.0]))
+    (c,) = clash.check([clash.Body("clip", "part", off.mesh, T), _slanted_rod()], allowed={pair: ring}).clashes
+    assert c.volume_mm3 > ring + clash.TOLERANCE_MM3
+
+
+def test_press_fits_are_every_rod_end_in_its_joint_with_the_ring_volume():
+    from cogniframe import spec as spec_mod
+    from cogniframe.export.assembly import press_fits
+    from cogniframe.frame import frame_of
+
+    from pathlib import Path
+
+    s = spec_mod.load(Path(__file__).resolve().parents[1] / "params" / "carbon.yaml")
+    f = frame_of(s)
+    fits = press_fits(s, f)
+    assert len(fits) == 2 * len(f.rods)
+    ring = math.pi / 4 * (3.0**2 - 2.85**2) * s.joints.socket_depth  # the preset's -0.15 mm fit, 8 mm deep
+    assert fits[frozenset(("knee_fl", "rod_arm_fl_1"))] == pytest.approx(ring, rel=1e-12)
+    loose = s.model_copy(update={"joints": s.joints.model_copy(update={"fit_clearance": {"tpu_95a": 0.1}})})
+    assert press_fits(loose, frame_of(loose)) == {}
