@@ -5,6 +5,7 @@ stays exactly empty, a real overlap equals its closed form -- and the turn is a 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -116,8 +117,6 @@ def test_press_fits_are_every_rod_end_in_its_joint_with_the_ring_volume():
     from cogniframe import spec as spec_mod
     from cogniframe.export.assembly import press_fits
     from cogniframe.frame import frame_of
-
-    from pathlib import Path
 
     s = spec_mod.load(Path(__file__).resolve().parents[1] / "params" / "carbon.yaml")
     f = frame_of(s)
