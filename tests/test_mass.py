@@ -36,16 +36,15 @@ def test_groups_add_up(preset):
 
 def test_carbon_matches_the_papers_table(carbon):
     b = verdict.check(carbon).mass
-    # rods + TPU joints: 13 % over, the core links' seat and 6 mm tab (+3.6 g) carry the bare
-    # arms' thrust moment, which the paper's lighter connectors do across the core
-    assert b.groups["exoskeleton"] == pytest.approx(62, rel=0.15)
+    assert b.groups["exoskeleton"] == pytest.approx(62, rel=0.10)  # rods + TPU joints
     assert b.by_material["abs"] == pytest.approx(25, rel=0.10)  # central ABS parts
-    assert b.total_g == pytest.approx(236, rel=0.06)
+    assert b.total_g == pytest.approx(236, rel=0.05)
 
 
-def test_bamboo_is_under_250(bamboo):
+def test_bamboo_is_near_the_papers_237_g_and_leaves_5_g_under_250(bamboo):
     b = verdict.check(bamboo).mass
-    assert b.total_g < 250
+    # the paper's bamboo build weighs 237 g; 245 g leaves a maker room for a heavier pack or camera
+    assert 237 * 0.95 < b.total_g <= 245
     assert b.by_material["bamboo"] == pytest.approx(18, rel=0.15)
 
 
