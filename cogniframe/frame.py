@@ -9,8 +9,9 @@ Layout (the paper's CogniFly): a square rod ring on top and one at the bottom
 knee (`knee_fl`), giving the hourglass side; from each knee a pair of parallel arm rods
 (`rod_arm_fl_1/2`) runs diagonally in to a TPU link on the core (`core_link_fl`) and carries a
 motor mount; a damping strut (`rod_strut_fl`) runs from each bottom corner to the same core link.
-The knees stand level with the core links unless `frame.knee_height` sets them (a fraction of the
-height), as the authors' arms run level from their knees to their core base.
+With `frame.level_arms` (the authors' build) the core plate hangs at the knees' height on
+standoffs above the battery holder, so the arms run level; without it the plate sits on the holder
+and the arms climb to the knees.
 
 A rod end sits at `seat` mm from its joint centre (the socket bottom) and goes `depth` mm into
 the socket, so cut length = centre distance - seat_a - seat_b.
@@ -161,6 +162,7 @@ class Core:
     camera: Box | None = None  # camera board + lens, on the camera mount's upright (untilted envelope)
     camera_base: Box | None = None  # the camera mount's base plate, under the FC stack
     mouth: float = 0.0  # holder length in front of the pack (strap slots), mm
+    hang: float = 0.0  # standoffs between the holder (or spacer) top and the plate's underside, mm
 
     @property
     def boxes(self) -> tuple[Box, ...]:
@@ -213,11 +215,7 @@ def frame_of(spec: Spec) -> Frame:
     z_top, z_bot = f.height - inset, inset
     core = _core(spec)
     z_link = core.plate.centre[2]
-    z_knee = z_link if f.knee_height is None else f.height * f.knee_height
-    if f.knee_height is None and not 0.2 * f.height < z_knee < 0.8 * f.height:
-        raise spec.error("frame.knee_height", f"level arms put the knees at the core link's height, z = {z_knee:.0f} mm, "
-                         f"{z_knee / f.height:.2f} of the {f.height:g} mm frame height (outside 0.2 to 0.8)",
-                         "set frame.knee_height to a fraction between 0.2 and 0.8, or change frame.height")
+    z_knee = z_link if f.level_arms else f.height * f.knee_height
     a_link = c.plate_size / 2 + inset  # link socket centre just outside the plate corner
 
     pos: dict[str, tuple[str, np.ndarray]] = {}
@@ -334,7 +332,7 @@ def _node_seat(n: str, pos, edges, inc: list[int], spec: Spec) -> float:
                 need = max(need, r / math.tan(half))
     if pos[n][0] == "knee":
         need = max(need, _hinge_seat(dirs, [edges[i][1] for i in inc], j.wall))
-    return round(need, 2)
+    return math.ceil(need * 100 - 1e-6) / 100  # up to 0.01 mm: rounded down, two bores could meet
 
 
 def _hinge_seat(dirs: list[np.ndarray], roles: list[str], wall: float) -> float:
@@ -368,7 +366,8 @@ def _core(spec: Spec) -> Core:
     """The core stack, bottom up: battery holder (pack centred under the plate, open at the front,
     strap slots at the mouth), spacer / sensor mount, core plate, camera-mount base, FC stack,
     computer mount and computer. The flow board hangs under the sensor mount's rear pad, behind
-    the holder; the camera stands on the plate's front edge."""
+    the holder; the camera stands on the plate's front edge. With level arms everything from the
+    plate up is lifted `hang` mm onto standoffs, to the knees' height."""
     from .materials import BOARDS
 
     c, b = spec.core, spec.core.battery
@@ -390,6 +389,19 @@ def _core(spec: Spec) -> Core:
         fy = y0 - SENSOR_GAP - fb.size[1] / 2
         flow = Box("flow_sensor", (0.0, fy, h_top - fz / 2), (fb.size[0], fb.size[1], fz))
     plate_z = h_top + c.spacer_thickness + c.plate_thickness / 2
+    hang = 0.0
+    if spec.frame.level_arms:
+        # whole millimetres: M2 standoffs come in 1 mm steps; the knees then follow the plate
+        z_knee = spec.frame.height * spec.frame.knee_height
+        hang = float(round(z_knee - plate_z))
+        if hang < 0:
+            raise spec.error(
+                "frame.knee_height",
+                f"level arms need the core plate at the knees' height, z = {z_knee:.1f} mm, but the battery holder "
+                f"({c.battery_clearance:g} mm clearance, {holder_h:.1f} mm tall) and the spacer already put it at "
+                f"z = {plate_z:.1f} mm", f"raise frame.knee_height to at least {plate_z / spec.frame.height:.2f}, "
+                "or set frame.level_arms: false (the arms then climb from the plate to the knees)")
+        plate_z += hang
     plate = Box("core_plate", (0.0, 0.0, plate_z), (c.plate_size, c.plate_size, c.plate_thickness))
     board = STACK_PATTERNS[c.stack_pattern][1]
     top = plate_z + c.plate_thickness / 2
@@ -406,7 +418,7 @@ def _core(spec: Spec) -> Core:
     if c.computer:
         w, h = c.computer.hole_spacing
         computer = Box("computer", (0.0, 0.0, top + STACK_H + 6.0), (w + 7.0, h + 7.0, 5.0))
-    return Core(plate, holder, battery, stack, computer, spacer, flow, camera, base, mouth)
+    return Core(plate, holder, battery, stack, computer, spacer, flow, camera, base, mouth, hang)
 
 
 def _motor(k: str, rods: dict[str, Rod], spec: Spec) -> Motor:

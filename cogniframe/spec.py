@@ -46,7 +46,8 @@ class FrameSection(_M):
     depth: Annotated[float, Field(ge=80, le=600, description="outside size along y (front-rear), mm")] = 210
     height: Annotated[float, Field(ge=50, le=400, description="outside height, mm")] = 120
     knee_inset: Annotated[float, Field(ge=0, le=80, description="how far each mid-height knee sits inside the corner, mm (the hourglass bow): along x and along y in a square box; in a rectangle the same distance (x sqrt 2) towards its core link, so that each corner folds in one plane; 0 = straight sides")] = 12
-    knee_height: Annotated[float, Field(gt=0.2, lt=0.8, description="knee height as a fraction of the frame height; null = level with the core link, so the arms run level from the knees to the core (the authors' build)")] | None = None
+    knee_height: Annotated[float, Field(gt=0.2, lt=0.8, description="knee height as a fraction of the frame height")] = 0.5
+    level_arms: bool = Field(True, description="true: the core plate hangs at the knees' height (to the nearest mm, on M2 standoffs above the battery holder) and the arms run level, as the authors build it; false: the plate sits on the holder and the arms climb to the knees")
     arm_spacing: Annotated[float, Field(ge=6, le=40, description="centre distance between the two parallel rods of an arm, mm")] = 12
     struts: bool = Field(True, description="damping struts from the bottom corners to the core")
 

@@ -58,8 +58,36 @@ def test_hourglass_knees_bow_inwards(carbon):
     f = frame_mod.frame_of(carbon)
     top, knee, bottom = (np.array(f.nodes[f"{k}_fl"].pos) for k in ("corner_top", "knee", "corner_bottom"))
     assert abs(knee[0]) == pytest.approx(abs(top[0]) - carbon.frame.knee_inset)
-    assert knee[2] == pytest.approx(carbon.frame.height / 2)
+    assert knee[2] == pytest.approx(carbon.frame.height / 2, abs=0.5)  # level arms: the knee follows the plate to 1 mm
     assert abs(bottom[0]) == pytest.approx(abs(top[0]))
+
+
+def test_level_arms_hang_the_plate_at_the_knees_on_whole_mm_standoffs(carbon):
+    f = frame_mod.frame_of(carbon)
+    for k in ("fl", "fr", "rr", "rl"):
+        for i in (1, 2):
+            r = f.rods[f"rod_arm_{k}_{i}"]
+            assert r.a.port[2] == pytest.approx(r.b.port[2], abs=1e-9)  # a level arm
+    assert all(m.arm_slope_deg == pytest.approx(0.0, abs=1e-9) for m in f.motors)
+    c = f.core
+    assert c.hang == round(c.hang) and c.hang > 0
+    # the standoffs span the gap between the spacer's top and the plate's underside exactly
+    assert c.plate.lo[2] - c.spacer.hi[2] == pytest.approx(c.hang)
+    assert f.nodes["knee_fl"].pos[2] == pytest.approx(c.plate.centre[2])
+    sitting = carbon.model_copy(update={"frame": carbon.frame.model_copy(update={"level_arms": False})})
+    g = frame_mod.frame_of(sitting)
+    assert g.core.hang == 0 and g.core.plate.lo[2] == pytest.approx(g.core.spacer.hi[2])
+    assert g.nodes["knee_fl"].pos[2] == pytest.approx(carbon.frame.height / 2)
+    assert g.motors[0].arm_slope_deg > 10  # the knee above the plate: the arm climbs to it
+
+
+def test_level_arms_below_the_battery_stack_name_the_key(carbon):
+    from cogniframe.errors import UserError
+
+    low = carbon.model_copy(update={"frame": carbon.frame.model_copy(update={"knee_height": 0.25})})
+    with pytest.raises(UserError) as e:
+        frame_mod.frame_of(low)
+    assert "frame.knee_height" in str(e.value) and "level_arms: false" in str(e.value)
 
 
 def test_cut_length_is_distance_minus_seats(carbon):

@@ -41,15 +41,15 @@ BOX = {
     "rods.diameter": (2.5, 4.0),
     "joints.wall": (1.2, 2.2),
     "joints.socket_depth": (8.0, 14.0),
-    "joints.fit_clearance.tpu_95a": (-0.05, 0.25),
+    "joints.fit_clearance.tpu_95a": (-0.30, 0.25),
     "printer.layer_height": (0.12, 0.28),
     "joints.hinge_thickness": (0.8, 2.0),
     "frame.height": (100.0, 145.0),
     "frame.knee_inset": (4.0, 16.0),
-    "frame.knee_height": (0.42, 0.58),
+    "frame.knee_height": (0.28, 0.58),
     "frame.width": (200.0, 250.0),
     "frame.depth": (200.0, 250.0),
-    "frame.arm_spacing": (10.0, 16.0),
+    "frame.arm_spacing": (10.0, 30.0),
     "core.plate_size": (36.0, 44.0),
 }
 HOLDOUT_SEED_OFFSET = 1000

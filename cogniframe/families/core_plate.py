@@ -19,6 +19,11 @@ SIZE_KEY = "core.plate_size"
 DOC = "ABS/PLA core plate with stack and core-link holes"
 
 
+# An M2 hex nylon standoff (4 mm across flats, threaded through): PA66 at 1.14 g/cm^3 over the
+# hexagon less the M2 thread's core, about 11.8 mm^2.
+NYLON_STANDOFF_G_PER_MM = 0.0135
+
+
 def plan(spec: Spec, frame: Frame) -> tuple[PartSpec, ...]:
     return (_core_plate(spec, frame),)
 
@@ -31,7 +36,16 @@ def _core_plate(spec: Spec, frame: Frame) -> PartSpec:
     holes += [(sx * hole, sy * hole) for sx in (-1, 1) for sy in (-1, 1)]
     est = plate_estimate(c.plate_size, c.plate_size, c.plate_thickness, [screw.clearance_d] * len(holes))
     params = (("size", c.plate_size), ("thickness", c.plate_thickness), ("holes", tuple(holes)), ("hole_d", screw.clearance_d))
-    hw = (HardwareLine(f"{screw.name} x 20 screw + 8 mm nylon standoffs (FC/ESC stack through plate and holder)", 4, 1.0),)
+    hang = frame.core.hang
+    if hang > 0:
+        # level arms: the plate stands on four standoffs on the holder; the stack screws end in
+        # their tops, short screws come up through the holder (and spacer) into their bottoms
+        hw = (HardwareLine(f"{screw.name} x 20 screw + 8 mm nylon standoffs (FC/ESC stack onto the plate)", 4, 1.0),
+              HardwareLine(f"{screw.name} x {hang:g} mm nylon standoff, female-female (plate on the battery holder)", 4,
+                           round(NYLON_STANDOFF_G_PER_MM * hang, 3)),
+              HardwareLine(f"{screw.name} x 6 screw (battery holder to standoff)", 4, screw.mass_of(6)))
+    else:
+        hw = (HardwareLine(f"{screw.name} x 20 screw + 8 mm nylon standoffs (FC/ESC stack through plate and holder)", 4, 1.0),)
     return PartSpec("core_plate", "core_plate", "core", c.material, c.infill,
                     (Placement("core", 0.0, rounded(frame.core.plate.centre)),), (), c.plate_thickness, est, params, hw)
 

@@ -143,8 +143,9 @@ def _joint(spec: Spec, frame: Frame, name: str, kind: str, proto: str = "fl", co
                    # 0.5 mm) and half-side, same frame: the tab keeps below the board
                    ("esc_keepout", rounded(np.array([0.0, 0.0, float(frame.core.stack.lo[2]) + STACK_BOTTOM - 0.5]) - origin)),
                    ("esc_half", STACK_PATTERNS[spec.core.stack_pattern][1] / 2 + 0.5)]
-        # tab + plate + spacer, nut in the spacer's nut trap: round up to a stock length
-        grip = LINK_TAB + spec.core.plate_thickness + spec.core.spacer_thickness
+        # tab + plate + spacer, nut in the spacer's nut trap (a hanging plate: the nut under the
+        # plate): round up to a stock length
+        grip = LINK_TAB + spec.core.plate_thickness + (spec.core.spacer_thickness if frame.core.hang == 0 else 2.0)
         length = next((n for n in (8, 10, 12, 14, 16, 20) if n >= grip), 20)
         hardware = (HardwareLine(f"{screw.name} x {length} socket-head screw + nut (core link to plate)", 1, screw.mass_g * length / 6 + 0.1),)
     if kind == "corner_bottom":
