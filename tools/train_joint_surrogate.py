@@ -46,7 +46,7 @@ BOX = {
     "joints.hinge_thickness": (0.8, 2.0),
     "frame.height": (100.0, 145.0),
     "frame.knee_inset": (4.0, 16.0),
-    "frame.knee_height": (0.28, 0.58),
+    "frame.knee_height": (0.42, 0.58),
     "frame.width": (200.0, 250.0),
     "frame.depth": (200.0, 250.0),
     "frame.arm_spacing": (10.0, 30.0),
