@@ -22,7 +22,7 @@ class Findings:
     drop: object | None  # analysis.impact.DropResult once the physics stage is available
     problems: tuple[str, ...]
     stiffness: dict | None = None  # analysis.drop.load_cases: wall, thrust, modes, buckling, strain
-    peak: dict | None = None  # analysis.impact_nl.design_peaks: predicted peak G per drop height
+    peak: dict | None = None  # analysis.peaks.design_peaks: predicted peak G per drop height
     flight: object | None = None  # analysis.flight.FlightResult
     clash: object | None = None  # analysis.clash.ClashResult, from `build` only
     notes: tuple[str, ...] = ()  # warnings that do not fail the design (joints outside the surrogate's training box)

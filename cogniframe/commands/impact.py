@@ -253,7 +253,7 @@ def fit(
     from cogniframe.analysis import droplogs as L
     from cogniframe.analysis import fit as F
 
-    from cogniframe.analysis import impact_nl
+    from cogniframe.analysis import impact_nl, peaks
 
     if loss not in F.LOSSES:
         raise UserError(f"Option --loss is '{loss}'; use 'cauchy' (the paper's) or 'mse'.")
@@ -313,7 +313,7 @@ def fit(
         from cogniframe.analysis import single_drop as S
 
         scatter = S.fit_scatter(heights_data, lambda h: S.kv_pulse_g(mass_kg, result.c_n_s_per_m, result.k_n_per_m, h))
-        predictions = impact_nl.predict("kelvin-voigt", mass_kg, result.c_n_s_per_m, result.k_n_per_m, predict,
+        predictions = peaks.predict("kelvin-voigt", mass_kg, result.c_n_s_per_m, result.k_n_per_m, predict,
                                         clearance_mm, lowpass_rad_per_s=lowpass, scatter=scatter.scatter)
 
     if plot is not None:
@@ -391,7 +391,7 @@ def _print_predictions(out, predictions: list[dict], scatter=None) -> None:
 
 def _fit_nonlinear(heights_data, mass_kg, exo_mass_kg, lowpass, loss, predict, clearance_mm, as_json, k_static) -> None:
     from cogniframe.analysis import fit as F
-    from cogniframe.analysis import impact_nl
+    from cogniframe.analysis import impact_nl, peaks
 
     r = F.fit_nonlinear(heights_data, mass_kg, exo_mass_kg, lowpass_rad_per_s=lowpass, loss=loss)
     scatter = None
@@ -400,7 +400,7 @@ def _fit_nonlinear(heights_data, mass_kg, exo_mass_kg, lowpass, loss, predict, c
         from cogniframe.analysis import single_drop as S
 
         scatter = S.fit_scatter(heights_data, lambda h: S.two_mass_pulse_g(r.params(), h))
-    preds = impact_nl.predict("nonlinear", mass_kg, r.c_n_s_per_m, r.k_n_per_m, predict, clearance_mm, m_exo=exo_mass_kg,
+    preds = peaks.predict("nonlinear", mass_kg, r.c_n_s_per_m, r.k_n_per_m, predict, clearance_mm, m_exo=exo_mass_kg,
                               k_c=r.contact_k_n_per_m, c_c=r.contact_c_n_s_per_m, lowpass_rad_per_s=lowpass,
                               scatter=scatter.scatter if scatter else None)
     d = r.to_dict()
