@@ -1,7 +1,8 @@
 """`cogniframe drop` (the impact model) and `cogniframe fit` (c, k from drop tests).
 
 Both raise :class:`cogniframe.errors.UserError` for anything the user can fix; the CLI entry
-point prints it and exits with code 2. ``register(app)`` adds both commands to a Typer app.
+point prints it and exits with code 2. The work is the API's (`api.droptests`); these parse the
+options and print. ``register(app)`` adds both commands to a Typer app.
 """
 
 from __future__ import annotations
