@@ -10,6 +10,7 @@ holes it joins and engages its thread by a sensible length without reaching past
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -99,14 +100,13 @@ def camera_screws(spec, frame, parts) -> list[Fastener]:
     nuts behind the upright."""
     from .materials import BOARDS
     from .families.camera_mount import CAMERA_WALL
-    from .vitamins import _camera_world
 
     mount = next((p for p in parts if p.family == "camera_mount"), None)
     if mount is None or spec.core.camera is None:
         return []
     g = dict(mount.params)
     board = BOARDS[spec.core.camera.model]
-    m = _camera_world(spec, frame, g)
+    m = camera_world(frame, g)
     length = _length_of(_line(mount, "camera"), 6.0)
     out = []
     for i, (x, z) in enumerate(g["camera_holes"], start=1):
@@ -116,6 +116,16 @@ def camera_screws(spec, frame, parts) -> list[Fastener]:
         out += _screw_and_nut(f"camera_{i}", "M2", length, head, axis, (board.size[2], CAMERA_WALL), "front_camera_mount",
                               float(g["camera_hole_d"]), "camera", board.hole_d, _line(mount, "camera"))
     return out
+
+
+def camera_world(frame, g: dict) -> np.ndarray:
+    """4x4 world <- camera-upright frame (families/camera_mount.camera_upright_matrix raised onto the core
+    plate): where the camera board's screws go here and where `vitamins` draws the board."""
+    a = math.radians(float(g["tilt_deg"]))
+    m = np.eye(4)
+    m[:3, :3] = [[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]]
+    m[:3, 3] = (0.0, float(g["y_front"]), float(frame.core.plate.hi[2]) + float(g["base_t"]))
+    return m
 
 
 def computer_screws(spec, frame, parts) -> list[Fastener]:

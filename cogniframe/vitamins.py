@@ -15,7 +15,6 @@ shown in the BOM only.
 from __future__ import annotations
 
 import functools
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -216,6 +215,7 @@ def computer_vitamin(spec: Spec, frame: Frame) -> Vitamin | None:
 def camera_vitamin(spec: Spec, frame: Frame) -> Vitamin | None:
     """The camera board on the camera mount's upright, lens forward, tilted with the upright."""
     from .families.camera_mount import camera_mount_geometry
+    from .fasteners import camera_world
 
     if spec.core.camera is None:
         return None
@@ -228,21 +228,12 @@ def camera_vitamin(spec: Spec, frame: Frame) -> Vitamin | None:
     z_lens = 1.0 + by - 9.5  # lens centre 9.5 mm below the board's top edge
     local = [box((-bx / 2, 0.0, 1.0), (bx / 2, bt, 1.0 + by)),
              box((-lens_d / 2, bt, z_lens - lens_d / 2), (lens_d / 2, bt + lens_h, z_lens + lens_d / 2))]
-    m = _camera_world(spec, frame, g)
+    m = camera_world(frame, g)
     prims = _transform_prims(local, m)
     axis = m[:3, :3] @ np.array([0.0, 1.0, 0.0])
     apex = m[:3, :3] @ np.array([0.0, bt + lens_h, z_lens]) + m[:3, 3]
     return Vitamin("camera", "camera", b.bom, lines[spec.core.camera.model], prims, COLOURS["camera"],
                    view=(_t(apex), _t(axis), 31.0))  # Pi camera v2: 62.2 x 48.8 deg field of view
-
-
-def _camera_world(spec: Spec, frame: Frame, g: dict) -> np.ndarray:
-    """4x4 world <- camera-upright frame (shared with families/camera_mount.camera_upright_matrix)."""
-    a = math.radians(float(g["tilt_deg"]))
-    m = np.eye(4)
-    m[:3, :3] = [[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]]
-    m[:3, 3] = (0.0, float(g["y_front"]), float(frame.core.plate.hi[2]) + float(g["base_t"]))
-    return m
 
 
 def flow_vitamin(spec: Spec, frame: Frame) -> Vitamin | None:

@@ -18,7 +18,7 @@ import pytest
 
 from cogniframe import api
 from cogniframe.analysis.constants import G
-from cogniframe.flight import massprops
+from cogniframe.analysis import massprops
 from cogniframe.flight.mix import QUAD_X
 
 ROOT = Path(__file__).resolve().parents[1]

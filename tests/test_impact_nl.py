@@ -13,6 +13,7 @@ from cogniframe.analysis import droplogs as L
 
 from cogniframe.analysis import fit as F
 from cogniframe.analysis import impact_nl as N
+from cogniframe.analysis import peaks
 from cogniframe.analysis.impact import G, impact_velocity
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -56,8 +57,8 @@ def validation():
     kv = F.fit_drop_tests([h50], 0.241)
     nl = F.fit_nonlinear([h50], 0.241, N.PAPER_EXO_MASS_KG)
     pred = {
-        "kelvin-voigt": N.predict("kelvin-voigt", 0.241, kv.c_n_s_per_m, kv.k_n_per_m, [50, 100], 16.0),
-        "nonlinear": N.predict("nonlinear", 0.241, nl.c_n_s_per_m, nl.k_n_per_m, [50, 100], 16.0,
+        "kelvin-voigt": peaks.predict("kelvin-voigt", 0.241, kv.c_n_s_per_m, kv.k_n_per_m, [50, 100], 16.0),
+        "nonlinear": peaks.predict("nonlinear", 0.241, nl.c_n_s_per_m, nl.k_n_per_m, [50, 100], 16.0,
                                m_exo=N.PAPER_EXO_MASS_KG, k_c=nl.contact_k_n_per_m, c_c=nl.contact_c_n_s_per_m),
     }
     return kv, nl, pred
@@ -77,7 +78,7 @@ def test_fit_on_50_predict_100_errors_as_documented(validation):
 def test_check_uses_the_model_that_predicts_100_cm_best(validation):
     _, _, pred = validation
     best = min(pred, key=lambda m: abs(pred[m][1]["peak_g"] - MEASURED_MEDIAN_PEAK[100]))
-    assert N.BEST_MODEL == best
+    assert peaks.BEST_MODEL == best
 
 
 def test_contact_ratios_are_the_50cm_fit(validation):

@@ -13,6 +13,7 @@ import pytest
 from cogniframe.analysis import droplogs as L
 from cogniframe.analysis import fit as F
 from cogniframe.analysis import impact_nl as N
+from cogniframe.analysis import peaks
 from cogniframe.analysis import single_drop as S
 from cogniframe.analysis.impact import G, impact_velocity
 
@@ -257,11 +258,11 @@ def test_paper_scatter_is_the_50cm_kelvin_voigt_fit(on50):
 
 def test_check_model_has_the_smaller_single_drop_errors_at_100cm(on50):
     score = {k: sum(abs(e) for e in _err(v[1], 100)) for k, v in on50.items()}
-    assert N.BEST_MODEL == min(score, key=score.get)
+    assert peaks.BEST_MODEL == min(score, key=score.get)
 
 
 def test_design_peaks_carry_the_single_drop_distribution():
-    d = N.design_peaks(0.241, 7040.0, 46.0, 0.062, [50, 100], 16.0, footprint_mm=(210.0, 210.0))
+    d = peaks.design_peaks(0.241, 7040.0, 46.0, 0.062, [50, 100], 16.0, footprint_mm=(210.0, 210.0))
     h50, h100 = d["heights"]
     for h in (h50, h100):
         assert h["peak_g"] < h["peak_g_drop_median"] < h["peak_g_drop_p90"]

@@ -202,7 +202,8 @@ def test_set_values_makes_a_whole_edit_from_one_parse(monkeypatch):
 
 
 def test_messages_the_studio_does_not_take_are_refused_in_a_sentence(tmp_path, monkeypatch):
-    from cogniframe.studio.session import MAX_SHOWN, Refused, Session
+    from cogniframe.studio.messages import MAX_SHOWN, Refused
+    from cogniframe.studio.session import Session
 
     monkeypatch.chdir(tmp_path)
     shutil.copy(CARBON, tmp_path / "carbon.yaml")
@@ -235,13 +236,14 @@ def test_messages_the_studio_does_not_take_are_refused_in_a_sentence(tmp_path, m
         assert maybe["key"] == "frame.struts" and maybe["message"] == str(cli.value).replace("maybe.yaml", "carbon.yaml")
     finally:
         s.close()
-    from cogniframe.studio.session import shorten
+    from cogniframe.studio.messages import shorten
 
     assert len(shorten("z" * 1_000_000)) < MAX_SHOWN + 60
 
 
 def test_compare_gives_each_designs_figures(tmp_path, monkeypatch):
-    from cogniframe.studio.session import COMPARE_ROWS, Session
+    from cogniframe.studio.compare import COMPARE_ROWS
+    from cogniframe.studio.session import Session
 
     monkeypatch.chdir(tmp_path)
     shutil.copy(CARBON, tmp_path / "carbon.yaml")

@@ -263,12 +263,12 @@ def test_max_peak_g_makes_the_payload_a_failure_mode():
     s = r.survival.to_dict()
     assert s["first_failure"]["part"] == "payload" and s["first_failure"]["mode"] == "peak G"
     # the peak model's own peak at that height is the limit
-    from cogniframe.analysis import impact_nl
+    from cogniframe.analysis import peaks
 
     at = s["first_failure"]["at_drop_cm"]
     d = r.drop
-    p = impact_nl.design_peaks(d.mass_kg, d.k_n_per_m, d.c_n_s_per_m, r.mass.groups["exoskeleton"] / 1000, [at],
-                               d.clearance_mm)["heights"][0]
+    p = peaks.design_peaks(d.mass_kg, d.k_n_per_m, d.c_n_s_per_m, r.mass.groups["exoskeleton"] / 1000, [at],
+                           d.clearance_mm)["heights"][0]
     assert p.get("peak_g_drop_median", p["peak_g"]) == pytest.approx(60.0, rel=0.02)
     assert s["max_undamaged_drop_cm"] == at
 

@@ -19,7 +19,8 @@ from ..spec import Spec
 from . import impact
 
 # the sources the frame model, the load cases and the peaks are made by (their cache keys)
-_MODULES = ("analysis/stiffness.py", "analysis/load_cases.py", "analysis/impact_nl.py", "analysis/impact.py", "analysis/framefe.py",
+_MODULES = ("analysis/stiffness.py", "analysis/load_cases.py", "analysis/peaks.py", "analysis/impact_nl.py",
+            "analysis/single_drop.py", "analysis/impact.py", "analysis/framefe.py",
             "analysis/joints/*.py", "analysis/flight.py", "analysis/constants.py",
             "frame.py", "partlist.py", "families/*.py", "parts/joint.py", "materials.py", "spec.py")
 
@@ -184,10 +185,10 @@ def peak_prediction(spec: Spec, total_mass_g: float, drop: impact.DropResult, ex
     hit = cache.load_json("peaks", key)
     if hit is not None:
         return hit
-    from . import impact_nl
+    from . import peaks
 
-    out = impact_nl.design_peaks(total_mass_g / 1000.0, drop.k_n_per_m, drop.c_n_s_per_m, exo_mass_g / 1000.0,
-                                  heights, drop.clearance_mm, footprint_mm=footprint)
+    out = peaks.design_peaks(total_mass_g / 1000.0, drop.k_n_per_m, drop.c_n_s_per_m, exo_mass_g / 1000.0,
+                             heights, drop.clearance_mm, footprint_mm=footprint)
     out = json.loads(json.dumps(out, sort_keys=True))  # as the cache stores it: same bytes fresh or cached
     cache.store_json("peaks", key, out)
     return out

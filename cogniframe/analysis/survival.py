@@ -70,21 +70,21 @@ def crossing(heights, margins) -> float | None:
 
 
 def payload_peaks(spec, drop, exo_mass_g: float, heights_cm=SWEEP_CM) -> list[dict]:
-    """The peak model's entries over the sweep (`impact_nl.design_peaks`, the feet at the corners
+    """The peak model's entries over the sweep (`peaks.design_peaks`, the feet at the corners
     of the frame's footprint as `drop.peak_prediction` puts them), cached on disk: a single-drop
     distribution per height is a second or two for the whole sweep."""
     from .. import cache
 
     footprint = (float(spec.frame.width), float(spec.frame.depth))
     args = (drop.mass_kg, drop.k_n_per_m, drop.c_n_s_per_m, exo_mass_g / 1000.0, list(heights_cm), drop.clearance_mm, footprint)
-    key = cache.key(["survival-peaks", args], ("analysis/impact_nl.py", "analysis/impact.py", "analysis/single_drop.py",
+    key = cache.key(["survival-peaks", args], ("analysis/peaks.py", "analysis/impact_nl.py", "analysis/impact.py", "analysis/single_drop.py",
                                                "analysis/survival.py"))
     hit = cache.load_json("peaks", key)
     if hit is not None:
         return hit["heights"]
-    from . import impact_nl
+    from . import peaks
 
-    out = impact_nl.design_peaks(*args[:6], footprint_mm=footprint)
+    out = peaks.design_peaks(*args[:6], footprint_mm=footprint)
     out = {"heights": out["heights"]}
     cache.store_json("peaks", key, out)
     return out["heights"]

@@ -22,13 +22,13 @@ class Findings:
     drop: object | None  # analysis.impact.DropResult once the physics stage is available
     problems: tuple[str, ...]
     stiffness: dict | None = None  # analysis.drop.load_cases: wall, thrust, modes, buckling, strain
-    peak: dict | None = None  # analysis.impact_nl.design_peaks: predicted peak G per drop height
+    peak: dict | None = None  # analysis.peaks.design_peaks: predicted peak G per drop height
     flight: object | None = None  # analysis.flight.FlightResult
     clash: object | None = None  # analysis.clash.ClashResult, from `build` only
     notes: tuple[str, ...] = ()  # warnings that do not fail the design (joints outside the surrogate's training box)
     survival: object | None = None  # analysis.survival.Survival: what breaks first, at what drop height
     fit: object | None = None  # analysis.fit_check.FitResult: the screws, holes and motor patterns
-    flight_model: dict | None = None  # flight.for_check: centre of gravity, inertia, resonance flags
+    flight_model: dict | None = None  # _flight_model: centre of gravity, inertia, resonance flags
     warnings: tuple[str, ...] = ()  # WARN, not FAIL: frame modes near the rotors or in the attitude loop's band
 
     @property
@@ -81,12 +81,40 @@ def complete(spec: Spec, d: Derived, budget: mass_mod.MassBudget, drop, session=
     # PASS/FAIL stays with the requirements' own checks
     problems = (_problems(spec, budget, drop) + _physics_problems(spec, stiffness, peak) + _aircraft_problems(spec, flight)
                 + fit.messages())
-    from .. import flight as flight_files
-
-    # the flight files' mass properties and resonance flags: a flagged mode WARNs, never FAILs
-    model, warn = flight_files.for_check(spec, d, budget, stiffness)
+    # the mass properties and resonance flags the flight files are written from: a flagged mode
+    # WARNs, never FAILs
+    model, warn = _flight_model(spec, d, budget, stiffness)
     return Findings(d, budget, drop, tuple(problems), stiffness, peak, flight, survival=surv, notes=tuple(_notes(spec, d)),
                        fit=fit, flight_model=model, warnings=warn)
+
+
+def _flight_model(spec: Spec, design: Derived, budget, stiffness: dict | None) -> tuple[dict, tuple[str, ...]]:
+    """What `check` adds to its `flight` section: (cg_mm, inertia_kg_m2 and the resonance flags from
+    the estimates and `stiffness.modes_hz`; the warnings of flagged modes: WARN, not FAIL). No flags
+    when the flight tables have no entry for the motor (the flight files need one; `check` does not).
+    The flight files (`cogniframe.flight`) are written from the same figures, a floor above."""
+    from ..errors import UserError
+    from . import massprops, resonance, rotors
+
+    mp = massprops.estimate(spec, design, budget)
+    out = {"cg_mm": [round(c, 3) + 0.0 for c in mp.cg_mm],
+           "inertia_kg_m2": [[float(f"{x:.6g}") + 0.0 for x in row] for row in mp.inertia_kg_m2]}
+    try:
+        rm = rotors.model(spec, mp.mass_kg, len(design.frame.motors))
+    except UserError:
+        return out, ()
+    hz = (stiffness or {}).get("modes_hz") or []
+    res = resonance.assess(hz, rm.hover_rotor_hz, rm.max_rotor_hz)
+    out["resonance_flags"] = [{"mode": f.mode, "hz": f.hz, "band": f.band} for f in res.flags]
+    notes = []
+    for band in [b.name for b in res.bands]:
+        fl = [f for f in res.flags if f.band == band]
+        if fl:
+            b = next(x for x in res.bands if x.name == band)
+            notes.append(f"resonance: mode{'s' if len(fl) > 1 else ''} {', '.join(str(f.mode) for f in fl)} "
+                         f"({', '.join(f'{f.hz:.1f}' for f in fl)} Hz) within {resonance.FLAG_MARGIN:.0%} of the {band} band "
+                         f"({b.lo_hz:.0f}-{b.hi_hz:.0f} Hz); `cogniframe fly` writes the filter advice and resonance.png")
+    return out, tuple(notes)
 
 
 def fit_of(spec: Spec, d: Derived):

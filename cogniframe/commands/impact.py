@@ -1,14 +1,14 @@
 """`cogniframe drop` (the impact model) and `cogniframe fit` (c, k from drop tests).
 
 Both raise :class:`cogniframe.errors.UserError` for anything the user can fix; the CLI entry
-point prints it and exits with code 2. ``register(app)`` adds both commands to a Typer app.
+point prints it and exits with code 2. The work is the API's (`api.droptests`); these parse the
+options and print. ``register(app)`` adds both commands to a Typer app.
 """
 
 from __future__ import annotations
 
 import json
 import math
-import re
 import sys
 from pathlib import Path
 from typing import Annotated, Optional
@@ -16,11 +16,6 @@ from typing import Annotated, Optional
 import typer
 
 from cogniframe.errors import UserError
-
-MANIFEST = "drop.yaml"
-"""Per-folder manifest read by `cogniframe fit`: ``height_cm:`` and optional ``mass_kg:``."""
-
-_HEIGHT_IN_NAME = re.compile(r"(\d+(?:\.\d+)?)\s*cm", re.IGNORECASE)
 
 
 def _stdout():
@@ -74,7 +69,7 @@ def drop(
 ) -> None:
     """Drop the payload on the exoskeleton (mass-spring-damper model): compression, peak G,
     energy split and the highest drop that keeps the battery holder off the ground."""
-    from cogniframe.analysis.impact import damping_from_ratio, evaluate
+    from cogniframe.api import droptests
 
     _positive(mass_kg, "--mass-kg", "kg", "0.241")
     _positive(k, "--k", "N/m", "7040")
@@ -84,18 +79,11 @@ def drop(
                         "(damping ratio, e.g. --zeta 0.558); "
                         + ("both were given." if c is not None else "neither was given."))
     if zeta is not None:
-        c = damping_from_ratio(_positive(zeta, "--zeta", "(dimensionless)", "0.558", True),
-                               k, mass_kg)
+        _positive(zeta, "--zeta", "(dimensionless)", "0.558", True)
     else:
         _positive(c, "--c", "N s/m", "46", allow_zero=True)
-    result = evaluate(mass_kg, c, k, _parse_heights(heights), clearance_mm)
-
-    written: list[Path] = []
-    if plots is not None:
-        from cogniframe.report.drop_plots import plot_drop_response, plot_energy_split
-
-        written = [plot_drop_response(result, plots / "drop_response.png"),
-                   plot_energy_split(result, plots / "energy_split.png")]
+    run = droptests.drop(mass_kg, k, _parse_heights(heights), clearance_mm, c=c, zeta=zeta, plots=plots)
+    result, c, written = run.result, run.c_n_s_per_m, run.written
 
     if as_json:
         sys.stdout.write(json.dumps(result.to_dict()) + "\n")
@@ -129,110 +117,6 @@ def drop(
 # fit
 
 
-def _read_manifest(folder: Path) -> dict:
-    """``drop.yaml`` of a folder as {"height_cm": float|None, "mass_kg": float|None}."""
-    path = folder / MANIFEST
-    if not path.is_file():
-        return {}
-    from ruamel.yaml import YAML, YAMLError
-
-    try:
-        data = YAML(typ="safe").load(path.read_text())
-    except YAMLError as exc:
-        raise UserError(f"Manifest '{path}' is not valid YAML ({str(exc).splitlines()[0]}). "
-                        "Write it as two lines, e.g. 'height_cm: 50' and 'mass_kg: 0.241'.") from None
-    if data is None:
-        data = {}
-    if not isinstance(data, dict):
-        raise UserError(f"Manifest '{path}' must be a mapping such as 'height_cm: 50' "
-                        "(and optionally 'mass_kg: 0.241').")
-    unknown = set(data) - {"height_cm", "mass_kg"}
-    if unknown:
-        raise UserError(f"Manifest '{path}' has unknown key(s) {', '.join(sorted(map(str, unknown)))}; "
-                        "the keys are 'height_cm' (required) and 'mass_kg' (optional).")
-    out = {}
-    for key, unit, example in (("height_cm", "cm", "50"), ("mass_kg", "kg", "0.241")):
-        if key in data:
-            v = data[key]
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0 or not math.isfinite(v):
-                raise UserError(f"Manifest '{path}': key '{key}' is {v!r}; it must be a positive "
-                                f"number in {unit} (e.g. '{key}: {example}').")
-            out[key] = float(v)
-    return out
-
-
-def _resolve_sources(data: list[Path], heights: list[float]) -> tuple[list[tuple[float, Path]], list[float]]:
-    """Pair every DATA path with its height (cm); also return the masses manifests declare."""
-    if heights and len(heights) != len(data):
-        raise UserError(f"Got {len(heights)} --height value(s) for {len(data)} DATA argument(s). "
-                        "Give --height once per DATA argument, in the same order, or leave it "
-                        f"out and put a '{MANIFEST}' with 'height_cm: <cm>' in each data folder.")
-    pairs, masses = [], []
-    for i, p in enumerate(data):
-        if not p.exists():
-            raise UserError(f"Drop-test data '{p}' does not exist. Give folders of trial files "
-                            "(.bin from the logger, or .csv) or the files themselves.")
-        folder = p if p.is_dir() else p.parent
-        manifest = _read_manifest(folder)
-        if "mass_kg" in manifest:
-            masses.append(manifest["mass_kg"])
-        if heights:
-            h = heights[i]
-            _positive(h, "--height", "cm", "50")
-        elif "height_cm" in manifest:
-            h = manifest["height_cm"]
-        else:
-            m = _HEIGHT_IN_NAME.findall(folder.name)
-            if not m:
-                raise UserError(
-                    f"No drop height for '{p}': give --height <cm> (once per DATA argument), or "
-                    f"add '{folder / MANIFEST}' containing 'height_cm: <cm>', or name the folder "
-                    "after the height (e.g. SoftBottom_50cm).")
-            h = float(m[-1])
-        pairs.append((h, p))
-    return pairs, masses
-
-
-def _load_params(path: Path):
-    """Round-trip load of the --write params file (checked before any work is done)."""
-    from ruamel.yaml import YAML, YAMLError
-    from ruamel.yaml.comments import CommentedMap
-
-    if not path.is_file():
-        raise UserError(f"Params file '{path}' (from --write) does not exist. Give the params "
-                        "file of your build; the fitted values go into its 'model:' section.")
-    yaml = YAML()  # round-trip: keeps comments, key order and quoting
-    yaml.preserve_quotes = True
-    try:
-        doc = yaml.load(path.read_text())
-    except YAMLError as exc:
-        raise UserError(f"Params file '{path}' (from --write) is not valid YAML "
-                        f"({str(exc).splitlines()[0]}); fix it before writing into it.") from None
-    if doc is None:
-        doc = CommentedMap()
-    if not isinstance(doc, dict):
-        raise UserError(f"Params file '{path}' (from --write) must be a YAML mapping at the top "
-                        "level (keys such as 'model:').")
-    model = doc.get("model")
-    if model is not None and not isinstance(model, dict):
-        raise UserError(f"Params file '{path}': key 'model' is {model!r}, not a mapping. Make it "
-                        "a section, e.g. 'model:' followed by indented 'k_n_per_m: 7040'.")
-    return yaml, doc
-
-
-def _store_params(path: Path, yaml, doc, c: float, k: float) -> None:
-    """Set model.k_n_per_m and model.c_n_s_per_m (creating 'model:' if absent) and save."""
-    from ruamel.yaml.comments import CommentedMap
-
-    if doc.get("model") is None:
-        doc["model"] = CommentedMap()
-    # Six significant digits: more than the data supports, and the file stays readable.
-    doc["model"]["k_n_per_m"] = float(f"{k:.6g}")
-    doc["model"]["c_n_s_per_m"] = float(f"{c:.6g}")
-    with path.open("w") as fh:
-        yaml.dump(doc, fh)
-
-
 def fit(
     data: Annotated[list[Path], typer.Argument(help="Folders of trials (.bin logger files or .csv), or trial files. One height per argument.", show_default=False)],
     height: Annotated[Optional[list[float]], typer.Option("--height", help="Drop height in cm, once per DATA argument in order. Without it: 'height_cm' from the folder's drop.yaml, else a height in the folder name (SoftBottom_50cm).")] = None,
@@ -250,14 +134,11 @@ def fit(
     clearance_mm: Annotated[float, typer.Option("--clearance-mm", help="Battery-holder clearance for the strike flag of --predict, mm.")] = 16.0,
 ) -> None:
     """Fit damping c and stiffness k to accelerometer drop tests with the paper's procedure."""
-    from cogniframe.analysis import droplogs as L
-    from cogniframe.analysis import fit as F
+    from cogniframe.api import droptests
 
-    from cogniframe.analysis import impact_nl
-
-    if loss not in F.LOSSES:
+    if loss not in droptests.losses():
         raise UserError(f"Option --loss is '{loss}'; use 'cauchy' (the paper's) or 'mse'.")
-    if model not in impact_nl.MODELS:
+    if model not in droptests.models():
         raise UserError(f"Option --model is '{model}'; use 'kelvin-voigt' (the paper's, default) or 'nonlinear'.")
     for h in predict or []:
         _positive(h, "--predict", "cm", "100")
@@ -267,8 +148,50 @@ def fit(
                         "with --model nonlinear. Drop --write, or fit with --model kelvin-voigt.")
     if not no_lowpass:
         _positive(lowpass_rad_per_s, "--lowpass-rad-per-s", "rad/s", "500")
-    params = _load_params(write) if write is not None else None
-    pairs, manifest_masses = _resolve_sources(list(data), list(height or []))
+    if write is not None:
+        droptests.check_params_file(write)  # before any work is done
+    for h in height or []:
+        _positive(h, "--height", "cm", "50")
+    pairs, manifest_masses = droptests.drop_sources(list(data), list(height or []))
+    mass_kg = _one_mass(mass_kg, manifest_masses)
+    if model == "nonlinear" and not 0 < exo_mass_kg < mass_kg:
+        raise UserError(f"Option --exo-mass-kg is {exo_mass_kg:g}; it must be more than 0 and less than the total "
+                        f"mass {mass_kg:g} kg (the paper's exoskeleton: --exo-mass-kg 0.062).")
+    k_static = droptests.static_stiffness(static, mass_kg) if static is not None else None
+
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+
+    with Progress(TextColumn("reading trials"), BarColumn(), MofNCompleteColumn(),
+                  console=_stderr(), transient=True) as progress:
+        task = progress.add_task("read", total=None)
+        heights_data = droptests.read_drops(pairs, on_total=lambda n: progress.update(task, total=n),
+                                            on_file=lambda _p: progress.advance(task))
+
+    run = droptests.fit(heights_data, mass_kg, model=model, lowpass_rad_per_s=None if no_lowpass else lowpass_rad_per_s,
+                        loss=loss, predict_cm=predict or [], exo_mass_kg=exo_mass_kg, clearance_mm=clearance_mm,
+                        static_k_n_per_m=k_static, plot=plot if model != "nonlinear" else None, write=write)
+    if as_json:
+        sys.stdout.write(json.dumps(run.to_dict()) + "\n")
+        if model != "nonlinear":
+            err = _stderr()
+            for s in run.result.skipped:
+                err.print(f"skipped {s}", markup=False, highlight=False, soft_wrap=True)
+        return
+    out = _stdout()
+    if model == "nonlinear":
+        _print_nonlinear(out, run, exo_mass_kg)
+        return
+    _print_fit(out, run, mass_kg)
+    if plot is not None:
+        out.print(f"wrote {plot}")
+    if write is not None:
+        out.print(f"wrote model.k_n_per_m and model.c_n_s_per_m to {write}")
+
+
+def _one_mass(mass_kg: float | None, manifest_masses: list[float]) -> float:
+    """--mass, else the one mass the data folders' manifests declare."""
+    from cogniframe.api.droptests import MANIFEST
+
     if mass_kg is None:
         if not manifest_masses:
             raise UserError("No mass: give --mass <kg> (the dropped build's total mass, e.g. "
@@ -278,68 +201,14 @@ def fit(
                             f"({', '.join(f'{m:g}' for m in sorted(set(manifest_masses)))} kg); "
                             "the model fits one mass. Give --mass <kg> to choose.")
         mass_kg = manifest_masses[0]
-    _positive(mass_kg, "--mass", "kg", "0.241")
-    if model == "nonlinear" and not 0 < exo_mass_kg < mass_kg:
-        raise UserError(f"Option --exo-mass-kg is {exo_mass_kg:g}; it must be more than 0 and less than the total "
-                        f"mass {mass_kg:g} kg (the paper's exoskeleton: --exo-mass-kg 0.062).")
-    k_static = F.fit_static_stiffness(static, mass_kg) if static is not None else None
+    return _positive(mass_kg, "--mass", "kg", "0.241")
 
-    # Several DATA arguments at the same height are one height: trimmed and averaged together.
-    groups: dict[float, list[Path]] = {}
-    for h, p in pairs:
-        groups.setdefault(h, []).append(p)
-    collected = {h: L.collect_files(ps) for h, ps in groups.items()}
-    total = sum(len(files) for files, _ in collected.values())
 
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
-
-    heights_data = []
-    with Progress(TextColumn("reading trials"), BarColumn(), MofNCompleteColumn(),
-                  console=_stderr(), transient=True) as progress:
-        task = progress.add_task("read", total=total)
-        for h, (files, skipped) in sorted(collected.items()):
-            trials, bad = L.load_trials(files, on_file=lambda _p: progress.advance(task))
-            heights_data.append(L.prepare_height(
-                trials, h, skipped=skipped + bad, source=", ".join(map(str, groups[h]))))
-
-    lowpass = None if no_lowpass else lowpass_rad_per_s
-    if model == "nonlinear":
-        _fit_nonlinear(heights_data, mass_kg, exo_mass_kg, lowpass, loss, predict or [], clearance_mm, as_json, k_static)
-        return
-    result = F.fit_drop_tests(heights_data, mass_kg, lowpass_rad_per_s=lowpass, loss=loss)
-    predictions, scatter = None, None
-    if predict:
-        # the single-drop scatter is learnt from the same drops, with this fit's pulse
-        from cogniframe.analysis import single_drop as S
-
-        scatter = S.fit_scatter(heights_data, lambda h: S.kv_pulse_g(mass_kg, result.c_n_s_per_m, result.k_n_per_m, h))
-        predictions = impact_nl.predict("kelvin-voigt", mass_kg, result.c_n_s_per_m, result.k_n_per_m, predict,
-                                        clearance_mm, lowpass_rad_per_s=lowpass, scatter=scatter.scatter)
-
-    if plot is not None:
-        from cogniframe.report.drop_plots import plot_fit
-
-        plot_fit(result, plot)
-    if params is not None:
-        _store_params(write, *params, result.c_n_s_per_m, result.k_n_per_m)
-
-    if as_json:
-        d = result.to_dict()
-        if k_static is not None:
-            d["static_k_n_per_m"] = k_static
-        if predictions is not None:
-            d["model"] = "kelvin-voigt"
-            d["single_drop"] = scatter.to_dict()
-            d["predictions"] = predictions
-        sys.stdout.write(json.dumps(d) + "\n")
-        err = _stderr()
-        for s in result.skipped:
-            err.print(f"skipped {s}", markup=False, highlight=False, soft_wrap=True)
-        return
-
+def _print_fit(out, run, mass_kg: float) -> None:
+    """The Kelvin-Voigt fit's tables: c, k and the loss; each height; the predictions."""
     from rich.table import Table
 
-    out = _stdout()
+    result, k_static, lowpass = run.result, run.static_k_n_per_m, run.lowpass_rad_per_s
     summary = Table(title="Drop-test fit")
     summary.add_column("quantity")
     summary.add_column("value", justify="right")
@@ -359,20 +228,16 @@ def fit(
         per.add_row(f"{h.height_cm:g}", str(h.trials_used), str(h.trials_skipped),
                     f"{h.peak_median_g:.1f}", f"{h.rmse_g:.1f}")
     out.print(per)
-    if predictions:
-        _print_predictions(out, predictions, scatter)
-    out.print(f"m = {mass_kg:g} kg, loss {loss}, "
+    if run.predictions:
+        _print_predictions(out, run.predictions, run.scatter)
+    out.print(f"m = {mass_kg:g} kg, loss {run.loss}, "
               + ("no low-pass" if lowpass is None else f"low-pass {lowpass:g} rad/s")
               + f", {result.evaluations} evaluations")
     for s in result.skipped:
         out.print(f"skipped {s}", markup=False, highlight=False, soft_wrap=True)
-    if plot is not None:
-        out.print(f"wrote {plot}")
-    if write is not None:
-        out.print(f"wrote model.k_n_per_m and model.c_n_s_per_m to {write}")
 
 
-def _print_predictions(out, predictions: list[dict], scatter=None) -> None:
+def _print_predictions(out, predictions, scatter=None) -> None:
     from rich.table import Table
 
     t = Table(title="Predictions (peak |a| as the logger sees it: the mean pulse through the 500 rad/s low-pass, and one drop's median and 90th percentile)")
@@ -389,34 +254,11 @@ def _print_predictions(out, predictions: list[dict], scatter=None) -> None:
                   f"{s.tilt_scale_deg(100.0):.2f} deg at touch-down from 100 cm)")
 
 
-def _fit_nonlinear(heights_data, mass_kg, exo_mass_kg, lowpass, loss, predict, clearance_mm, as_json, k_static) -> None:
-    from cogniframe.analysis import fit as F
-    from cogniframe.analysis import impact_nl
-
-    r = F.fit_nonlinear(heights_data, mass_kg, exo_mass_kg, lowpass_rad_per_s=lowpass, loss=loss)
-    scatter = None
-    if predict:
-        # the single-drop scatter is learnt from the same drops, with this fit's pulse
-        from cogniframe.analysis import single_drop as S
-
-        scatter = S.fit_scatter(heights_data, lambda h: S.two_mass_pulse_g(r.params(), h))
-    preds = impact_nl.predict("nonlinear", mass_kg, r.c_n_s_per_m, r.k_n_per_m, predict, clearance_mm, m_exo=exo_mass_kg,
-                              k_c=r.contact_k_n_per_m, c_c=r.contact_c_n_s_per_m, lowpass_rad_per_s=lowpass,
-                              scatter=scatter.scatter if scatter else None)
-    d = r.to_dict()
-    if scatter is not None:
-        d["single_drop"] = scatter.to_dict()
-    d["lowpass_rad_per_s"] = lowpass
-    d["loss_kind"] = loss
-    d["predictions"] = preds
-    if k_static is not None:
-        d["static_k_n_per_m"] = k_static
-    if as_json:
-        sys.stdout.write(json.dumps(d) + "\n")
-        return
+def _print_nonlinear(out, run, exo_mass_kg: float) -> None:
+    """The two-mass fit's table: frame and contact springs and dampers; each height; the predictions."""
     from rich.table import Table
 
-    out = _stdout()
+    r = run.result
     t = Table(title="Drop-test fit: two-mass model (nonlinear)")
     t.add_column("quantity")
     t.add_column("value", justify="right")
@@ -424,13 +266,13 @@ def _fit_nonlinear(heights_data, mass_kg, exo_mass_kg, lowpass, loss, predict, c
                      ("contact k_c (N/m)", f"{r.contact_k_n_per_m:.4g}"), ("contact c_c (N s/m)", f"{r.contact_c_n_s_per_m:.4g}"),
                      ("exoskeleton mass (kg)", f"{exo_mass_kg:g}"), ("loss", f"{r.loss:.4f}")):
         t.add_row(label, v)
-    if k_static is not None:
-        t.add_row("static k (N/m)", f"{k_static:.1f}")
+    if run.static_k_n_per_m is not None:
+        t.add_row("static k (N/m)", f"{run.static_k_n_per_m:.1f}")
     out.print(t)
     for h in r.heights:
         out.print(f"{h['height_cm']:g} cm: {h['trials_used']} trials, median peak {h['peak_median_g']:.1f} G, RMSE {h['rmse_g']:.1f} G")
-    if preds:
-        _print_predictions(out, preds, scatter)
+    if run.predictions:
+        _print_predictions(out, run.predictions, run.scatter)
 
 
 def register(app: typer.Typer) -> None:

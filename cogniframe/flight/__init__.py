@@ -1,9 +1,9 @@
 """Fly it before you print it: the flight-controller setup and simulator models of a design.
 
-    check result (mass budget, modes) -> mass properties (massprops.py) -> rotors (rotors.py)
-      -> the frame's modes against the motors (resonance.py) -> Vehicle (vehicle.py)
-      -> one file per format: inav.py, betaflight.py, ardupilot.py, px4.py, gazebo.py,
-         rotorpy_params.py, resonance.json / resonance.png
+    check result (mass budget, modes) -> mass properties (analysis/massprops.py) -> rotors
+      (analysis/rotors.py) -> the frame's modes against the motors (analysis/resonance.py)
+      -> Vehicle (vehicle.py) -> one file per format: inav.py, betaflight.py, ardupilot.py,
+         px4.py, gazebo.py, rotorpy_params.py, resonance.json / resonance.png (campbell.py)
 
 `cogniframe fly PARAMS` writes them from the part list's estimates; `build` from the CAD solids
 into out/<name>/flight/. Every writer is a pure function of the frozen `Vehicle`: same params,
@@ -24,7 +24,7 @@ def make_vehicle(spec, result, solids=None, shapes: bool = True):
     solids when `solids` ({part: (massprops.SolidProps as printed, print-from-local 4 x 4)}) is
     given, else from the estimates; the modes' flight-controller participation from their shapes
     when `shapes`."""
-    from . import massprops, resonance, rotors
+    from ..analysis import massprops, resonance, rotors
     from .vehicle import vehicle_of
 
     d, budget = result.design, result.mass
@@ -53,7 +53,7 @@ def texts(v) -> dict[str, str]:
 
 def write(v, folder: Path) -> tuple[str, ...]:
     """Write every flight file into `folder` (made if missing); the paths written, relative to it."""
-    from .resonance import plot
+    from .campbell import plot
 
     folder = Path(folder)
     for rel, text in texts(v).items():
@@ -62,31 +62,3 @@ def write(v, folder: Path) -> tuple[str, ...]:
         p.write_text(text, encoding="utf-8")
     plot(v.resonance, folder / "resonance.png", v.name)
     return FILES
-
-
-def for_check(spec, design, budget, stiffness: dict | None) -> tuple[dict, tuple[str, ...]]:
-    """What `check` adds: (`flight` keys cg_mm, inertia_kg_m2 and the resonance flags from the
-    estimates and `stiffness.modes_hz`; the warnings of flagged modes: WARN, not FAIL). Nothing when the flight
-    tables have no entry for the motor (the flight files need one; `check` does not)."""
-    from ..errors import UserError
-    from . import massprops, resonance, rotors
-
-    mp = massprops.estimate(spec, design, budget)
-    out = {"cg_mm": [round(c, 3) + 0.0 for c in mp.cg_mm],
-           "inertia_kg_m2": [[float(f"{x:.6g}") + 0.0 for x in row] for row in mp.inertia_kg_m2]}
-    try:
-        rm = rotors.model(spec, mp.mass_kg, len(design.frame.motors))
-    except UserError:
-        return out, ()
-    hz = (stiffness or {}).get("modes_hz") or []
-    res = resonance.assess(hz, rm.hover_rotor_hz, rm.max_rotor_hz)
-    out["resonance_flags"] = [{"mode": f.mode, "hz": f.hz, "band": f.band} for f in res.flags]
-    notes = []
-    for band in [b.name for b in res.bands]:
-        fl = [f for f in res.flags if f.band == band]
-        if fl:
-            b = next(x for x in res.bands if x.name == band)
-            notes.append(f"resonance: mode{'s' if len(fl) > 1 else ''} {', '.join(str(f.mode) for f in fl)} "
-                         f"({', '.join(f'{f.hz:.1f}' for f in fl)} Hz) within {resonance.FLAG_MARGIN:.0%} of the {band} band "
-                         f"({b.lo_hz:.0f}-{b.hi_hz:.0f} Hz); `cogniframe fly` writes the filter advice and resonance.png")
-    return out, tuple(notes)

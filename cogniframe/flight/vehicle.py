@@ -1,7 +1,7 @@
 """The frozen record every flight file is written from: the design's mass properties, its rotors
 and their constants, the pack and the frame's vibration against the motors. Each output format is
 a pure function of one `Vehicle` (inav.py, betaflight.py, ardupilot.py, px4.py, gazebo.py,
-rotorpy_params.py, resonance.py).
+rotorpy_params.py, campbell.py).
 
 Axes: the record keeps the frame's (x right, y front, z up, SI). The formats turn them into their
 own: FRD body axes (x front, y right, z down) for INAV, Betaflight, ArduPilot and PX4, FLU (x
@@ -14,9 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .massprops import MassProps
-from .resonance import Resonance
-from .rotors import Rotor, RotorModel
+from ..analysis.massprops import MassProps
+from ..analysis.resonance import Resonance
+from ..analysis.rotors import Rotor, RotorModel
 
 # Motor order of the quad-X mixers: Betaflight's and INAV's (1 rear right, 2 front right, 3 rear
 # left, 4 front left), ArduPilot's quad X (1 front right, 2 rear left, 3 front left, 4 rear
@@ -76,7 +76,7 @@ def inertia_in(axes: str, inertia: np.ndarray) -> np.ndarray:
 
 def vehicle_of(spec, design, budget, mass: MassProps, resonance: Resonance) -> Vehicle:
     from ..analysis import flight
-    from . import rotors as rotors_mod
+    from ..analysis import rotors as rotors_mod
 
     rot = rotors_mod.rotors(spec, design.frame, mass.cg_m)
     model = rotors_mod.model(spec, mass.mass_kg, len(rot))

@@ -26,7 +26,7 @@ def flight_key(ctx):
 def make_flight(ctx) -> Made:
     from .. import flight
     from ..errors import UserError
-    from ..flight.massprops import read_stl_triangles, solid_props
+    from ..analysis.massprops import read_stl_triangles, solid_props
 
     d = ctx.design
     solids = {p.name: (solid_props(read_stl_triangles(ctx.out / ctx.part_value(p.name)["stl"])),
@@ -40,5 +40,6 @@ def make_flight(ctx) -> Made:
 
 
 FLIGHT = Step("flight", ("check", "part:*"), make_flight, flight_key,
-              ("flight/*", "vitamins.py", "errors.py", "analysis/flight.py", "analysis/stiffness.py", "analysis/load_cases.py"),
+              ("flight/*", "vitamins.py", "errors.py", "analysis/flight.py", "analysis/stiffness.py", "analysis/load_cases.py",
+               "analysis/massprops.py", "analysis/rotors.py", "analysis/resonance.py"),
               reads="STL hashes, copies and placements, rods, vitamins, mass budget, modes, flight numbers, motors")

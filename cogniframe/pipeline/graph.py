@@ -174,6 +174,33 @@ def _do(task: Task, ctx: Context) -> tuple[Any, str]:
     return value, ("ran" if key is not None or (task.step.key is not None and not ctx.use_cache) else "always")
 
 
+class _Failures:
+    """The errors of one run, each with when and in which task it arose. The first (by time) calls
+    the caller's `on_error()` once; `raise_first` raises the one that stopped the run."""
+
+    def __init__(self, on_error: Callable[[], None] | None):
+        self.on_error = on_error
+        self.errors: list[tuple[float, str, BaseException]] = []  # (when, task, error)
+
+    def __bool__(self) -> bool:
+        return bool(self.errors)
+
+    def add(self, task: str, e: BaseException) -> None:  # holding the run's lock
+        self.errors.append((time.perf_counter(), task, e))
+        if len(self.errors) == 1 and self.on_error is not None:
+            self.on_error()
+
+    def raise_first(self) -> None:
+        """Raise the first error, an interruption (Ctrl-C, exit) before any other, with a note naming
+        its task; nothing when there was none."""
+        if not self.errors:
+            return
+        _, task, first = min(self.errors, key=lambda x: (not isinstance(x[2], (KeyboardInterrupt, SystemExit)), x[0]))
+        if task:
+            first.add_note(f"first failed step: {task}")
+        raise first
+
+
 def run(tasks: Sequence[Task], ctx: Context, threads: int = 16,
         on_start: Callable[[str], None] | None = None,
         on_done: Callable[[Record], None] | None = None,
@@ -194,14 +221,9 @@ def run(tasks: Sequence[Task], ctx: Context, threads: int = 16,
     pending = list(tasks)
     done: set[str] = set()
     records: list[Record] = []
-    errors: list[tuple[float, str, BaseException]] = []  # (when, task, error)
+    errors = _Failures(on_error)
     running = [0]
     lock = threading.Condition()
-
-    def failed(task: str, e: BaseException) -> None:  # holding the lock
-        errors.append((time.perf_counter(), task, e))
-        if len(errors) == 1 and on_error is not None:
-            on_error()
 
     def ready(t: Task) -> bool:
         return all(n in done for n in t.needs) and all(n in done for n in t.after)
@@ -219,7 +241,7 @@ def run(tasks: Sequence[Task], ctx: Context, threads: int = 16,
             value, status = _do(t, ctx)
         except BaseException as e:  # noqa: BLE001 - handed to the caller
             with lock:
-                failed(t.name, e)
+                errors.add(t.name, e)
                 running[0] -= 1
                 lock.notify_all()
             return
@@ -260,7 +282,7 @@ def run(tasks: Sequence[Task], ctx: Context, threads: int = 16,
                     value, status = _do(main, ctx)
             except Exception as e:  # noqa: BLE001 - handed to the caller, after the running tasks end
                 with lock:
-                    failed(main.name, e)
+                    errors.add(main.name, e)
                 continue
             with lock:
                 finish(main, value, status, t0)
@@ -270,12 +292,8 @@ def run(tasks: Sequence[Task], ctx: Context, threads: int = 16,
             main_loop()
         except BaseException as e:  # noqa: BLE001 - Ctrl-C (or the graph stuck): start nothing new,
             with lock:              # let the running tasks end (the executor waits for them), then raise
-                failed("", e)
+                errors.add("", e)
                 while running[0]:
                     lock.wait()
-    if errors:
-        _, task, first = min(errors, key=lambda x: (not isinstance(x[2], (KeyboardInterrupt, SystemExit)), x[0]))
-        if task:
-            first.add_note(f"first failed step: {task}")
-        raise first
+    errors.raise_first()
     return records

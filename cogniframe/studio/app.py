@@ -38,7 +38,9 @@ from starlette.responses import FileResponse, HTMLResponse, JSONResponse, Respon
 from starlette.routing import Route, WebSocketRoute
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
-from .session import COMPARE_ROWS, MAX_MESSAGE_BYTES, Page, Refused, Session, shorten, text_hash
+from .compare import COMPARE_ROWS
+from .messages import MAX_MESSAGE_BYTES, Refused, shorten, text_hash
+from .session import Page, Session
 
 VIEWER_FILES = {"three.module.min.js", "OrbitControls.js", "viewer.js"}
 STATIC_FILES = {"studio.js": "text/javascript", "studio.css": "text/css"}

@@ -28,6 +28,9 @@ FE with them), then publishes the view and, after a FE, checks the waiting pages
 runs `cogniframe build` into out/<name>. Nothing is written but the params file (Save), the build
 folder (Build) and the studio's log; the parts of the 3D view go to a temporary folder, removed
 on exit.
+
+Beside it: what a message may hold (`messages.py`), the compare table's figures (`compare.py`)
+and the workers' mailboxes (`mailbox.py`).
 """
 
 from __future__ import annotations
@@ -49,89 +52,13 @@ from typing import Any
 from .. import api
 from ..errors import UserError
 from . import form
+from .compare import compare_figures
+from .mailbox import Latest, PerPage
+from .messages import Refused, compare_items, parse_values, shorten, text_hash
 
 Event = dict
 log = logging.getLogger("cogniframe.studio")
-
-# What one message may hold. The form has about 100 fields; a page sends only the ones it changed.
-MAX_MESSAGE_BYTES = 256 * 1024
-MAX_KEYS = 400
-MAX_VALUE_CHARS = 1000  # a name is at most 64 characters, a list of numbers a few dozen
-MAX_DESIGNS = 8  # designs in one compare
-MAX_SHOWN = 600  # characters of a message a page shows: a huge value is never echoed whole
 BASES_KEPT = 32  # file texts that pages started from
-
-
-class Refused(Exception):
-    """A message the studio does not take: the plain reason, for the page."""
-
-
-def text_hash(text: str) -> str:
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
-
-
-def shorten(text: str, limit: int = MAX_SHOWN) -> str:
-    """`text`, with its long runs cut so that a 1 MB value in a message is not sent back whole."""
-    if len(text) <= limit:
-        return text
-    keep = limit // 2
-    return f"{text[:keep]}… ({len(text) - 2 * keep} characters left out) …{text[-keep:]}"
-
-
-class _Latest:
-    """A one-slot mailbox: `put` replaces what is waiting; `take` waits for something."""
-
-    def __init__(self):
-        self._cond = threading.Condition()
-        self._item = None
-        self._closed = False
-
-    def put(self, item) -> None:
-        with self._cond:
-            self._item = item
-            self._cond.notify_all()
-
-    def take(self):
-        with self._cond:
-            while self._item is None and not self._closed:
-                self._cond.wait()
-            item, self._item = self._item, None
-            return item
-
-    def close(self) -> None:
-        with self._cond:
-            self._closed = True
-            self._cond.notify_all()
-
-
-class _PerPage:
-    """One slot per page: `put` replaces that page's waiting job; `take` hands out the pages'
-    jobs in the order they first came, so one busy page cannot starve another."""
-
-    def __init__(self):
-        self._cond = threading.Condition()
-        self._jobs: collections.OrderedDict[int, Any] = collections.OrderedDict()
-        self._closed = False
-
-    def put(self, page: int, job, replace: bool = True) -> None:
-        with self._cond:
-            if replace or page not in self._jobs:
-                self._jobs[page] = job
-            self._cond.notify_all()
-
-    def take(self):
-        with self._cond:
-            while not self._jobs and not self._closed:
-                self._cond.wait()
-            if not self._jobs:
-                return None
-            return self._jobs.popitem(last=False)[1]
-
-    def close(self) -> None:
-        with self._cond:
-            self._closed = True
-            self._cond.notify_all()
-
 
 @dataclass
 class Page:
@@ -169,8 +96,8 @@ class Session:
         self.building = False
         self.schema = None
         self.tmp = Path(tempfile.mkdtemp(prefix="cogniframe-studio-"))
-        self._edits = _PerPage()
-        self._geometry = _Latest()
+        self._edits = PerPage()
+        self._geometry = Latest()
         self._closed = False
         self._threads = [threading.Thread(target=self._evaluator, name="studio-evaluate", daemon=True),
                          threading.Thread(target=self._geometry_worker, name="studio-geometry", daemon=True)]
@@ -255,28 +182,8 @@ class Session:
         return self._fields().get(key)
 
     def parse_values(self, values: Any) -> dict[str, Any]:
-        """The values a page sent, as the YAML values to write. Refused (a plain message, in well
-        under a second whatever was sent): not a mapping, too many keys, a key that is not an input
-        of the form, a value that is not text, a number, true/false or null, or a very long one."""
-        if values is None:
-            return {}
-        if not isinstance(values, dict):
-            raise Refused("refused: `values` must be a mapping of dotted keys to values.")
-        if len(values) > MAX_KEYS:
-            raise Refused(f"refused: {len(values)} keys in one message; the studio takes at most {MAX_KEYS} "
-                          f"(the form has {len(self._fields())} inputs).")
-        fields = self._fields()
-        parsed = {}
-        for key, raw in values.items():
-            f = fields.get(key)
-            if f is None:
-                raise Refused(f"refused: {shorten(str(key), 80)!s} is not an input of the form.")
-            if raw is not None and not isinstance(raw, (str, bool, int, float)):
-                raise Refused(f"refused: {key}: a value is text, a number, true/false or null, not a {type(raw).__name__}.")
-            if isinstance(raw, str) and len(raw) > MAX_VALUE_CHARS:
-                raise Refused(f"refused: {key}: a value of {len(raw)} characters; the studio takes at most {MAX_VALUE_CHARS}.")
-            parsed[key] = f.parse(raw)
-        return parsed
+        """The values a page sent, as the YAML values to write (`messages.parse_values`)."""
+        return parse_values(values, self._fields())
 
     # -- pages ------------------------------------------------------------------------------------
     def connect(self, send: Callable[[Event], None]) -> Page:
@@ -630,16 +537,7 @@ class Session:
         """The compare table's figures of each design ({"name", "base", "values"}); a design that
         does not validate gets its message instead. Each is checked as `cogniframe check` checks it
         (a joint geometry never solved: its FE first, seconds)."""
-        if not isinstance(designs, list) or not designs:
-            raise Refused("refused: `designs` must be a list of designs to compare.")
-        if len(designs) > MAX_DESIGNS:
-            raise Refused(f"refused: {len(designs)} designs; the compare takes at most {MAX_DESIGNS}.")
-        prepared = []
-        for i, item in enumerate(designs):
-            if not isinstance(item, dict):
-                raise Refused("refused: each design to compare is {name, base, values}.")
-            name = shorten(str(item.get("name") or f"design {i + 1}"), 80)
-            prepared.append((name, self.base_of(item.get("base")), self.parse_values(item.get("values"))))
+        prepared = [(name, self.base_of(base), self.parse_values(values)) for name, base, values in compare_items(designs)]
         columns = []
         for name, d0, overrides in prepared:
             try:
@@ -654,42 +552,6 @@ class Session:
         self._edits.close()
         self._geometry.close()
         shutil.rmtree(self.tmp, ignore_errors=True)
-
-
-# the compare's rows: label, unit, digits, which is better ("lower", "higher", None)
-COMPARE_ROWS = (
-    ("mass_g", "all-up weight", "g", 1),
-    ("margin_g", "margin to the limit", "g", 1),
-    ("k_n_per_m", "stiffness k", "N/m", 0),
-    ("safe_drop_cm", "max safe drop", "cm", 1),
-    ("one_drop_peak_g", "one drop's peak at the design drop (median)", "G", 0),
-    ("hover_time_min", "hover time", "min", 1),
-    ("thrust_to_weight", "thrust / weight", "", 2),
-    ("first_mode_hz", "first mode", "Hz", 1),
-    ("verdict", "verdict", "", None),
-)
-
-
-def compare_figures(check: dict) -> dict[str, Any]:
-    """The compare's figures from a `check --json` object (None where the check has none)."""
-
-    def at(*path):
-        node: Any = check
-        for p in path:
-            if isinstance(node, list) and isinstance(p, int) and p < len(node):
-                node = node[p]
-            elif isinstance(node, dict) and p in node:
-                node = node[p]
-            else:
-                return None
-        return node
-
-    design = at("stiffness", "design_drop_height_cm")
-    peak = next((h.get("peak_g_drop_median") for h in at("peak_g", "heights") or [] if h.get("height_cm") == design), None)
-    return {"mass_g": at("mass", "total_g"), "margin_g": at("mass", "margin_g"), "k_n_per_m": at("stiffness", "k_n_per_m"),
-            "safe_drop_cm": at("drop", "max_safe_height_cm"), "one_drop_peak_g": peak,
-            "hover_time_min": at("flight", "hover_time_min"), "thrust_to_weight": at("flight", "thrust_to_weight"),
-            "first_mode_hz": at("stiffness", "modes_hz", 0), "verdict": check.get("verdict")}
 
 
 class _Lines:

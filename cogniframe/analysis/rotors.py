@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..analysis.constants import G, RHO_AIR
+from .constants import G, RHO_AIR
 
 # Motor + ESC efficiency of small brushless motors (shaft power over battery power): the 0.6 of
 # analysis/flight.py's FOM_ETA = figure of merit 0.5 x 0.6.
@@ -105,8 +105,8 @@ def rotors(spec, frame, cg_m) -> tuple[Rotor, ...]:
 def model(spec, mass_kg: float, n_rotors: int = 4) -> RotorModel:
     """The rotor constants for the design's motor, propeller and pack (see the module docstring).
     Raises UserError (naming motors.kv) when the flight tables have no entry for them."""
-    from ..analysis import flight
-    from ..analysis.load_cases import PROP_CT
+    from . import flight
+    from .load_cases import PROP_CT
     p = flight.propulsion(spec)
     if p is None:
         tabled = "; ".join(f"{m} {k} KV with {pr}" for m, k, pr, _ in sorted(flight.TABLES))
