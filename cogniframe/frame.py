@@ -399,7 +399,7 @@ def _core(spec: Spec) -> Core:
                 "frame.knee_height",
                 f"level arms need the core plate at the knees' height, z = {z_knee:.1f} mm, but the battery holder "
                 f"({c.battery_clearance:g} mm clearance, {holder_h:.1f} mm tall) and the spacer already put it at "
-                f"z = {plate_z:.1f} mm", f"raise frame.knee_height to at least {plate_z / spec.frame.height:.2f}, "
+                f"z = {plate_z:.1f} mm", f"raise frame.knee_height to at least {math.ceil(plate_z / spec.frame.height * 100) / 100:.2f}, "
                 "or set frame.level_arms: false (the arms then climb from the plate to the knees)")
         plate_z += hang
     plate = Box("core_plate", (0.0, 0.0, plate_z), (c.plate_size, c.plate_size, c.plate_thickness))

@@ -51,8 +51,12 @@ def test_lines_cover_the_design(checked):
     mount = next(p for p in d.parts if p.family == "motor_mount")
     assert motor_screws.qty == 4 * len(mount.param("holes")) >= 8
     assert motor_screws.size == f"M2 x {mount.param('screw_length'):g}"
-    assert all(ln.size.startswith("M") for ln in hw.values() if "screw" in ln.item)
-    assert all(ln.size.endswith(" mm") for ln in hw.values() if "screw" not in ln.item)  # strap, zip ties
+    threaded = [ln for ln in hw.values() if "screw" in ln.item or "standoff" in ln.item]
+    assert all(ln.size.startswith("M") for ln in threaded)
+    assert all(ln.size.endswith(" mm") for ln in hw.values() if ln not in threaded)  # strap, zip ties
+    # level arms: the plate stands on four standoffs as long as the gap the frame leaves for them
+    (stand,) = [ln for ln in hw.values() if "standoff, female-female" in ln.item]
+    assert stand.qty == 4 and stand.size == f"M2 x {d.frame.core.hang:g}"
     (motor,) = [ln for ln in lines if ln.category == "motor"]
     assert motor.qty == 4 and motor.mass_g_each == spec.motor.mass_g
     (prop,) = [ln for ln in lines if ln.category == "propeller"]
