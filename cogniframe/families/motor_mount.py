@@ -208,6 +208,37 @@ def sleeve_length(spec: Spec) -> float:
     return spec.joints.socket_depth
 
 
+def shaft_hole(spec: Spec, holes, counterbore_d: float) -> float:
+    """The centre hole, mm: the motor's shaft boss with 0.5 mm round it, made HOLE_CLEAR smaller
+    where its side would touch a screw hole's or a head seat's (the whoop classes' M1.4 holes on a
+    6.6 mm circle come to 2.5 mm from the axis, where a 4 mm boss's hole ends: OCC's cut of two
+    tangent cylinders left an STL with holes), or HOLE_CLEAR larger when that would not pass the
+    boss (the hole then takes in the screw holes' inner sides)."""
+    boss = spec.motor.shaft_boss_d
+    r = boss / 2 + 0.5
+    clear = SCREWS[spec.motor.screw].clearance_d / 2
+    touch = [math.hypot(x, y) + sign * hr for x, y in holes for hr in (clear, counterbore_d / 2) for sign in (-1, 1)]
+    for t in sorted(touch):
+        if abs(r - t) < HOLE_CLEAR:
+            r = t - HOLE_CLEAR if t - HOLE_CLEAR >= boss / 2 + 0.1 else t + HOLE_CLEAR
+    return round(2 * r, 4)
+
+
+def _centre_clears_rods(spec: Spec, rods_local, bore: float, centre_d: float) -> None:
+    """Raises the spec's error on frame.arm_spacing when the centre hole would open into a rod's
+    bore (it keeps two extrusion lines of TPU to it, as the screw holes do): the motor's shaft boss
+    would stand against the rod."""
+    lines = 2 * spec.printer.nozzle
+    need = centre_d / 2 + lines + bore / 2
+    near = min(_plan_distance((0.0, 0.0), p, d) for p, d in rods_local)
+    if near < need - 1e-9:
+        motor = spec.motor
+        raise spec.error("frame.arm_spacing",
+                         f"the {motor.name} motor's shaft boss ({motor.shaft_boss_d:g} mm) needs a {centre_d:g} mm hole in the "
+                         f"motor mount, and the arm rods {spec.frame.arm_spacing:g} mm apart pass through it",
+                         f"set frame.arm_spacing to at least {2 * need:.1f} or choose a smaller motor")
+
+
 def seat_diameter(spec: Spec, holes, counterbore_d: float) -> float:
     """The least seat that carries the motor, mm: the motor's bell (its base stands inside that
     footprint; the authors' 15 mm seat carries a 14 mm 1104), and every screw head's seat with two
@@ -245,7 +276,7 @@ def _span(rods, start: float, length: float) -> tuple[float, float]:
     return base + start * cos_a, base + (start + length) * cos_a
 
 
-def layout(spec: Spec, rods, holes, seat_z: float, counterbore_d: float, shaft_hole: float) -> Layout:
+def layout(spec: Spec, rods, holes, seat_z: float, counterbore_d: float, centre_d: float) -> Layout:
     """The mount's seat and sleeves for `holes` on `rods` (local frame). The seat and the sleeves
     start at their least sizes (`seat_diameter`, `sleeve_length`) and grow by 0.1 mm steps until no
     face of one stands within HOLE_CLEAR of touching another flat (OCC's boolean breaks on a
@@ -259,7 +290,7 @@ def layout(spec: Spec, rods, holes, seat_z: float, counterbore_d: float, shaft_h
     dz = float(rods[0][1][2])
     flat = abs(dz) <= 1e-9
     bolts = [np.array([x, y, 0.0]) for x, y in holes]
-    cuts = [(c, float(SCREWS[spec.motor.screw].clearance_d) / 2) for c in bolts] + [(np.zeros(3), shaft_hole / 2)]
+    cuts = [(c, float(SCREWS[spec.motor.screw].clearance_d) / 2) for c in bolts] + [(np.zeros(3), centre_d / 2)]
     skirts = tuple(1.0 if flat else _skirt(r, p, d, cuts + [(c, counterbore_d / 2) for c in bolts]) for p, d in rods)
     along = [(float(c @ a_h), hr) for c, hr in cuts + [(c, counterbore_d / 2) for c in bolts]]
     sides = [abs(float(p @ lat)) + sign * f * r for p, _ in rods for f in (*skirts, 1.0) for sign in (-1, 1)]
@@ -309,7 +340,7 @@ def _disc_strip(radius: float, x0: float, x1: float, c: float) -> float:
 
 
 def _estimate(spec: Spec, rods, lay: Layout, seat_z: float, plate_t: float, holes, grip: float,
-              counterbore_d: float, shaft_hole: float) -> Estimate:
+              counterbore_d: float, centre_d: float) -> Estimate:
     """Closed form: the flat slab (seat disc, bridge, and the webs' feet in the plate's layer), the
     sleeves (annulus x length) and the webs between them and the slab, less the holes and the
     counterbores inside the plate."""
@@ -334,7 +365,7 @@ def _estimate(spec: Spec, rods, lay: Layout, seat_z: float, plate_t: float, hole
     vol += sleeves_v
     screw = SCREWS[spec.motor.screw]
     n = len(holes)
-    vol -= (n * screw.clearance_d**2 + shaft_hole**2) * math.pi / 4 * plate_t
+    vol -= (n * screw.clearance_d**2 + centre_d**2) * math.pi / 4 * plate_t
     vol -= n * math.pi / 4 * (counterbore_d**2 - screw.clearance_d**2) * (plate_t - grip)
     length = max(lay.seat_d, e1 - e0 + 2 * r)
     wide = max(lay.seat_d, 2 * (half + r))
@@ -355,13 +386,14 @@ def _motor_mount(spec: Spec, frame: Frame) -> PartSpec:
     plate_t = min(spec.joints.wall + 1.5, seat_z)
     length, grip, engagement = motor_screw(spec, plate_t)
     counterbore_d = round(screw.head_d + 2 * HEAD_CLEAR, 4)
-    shaft_hole = motor.shaft_boss_d + 1.0
-    lay = layout(spec, rods_local, holes, seat_z, counterbore_d, shaft_hole)
-    est = _estimate(spec, rods_local, lay, seat_z, plate_t, holes, grip, counterbore_d, shaft_hole)
+    centre = shaft_hole(spec, holes, counterbore_d)
+    _centre_clears_rods(spec, rods_local, bore, centre)
+    lay = layout(spec, rods_local, holes, seat_z, counterbore_d, centre)
+    est = _estimate(spec, rods_local, lay, seat_z, plate_t, holes, grip, counterbore_d, centre)
     placements = tuple(Placement(m.name, _mount_rotation(frame, m0, m), rounded(m.axis)) for m in frame.motors)
     params = (("holes", holes), ("pattern", motor.holes), ("pattern_turn", turn), ("screw", screw.name),
               ("screw_clearance", screw.clearance_d), ("screw_length", length), ("grip", grip), ("engagement", engagement),
-              ("counterbore_d", counterbore_d), ("shaft_hole", shaft_hole), ("bell_d", motor.bell_d), ("seat_z", seat_z),
+              ("counterbore_d", counterbore_d), ("shaft_hole", centre), ("bell_d", motor.bell_d), ("seat_z", seat_z),
               ("arm_rods", tuple(rods_local)), ("arm_slope_deg", round(m0.arm_slope_deg, 4)),
               ("seat_d", lay.seat_d), ("clip_start", lay.clip_start), ("clip_len", lay.clip_len),
               ("skirt", tuple(round(f, 4) for f in lay.skirts)), ("bore", round(bore, 4)))
