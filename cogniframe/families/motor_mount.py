@@ -362,6 +362,15 @@ def _estimate(spec: Spec, rods, lay: Layout, seat_z: float, plate_t: float, hole
         upper = _disc_strip(r, -w, w, r) / 2  # the sleeve's upper half inside the web
         sleeves_v += math.pi * (r * r - bore * bore / 4) * lay.clip_len
         sleeves_v += max(2 * w * depth * lay.clip_len * cos_a - upper * lay.clip_len, 0.0)
+        # Close rods (thick walls): each level of a sleeve and its web is one span centred on its
+        # rod, so the two overlap by twice what one reaches past the arm's centre line.
+        c = abs(float(p @ lat))
+        past = 0.0
+        if c < r:
+            past += r * r * math.acos(c / r) - c * math.sqrt(r * r - c * c)
+        if c < w:
+            past += (w - c) * depth - _disc_strip(r, c, min(w, r), depth) / 2
+        sleeves_v -= past * lay.clip_len
     vol += sleeves_v
     screw = SCREWS[spec.motor.screw]
     n = len(holes)
