@@ -225,6 +225,20 @@ def test_fails_the_pattern_read_as_a_square():
     assert len(pat) == 4 and "6.36 mm from the shaft axis" in pat[0].message and pat[0].b == "motor 1104"
 
 
+def test_fails_the_diagonal_pattern_read_on_the_arm_axis():
+    """Rods 25 mm apart: the mount carries the four holes at 45 deg to the arm (pattern_turn 45).
+    The same holes on a mount that says its pattern lies on the arm axis are 3.44 mm from every
+    catalogue hole: the pattern rule reads the turn, it does not accept any hole on the circle."""
+    spec = _spec("carbon", frame__arm_spacing=25.0)
+    fr, parts = _design(spec)
+    mount = _mount(parts)
+    assert mount.param("pattern_turn") == 45.0
+    bad = _with(mount, pattern_turn=0.0)
+    parts = tuple(bad if p is mount else p for p in parts)
+    pat = [p for p in _fit(spec, fr, parts).problems if p.rule == "pattern"]
+    assert len(pat) == 4 and "nearest 3.44 mm away" in pat[0].message
+
+
 def test_fails_a_mount_without_an_opposite_pair():
     spec = _spec("carbon", frame__arm_spacing=25.0)
     fr, parts = _design(spec)

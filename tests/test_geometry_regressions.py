@@ -337,18 +337,24 @@ def test_knee_web_top_clears_the_legs_top():
     ("carbon", {"frame__arm_spacing": 25.0}),  # the authors' spacing: all four holes
     ("carbon", {"motors__model": "1505", "frame__arm_spacing": 25.0}),  # 12 mm holes across the shaft
     ("carbon", {"joints__wall": 1.45}),  # OCC's exact cut gave the mount and a phantom 210 mm^3 solid
+    ("bamboo", {"frame__knee_height": 0.38, "frame__arm_spacing": 25.0}),  # level arms, the authors' spacing
+    ("carbon", {"frame__arm_spacing": 30.0, "joints__wall": 3.0}),  # long bridges, thick sleeves
+    ("carbon", {"frame__arm_spacing": 15.0, "joints__socket_depth": 16.0}),  # sleeves longer than the seat
 ])
 def test_motor_mount_builds(base, change):
-    from cogniframe.families.motor_mount import MOUNT_CLEAR
+    from cogniframe.families.motor_mount import sleeve_length
 
     spec = _variant(base, **change)
     (mount,) = _parts(spec, ["motor_mount"])
     _one_watertight_solid(mount)
-    width = float(mount.param("width"))
-    # the seat holds the motor's holes with a wall outside each, and reaches past the clips
+    seat = float(mount.param("seat_d"))
+    # the seat carries the motor's bell and every screw head's seat with two extrusion lines outside it
     reach = max(math.hypot(x, y) for x, y in mount.param("holes"))
-    assert width >= 2 * reach + float(mount.param("screw_clearance")) + 2 * mount.wall - 1e-5  # holes stored to 1e-6
-    assert width >= spec.frame.arm_spacing + spec.bore + 2 * mount.wall + 2 * MOUNT_CLEAR - 1e-9
+    assert seat >= spec.motor.bell_d - 1e-9
+    assert seat >= 2 * (reach + float(mount.param("counterbore_d")) / 2 + 2 * spec.printer.nozzle) - 1e-5
+    assert seat <= max(spec.motor.bell_d, 2 * (reach + float(mount.param("counterbore_d")) / 2 + 2 * spec.printer.nozzle)) + 4.0
+    # the sleeves hold the rods as deep as a socket does
+    assert sleeve_length(spec) - 1e-9 <= float(mount.param("clip_len")) <= sleeve_length(spec) + 4.0
 
 
 def test_motor_mount_clips_are_built_on_one_line():

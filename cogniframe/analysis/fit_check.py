@@ -14,7 +14,8 @@ Rules:
   (a counterbore through any sleeve under the plate) keeps two extrusion lines to the bore too;
 * `pattern`: a motor mount's holes are where the motor's holes are: each on a hole of the
   catalogue pattern (opposite holes across the shaft, MotorPreset.hole_points) turned onto the
-  arm, and at least one opposite pair of them.
+  arm by the mount's `pattern_turn` (the motor sits at any turn about its shaft; the pattern's
+  shape does not change), and at least one opposite pair of them.
 """
 
 from __future__ import annotations
@@ -120,7 +121,7 @@ def _mount_pattern(spec, p) -> list[FitProblem]:
     """pattern: the mount's holes on the catalogue pattern turned onto the arm, an opposite pair at least."""
     motor = spec.motor
     d0 = np.asarray(p.param("arm_rods")[0][1], float)
-    turn = math.degrees(math.atan2(d0[1], d0[0]))
+    turn = math.degrees(math.atan2(d0[1], d0[0])) + float(dict(p.params).get("pattern_turn", 0.0))
     cat = np.asarray(motor.hole_points(turn), float)
     got = np.asarray(p.param("holes"), float).reshape(-1, 2)
     out = []
