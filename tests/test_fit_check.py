@@ -169,7 +169,7 @@ def test_fails_a_hole_through_a_rod():
     r = _fit(spec, fr, parts)
     rods = [p for p in r.problems if p.rule == "rod_wall"]
     assert len(rods) == 2 and all("arm rod" in p.b and "motor_mount hole" in p.a for p in rods)
-    assert "cuts its 3.1 mm bore" in rods[0].message
+    assert "cuts its 3.2 mm bore" in rods[0].message  # the through-sleeve: 3 mm + joints.sleeve_clearance
     assert {p.rule for p in r.problems} == {"rod_wall"}
 
 

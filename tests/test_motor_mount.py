@@ -128,7 +128,7 @@ def test_centre_hole_that_opens_into_a_rod_is_refused_with_the_key():
     msg = str(err.value)
     assert "shaft boss" in msg and "7 mm hole" in msg
     least = float(msg.split("frame.arm_spacing to at least ")[1].split()[0])
-    assert least == pytest.approx(7.0 + 3.1 + 4 * 0.4, abs=0.05)
+    assert least == pytest.approx(7.0 + 3.2 + 4 * 0.4, abs=0.05)  # hole + the through-sleeve's bore + two lines each side
     from cogniframe.analysis.fit_check import plan_distance
 
     mount = _mount(_spec(motors__model="1408", frame__arm_spacing=least))
@@ -161,7 +161,7 @@ def test_bridge_sag_and_twist_under_full_thrust_are_below_a_layer_PL3_over_12EI(
     the motor's full-throttle drag torque (flight/rotors.py) shared by the two bridges bends it in
     plane. Both deflections stay below one printed layer (the smallest step the printer makes)."""
     from cogniframe.families.motor_mount import _span
-    from cogniframe.flight import rotors
+    from cogniframe.analysis import rotors
 
     spec = _spec(frame__arm_spacing=spacing)
     mount = _mount(spec)
