@@ -231,12 +231,12 @@ def _centre_clears_rods(spec: Spec, rods_local, bore: float, centre_d: float) ->
     lines = 2 * spec.printer.nozzle
     need = centre_d / 2 + lines + bore / 2
     near = min(_plan_distance((0.0, 0.0), p, d) for p, d in rods_local)
-    if near < need - 1e-9:
+    if near < need - 1e-6:  # the rods' plan distance carries their stored rounding (1e-6 mm)
         motor = spec.motor
         raise spec.error("frame.arm_spacing",
                          f"the {motor.name} motor's shaft boss ({motor.shaft_boss_d:g} mm) needs a {centre_d:g} mm hole in the "
                          f"motor mount, and the arm rods {spec.frame.arm_spacing:g} mm apart pass through it",
-                         f"set frame.arm_spacing to at least {2 * need:.1f} or choose a smaller motor")
+                         f"set frame.arm_spacing to at least {math.ceil(20 * need - 1e-6) / 10:.1f} or choose a smaller motor")
 
 
 def seat_diameter(spec: Spec, holes, counterbore_d: float) -> float:
