@@ -217,11 +217,13 @@ def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict |
         par = [i for i in range(len(sockets)) if sum(dirs[i] @ dirs[k] > 1 - PARALLEL_TOL for k in range(len(sockets))) > 1]
         rest = [i for i in range(len(sockets)) if i not in par]
         sleeve_l = [sockets[i].depth + j.wall for i in range(len(sockets))]
-        blocks = [(z[par].max(), sleeve_l[par[0]])] + [(z[i], sleeve_l[i]) for i in rest]
-        for h, n in blocks:
-            vol += d_area(h) * n
-            a_h += (2 * r + math.pi * r / 2) * n
-            a_v += (2 * h + math.pi * r / 2) * n
+        if kind == "knee":
+            vol, a_h, a_v = _knee_sleeves(r, j.wall, z, sleeve_l, par, rest, vol, a_h, a_v)
+        else:
+            for h, n in [(z[par].max(), sleeve_l[par[0]])] + [(z[i], sleeve_l[i]) for i in rest]:
+                vol += d_area(h) * n
+                a_h += (2 * r + math.pi * r / 2) * n
+                a_v += (2 * h + math.pi * r / 2) * n
         for i in (rest if kind == "core_link" else []):  # a sleeve leaving at a small angle to the arm block runs partly inside it
             sin_t = float(np.linalg.norm(np.cross(dirs[i], dirs[par[0]])))
             s0, s1 = sockets[i].seat - j.wall, sockets[i].seat + sockets[i].depth
@@ -241,6 +243,39 @@ def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict |
     a_v += sum(math.pi * spec.bore * s.depth for s in sockets)
     env = tuple(sorted(float(x) for x in ext))
     return Estimate(vol, a_h, a_v, (env[2], env[1], env[0]))
+
+
+def _knee_sleeves(r: float, wall: float, z: np.ndarray, sleeve_l: list[float], par: list[int], rest: list[int],
+                  vol: float, a_h: float, a_v: float) -> tuple[float, float, float]:
+    """A knee's sleeves added to the running volume and areas, as parts/joint.py builds them
+    (axis heights `z`): the arm pair's bridge (`knee_bridge`: the top arm's D-section, bed up, over
+    one sleeve OD from the back; to the mouths where less than a millimetre would be left), the
+    lowest arm's D-section sleeve past it, the higher arms' and the legs' teardrops on a `wall`
+    thick web (`teardrop`). A rigid leg that joins past one OD lengthens the bridge a little: not
+    counted."""
+    def d_section(h: float, n: float) -> tuple[float, float, float]:
+        return (2 * r * h + math.pi * r**2 / 2) * n, (2 * r + math.pi * r / 2) * n, (2 * h + math.pi * r / 2) * n
+
+    def tear(h: float, n: float) -> tuple[float, float, float]:
+        k = r / math.sqrt(2.0)
+        z_web = h - r * math.sqrt(2.0) + wall / 2  # where the flanks meet the web, above the bed
+        if wall / 2 >= k - 0.05 or z_web <= 0.2:
+            return d_section(h, n)
+        # round top and 45 deg flanks (3/4 of the circle + the kite r^2) less the kite's tip below
+        # the web's top, plus the web
+        area = 0.75 * math.pi * r**2 + r**2 - wall**2 / 4 + wall * z_web
+        flank = r - wall / math.sqrt(2.0)  # one flank's length
+        return area * n, (wall + 0.75 * math.pi * r + flank) * n, (2 * z_web + 0.75 * math.pi * r + flank) * n
+
+    n_arm = sleeve_l[par[0]]
+    bridge = 2 * r if 2 * r <= n_arm - 1.0 else n_arm
+    low = min(par, key=lambda i: float(z[i]))
+    pieces = [d_section(float(z[par].max()), bridge), d_section(float(z[low]), n_arm - bridge)]
+    pieces += [tear(float(z[i]), n_arm - bridge) for i in par if i != low]
+    pieces += [tear(float(z[i]), sleeve_l[i]) for i in rest]
+    for v, ah, av in pieces:
+        vol, a_h, a_v = vol + v, a_h + ah, a_v + av
+    return vol, a_h, a_v
 
 
 def _link_pieces(spec: Spec, params: dict, sockets: list[Socket], dirs: np.ndarray, ports: np.ndarray, z: np.ndarray,
