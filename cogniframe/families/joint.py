@@ -165,7 +165,8 @@ def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict |
     Pieces (r = OD/2 = bore/2 + wall, L = seat + depth): a sleeve parallel to the bed is a D
     section (2r wide, flat on the bed up to its axis height h, round top: 2 r h + pi r^2 / 2); a
     steep one a cylinder; a sloped one half a cylinder on a 0.9 x OD web down to the bed. Corners
-    add a round hub (and the foot pad), knee and core link stack the arm sockets in one block,
+    add a round hub (and the foot pad), the core link stacks the arm sockets in one block, the
+    knee holds them in a U and its legs on webs (`_knee_sleeves`),
     the core link adds a hub between the sleeves and its bolt tab. Minus the bores.
     """
     params = params or {}
