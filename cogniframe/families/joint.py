@@ -220,6 +220,10 @@ def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict |
         sleeve_l = [sockets[i].depth + j.wall for i in range(len(sockets))]
         if kind == "knee":
             vol, a_h, a_v = _knee_sleeves(r, j.wall, z, sleeve_l, par, rest, vol, a_h, a_v)
+            hub = _knee_hub_area(sockets, dirs, ports, w, z, par, rest, r, j.wall)
+            vol += hub[0] * hub[1]
+            a_h += hub[0]
+            a_v += 2 * 2 * r * hub[1]
         else:
             for h, n in [(z[par].max(), sleeve_l[par[0]])] + [(z[i], sleeve_l[i]) for i in rest]:
                 vol += d_area(h) * n
@@ -277,6 +281,40 @@ def _knee_sleeves(r: float, wall: float, z: np.ndarray, sleeve_l: list[float], p
     for v, ah, av in pieces:
         vol, a_h, a_v = vol + v, a_h + ah, a_v + av
     return vol, a_h, a_v
+
+
+def _knee_hub_area(sockets: list[Socket], dirs: np.ndarray, ports: np.ndarray, w: np.ndarray, z: np.ndarray,
+                   par: list[int], rest: list[int], r: float, wall: float) -> tuple[float, float]:
+    """(plan area, height) of the hub that joins a knee's rigid leg to its arm bridge where no
+    sleeve start can (parts/joint.py `_rigid_leg_start` is None: a large seat): the hull of the two
+    back faces, from the bed to halfway up the leg's round top (the hinge-side clip not counted).
+    (0, 0) where the leg's sleeve joins the bridge itself."""
+    from ..parts.joint import PSocket, _footprint_rect, _hull, _rigid_leg_start
+
+    a_i = par[0]
+    x = dirs[a_i] - w * (dirs[a_i] @ w)
+    x /= np.linalg.norm(x)
+    rot = np.vstack([x, np.cross(w, x), w])  # print-like axes: the side plane on the bed, as parts/joint.py prints it
+
+    def psock(i: int) -> PSocket:
+        return PSocket(rot @ ports[i] + np.array([0.0, 0.0, z[i] - float(w @ ports[i])]), rot @ dirs[i], float(sockets[i].seat),
+                       float(sockets[i].depth), float(sockets[i].bore), sockets[i].rod)
+
+    a = psock(a_i)
+    legs = [psock(i) for i in rest]
+    if len(legs) < 2:
+        return 0.0, 0.0
+    hinged = min(legs, key=lambda s: float(s.direction @ a.direction))
+    s_back = a.seat - wall
+    area = height = 0.0
+    for s in legs:
+        if s is hinged or _rigid_leg_start(a, s, r, s_back, wall) is not None:
+            continue
+        t0 = s.seat - wall
+        pts = np.array(_footprint_rect(a, s_back, s_back, r) + _footprint_rect(s, t0, t0, r))
+        area += polygon_area(_hull(pts))
+        height = max(height, float(s.port[2]) + r / 2)
+    return area, height
 
 
 def _link_pieces(spec: Spec, params: dict, sockets: list[Socket], dirs: np.ndarray, ports: np.ndarray, z: np.ndarray,
