@@ -166,7 +166,8 @@ def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict |
     Pieces (r = OD/2 = bore/2 + wall, L = seat + depth): a sleeve parallel to the bed is a D
     section (2r wide, flat on the bed up to its axis height h, round top: 2 r h + pi r^2 / 2); a
     steep one a cylinder; a sloped one half a cylinder on a 0.9 x OD web down to the bed. Corners
-    add a round hub (and the foot pad), knee and core link stack the arm sockets in one block,
+    add a round hub (and the foot pad), the core link stacks the arm sockets in one block, the
+    knee holds them in a U and its legs on webs (`_knee_sleeves`),
     the core link adds a hub between the sleeves and its bolt tab. Minus the bores.
     """
     params = params or {}
@@ -218,11 +219,17 @@ def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict |
         par = [i for i in range(len(sockets)) if sum(dirs[i] @ dirs[k] > 1 - PARALLEL_TOL for k in range(len(sockets))) > 1]
         rest = [i for i in range(len(sockets)) if i not in par]
         sleeve_l = [sockets[i].depth + j.wall for i in range(len(sockets))]
-        blocks = [(z[par].max(), sleeve_l[par[0]])] + [(z[i], sleeve_l[i]) for i in rest]
-        for h, n in blocks:
-            vol += d_area(h) * n
-            a_h += (2 * r + math.pi * r / 2) * n
-            a_v += (2 * h + math.pi * r / 2) * n
+        if kind == "knee":
+            vol, a_h, a_v = _knee_sleeves(r, j.wall, z, sleeve_l, par, rest, vol, a_h, a_v)
+            hub = _knee_hub_area(sockets, dirs, ports, w, z, par, rest, r, j.wall)
+            vol += hub[0] * hub[1]
+            a_h += hub[0]
+            a_v += 2 * 2 * r * hub[1]
+        else:
+            for h, n in [(z[par].max(), sleeve_l[par[0]])] + [(z[i], sleeve_l[i]) for i in rest]:
+                vol += d_area(h) * n
+                a_h += (2 * r + math.pi * r / 2) * n
+                a_v += (2 * h + math.pi * r / 2) * n
         for i in (rest if kind == "core_link" else []):  # a sleeve leaving at a small angle to the arm block runs partly inside it
             sin_t = float(np.linalg.norm(np.cross(dirs[i], dirs[par[0]])))
             s0, s1 = sockets[i].seat - j.wall, sockets[i].seat + sockets[i].depth
@@ -242,6 +249,73 @@ def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict |
     a_v += sum(math.pi * spec.bore * s.depth for s in sockets)
     env = tuple(sorted(float(x) for x in ext))
     return Estimate(vol, a_h, a_v, (env[2], env[1], env[0]))
+
+
+def _knee_sleeves(r: float, wall: float, z: np.ndarray, sleeve_l: list[float], par: list[int], rest: list[int],
+                  vol: float, a_h: float, a_v: float) -> tuple[float, float, float]:
+    """A knee's sleeves added to the running volume and areas, as parts/joint.py builds them
+    (axis heights `z`): the arm pair's bridge (`knee_bridge`: the top arm's D-section, bed up, over
+    one sleeve OD from the back; to the mouths where less than a millimetre would be left), the
+    lowest arm's D-section sleeve past it, the higher arms' and the legs' teardrops on a `wall`
+    thick web (`teardrop`). A rigid leg that joins past one OD lengthens the bridge a little: not
+    counted."""
+    def d_section(h: float, n: float) -> tuple[float, float, float]:
+        return (2 * r * h + math.pi * r**2 / 2) * n, (2 * r + math.pi * r / 2) * n, (2 * h + math.pi * r / 2) * n
+
+    def tear(h: float, n: float) -> tuple[float, float, float]:
+        k = r / math.sqrt(2.0)
+        z_web = h - r * math.sqrt(2.0) + wall / 2  # where the flanks meet the web, above the bed
+        if wall / 2 >= k - 0.05 or z_web <= 0.2:
+            return d_section(h, n)
+        # round top and 45 deg flanks (3/4 of the circle + the kite r^2) less the kite's tip below
+        # the web's top, plus the web
+        area = 0.75 * math.pi * r**2 + r**2 - wall**2 / 4 + wall * z_web
+        flank = r - wall / math.sqrt(2.0)  # one flank's length
+        return area * n, (wall + 0.75 * math.pi * r + flank) * n, (2 * z_web + 0.75 * math.pi * r + flank) * n
+
+    n_arm = sleeve_l[par[0]]
+    bridge = 2 * r if 2 * r <= n_arm - 1.0 else n_arm
+    low = min(par, key=lambda i: float(z[i]))
+    pieces = [d_section(float(z[par].max()), bridge), d_section(float(z[low]), n_arm - bridge)]
+    pieces += [tear(float(z[i]), n_arm - bridge) for i in par if i != low]
+    pieces += [tear(float(z[i]), sleeve_l[i]) for i in rest]
+    for v, ah, av in pieces:
+        vol, a_h, a_v = vol + v, a_h + ah, a_v + av
+    return vol, a_h, a_v
+
+
+def _knee_hub_area(sockets: list[Socket], dirs: np.ndarray, ports: np.ndarray, w: np.ndarray, z: np.ndarray,
+                   par: list[int], rest: list[int], r: float, wall: float) -> tuple[float, float]:
+    """(plan area, height) of the hub that joins a knee's rigid leg to its arm bridge where no
+    sleeve start can (parts/joint.py `_rigid_leg_start` is None: a large seat): the hull of the two
+    back faces, from the bed to halfway up the leg's round top (the hinge-side clip not counted).
+    (0, 0) where the leg's sleeve joins the bridge itself."""
+    from ..parts.joint import PSocket, _footprint_rect, _hull, _rigid_leg_start
+
+    a_i = par[0]
+    x = dirs[a_i] - w * (dirs[a_i] @ w)
+    x /= np.linalg.norm(x)
+    rot = np.vstack([x, np.cross(w, x), w])  # print-like axes: the side plane on the bed, as parts/joint.py prints it
+
+    def psock(i: int) -> PSocket:
+        return PSocket(rot @ ports[i] + np.array([0.0, 0.0, z[i] - float(w @ ports[i])]), rot @ dirs[i], float(sockets[i].seat),
+                       float(sockets[i].depth), float(sockets[i].bore), sockets[i].rod)
+
+    a = psock(a_i)
+    legs = [psock(i) for i in rest]
+    if len(legs) < 2:
+        return 0.0, 0.0
+    hinged = min(legs, key=lambda s: float(s.direction @ a.direction))
+    s_back = a.seat - wall
+    area = height = 0.0
+    for s in legs:
+        if s is hinged or _rigid_leg_start(a, s, r, s_back, wall) is not None:
+            continue
+        t0 = s.seat - wall
+        pts = np.array(_footprint_rect(a, s_back, s_back, r) + _footprint_rect(s, t0, t0, r))
+        area += polygon_area(_hull(pts))
+        height = max(height, float(s.port[2]) + r / 2)
+    return area, height
 
 
 def _link_pieces(spec: Spec, params: dict, sockets: list[Socket], dirs: np.ndarray, ports: np.ndarray, z: np.ndarray,

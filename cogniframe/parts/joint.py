@@ -21,16 +21,21 @@ Print orientations
   the bottom corners are the feet, and the foot pad is what touches the ground.
 * knee, core_link: every socket direction lies in the frame's diagonal side plane and the two arm
   rods are offset across it, so the joint is printed lying on its side: the lateral axis is vertical,
-  every socket is parallel to the bed, the two arm sockets are stacked in one block.
+  every socket is parallel to the bed, the two arm sockets are stacked. The core link holds them in
+  one block. The knee holds them as a U: a bridge of the block's section over one sleeve OD at
+  their back, and past it the lower sleeve on the bed and the upper one a teardrop (round top,
+  45 deg flanks) on a vertical web one wall thick; its legs, halfway up, are teardrops on such
+  webs too. A web is print support that also ties what it holds: a D-section pillar from the bed
+  to a sleeve 15 mm up weighs 2.5 times as much.
 
 Living hinge (knee). The sides fold at the knees ("fold as you assemble"; on impact the hourglass
 closes): the legs rotate relative to the arms about the lateral axis. That axis is vertical in
 print, so the hinge is a vertical TPU web `hinge_thickness` thick (across the bend) running from the
-upper-leg sleeve to the arm block, with a `HINGE_GAP` slot on both sides that frees the upper leg
+upper-leg sleeve to the arm bridge, with a `HINGE_GAP` slot on both sides that frees the upper leg
 everywhere else. Layer lines then run along the bend, the way printed living hinges survive. The
 lower leg leaves the knee almost at right angles to the arms and its socket shares a wall with the
 arm sockets (the seat is only `joints.seat` from the knee centre), so it stays solid with the arm
-block (where a large seat keeps their sleeves apart, a hub between their back faces joins them);
+bridge (where a large seat keeps their sleeves apart, a hub between their back faces joins them);
 the upper leg, which makes the larger angle with the arms and carries the fold, is the one hinged.
 frame.py raises the knee's seat until the slot leaves that leg's back end whole.
 """
@@ -485,17 +490,81 @@ def _clip(poly: np.ndarray, n: np.ndarray, c: float) -> np.ndarray:
     return np.array(out)
 
 
+def teardrop(start, d, length: float, axis_z: float, r: float, web: float):
+    """A sleeve along horizontal `d` from `start` that stands on a thin web: its round top, 45 deg
+    flanks tangent to it below, and a vertical web `web` thick from the flanks down to the bed.
+    Every face is vertical or faces down at most 45 deg, so it prints without supports however
+    high its axis, at a fraction of a D-section's TPU. Where the flanks would not reach the web
+    (a web as wide as the tangent points, or an axis too low for them) it is the D-section sleeve."""
+    cq = _cq()
+    k = r / math.sqrt(2.0)  # the tangent points: (+-k, -k) from the axis
+    z_web = -r * math.sqrt(2.0) + web / 2  # where the flanks meet the web, from the axis
+    if web / 2 >= k - 0.05 or axis_z + z_web <= 0.2:
+        return dsleeve(start, d, length, axis_z, r)
+    d = horizontal(d)
+    lat = np.array([-d[1], d[0], 0.0])
+    plane = cq.Plane(origin=(float(start[0]), float(start[1]), float(axis_z)), xDir=tuple(lat), normal=tuple(d))
+    h = web / 2
+    wp = (cq.Workplane(plane).moveTo(-h, -axis_z).lineTo(h, -axis_z).lineTo(h, z_web).lineTo(k, -k)
+          .threePointArc((0, r), (-k, -k)).lineTo(-h, z_web).close())
+    return wp.extrude(length).val()
+
+
+def knee_bridge(a: PSocket, joined: list[tuple[PSocket, float]], r: float, s_back: float) -> float:
+    """Where the knee's bridge ends, along the arm from its port (pure numpy). The arm pair's
+    sleeves are joined by a solid bridge, the old arm block's section (bed to the top arm), from
+    their back face `s_back` over one sleeve OD (the authors' U bracket: two sleeves and a bridge
+    about one OD wide), longer where a rigid leg's inner back corner would not lie `JOIN` inside
+    it (each leg in `joined` with its sleeve start joins the knee there: `_rigid_leg_start`).
+    Where less than a millimetre of sleeve would be left past it, the bridge runs to the mouths
+    (the old block, no sliver)."""
+    end = s_back + 2 * r
+    dx = horizontal(a.direction)
+    for s, t in joined:
+        u = horizontal(s.direction)
+        n = np.array([-u[1], u[0], 0.0])
+        n = n if n @ dx >= 0 else -n
+        corner = (s.port - a.port) * np.array([1.0, 1.0, 0.0]) + u * t + n * r
+        end = max(end, float(corner @ dx) + JOIN)
+    mouth = a.seat + a.depth
+    return mouth if end > mouth - 1.0 else end
+
+
+def _arm_bracket(arms: list[PSocket], r: float, s_back: float, bridge_end: float, web: float):
+    """The knee's arm pair as a U, not a solid block: the bridge (`knee_bridge`) carries the top
+    arm's moment down to the legs (in torsion about the print vertical: its square section twists
+    ~40x less than a web one wall thick); past it the lowest arm's sleeve lies on the bed (a
+    D-section) and every higher arm's sleeve is a `teardrop` on a `web` thick web, which the print
+    needs under it and which ties the pair in its own plane."""
+    stacked = [_stacked(arms[0], s) for s in arms]
+    low = min(stacked, key=lambda s: float(s.port[2]))
+    mouth = low.seat + low.depth
+    if bridge_end >= mouth:
+        return _block(arms, r, s_back)
+    pieces = [fuse_all([sleeve(s, s_back, r, bridge_end) for s in stacked]), sleeve(low, bridge_end, r)]
+    pieces += [teardrop(s.at(bridge_end), s.direction, mouth - bridge_end, s.port[2], r, web) for s in stacked if s is not low]
+    return fuse_all(pieces)
+
+
+def _knee_leg(s: PSocket, start: float, r: float, web: float):
+    """A knee leg's sleeve: a teardrop on a web (the legs lie halfway up the arm pair in print)."""
+    if abs(float(s.direction[2])) < FLAT:
+        return teardrop(s.at(start), s.direction, s.seat + s.depth - start, s.port[2], r, web)
+    return sleeve(s, start, r)
+
+
 def _knee(part: PartSpec, socks: list[PSocket], r: float):
     arms, legs = _groups(socks)
     a = arms[0]
     s_back = a.seat - part.wall
-    block = _block(arms, r, s_back)
+    web_t = part.wall  # the print webs: one socket wall, at least two extrusion lines (spec checks the wall)
     # The hinged leg makes the larger angle with the arms (see the module docstring).
     hinged = min(legs, key=lambda s: float(s.direction @ a.direction))
     rigid = [s for s in legs if s is not hinged]
     t_back = {id(s): s.seat - part.wall for s in legs}
     web = knee_hinge(part)
     hubs = []  # (plan polygon, top z) of each rigid leg that no sleeve start joins to the block
+    joined = []  # (leg, sleeve start) of each rigid leg that its sleeve joins to the bridge
     for s in rigid:
         t = _rigid_leg_start(a, s, r, s_back, part.wall)
         if t is None:
@@ -504,15 +573,17 @@ def _knee(part: PartSpec, socks: list[PSocket], r: float):
             hubs.append((_knee_hub(a, s, r, s_back, part.wall, web), _clear_of(float(s.port[2]) + r / 2, _levels(socks, r))))
         else:
             t_back[id(s)] = t
-    rigid_solids = [sleeve(s, t_back[id(s)], r) for s in rigid] + [prism(poly, 0.0, top) for poly, top in hubs]
+            joined.append((s, t))
+    block = _arm_bracket(arms, r, s_back, knee_bridge(a, joined, r, s_back), web_t)
+    rigid_solids = [_knee_leg(s, t_back[id(s)], r, web_t) for s in rigid] + [prism(poly, 0.0, top) for poly, top in hubs]
     # Upper leg, freed from everything rigid by HINGE_GAP ...
-    upper = sleeve(hinged, t_back[id(hinged)], r)
+    upper = _knee_leg(hinged, t_back[id(hinged)], r, web_t)
     clear = [prism(_footprint_rect(a, s_back, a.seat + a.depth, r, HINGE_GAP), -1.0, 1000.0)]
     clear += [prism(_footprint_rect(s, t_back[id(s)], s.seat + s.depth, r, HINGE_GAP), -1.0, 1000.0) for s in rigid]
     clear += [prism(_hull(_grown(poly, HINGE_GAP)), -1.0, 1000.0) for poly, _ in hubs]
     upper = upper.cut(fuse_all(clear))
-    # ... and joined to the arm block by the hinge web (`web`): from the centre of the upper leg's
-    # back face straight to the arm block's back face.
+    # ... and joined to the arm bridge by the hinge web (`web`): from the centre of the upper leg's
+    # back face straight to the bridge's back face.
     body = above_bed(fuse_all([block, *rigid_solids, upper, box_along(web.start, web.end, web.thickness, 0.0, web.height)]))
     return finish(body, [socket_cutter(s) for s in socks])
 
