@@ -366,6 +366,7 @@ def _hull_area(pts: np.ndarray) -> float:
 # the plate's bottom: it bears on the plate's edges, and it makes each band 9 mm deep (at a 3 mm
 # plate) from its sleeve to the plate, where the hinge the bare arms hang on bends (cubic in depth).
 BAND_INTO = 1.0  # mm: a band runs this far into its sleeve's back end: the sleeve's moment enters it there
+BAND_WIDER = 0.2  # mm: a band stands this much wider than its sleeve on either side
 PAD_SIDES = 16  # the bolt pad's polygon (circumscribes the pad's circle)
 TEAR_WEB = 1.6  # mm: the web under a teardrop arm sleeve (four 0.4 mm lines)
 TEAR_MIN = 1.0  # mm: least web height below a teardrop's apex; lower, the arm sleeve is a D section
@@ -416,7 +417,8 @@ def link_bands(params: dict, sockets, wall: float, r: float) -> list[np.ndarray]
         # into the sleeve to `BAND_INTO` past where a sloped sleeve's web begins (r sin a ahead of its back)
         sa, ca = abs(float(d[2])), float(np.linalg.norm(d[:2]))
         ends = [(np.asarray(s.port, float) + d * t)[:2] for t in (t0, t0 + (r * sa + BAND_INTO) / ca)]
-        out.append(_hull_pts([c + n * k * r for c in ends for k in (-1.0, 1.0)] + pad))
+        half = r + BAND_WIDER  # its sides never tangent to the sleeve's round (a mesh with open edges)
+        out.append(_hull_pts([c + n * k * half for c in ends for k in (-1.0, 1.0)] + pad))
     return out
 
 
