@@ -365,11 +365,16 @@ def _hull_area(pts: np.ndarray) -> float:
 # (the tab, split), and the seat is the bands' part below the plate top outside the plate, down to
 # the plate's bottom: it bears on the plate's edges, and it makes each band 9 mm deep (at a 3 mm
 # plate) from its sleeve to the plate, where the hinge the bare arms hang on bends (cubic in depth).
-BAND_INTO = 1.0  # mm: a band runs this far into its sleeve's back end: the sleeve's moment enters it there
-BAND_WIDER = 0.2  # mm: a band stands this much wider than its sleeve on either side
+# A band runs into its sleeve to `BAND_PAST` beyond the socket's bottom: the rod's moment then
+# enters the band through the socket's side wall. Ending at the sleeve's back face (the rod's
+# moment through the thin ring behind the socket's bottom) gave the bare arms' hinge 38 N mm/rad at
+# 25 mm spacing, ending 1.3 mm past the socket's bottom 113 (carbon, joint FE).
+BAND_PAST = 1.5  # mm
+BAND_NARROWER = 0.3  # mm: a band's sides stand this far inside its sleeve's (never tangent to its round: an STL with open edges)
 PAD_SIDES = 16  # the bolt pad's polygon (circumscribes the pad's circle)
 TEAR_WEB = 1.6  # mm: the web under a teardrop arm sleeve (four 0.4 mm lines)
 TEAR_MIN = 1.0  # mm: least web height below a teardrop's apex; lower, the arm sleeve is a D section
+TEAR_SLOPE = 40.0  # deg: a strut rising less steeply in print is a teardrop on a thin web, a steeper one a cylinder on a 0.9 x OD web
 
 
 def link_is_flat(sockets) -> bool:
@@ -403,8 +408,9 @@ def _hull_pts(pts) -> np.ndarray:
 
 def link_bands(params: dict, sockets, wall: float, r: float) -> list[np.ndarray]:
     """The flat link's bands in plan (local xy, counter-clockwise convex polygons): for each socket
-    the hull of its sleeve's back end (from its back face `BAND_INTO` into the sleeve, or into a
-    sloped sleeve's web, the sleeve's width) and the bolt pad (a polygon round the screw hole, one `wall` outside it)."""
+    the hull of its sleeve's back end (from its back face to `BAND_PAST` beyond the socket's
+    bottom, and past where a sloped sleeve's web begins; `BAND_NARROWER` inside the sleeve's sides)
+    and the bolt pad (a polygon round the screw hole, one `wall` outside it)."""
     bolt = np.asarray(params["bolt_hole"], float)[:2]
     r_pad = (float(params["screw_clearance"]) / 2 + wall) / math.cos(math.pi / PAD_SIDES)
     pad = [bolt + r_pad * np.array([math.cos(a), math.sin(a)]) for a in 2 * math.pi * (np.arange(PAD_SIDES) + 0.5) / PAD_SIDES]
@@ -414,10 +420,10 @@ def link_bands(params: dict, sockets, wall: float, r: float) -> list[np.ndarray]
         h = d[:2] / np.linalg.norm(d[:2])
         n = np.array([-h[1], h[0]])
         t0 = s.seat - wall
-        # into the sleeve to `BAND_INTO` past where a sloped sleeve's web begins (r sin a ahead of its back)
+        # a sloped sleeve's web begins r sin a ahead of its back
         sa, ca = abs(float(d[2])), float(np.linalg.norm(d[:2]))
-        ends = [(np.asarray(s.port, float) + d * t)[:2] for t in (t0, t0 + (r * sa + BAND_INTO) / ca)]
-        half = r + BAND_WIDER  # its sides never tangent to the sleeve's round (a mesh with open edges)
+        ends = [(np.asarray(s.port, float) + d * t)[:2] for t in (t0, s.seat + BAND_PAST + r * sa / ca)]
+        half = r - BAND_NARROWER
         out.append(_hull_pts([c + n * k * half for c in ends for k in (-1.0, 1.0)] + pad))
     return out
 
@@ -482,14 +488,29 @@ def _flat_link_estimate(spec: Spec, params: dict, sockets: list[Socket], r: floa
         vol -= hole * s.depth
         a_v += math.pi * spec.bore * s.depth
         if abs(d[2]) < 1e-5:
-            vol += link_sleeve_area(h, r) * n - BAND_INTO * 2 * r * T
+            # the band's run into the sleeve, less the sleeve's round top above the band's bottom
+            seg = max(0.0, h + r - (z_bed + v0))
+            seg_area = r * r * math.acos(1 - seg / r) - (r - seg) * math.sqrt(max(0.0, 2 * r * seg - seg * seg)) if seg < r else 0.0
+            vol += link_sleeve_area(h, r) * n - (s.seat + BAND_PAST - (s.seat - j.wall)) * (link_sleeve_area(h, r) - seg_area)
             a_h += (2 * r + math.pi * r / 2) * n
             a_v += (2 * h + math.pi * r / 2) * n
-        else:  # the strut, rising in print: half a cylinder on its web
+        else:  # the strut, rising in print
             sin_a = abs(float(d[2]))
-            run = n * math.sqrt(1 - sin_a * sin_a)
-            h_mean = h + sin_a * (s.seat - j.wall + s.seat + s.depth) / 2
-            vol += math.pi * r**2 / 2 * n + 1.8 * r * h_mean * run
+            cos_a = math.sqrt(1 - sin_a * sin_a)
+            run = n * cos_a
+            t0, t1 = s.seat - j.wall, s.seat + s.depth
+            h_mean = h + sin_a * (t0 + t1) / 2
+            # its run inside the band (parts/joint.py: the band reaches BAND_PAST past the socket's
+            # bottom and past where the web begins)
+            t_in = min(t1, s.seat + BAND_PAST + r * sin_a / cos_a) - t0
+            h_in = h + sin_a * (t0 + t_in / 2)  # the axis's mean height there
+            if sin_a < math.sin(math.radians(TEAR_SLOPE)):  # a teardrop on a thin web
+                apex = r * math.sqrt(2) * cos_a
+                vol += (0.75 * math.pi * r**2 + r**2) * n + TEAR_WEB * (h_mean - apex) * run
+                vol -= t_in * cos_a * TEAR_WEB * (h_in - apex) + t_in * (r**2 + math.pi * r**2 / 4)  # web and lower part inside the band
+            else:  # half a cylinder on a 0.9 x OD web
+                vol += math.pi * r**2 / 2 * n + 1.8 * r * h_mean * run
+                vol -= t_in * cos_a * 1.8 * r * min(h_in, z_bed + v0)
             a_h += 1.8 * r * run + math.pi * r * n / 2
             a_v += 2 * h_mean * run + math.pi * r * n / 2
     pts = np.vstack([np.vstack(bands)] + [(np.asarray(s.port, float) + np.asarray(s.direction, float) * (s.seat + s.depth))[:2] for s in sockets])

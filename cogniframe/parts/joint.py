@@ -44,7 +44,7 @@ import numpy as np
 
 from ..frame import HINGE_GAP
 from ..families.base import PARALLEL_TOL, PartSpec
-from ..families.joint import (TEAR_MIN, TEAR_WEB, link_bands, link_bed_z, link_is_flat, link_plate_corner,
+from ..families.joint import (TEAR_MIN, TEAR_SLOPE, TEAR_WEB, link_bands, link_bed_z, link_is_flat, link_plate_corner,
                                link_plate_region, seat_plan)
 
 CHAMFER = 0.5  # mm, 45 deg, at every socket mouth
@@ -603,8 +603,10 @@ def _core_link_flat(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarra
     pieces = []
     for s in socks:
         t0 = s.seat - part.wall
-        if abs(float(s.direction[2])) >= FLAT:
+        if abs(float(s.direction[2])) >= math.sin(math.radians(TEAR_SLOPE)):
             pieces.append(sloped_sleeve(s.at(t0), s.direction, s.depth + part.wall, r))
+        elif abs(float(s.direction[2])) >= FLAT:
+            pieces.append(sloped_tsleeve(s.at(t0), s.direction, s.depth + part.wall, r, TEAR_WEB))
         elif float(s.port[2]) - r * math.sqrt(2) >= TEAR_MIN:
             pieces.append(tsleeve(s.at(t0), s.direction, s.depth + part.wall, float(s.port[2]), r, TEAR_WEB))
         else:
@@ -647,6 +649,29 @@ def tsleeve(start, d, length: float, axis_z: float, r: float, web: float):
     wp = (cq.Workplane(plane).moveTo(-web / 2, -axis_z).lineTo(web / 2, -axis_z).lineTo(web / 2, apex + web / 2)
           .lineTo(k, -k).threePointArc((0, r), (-k, -k)).lineTo(-web / 2, apex + web / 2).close())
     return wp.extrude(length).val()
+
+
+def sloped_tsleeve(start, d, length: float, r: float, web: float):
+    """A sloped teardrop sleeve (rising gently along `d`): the cylinder, the two 45 deg flanks
+    under it (in its cross-section) meeting r sqrt 2 below the axis, and a vertical web `web`
+    thick from that apex line down below the bed. The flanks face down at most 45 deg (less as the
+    sleeve rises), and its back face by the slope."""
+    cq = _cq()
+    d = np.asarray(d, float)
+    h = horizontal(d)
+    lat = np.array([-h[1], h[0], 0.0])
+    u = np.cross(lat, d)
+    u = u if u[2] < 0 else -u  # across the axis, downwards
+    k = r / math.sqrt(2)
+    plane = cq.Plane(origin=tuple(float(v) for v in start), xDir=tuple(lat), normal=tuple(d))
+    kite = cq.Workplane(plane).polyline([(0.0, 0.0), (k, -k), (0.0, -r * math.sqrt(2)), (-k, -k)]).close().extrude(length).val()
+    p0 = np.asarray(start, float)
+    a0, a1 = p0 + u * r * math.sqrt(2), p0 + d * length + u * r * math.sqrt(2)
+    x0, x1 = float((a0 - p0)[:2] @ h[:2]), float((a1 - p0)[:2] @ h[:2])
+    wplane = cq.Plane(origin=(float(p0[0]), float(p0[1]), 0.0), xDir=tuple(h), normal=tuple(-lat))
+    webs = cq.Workplane(wplane).polyline([(x0, -1.0), (x1, -1.0), (x1, float(a1[2])), (x0, float(a0[2]))]).close() \
+        .extrude(web / 2, both=True).val()
+    return cylinder(p0, d, length, r).fuse(kite, webs)
 
 
 def _esc_keepout(part: PartSpec, m: np.ndarray):
