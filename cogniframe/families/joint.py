@@ -370,7 +370,7 @@ def _hull_area(pts: np.ndarray) -> float:
 # moment through the thin ring behind the socket's bottom) gave the bare arms' hinge 38 N mm/rad at
 # 25 mm spacing, ending 1.3 mm past the socket's bottom 113 (carbon, joint FE).
 BAND_PAST = 1.5  # mm
-BAND_NARROWER = 0.3  # mm: a band's sides stand this far inside its sleeve's (never tangent to its round: an STL with open edges)
+BAND_NARROWER = 0.5  # mm: a band's sides stand this far inside its sleeve's (never tangent to its round: an STL with open edges; at 0.3 carbon 12 mm gave one)
 PAD_SIDES = 16  # the bolt pad's polygon (circumscribes the pad's circle)
 TEAR_WEB = 1.6  # mm: the web under a teardrop arm sleeve (four 0.4 mm lines)
 TEAR_MIN = 1.0  # mm: least web height below a teardrop's apex; lower, the arm sleeve is a D section

@@ -652,26 +652,23 @@ def tsleeve(start, d, length: float, axis_z: float, r: float, web: float):
 
 
 def sloped_tsleeve(start, d, length: float, r: float, web: float):
-    """A sloped teardrop sleeve (rising gently along `d`): the cylinder, the two 45 deg flanks
-    under it (in its cross-section) meeting r sqrt 2 below the axis, and a vertical web `web`
-    thick from that apex line down below the bed. The flanks face down at most 45 deg (less as the
-    sleeve rises), and its back face by the slope."""
+    """A sloped teardrop sleeve (rising gently along `d`): in its cross-section the round top, two
+    45 deg flanks meeting r sqrt 2 below the axis and a stem `web` wide from there on down, past
+    the bed (the caller keeps what is above it), all extruded along the axis. The flanks face down
+    at most 45 deg (less as the sleeve rises), the back face by the slope; one section, so no
+    faces of separate pieces touch."""
     cq = _cq()
     d = np.asarray(d, float)
     h = horizontal(d)
     lat = np.array([-h[1], h[0], 0.0])
-    u = np.cross(lat, d)
-    u = u if u[2] < 0 else -u  # across the axis, downwards
     k = r / math.sqrt(2)
+    apex = -r * math.sqrt(2)
+    ca = float(np.linalg.norm(d[:2]))
+    deep = -(float(start[2]) + float(d[2]) * length + 1.0) / ca  # below the bed all along
     plane = cq.Plane(origin=tuple(float(v) for v in start), xDir=tuple(lat), normal=tuple(d))
-    kite = cq.Workplane(plane).polyline([(0.0, 0.0), (k, -k), (0.0, -r * math.sqrt(2)), (-k, -k)]).close().extrude(length).val()
-    p0 = np.asarray(start, float)
-    a0, a1 = p0 + u * r * math.sqrt(2), p0 + d * length + u * r * math.sqrt(2)
-    x0, x1 = float((a0 - p0)[:2] @ h[:2]), float((a1 - p0)[:2] @ h[:2])
-    wplane = cq.Plane(origin=(float(p0[0]), float(p0[1]), 0.0), xDir=tuple(h), normal=tuple(-lat))
-    webs = cq.Workplane(wplane).polyline([(x0, -1.0), (x1, -1.0), (x1, float(a1[2])), (x0, float(a0[2]))]).close() \
-        .extrude(web / 2, both=True).val()
-    return cylinder(p0, d, length, r).fuse(kite, webs)
+    wp = (cq.Workplane(plane).moveTo(-web / 2, deep).lineTo(web / 2, deep).lineTo(web / 2, apex + web / 2)
+          .lineTo(k, -k).threePointArc((0, r), (-k, -k)).lineTo(-web / 2, apex + web / 2).close())
+    return wp.extrude(length).val()
 
 
 def _esc_keepout(part: PartSpec, m: np.ndarray):
