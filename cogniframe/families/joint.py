@@ -374,7 +374,6 @@ BAND_NARROWER = 0.5  # mm: a band's sides stand this far inside its sleeve's (ne
 PAD_SIDES = 16  # the bolt pad's polygon (circumscribes the pad's circle)
 TEAR_WEB = 1.6  # mm: the web under a teardrop arm sleeve (four 0.4 mm lines)
 TEAR_MIN = 1.0  # mm: least web height below a teardrop's apex; lower, the arm sleeve is a D section
-TEAR_SLOPE = 40.0  # deg: a strut rising less steeply in print is a teardrop on a thin web, a steeper one a cylinder on a 0.9 x OD web
 
 
 def link_is_flat(sockets) -> bool:
@@ -504,13 +503,9 @@ def _flat_link_estimate(spec: Spec, params: dict, sockets: list[Socket], r: floa
             # bottom and past where the web begins)
             t_in = min(t1, s.seat + BAND_PAST + r * sin_a / cos_a) - t0
             h_in = h + sin_a * (t0 + t_in / 2)  # the axis's mean height there
-            if sin_a < math.sin(math.radians(TEAR_SLOPE)):  # a teardrop on a thin web
-                apex = r * math.sqrt(2) * cos_a
-                vol += (0.75 * math.pi * r**2 + r**2) * n + TEAR_WEB * (h_mean - apex) * run
-                vol -= t_in * cos_a * TEAR_WEB * (h_in - apex) + t_in * (r**2 + math.pi * r**2 / 4)  # web and lower part inside the band
-            else:  # half a cylinder on a 0.9 x OD web
-                vol += math.pi * r**2 / 2 * n + 1.8 * r * h_mean * run
-                vol -= t_in * cos_a * 1.8 * r * min(h_in, z_bed + v0)
+            # half a cylinder on a 0.9 x OD web, less the web inside the band
+            vol += math.pi * r**2 / 2 * n + 1.8 * r * h_mean * run
+            vol -= t_in * cos_a * 1.8 * r * min(h_in, z_bed + v0)
             a_h += 1.8 * r * run + math.pi * r * n / 2
             a_v += 2 * h_mean * run + math.pi * r * n / 2
     pts = np.vstack([np.vstack(bands)] + [(np.asarray(s.port, float) + np.asarray(s.direction, float) * (s.seat + s.depth))[:2] for s in sockets])
