@@ -241,6 +241,8 @@ def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict |
         if kind == "knee":
             vol += j.hinge_thickness * 2.7 * top
             a_v += 2 * 2.7 * top
+        elif link_is_flat(sockets):
+            return _flat_link_estimate(spec, params, sockets, r)
         else:
             vol, a_h, a_v = _link_pieces(spec, params, sockets, dirs, ports, z, zc, w, par, rest, top, r,
                                          vol, a_h, a_v)
@@ -428,3 +430,168 @@ def _hull_area(pts: np.ndarray) -> float:
     hull = np.array(half(pts) + half(pts[::-1]))
     x, y = hull[:, 0], hull[:, 1]
     return float(abs(x @ np.roll(y, -1) - y @ np.roll(x, -1)) / 2)
+
+
+# -- the flat core link (level arms) ---------------------------------------------------------------
+# With level arms (frame.knee_height null) every core-link socket but the strut is parallel to the
+# plate, so the link prints flat and upside down: its top (the tab's top, on the plate) on the bed,
+# the arm sleeves lying on the bed side by side, the strut rising with a web under it. Nothing then
+# has to be extruded across the arm pair: each arm's sleeve joins the bolt pad through its own band
+# (the tab, split), and the seat is the bands' part below the plate top outside the plate, down to
+# the plate's bottom: it bears on the plate's edges, and it makes each band 9 mm deep (at a 3 mm
+# plate) from its sleeve to the plate, where the hinge the bare arms hang on bends (cubic in depth).
+# A band runs into its sleeve to `BAND_PAST` beyond the socket's bottom: the rod's moment then
+# enters the band through the socket's side wall. Ending at the sleeve's back face (the rod's
+# moment through the thin ring behind the socket's bottom) gave the bare arms' hinge 38 N mm/rad at
+# 25 mm spacing, ending 1.3 mm past the socket's bottom 113 (carbon, joint FE).
+BAND_PAST = 1.5  # mm
+BAND_NARROWER = 0.5  # mm: a band's sides stand this far inside its sleeve's (never tangent to its round: an STL with open edges; at 0.3 carbon 12 mm gave one)
+PAD_SIDES = 16  # the bolt pad's polygon (circumscribes the pad's circle)
+TEAR_WEB = 1.6  # mm: the web under a teardrop arm sleeve (four 0.4 mm lines)
+TEAR_MIN = 1.0  # mm: least web height below a teardrop's apex; lower, the arm sleeve is a D section
+
+
+def link_is_flat(sockets) -> bool:
+    """Whether a core link prints flat: its parallel (arm) sockets are level in the frame."""
+    dirs = [np.asarray(s.direction, float) for s in sockets]
+    arms = [d for d in dirs if sum(float(d @ e) > 1 - PARALLEL_TOL for e in dirs) > 1]
+    return len(arms) >= 2 and all(abs(float(d[2])) < 1e-5 for d in arms)
+
+
+def link_bed_z(params: dict, sockets, r: float) -> float:
+    """The flat link's bed, as a height in its local frame (it prints upside down): the tab's top,
+    or a sleeve's top where one stands higher."""
+    tops = [float(np.asarray(p, float)[2]) + r for s in sockets for p in (s.port, np.asarray(s.port) + np.asarray(s.direction) * (s.seat + s.depth))]
+    return max(float(params["plate_top_z"]) + float(params["tab_thickness"]), *tops)
+
+
+def _hull_pts(pts) -> np.ndarray:
+    """Convex hull of 2-D points, counter-clockwise (monotone chain)."""
+    pts = sorted(map(tuple, np.round(np.asarray(pts, float), 9)))
+
+    def half(seq):
+        out: list = []
+        for p in seq:
+            while len(out) >= 2 and (out[-1][0] - out[-2][0]) * (p[1] - out[-2][1]) - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0]) <= 0:
+                out.pop()
+            out.append(p)
+        return out[:-1]
+
+    return np.array(half(pts) + half(pts[::-1]))
+
+
+def link_bands(params: dict, sockets, wall: float, r: float) -> list[np.ndarray]:
+    """The flat link's bands in plan (local xy, counter-clockwise convex polygons): for each socket
+    the hull of its sleeve's back end (from its back face to `BAND_PAST` beyond the socket's
+    bottom, and past where a sloped sleeve's web begins; `BAND_NARROWER` inside the sleeve's sides)
+    and the bolt pad (a polygon round the screw hole, one `wall` outside it)."""
+    bolt = np.asarray(params["bolt_hole"], float)[:2]
+    r_pad = (float(params["screw_clearance"]) / 2 + wall) / math.cos(math.pi / PAD_SIDES)
+    pad = [bolt + r_pad * np.array([math.cos(a), math.sin(a)]) for a in 2 * math.pi * (np.arange(PAD_SIDES) + 0.5) / PAD_SIDES]
+    out = []
+    for s in sockets:
+        d = np.asarray(s.direction, float)
+        h = d[:2] / np.linalg.norm(d[:2])
+        n = np.array([-h[1], h[0]])
+        t0 = s.seat - wall
+        # a sloped sleeve's web begins r sin a ahead of its back
+        sa, ca = abs(float(d[2])), float(np.linalg.norm(d[:2]))
+        ends = [(np.asarray(s.port, float) + d * t)[:2] for t in (t0, s.seat + BAND_PAST + r * sa / ca)]
+        half = r - BAND_NARROWER
+        out.append(_hull_pts([c + n * k * half for c in ends for k in (-1.0, 1.0)] + pad))
+    return out
+
+
+def convex_clip(poly, other) -> list:
+    """The intersection of two convex polygons (`other` counter-clockwise)."""
+    out = list(poly)
+    q = np.asarray(other, float)
+    for i in range(len(q)):
+        if len(out) < 3:
+            return []
+        e = q[(i + 1) % len(q)] - q[i]
+        a = np.array([e[1], -e[0]])  # outward normal of a counter-clockwise edge
+        out = _clip(out, a, float(a @ q[i]))
+    return out if len(out) >= 3 else []
+
+
+def union_area(polys) -> float:
+    """Area of the union of convex polygons (inclusion-exclusion over their intersections)."""
+    from itertools import combinations
+
+    total = 0.0
+    for k in range(1, len(polys) + 1):
+        for group in combinations(polys, k):
+            inter = list(group[0])
+            for q in group[1:]:
+                inter = convex_clip(inter, _hull_pts(q)) if inter else []
+            if len(inter) >= 3:
+                total += (-1) ** (k + 1) * polygon_area(inter)
+    return total
+
+
+def link_plate_region(params: dict, big: float = 500.0) -> np.ndarray:
+    """The core plate's corner near the link in plan (local xy, counter-clockwise): the plate is
+    {sx (x - cx) <= 0, sy (y - cy) <= 0}."""
+    c, sign = link_plate_corner(params)
+    return _hull_pts([c, c - np.array([sign[0], 0.0]) * big, c - sign * big, c - np.array([0.0, sign[1]]) * big])
+
+
+def _flat_link_estimate(spec: Spec, params: dict, sockets: list[Socket], r: float) -> Estimate:
+    """Closed form of the flat core link (parts/joint.py `_core_link_flat`): the sleeves (arms:
+    a teardrop on a web, or a D section, from the bed up; the strut: half a cylinder on a 0.9 x OD
+    web), the bands `T` deep (the bed down to the plate top), the seat (the bands outside the
+    plate, on down to the plate's bottom), less the bores and the screw hole."""
+    j = spec.joints
+    hole = math.pi / 4 * spec.bore**2
+    z_bed = link_bed_z(params, sockets, r)
+    v0 = float(params["plate_top_z"])
+    T = z_bed - v0
+    hole_d = float(params["screw_clearance"])
+    bands = link_bands(params, sockets, j.wall, r)
+    plate = link_plate_region(params)
+    a_band = union_area(bands)
+    a_seat = a_band - union_area([p for p in (convex_clip(b, plate) for b in bands) if p])
+    vol = a_band * T + a_seat * 2 * v0 - math.pi / 4 * hole_d**2 * T
+    a_h = 2 * a_band
+    a_v = 0.0
+    for s in sockets:
+        d = np.asarray(s.direction, float)
+        n = s.depth + j.wall
+        h = z_bed - float(s.port[2])  # the axis above the bed at the port
+        vol -= hole * s.depth
+        a_v += math.pi * spec.bore * s.depth
+        if abs(d[2]) < 1e-5:
+            # the band's run into the sleeve, less the sleeve's round top above the band's bottom
+            seg = max(0.0, h + r - (z_bed + v0))
+            seg_area = r * r * math.acos(1 - seg / r) - (r - seg) * math.sqrt(max(0.0, 2 * r * seg - seg * seg)) if seg < r else 0.0
+            vol += link_sleeve_area(h, r) * n - (s.seat + BAND_PAST - (s.seat - j.wall)) * (link_sleeve_area(h, r) - seg_area)
+            a_h += (2 * r + math.pi * r / 2) * n
+            a_v += (2 * h + math.pi * r / 2) * n
+        else:  # the strut, rising in print
+            sin_a = abs(float(d[2]))
+            cos_a = math.sqrt(1 - sin_a * sin_a)
+            run = n * cos_a
+            t0, t1 = s.seat - j.wall, s.seat + s.depth
+            h_mean = h + sin_a * (t0 + t1) / 2
+            # its run inside the band (parts/joint.py: the band reaches BAND_PAST past the socket's
+            # bottom and past where the web begins)
+            t_in = min(t1, s.seat + BAND_PAST + r * sin_a / cos_a) - t0
+            h_in = h + sin_a * (t0 + t_in / 2)  # the axis's mean height there
+            # half a cylinder on a 0.9 x OD web, less the web inside the band
+            vol += math.pi * r**2 / 2 * n + 1.8 * r * h_mean * run
+            vol -= t_in * cos_a * 1.8 * r * min(h_in, z_bed + v0)
+            a_h += 1.8 * r * run + math.pi * r * n / 2
+            a_v += 2 * h_mean * run + math.pi * r * n / 2
+    pts = np.vstack([np.vstack(bands)] + [(np.asarray(s.port, float) + np.asarray(s.direction, float) * (s.seat + s.depth))[:2] for s in sockets])
+    ext = sorted([float(np.ptp(pts[:, 0])) + r, float(np.ptp(pts[:, 1])) + r, z_bed + r])
+    return Estimate(vol, a_h, a_v, (ext[2], ext[1], ext[0]))
+
+
+def link_sleeve_area(h: float, r: float) -> float:
+    """Section of a flat link's arm sleeve whose axis stands `h` above the bed: a teardrop (the
+    round top and two 45 deg flanks meeting r sqrt 2 below the axis) on a `TEAR_WEB` web, or a D
+    section where the apex would be less than `TEAR_MIN` above the bed."""
+    if h - r * math.sqrt(2) >= TEAR_MIN:
+        return 0.75 * math.pi * r**2 + r**2 + TEAR_WEB * (h - r * math.sqrt(2)) + TEAR_WEB**2 / 4
+    return 2 * r * h + math.pi * r**2 / 2

@@ -49,7 +49,8 @@ import numpy as np
 
 from ..frame import HINGE_GAP
 from ..families.base import PARALLEL_TOL, PartSpec
-from ..families.joint import link_plate_corner, seat_plan
+from ..families.joint import (TEAR_MIN, TEAR_WEB, link_bands, link_bed_z, link_is_flat, link_plate_corner,
+                               link_plate_region, seat_plan)
 
 CHAMFER = 0.5  # mm, 45 deg, at every socket mouth
 JOIN = 0.4  # mm, least overlap of the knee's rigid leg sleeve with the arm block, each way (one 0.4 mm line)
@@ -117,6 +118,12 @@ def print_from_local(part: PartSpec) -> np.ndarray:
         vertical = dirs[np.abs(dirs[:, 2]) > 1e-6, 2]
         rot = FLIP_X if vertical.sum() < 0 else np.eye(3)
         return transform(rot, (0.0, 0.0, r))
+    if kind_of(part) == "core_link" and link_is_flat(part.sockets):
+        # flat and upside down: the arm direction along x, the frame's up pointing into the bed
+        x = horizontal(_arm_direction(part))
+        zp = np.array([0.0, 0.0, -1.0])
+        rot = np.vstack([x, np.cross(zp, x), zp])
+        return transform(rot, (0.0, 0.0, link_bed_z(dict(part.params), part.sockets, r)))
     if kind_of(part) in ("knee", "core_link"):
         w = _side_normal(part, dirs)
         x = _arm_direction(part)
@@ -310,6 +317,8 @@ def solid(part: PartSpec) -> Built:
         shape = _corner(part, socks, r)
     elif kind == "knee":
         shape = _knee(part, socks, r)
+    elif kind == "core_link" and link_is_flat(part.sockets):
+        shape = _core_link_flat(part, socks, r, m)
     elif kind == "core_link":
         shape = _core_link(part, socks, r, m)
     else:
@@ -645,6 +654,73 @@ def _core_link(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarray):
     cq = _cq()
     bolt_hole = cq.Solid.makeCylinder(hole_d / 2, t + 2.0, vec(bolt + e_v * (v0 - 1.0)), vec(e_v))
     return finish(above_bed(fuse_all(pieces)), [socket_cutter(s) for s in socks] + [bolt_hole, _esc_keepout(part, m)])
+
+
+def _core_link_flat(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarray):
+    """The flat core link (level arms), printed upside down: each arm's sleeve lying on the bed (a
+    teardrop on a thin web, or a D section where the axis stands low), the strut's sleeve rising on
+    its web, and one band per socket from its sleeve's back end to the bolt pad, from the bed (the
+    tab's top) down to the plate top: the tab, in as many strips as there are sockets, each as deep
+    as the tab. Outside the plate the bands go on below the plate top, down to the plate's bottom:
+    the seat, bearing on the plate's edges. Every face then looks up or sideways in print but
+    the bores' ceilings (bridges of one bore) and the plate's imprint (the bands' undersides over
+    the plate, which face up in print)."""
+    params = dict(part.params)
+    arms, others = _groups(socks)
+    rot, o = m[:3, :3], m[:3, 3]
+    z_bed = float(o[2])  # the bed, as a height in the local frame (local z maps to z_bed - z)
+    v0 = float(part.param("plate_top_z"))
+    T = z_bed - v0
+    pieces = []
+    for s in socks:
+        t0 = s.seat - part.wall
+        if abs(float(s.direction[2])) >= FLAT:
+            # the strut: its web as wide as a sloped sleeve's anywhere (a teardrop on a thin web,
+            # 0.16 g lighter, made the link softer: carbon 25 mm, hinge 128 -> 112 N mm/rad,
+            # frame k 5850 -> 5569 N/m)
+            pieces.append(sloped_sleeve(s.at(t0), s.direction, s.depth + part.wall, r))
+        elif float(s.port[2]) - r * math.sqrt(2) >= TEAR_MIN:
+            pieces.append(tsleeve(s.at(t0), s.direction, s.depth + part.wall, float(s.port[2]), r, TEAR_WEB))
+        else:
+            pieces.append(sleeve(s, t0, r))
+
+    def plan(poly):
+        return [rot[:2, :2] @ np.asarray(p, float) + o[:2] for p in poly]
+
+    levels = _levels(socks, r)
+    bands = link_bands(params, part.sockets, part.wall, r)
+    # each band from the bed to the plate's bottom (clear of the sleeves' levels); the plate's cut
+    # leaves the tab over the plate and the seat beside it
+    bottom = _clear_of(z_bed + v0, levels)
+    pieces += [prism(plan(b), 0.0, bottom) for b in bands]
+    body = fuse_all(pieces)
+    plate = prism(plan(link_plate_region(params)), T, 1000.0)  # the plate, under its top
+    c = np.asarray(part.param("esc_keepout"), float)
+    h = float(part.param("esc_half"))
+    # under the ESC board nothing stands above the board's underside (less 0.5 mm); cut through
+    # the whole depth, so the cut faces are walls (a cut from the bed up would leave a ceiling)
+    esc = prism(plan([c[:2] + np.array([sx, sy]) * h for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]), -1.0, 1000.0) \
+        if float(c[2]) < z_bed else None
+    body = body.cut(plate) if esc is None else body.cut(plate).cut(esc)
+    cq = _cq()
+    bolt = rot @ np.asarray(part.param("bolt_hole"), float) + o
+    hole_d = float(part.param("screw_clearance"))
+    bolt_hole = cq.Solid.makeCylinder(hole_d / 2, T + 2.0, vec((bolt[0], bolt[1], -1.0)), vec((0.0, 0.0, 1.0)))
+    return finish(above_bed(body), [socket_cutter(s) for s in socks] + [bolt_hole])
+
+
+def tsleeve(start, d, length: float, axis_z: float, r: float, web: float):
+    """Teardrop sleeve along horizontal `d` from `start`: the round top, two 45 deg flanks meeting
+    r sqrt 2 under the axis, and a web `web` wide from there down to the bed (z = 0)."""
+    cq = _cq()
+    d = horizontal(d)
+    lat = np.array([-d[1], d[0], 0.0])
+    plane = cq.Plane(origin=(float(start[0]), float(start[1]), float(axis_z)), xDir=tuple(lat), normal=tuple(d))
+    k = r / math.sqrt(2)
+    apex = -r * math.sqrt(2)
+    wp = (cq.Workplane(plane).moveTo(-web / 2, -axis_z).lineTo(web / 2, -axis_z).lineTo(web / 2, apex + web / 2)
+          .lineTo(k, -k).threePointArc((0, r), (-k, -k)).lineTo(-web / 2, apex + web / 2).close())
+    return wp.extrude(length).val()
 
 
 def _esc_keepout(part: PartSpec, m: np.ndarray):
