@@ -202,10 +202,16 @@ def sleeve_bore(spec: Spec) -> float:
     return spec.sleeve_bore
 
 
+# The authors' motor base holds each 3 mm rod in a through-sleeve 6.3 mm long
+# (Flex_MotorBase_Shorter.stl, CogniFly_v8_Crash_Tests, measured): 2.1 rod diameters.
+SLEEVE_DIAMETERS = 2.1
+
+
 def sleeve_length(spec: Spec) -> float:
-    """How long each clip sleeve holds its rod, mm: the joints' socket depth, the grip a rod gets
-    in every joint of the frame."""
-    return spec.joints.socket_depth
+    """How long each clip sleeve holds its rod, mm: the authors' 2.1 rod diameters. A through-sleeve
+    the rod slides in only has to keep the seat square to the arm; a blind socket's depth is
+    grip, which this is not."""
+    return round(SLEEVE_DIAMETERS * spec.rods.diameter, 3)
 
 
 def shaft_hole(spec: Spec, holes, counterbore_d: float) -> float:
