@@ -564,7 +564,8 @@ def test_solve_missing_submits_the_biggest_joint_first(tmp_path, monkeypatch):
     """Longest-processing-time-first: the FE jobs go to the workers by falling closed-form volume
     (the mesh has a fixed size, so the factorization grows with it), so the last one to start is
     the smallest and the workers end together. Carbon: core link (with its seat and 6 mm tab),
-    knee, corner bottom, corner top; the mirrored core link is derived, not submitted."""
+    corner bottom (1.41 g), knee (1.38 g: its arm pair a U, its legs on webs), corner top; the
+    mirrored core link is derived, not submitted."""
     from concurrent.futures import Future
 
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))
@@ -580,7 +581,7 @@ def test_solve_missing_submits_the_biggest_joint_first(tmp_path, monkeypatch):
     # the mirror falls back to its own FE when its original fails: not solved here either
     monkeypatch.setattr(JS, "_fe_unit", lambda spec, part, mesh_mm: (part.name, None, "not solved in this test"))
     failed = JS.solve_missing(s, st.joint_parts(p), submit=submit)
-    assert order == ["core_link", "knee", "corner_bottom", "corner_top"]
+    assert order == ["core_link", "corner_bottom", "knee", "corner_top"]
     assert set(failed) == {"knee", "core_link", "corner_bottom", "corner_top", "core_link_mirrored"}
 
 

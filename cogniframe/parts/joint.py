@@ -53,7 +53,7 @@ from ..families.joint import (TEAR_MIN, TEAR_WEB, link_bands, link_bed_z, link_i
                                link_plate_region, seat_plan)
 
 CHAMFER = 0.5  # mm, 45 deg, at every socket mouth
-JOIN = 0.4  # mm, least overlap of the knee's rigid leg sleeve with the arm block, each way (one 0.4 mm line)
+JOIN = 0.4  # mm, least overlap of the knee's rigid leg sleeve with the arm bridge, each way (one 0.4 mm line)
 # A knee or core-link socket is parallel to the bed below this slope (rad): the stored sockets'
 # 1e-6 rounding tilts a rectangle's by up to ~1e-6, which must not turn a D-section sleeve into a
 # degenerate sloped one (a square box's are level to ~1e-17).
@@ -408,7 +408,7 @@ class Hinge:
     """The knee's living-hinge web in print coordinates (xy points, z from 0 to `height`)."""
 
     start: np.ndarray  # xy, inside the upper-leg sleeve
-    end: np.ndarray  # xy, inside the arm block
+    end: np.ndarray  # xy, inside the arm bridge
     normal: np.ndarray  # xy unit vector across the web (the bending direction)
     thickness: float
     height: float
@@ -435,7 +435,7 @@ def knee_hinge(part: PartSpec) -> Hinge:
     probe = (a.port + d * (s_back - HINGE_GAP / 2) + lat * off)[:2]
     # The web stands on the bed up to just above the legs' top lines: a web top level with the
     # hinged leg's round top touched it along a line, and OCC's mesher left that face out of the
-    # STL (carbon, 153 x 190.6 x 168.2 box). Clear of the arm block's levels too.
+    # STL (carbon, 153 x 190.6 x 168.2 box). Clear of the arm sleeves' levels too.
     top = _clear_of(max(float(s.port[2]) for s in legs) + r, _levels(socks, r))
     return Hinge(c[:2] - e * 0.6, q[:2], np.array([-e[1], e[0]]), h, float(top), probe)
 
