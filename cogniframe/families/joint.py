@@ -445,6 +445,7 @@ def _hull_area(pts: np.ndarray) -> float:
 # moment through the thin ring behind the socket's bottom) gave the bare arms' hinge 38 N mm/rad at
 # 25 mm spacing, ending 1.3 mm past the socket's bottom 113 (carbon, joint FE).
 BAND_PAST = 1.5  # mm
+BAND_BACK = 0.2  # mm
 BAND_NARROWER = 0.5  # mm: a band's sides stand this far inside its sleeve's (never tangent to its round: an STL with open edges; at 0.3 carbon 12 mm gave one)
 PAD_SIDES = 16  # the bolt pad's polygon (circumscribes the pad's circle)
 TEAR_WEB = 1.6  # mm: the web under a teardrop arm sleeve (four 0.4 mm lines)
@@ -496,7 +497,9 @@ def link_bands(params: dict, sockets, wall: float, r: float) -> list[np.ndarray]
         t0 = s.seat - wall
         # a sloped sleeve's web begins r sin a ahead of its back
         sa, ca = abs(float(d[2])), float(np.linalg.norm(d[:2]))
-        ends = [(np.asarray(s.port, float) + d * t)[:2] for t in (t0, s.seat + BAND_PAST + r * sa / ca)]
+        # from BAND_BACK behind the sleeve's back face: a band side turning there met the back
+        # face's edge on the sleeve's round (an STL with open edges: a carbon box 304.6 mm square)
+        ends = [(np.asarray(s.port, float) + d * t)[:2] for t in (t0 - BAND_BACK, s.seat + BAND_PAST + r * sa / ca)]
         half = r - BAND_NARROWER
         out.append(_hull_pts([c + n * k * half for c in ends for k in (-1.0, 1.0)] + pad))
     return out

@@ -675,9 +675,8 @@ def _core_link_flat(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarra
     for s in socks:
         t0 = s.seat - part.wall
         if abs(float(s.direction[2])) >= FLAT:
-            # the strut: its web as wide as a sloped sleeve's anywhere (a teardrop on a thin web,
-            # 0.16 g lighter, made the link softer: carbon 25 mm, hinge 128 -> 112 N mm/rad,
-            # frame k 5850 -> 5569 N/m)
+            # the strut: its web as wide as a sloped sleeve's (a teardrop on a thin web, 0.16 g
+            # lighter, carries the payload worse: docs/stiffness-model.md)
             pieces.append(sloped_sleeve(s.at(t0), s.direction, s.depth + part.wall, r))
         elif float(s.port[2]) - r * math.sqrt(2) >= TEAR_MIN:
             pieces.append(tsleeve(s.at(t0), s.direction, s.depth + part.wall, float(s.port[2]), r, TEAR_WEB))
