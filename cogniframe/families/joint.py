@@ -433,7 +433,7 @@ def _hull_area(pts: np.ndarray) -> float:
 
 
 # -- the flat core link (level arms) ---------------------------------------------------------------
-# With level arms (frame.knee_height null) every core-link socket but the strut is parallel to the
+# With level arms (frame.level_arms) every core-link socket but the strut is parallel to the
 # plate, so the link prints flat and upside down: its top (the tab's top, on the plate) on the bed,
 # the arm sleeves lying on the bed side by side, the strut rising with a web under it. Nothing then
 # has to be extruded across the arm pair: each arm's sleeve joins the bolt pad through its own band
