@@ -38,31 +38,16 @@ def check(params: ParamsArg,
         sys.stdout.write(hit[0])
         raise typer.Exit(hit[1])
     from . import api
-    from .analysis import verdict
 
     design = api.load(params)
     # a new joint geometry's solid FE takes seconds: say what it is doing
     with _progress_to_stderr():
-        result = design.check().result  # blamed, one BLAS thread: as `build` computes it, same numbers
-    if plots is not None and result.drop is not None:
-        from .outdir import claim_file
-        from .report import drop_plots
-
-        for name in ("drop_response.png", "energy_split.png"):
-            claim_file(plots / name)  # both checked before either is written
-        plots.mkdir(parents=True, exist_ok=True)
-        drop_plots.plot_drop_response(result.drop, plots / "drop_response.png")
-        drop_plots.plot_energy_split(result.drop, plots / "energy_split.png")
-    if json_out:
-        text = json.dumps(verdict.check_dict(result), indent=2) + "\n"
-    else:
-        from .report.console import print_check
-
-        with console.capture() as captured:
-            print_check(result, console)
-        text = captured.get()
+        checked = design.check()  # blamed, one BLAS thread: as `build` computes it, same numbers
+    if plots is not None:
+        checked.write_drop_plots(plots)
+    text = json.dumps(checked.to_dict(), indent=2) + "\n" if json_out else checked.tables(console)
     sys.stdout.write(text)
-    code = 0 if result.verdict == "PASS" else 1
+    code = 0 if checked.verdict == "PASS" else 1
     check_cache.store(key, text, code)
     raise typer.Exit(code)
 
@@ -110,18 +95,12 @@ def build(params: ParamsArg,
 def coupon(params: ParamsArg,
            out: Annotated[Optional[Path], typer.Option("-o", "--out", help="STL path (default out/<name>-coupon.stl)")] = None) -> None:
     """Write a socket-fit test print: a row of sockets stepping the fit clearance, each labelled."""
-    from .export.coupon import write_coupon
-    from . import spec as spec_mod
-    from .outdir import claim_file
+    from .api.coupons import coupon_file
 
-    spec = spec_mod.load(params)
-    path = out or Path("out") / f"{spec.name}-coupon.stl"
-    claim_file(path)
-    with spec.blamed():
-        written, clearances = write_coupon(spec, path)
-    Console().print(f"wrote {written}: sockets for clearances {', '.join(f'{c:+.2f}' for c in clearances)} mm. "
-                    f"Print it in {spec.joints.material}, push a rod into each, and set "
-                    f"joints.fit_clearance.{spec.joints.material} to the loosest hole that still grips (blind sockets), "
+    c = coupon_file(params, out)
+    Console().print(f"wrote {c.path}: sockets for clearances {', '.join(f'{x:+.2f}' for x in c.clearances_mm)} mm. "
+                    f"Print it in {c.material}, push a rod into each, and set "
+                    f"joints.fit_clearance.{c.material} to the loosest hole that still grips (blind sockets), "
                     f"and joints.sleeve_clearance to the tightest one a rod slides through (motor mount sleeves).")
 
 
@@ -142,9 +121,9 @@ def fly(params: ParamsArg,
 @app.command()
 def schema() -> None:
     """Print the JSON Schema of a params file (for editor autocompletion)."""
-    from . import spec as spec_mod
+    from .api.presets import params_schema
 
-    sys.stdout.write(json.dumps(spec_mod.json_schema(), indent=2) + "\n")
+    sys.stdout.write(json.dumps(params_schema(), indent=2) + "\n")
 
 
 def _register_commands() -> None:

@@ -9,6 +9,7 @@ import pytest
 import yaml
 
 from cogniframe import spec as spec_mod
+from cogniframe.api import presets
 from cogniframe.commands import maker
 from cogniframe.errors import UserError
 from cogniframe.printers import PRINTERS
@@ -150,8 +151,8 @@ def test_presets_first_line_is_the_schema_line(name):
     repo = (ROOT / "params" / f"{name}.yaml").read_text(encoding="utf-8").splitlines(keepends=True)
     shipped = (PKG / "data" / "presets" / f"{name}.yaml").read_text(encoding="utf-8").splitlines(keepends=True)
     for path, lines in ((ROOT / "params" / f"{name}.yaml", repo), (PKG / "data" / "presets" / f"{name}.yaml", shipped)):
-        assert lines[0].startswith(maker.SCHEMA_LINE), path
-        target = (path.parent / lines[0][len(maker.SCHEMA_LINE):].strip()).resolve()
+        assert lines[0].startswith(presets.SCHEMA_LINE), path
+        target = (path.parent / lines[0][len(presets.SCHEMA_LINE):].strip()).resolve()
         assert target == SCHEMA.resolve(), f"{path}: the schema line points at {target}"
     assert repo[1:] == shipped[1:], (f"cogniframe/data/presets/{name}.yaml differs from params/{name}.yaml: copy it "
                                      f"over, keeping its first line (the schema path relative to the package)")
@@ -165,8 +166,8 @@ def test_new_writes_a_commented_valid_params_file(run_cli, tmp_path):
     path = tmp_path / "mydrone.yaml"
     text = path.read_text(encoding="utf-8")
     first = text.splitlines()[0]
-    assert first.startswith(maker.SCHEMA_LINE)
-    assert (tmp_path / first[len(maker.SCHEMA_LINE):]).resolve() == SCHEMA.resolve()
+    assert first.startswith(presets.SCHEMA_LINE)
+    assert (tmp_path / first[len(presets.SCHEMA_LINE):]).resolve() == SCHEMA.resolve()
     assert text.count(" # ") > 30 and "params/bamboo.yaml" not in text
     spec = spec_mod.load(path)
     bamboo = spec_mod.load(ROOT / "params" / "bamboo.yaml")

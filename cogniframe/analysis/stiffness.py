@@ -184,6 +184,34 @@ def build_model(spec, frame, parts, joints: dict, *, feet: str = "sliding", rod_
                         r.diameter, rho=rho_rod, group=rn)
 
     # Joints: rotate each prototype super-element to its corner.
+    _add_joints(mdl, frame, parts, joints, rods, only_roles=only_roles, play=play)
+
+    # Motors: a node at the motor axis, rigidly tied to the arm rods' stations (the clip mount).
+    for m in frame.motors:
+        if not all(rn in rods for rn in m.arm):
+            continue
+        name = fe.add_node(m.name, np.asarray(m.axis, float))
+        mdl.motors.append(name)
+        for rn in m.arm:
+            fe.add_beam(f"mount:{m.name}:{rn}", name, f"{rn}:motor", _RIGID_E_MPA, _RIGID_G_MPA, _RIGID_D_MM)
+
+    # Core: rigid star from the payload node to the core links' support bodies.
+    fe.add_node(mdl.payload, np.asarray(frame.core.plate.centre, float))
+    mdl.links = sorted(n for n in fe.nodes if n.startswith("core_link_") and ":" not in n)
+    for name in mdl.links:
+        fe.add_beam(f"core:{name}", mdl.payload, name, _RIGID_E_MPA, _RIGID_G_MPA, _RIGID_D_MM)
+    mdl.feet = sorted(n for n in fe.nodes if n.startswith("corner_bottom_") and ":" not in n)
+
+    if masses is not None:
+        _add_masses(spec, frame, mdl, masses)
+    return mdl
+
+
+def _add_joints(mdl: Model, frame, parts, joints: dict, rods: dict, *, only_roles, play) -> None:
+    """Each joint placement as its part's super-element rotated to the corner: its socket bodies
+    tied to the mouths of the rods kept (through the fit's play springs when given), a removed
+    rod's socket left free; a joint with no rod kept is left out."""
+    fe = mdl.fe
     ends = _rod_ends(frame)
     for part in joint_parts(parts):
         js = joints[part.name]
@@ -231,26 +259,6 @@ def build_model(spec, frame, parts, joints: dict, *, feet: str = "sliding", rod_
             mdl.joint_nodes[pl.instance] = dict(zip(js.labels, node_names))
             mdl.instance_part[pl.instance] = part.name
             mdl.instance_rot[pl.instance] = R
-
-    # Motors: a node at the motor axis, rigidly tied to the arm rods' stations (the clip mount).
-    for m in frame.motors:
-        if not all(rn in rods for rn in m.arm):
-            continue
-        name = fe.add_node(m.name, np.asarray(m.axis, float))
-        mdl.motors.append(name)
-        for rn in m.arm:
-            fe.add_beam(f"mount:{m.name}:{rn}", name, f"{rn}:motor", _RIGID_E_MPA, _RIGID_G_MPA, _RIGID_D_MM)
-
-    # Core: rigid star from the payload node to the core links' support bodies.
-    fe.add_node(mdl.payload, np.asarray(frame.core.plate.centre, float))
-    mdl.links = sorted(n for n in fe.nodes if n.startswith("core_link_") and ":" not in n)
-    for name in mdl.links:
-        fe.add_beam(f"core:{name}", mdl.payload, name, _RIGID_E_MPA, _RIGID_G_MPA, _RIGID_D_MM)
-    mdl.feet = sorted(n for n in fe.nodes if n.startswith("corner_bottom_") and ":" not in n)
-
-    if masses is not None:
-        _add_masses(spec, frame, mdl, masses)
-    return mdl
 
 
 def _play_block(p: np.ndarray) -> np.ndarray:

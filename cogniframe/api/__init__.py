@@ -411,6 +411,31 @@ class CheckResult:
         """The `cogniframe check --json` object (a fresh copy)."""
         return copy.deepcopy(self._dict)
 
+    def tables(self, console) -> str:
+        """The `cogniframe check` tables (mass budget, cut list, drop model, verdict) as rendered
+        for `console` (a rich Console: its width and colours)."""
+        from ..report.console import print_check
+
+        with console.capture() as captured:
+            print_check(self.result, console)
+        return captured.get()
+
+    def write_drop_plots(self, folder: str | Path) -> tuple[Path, ...]:
+        """`check --plots`: drop_response.png and energy_split.png into `folder`, both checked
+        before either is written (never over a file cogniframe did not write). Nothing when the
+        design has no drop model. Returns the files written."""
+        from ..outdir import claim_file
+        from ..report import drop_plots
+
+        if self.result.drop is None:
+            return ()
+        folder = Path(folder)
+        for name in ("drop_response.png", "energy_split.png"):
+            claim_file(folder / name)
+        folder.mkdir(parents=True, exist_ok=True)
+        return (drop_plots.plot_drop_response(self.result.drop, folder / "drop_response.png"),
+                drop_plots.plot_energy_split(self.result.drop, folder / "energy_split.png"))
+
     @property
     def verdict(self) -> str:
         return self._dict["verdict"]

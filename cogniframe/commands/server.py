@@ -1,5 +1,6 @@
-"""`cogniframe server status|stop`: the CAD server that `cogniframe build` keeps between builds
-(`runtime.server`). It exits by itself after 10 minutes without a build; `stop` ends it now.
+"""`cogniframe server status|stop`: the CAD server that `cogniframe build` keeps between builds.
+It exits by itself after 10 minutes without a build; `stop` ends it now. The work is the API's
+(`api.cadserver`); these print what it returns.
 A server belongs to one environment (interpreter, cogniframe source, library versions,
 environment variables, cache folder): these commands see the one this shell's builds use.
 ``register(app)`` adds the command group to a Typer app.
@@ -13,27 +14,21 @@ server_app = typer.Typer(help="The CAD server that keeps CadQuery loaded between
                          no_args_is_help=True)
 
 
-def _stack() -> str:
-    from cogniframe.stack import versions
-
-    return versions()
-
-
 @server_app.command("status")
 def status_cmd() -> None:
     """Say whether this environment's CAD server runs (and its pid)."""
-    from cogniframe.runtime import server as cad_server
+    from cogniframe.api.cadserver import cad_server_pid
 
-    pid = cad_server.running(_stack())
+    pid = cad_server_pid()
     typer.echo(f"CAD server running (pid {pid})" if pid else "no CAD server running")
 
 
 @server_app.command("stop")
 def stop_cmd() -> None:
     """Stop this environment's CAD server (the next build starts a new one)."""
-    from cogniframe.runtime import server as cad_server
+    from cogniframe.api.cadserver import stop_cad_server
 
-    pid = cad_server.stop(_stack())
+    pid = stop_cad_server()
     typer.echo(f"stopped the CAD server (pid {pid})" if pid else "no CAD server running")
 
 
