@@ -81,10 +81,14 @@ def test_socket_holes_end_at_the_socket_bottom(preset):
 
 @pytest.mark.parametrize("preset", PRESETS)
 def test_no_rod_intersects_a_printed_part(preset):
+    from cogniframe.export.assembly import press_fits
     from cogniframe.export.mesh import intersection_volume
 
     d = built_preset(preset)
     parts = _world(d)
+    # a rod pressed into its blind socket (joints.fit_clearance < 0) overlaps it by the designed
+    # ring pi/4 (d^2 - bore^2) x depth, and by no more
+    pressed = press_fits(d.spec, d.frame)
     checked = 0
     for rod in d.frame.rods.values():
         rm = _rod_mesh(rod)
@@ -94,7 +98,7 @@ def test_no_rod_intersects_a_printed_part(preset):
             if np.any(lo > hi):
                 continue
             v = intersection_volume(rm, mesh)
-            assert v < VOLUME_TOL, f"{rod.name} cuts {v:.2f} mm^3 into {inst}"
+            assert v < VOLUME_TOL + pressed.get(frozenset((inst, rod.name)), 0.0), f"{rod.name} cuts {v:.2f} mm^3 into {inst}"
             checked += 1
     assert checked >= 2 * len(d.frame.rods)  # at least both joints of every rod were really tested
 
