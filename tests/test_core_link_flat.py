@@ -46,7 +46,7 @@ def test_flat_link_at_the_authors_spacing_is_lean_printable_and_estimated(tmp_pa
     from cogniframe.families import registry
     from cogniframe.parts.joint import map_sockets, print_from_local
 
-    spec = _carbon(arm_spacing=25, knee_height=None)
+    spec = _carbon(arm_spacing=25, level_arms=True)
     links = _links(spec)
     assert {p.name for p in links} == {"core_link", "core_link_mirrored"}
     for p in links:
@@ -67,15 +67,15 @@ def test_flat_link_at_the_authors_spacing_is_lean_printable_and_estimated(tmp_pa
 def test_flat_link_at_12mm_is_no_heavier_than_the_side_printed_one():
     """Carbon at the presets' 12 mm: the side-printed link (the arm pair stacked in one block, the
     hub and tab extruded across it) weighed 2154 mm^3 by its closed form; the flat one weighs less."""
-    for p in _links(_carbon(arm_spacing=12, knee_height=None)):
+    for p in _links(_carbon(arm_spacing=12, level_arms=True)):
         assert link_is_flat(p.sockets)
         assert p.estimate.volume < 2154
 
 
 def test_climbing_arms_keep_the_side_printed_link():
-    """With frame.knee_height set the arms climb from the core: the arm sockets are not level and
+    """With frame.level_arms false the arms climb from the core: the arm sockets are not level and
     the link is printed on its side as before (its lateral axis vertical)."""
-    links = _links(_carbon(knee_height=0.5))
+    links = _links(_carbon(level_arms=False))
     assert links and not any(link_is_flat(p.sockets) for p in links)
     arm = next(s for s in links[0].sockets if "arm" in s.rod)
     assert abs(float(arm.direction[2])) > 1e-5

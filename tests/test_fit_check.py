@@ -157,9 +157,9 @@ def test_too_narrow_arm_spacing_is_refused_with_the_key():
 # -- each rule fails where it should ----------------------------------------------------------
 
 def test_fails_a_hole_through_a_rod():
-    """The carbon preset's rods 12 mm apart, and the pair across the arm added back: those holes
-    sit 1.5 mm from a rod's axis, inside its 3.1 mm bore."""
-    spec = _spec("carbon")
+    """The carbon preset with its rods 12 mm apart, and the pair across the arm added back: those
+    holes sit 1.5 mm from a rod's axis, inside its 3.2 mm bore."""
+    spec = _spec("carbon", frame__arm_spacing=12)
     fr, parts = _design(spec)
     mount = _mount(parts)
     d0 = np.asarray(mount.param("arm_rods")[0][1], float)
