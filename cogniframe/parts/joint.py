@@ -200,15 +200,26 @@ def horizontal(d) -> np.ndarray:
     return h / np.linalg.norm(h)
 
 
-def dsleeve(start, d, length: float, axis_z: float, r: float, bottom: float = 0.0):
-    """D-section sleeve along horizontal `d` from `start`: flat bottom at `bottom`, round top."""
+def along(start, d, length: float, axis_z: float, section):
+    """A prism of `length` along horizontal `d` from `start` (its axis at `axis_z`), over a section
+    drawn by `section(wp)` on a workplane whose x runs across `d` (to its left) and whose y is up,
+    from the axis. The section is drawn and extruded at the origin and then placed by one rigid
+    transform: drawn on a workplane at the sleeve's own origin and direction, OCC's arcs came out
+    with different last bits from one call to the next (the STEP bytes of the same params differed)."""
     cq = _cq()
     d = horizontal(d)
     lat = np.array([-d[1], d[0], 0.0])
-    plane = cq.Plane(origin=(float(start[0]), float(start[1]), float(axis_z)), xDir=tuple(lat), normal=tuple(d))
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2] = lat, d, (0.0, 0.0, 1.0)
+    m[:3, 3] = (float(start[0]), float(start[1]), float(axis_z))
+    return apply(section(cq.Workplane("XZ")).extrude(-length).val(), m)
+
+
+def dsleeve(start, d, length: float, axis_z: float, r: float, bottom: float = 0.0):
+    """D-section sleeve along horizontal `d` from `start`: flat bottom at `bottom`, round top."""
     lo = bottom - axis_z
-    wp = cq.Workplane(plane).moveTo(-r, lo).lineTo(r, lo).lineTo(r, 0).threePointArc((0, r), (-r, 0)).close()
-    return wp.extrude(length).val()
+    return along(start, d, length, axis_z,
+                 lambda wp: wp.moveTo(-r, lo).lineTo(r, lo).lineTo(r, 0).threePointArc((0, r), (-r, 0)).close())
 
 
 def prism(points_xy, z0: float, z1: float):
@@ -505,18 +516,14 @@ def teardrop(start, d, length: float, axis_z: float, r: float, web: float):
     Every face is vertical or faces down at most 45 deg, so it prints without supports however
     high its axis, at a fraction of a D-section's TPU. Where the flanks would not reach the web
     (a web as wide as the tangent points, or an axis too low for them) it is the D-section sleeve."""
-    cq = _cq()
     k = r / math.sqrt(2.0)  # the tangent points: (+-k, -k) from the axis
     z_web = -r * math.sqrt(2.0) + web / 2  # where the flanks meet the web, from the axis
     if web / 2 >= k - 0.05 or axis_z + z_web <= 0.2:
         return dsleeve(start, d, length, axis_z, r)
-    d = horizontal(d)
-    lat = np.array([-d[1], d[0], 0.0])
-    plane = cq.Plane(origin=(float(start[0]), float(start[1]), float(axis_z)), xDir=tuple(lat), normal=tuple(d))
     h = web / 2
-    wp = (cq.Workplane(plane).moveTo(-h, -axis_z).lineTo(h, -axis_z).lineTo(h, z_web).lineTo(k, -k)
-          .threePointArc((0, r), (-k, -k)).lineTo(-h, z_web).close())
-    return wp.extrude(length).val()
+    return along(start, d, length, axis_z,
+                 lambda wp: (wp.moveTo(-h, -axis_z).lineTo(h, -axis_z).lineTo(h, z_web).lineTo(k, -k)
+                             .threePointArc((0, r), (-k, -k)).lineTo(-h, z_web).close()))
 
 
 def knee_bridge(a: PSocket, joined: list[tuple[PSocket, float]], r: float, s_back: float) -> float:
@@ -679,7 +686,7 @@ def _core_link_flat(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarra
             # lighter, carries the payload worse: docs/stiffness-model.md)
             pieces.append(sloped_sleeve(s.at(t0), s.direction, s.depth + part.wall, r))
         elif float(s.port[2]) - r * math.sqrt(2) >= TEAR_MIN:
-            pieces.append(tsleeve(s.at(t0), s.direction, s.depth + part.wall, float(s.port[2]), r, TEAR_WEB))
+            pieces.append(teardrop(s.at(t0), s.direction, s.depth + part.wall, float(s.port[2]), r, TEAR_WEB))
         else:
             pieces.append(sleeve(s, t0, r))
 
@@ -706,20 +713,6 @@ def _core_link_flat(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarra
     hole_d = float(part.param("screw_clearance"))
     bolt_hole = cq.Solid.makeCylinder(hole_d / 2, T + 2.0, vec((bolt[0], bolt[1], -1.0)), vec((0.0, 0.0, 1.0)))
     return finish(above_bed(body), [socket_cutter(s) for s in socks] + [bolt_hole])
-
-
-def tsleeve(start, d, length: float, axis_z: float, r: float, web: float):
-    """Teardrop sleeve along horizontal `d` from `start`: the round top, two 45 deg flanks meeting
-    r sqrt 2 under the axis, and a web `web` wide from there down to the bed (z = 0)."""
-    cq = _cq()
-    d = horizontal(d)
-    lat = np.array([-d[1], d[0], 0.0])
-    plane = cq.Plane(origin=(float(start[0]), float(start[1]), float(axis_z)), xDir=tuple(lat), normal=tuple(d))
-    k = r / math.sqrt(2)
-    apex = -r * math.sqrt(2)
-    wp = (cq.Workplane(plane).moveTo(-web / 2, -axis_z).lineTo(web / 2, -axis_z).lineTo(web / 2, apex + web / 2)
-          .lineTo(k, -k).threePointArc((0, r), (-k, -k)).lineTo(-web / 2, apex + web / 2).close())
-    return wp.extrude(length).val()
 
 
 def _esc_keepout(part: PartSpec, m: np.ndarray):
