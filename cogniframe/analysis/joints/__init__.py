@@ -28,7 +28,7 @@ from .closed_forms import analytic_joint
 from .fe import FE_CURVATURE, FE_MESH_MM, fe_joint
 from .mirror import _originals, is_mirror, mirror_original, reflect_unit
 from .model import (TPU_ELONGATION_AT_BREAK, TPU_PRINTED_MODULUS_FACTOR, JointStiffness, hinge_geometry,
-                    hinged_socket, interface)
+                    hinged_socket, interface, joint_kind)
 
 # the entry points, and what the frame model, the load cases and the build read from the joints
 __all__ = ["FE_MESH_MM", "TPU_ELONGATION_AT_BREAK", "TPU_PRINTED_MODULUS_FACTOR", "JointStiffness", "analytic_joint",
@@ -293,7 +293,8 @@ def surrogate_notes(spec, parts) -> list[str]:
     """One line per joint outside the surrogate's training box (what `check` reports as a note and
     a sweep as its `joints_outside_box` column); empty when every joint is inside. Milliseconds:
     the features and the box, no fit evaluated."""
-    from .surrogate import outside_reasons
+    from .surrogate import FE_ONLY, outside_reasons
 
+    fe_only = {p.name for p in parts if joint_kind(p) in FE_ONLY}  # solved by FE by design: no note
     return [f"joint {name}: outside the surrogate's training box ({why}); its stiffness is from the solid FE"
-            for name, why in outside_reasons(spec, parts).items()]
+            for name, why in outside_reasons(spec, parts).items() if name not in fe_only]

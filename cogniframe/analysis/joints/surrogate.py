@@ -39,7 +39,7 @@ LENGTH_MM = 10.0  # rotations scaled by this length: translational and rotationa
 DATA_FILE = Path(__file__).resolve().parents[2] / "data" / "joint_surrogate.json"
 # sha256 of the data file this code was fitted with (written by the training tool): a different
 # file is refused, and retraining edits this line, so every cache key over the source changes too
-DATA_SHA256 = "18f566b632400d88602781d501b3d80fb674c7ef98a814cac74756f6352eceeb"
+DATA_SHA256 = "7b8ce96ef28a2eeb5fd7e4f6933dc57c31582c67f3cb8de3771b7a5efa5b48c9"
 _ABS_TOL = 1e-6  # a feature constant over the training set must equal it to this (mm, rad, ratios)
 _BOX_SLACK = 0.02  # a varying feature may exceed its sampled range by this share of it: the design box ends (a hypercube never samples them exactly)
 _IGNORED = {"hinge_thickness"}  # params a family's CAD does not read (the knee's hinge is a feature of knees only)
@@ -276,11 +276,20 @@ def outside_reasons(spec, parts) -> dict[str, str]:
     return out
 
 
+# The knee (a U whose rigid leg joins the bridge by its sleeve or by a hub) and the flat core link
+# (bands that reach the bolt pad or not) change shape inside the box: a smooth fit of their FE
+# misses held-out joints by up to 39 % (median 10 % for the knee), where the corners' stay under
+# 2 % (tests/data/joint_surrogate_holdout.json). They are solved by FE, cached by their geometry.
+FE_ONLY = ("knee", "core_link")
+
+
 def _why_outside(fams: dict, spec, part) -> str | None:
     from .mirror import is_mirror
 
     if is_mirror(part):  # fitted on originals: a mirror is its original's prediction, reflected
         return "a mirrored joint (reflected from its original's prediction, not predicted itself)"
+    if joint_kind(part) in FE_ONLY:
+        return f"{joint_kind(part)} joints change shape inside the training box: solved by FE"
     fam = fams.get(joint_kind(part))
     if fam is None:
         return f"no surrogate for {joint_kind(part)} joints"
