@@ -347,7 +347,7 @@ def test_built_1104_mount_holes_are_4p5mm_from_the_axis_and_clear_the_rods(spaci
         assert math.hypot(x - shaft[0], y - shaft[1]) == pytest.approx(4.5, abs=1e-5)
     grip = float(mount.param("grip"))
     bores = [f for f in shape.Faces() if f.geomType() == "CYLINDER"
-             and abs(_cylinder(f).Radius() - spec.bore / 2) < 1e-6]
+             and abs(_cylinder(f).Radius() - spec.sleeve_bore / 2) < 1e-6]  # the mount's through-sleeves
     assert len(bores) >= 2
     seats = _hole_faces(shape, mount.param("counterbore_d") / 2)
     # a seat has faces where it cut a sleeve: 3.5 mm walls fill the plate's underside between the rods

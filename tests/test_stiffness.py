@@ -571,8 +571,8 @@ def test_a_mirror_that_is_not_an_exact_image_is_solved_by_FE(tmp_path, monkeypat
 def test_solve_missing_submits_the_biggest_joint_first(tmp_path, monkeypatch):
     """Longest-processing-time-first: the FE jobs go to the workers by falling closed-form volume
     (the mesh has a fixed size, so the factorization grows with it), so the last one to start is
-    the smallest and the workers end together. Carbon: core link (with its seat and 6 mm tab),
-    corner bottom (1.41 g), knee (1.38 g: its arm pair a U, its legs on webs), corner top; the
+    the smallest and the workers end together. Carbon: core link (its 6 mm tab and bands), knee
+    (2.13 g at 25 mm: its arm pair a U, its legs on webs), corner bottom (1.34 g), corner top; the
     mirrored core link is derived, not submitted."""
     from concurrent.futures import Future
 
@@ -589,7 +589,7 @@ def test_solve_missing_submits_the_biggest_joint_first(tmp_path, monkeypatch):
     # the mirror falls back to its own FE when its original fails: not solved here either
     monkeypatch.setattr(JS, "_fe_unit", lambda spec, part, mesh_mm: (part.name, None, "not solved in this test"))
     failed = JS.solve_missing(s, st.joint_parts(p), submit=submit)
-    assert order == ["core_link", "corner_bottom", "knee", "corner_top"]
+    assert order == ["core_link", "knee", "corner_bottom", "corner_top"]
     assert set(failed) == {"knee", "core_link", "corner_bottom", "corner_top", "core_link_mirrored"}
 
 
