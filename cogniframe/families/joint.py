@@ -416,18 +416,8 @@ def _clip(poly, a: np.ndarray, b: float) -> list:
 
 
 def _hull_area(pts: np.ndarray) -> float:
-    """Area of the convex hull of 2-D points (monotone chain + shoelace)."""
-    pts = sorted(map(tuple, np.round(pts, 9)))
-
-    def half(seq):
-        out: list = []
-        for p in seq:
-            while len(out) >= 2 and (out[-1][0] - out[-2][0]) * (p[1] - out[-2][1]) - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0]) <= 0:
-                out.pop()
-            out.append(p)
-        return out[:-1]
-
-    hull = np.array(half(pts) + half(pts[::-1]))
+    """Area of the convex hull of 2-D points (`_hull_pts` + shoelace)."""
+    hull = _hull_pts(pts)
     x, y = hull[:, 0], hull[:, 1]
     return float(abs(x @ np.roll(y, -1) - y @ np.roll(x, -1)) / 2)
 
