@@ -293,8 +293,7 @@ def surrogate_notes(spec, parts) -> list[str]:
     """One line per joint outside the surrogate's training box (what `check` reports as a note and
     a sweep as its `joints_outside_box` column); empty when every joint is inside. Milliseconds:
     the features and the box, no fit evaluated."""
-    from .surrogate import FE_ONLY, outside_reasons
+    from .surrogate import outside_reasons
 
-    fe_only = {p.name for p in parts if joint_kind(p) in FE_ONLY}  # solved by FE by design: no note
     return [f"joint {name}: outside the surrogate's training box ({why}); its stiffness is from the solid FE"
-            for name, why in outside_reasons(spec, parts).items() if name not in fe_only]
+            for name, why in outside_reasons(spec, parts).items()]

@@ -276,20 +276,11 @@ def outside_reasons(spec, parts) -> dict[str, str]:
     return out
 
 
-# The knee (a U whose rigid leg joins the bridge by its sleeve or by a hub) and the flat core link
-# (bands that reach the bolt pad or not) change shape inside the box: a smooth fit of their FE
-# misses held-out joints by up to 39 % (median 10 % for the knee), where the corners' stay under
-# 2 % (tests/data/joint_surrogate_holdout.json). They are solved by FE, cached by their geometry.
-FE_ONLY = ("knee", "core_link")
-
-
 def _why_outside(fams: dict, spec, part) -> str | None:
     from .mirror import is_mirror
 
     if is_mirror(part):  # fitted on originals: a mirror is its original's prediction, reflected
         return "a mirrored joint (reflected from its original's prediction, not predicted itself)"
-    if joint_kind(part) in FE_ONLY:
-        return f"{joint_kind(part)} joints change shape inside the training box: solved by FE"
     fam = fams.get(joint_kind(part))
     if fam is None:
         return f"no surrogate for {joint_kind(part)} joints"
