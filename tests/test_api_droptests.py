@@ -6,12 +6,11 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 import pytest
 
-from cogniframe.analysis.fit import model_accel_g
 from cogniframe.api import droptests
 from cogniframe.errors import UserError
+from droplogs import write_drops
 
 
 def test_drop_with_zeta_uses_c_equal_2_zeta_sqrt_km_and_reproduces_the_paper():
@@ -40,22 +39,9 @@ def test_drop_sources_take_the_height_from_the_manifest_else_the_folder_name(tmp
         droptests.drop_sources([declared], [])
 
 
-def _drops(folder, height_cm, c, k, n=6, seed=0):
-    """Synthetic logger trials (t, ax, ay, az in G) of the Kelvin-Voigt pulse with noise."""
-    folder.mkdir(parents=True)
-    rng = np.random.default_rng(seed)
-    a = model_accel_g(0.241, c, k, height_cm, 200)
-    for i in range(n):
-        sig = np.concatenate([np.abs(rng.normal(0, 0.2, 30)), a + np.abs(rng.normal(0, 0.3, a.size))])
-        sig[30] = 0.1
-        t = np.arange(sig.size) / 1000
-        (folder / f"trial{i}.csv").write_text("t_s,ax_g,ay_g,az_g\n"
-                                              + "".join(f"{ti:.3f},0,0,{si:.6f}\n" for ti, si in zip(t, sig)))
-
-
 def test_fit_recovers_the_c_and_k_the_drops_were_made_with_and_stores_them(tmp_path):
-    _drops(tmp_path / "low_60cm", 60, 40.0, 8000.0, seed=1)
-    _drops(tmp_path / "high_120cm", 120, 40.0, 8000.0, seed=2)
+    write_drops(tmp_path / "low_60cm", 60, 40.0, 8000.0, n_trials=6, seed=1)
+    write_drops(tmp_path / "high_120cm", 120, 40.0, 8000.0, n_trials=6, seed=2)
     params = tmp_path / "p.yaml"
     params.write_text("# my build\nname: p  # kept\nmodel:\n  stiffness_model: analytic\n")
     droptests.check_params_file(params)

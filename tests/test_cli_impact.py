@@ -6,7 +6,6 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
 import pytest
 import typer
 from ruamel.yaml import YAML
@@ -15,6 +14,7 @@ from typer.testing import CliRunner
 from cogniframe.analysis.fit import model_accel_g
 from cogniframe.commands.impact import register
 from cogniframe.errors import UserError
+from droplogs import write_drops
 
 DROPS = Path(__file__).resolve().parents[1] / "examples" / "droptests"  # shipped with the project
 
@@ -123,29 +123,11 @@ def test_fit_table_lists_results_and_skipped_files(drops):
 # ---- fit on synthetic CSV folders with manifests ---------------------------------------------
 
 
-def write_csv_height(folder: Path, height_cm: float, c: float, k: float, manifest: str | None,
-                     n_trials: int = 12, seed: int = 0) -> Path:
-    """CSV trials in G. The model curve comes from the library (its agreement with lsim is
-    tested in test_fit.py); here it only feeds the command's plumbing."""
-    folder.mkdir(parents=True)
-    rng = np.random.default_rng(seed)
-    a = model_accel_g(0.241, c, k, height_cm, 200)
-    for i in range(n_trials):
-        sig = np.concatenate([np.abs(rng.normal(0, 0.2, 30)), a + np.abs(rng.normal(0, 0.3, a.size))])
-        sig[30] = 0.1
-        t = np.arange(sig.size) / 1000
-        rows = "".join(f"{ti:.3f},0,0,{si:.6f}\n" for ti, si in zip(t, sig))
-        (folder / f"trial{i}.csv").write_text("t_s,ax_g,ay_g,az_g\n" + rows)
-    if manifest is not None:
-        (folder / "drop.yaml").write_text(manifest)
-    return folder
-
-
 @pytest.fixture(scope="module")
 def csv_drops(tmp_path_factory) -> Path:
     root = tmp_path_factory.mktemp("csv")
-    write_csv_height(root / "low", 60, 40.0, 8000.0, "height_cm: 60\nmass_kg: 0.241\n", seed=1)
-    write_csv_height(root / "high", 120, 40.0, 8000.0, "height_cm: 120\nmass_kg: 0.241\n", seed=2)
+    write_drops(root / "low", 60, 40.0, 8000.0, "height_cm: 60\nmass_kg: 0.241\n", seed=1)
+    write_drops(root / "high", 120, 40.0, 8000.0, "height_cm: 120\nmass_kg: 0.241\n", seed=2)
     return root
 
 
@@ -242,13 +224,13 @@ def test_fit_height_count_must_match_data(csv_drops):
 
 
 def test_fit_without_height_anywhere_exits_2(tmp_path):
-    d = write_csv_height(tmp_path / "drops", 50, 40.0, 8000.0, None, n_trials=2)
+    d = write_drops(tmp_path / "drops", 50, 40.0, 8000.0, None, n_trials=2)
     r = run("fit", d, "--mass", 0.241)
     assert r.exit_code == 2 and "drop.yaml" in r.message and "--height" in r.message
 
 
 def test_fit_without_mass_exits_2(tmp_path):
-    d = write_csv_height(tmp_path / "drops", 50, 40.0, 8000.0, "height_cm: 50\n", n_trials=2)
+    d = write_drops(tmp_path / "drops", 50, 40.0, 8000.0, "height_cm: 50\n", n_trials=2)
     r = run("fit", d)
     assert r.exit_code == 2 and "--mass" in r.message
 
@@ -257,7 +239,7 @@ def test_fit_without_mass_exits_2(tmp_path):
                                               ("heigth_cm: 50\n", "heigth_cm"),
                                               ("height_cm: [50\n", "not valid YAML")])
 def test_fit_bad_manifest_exits_2(tmp_path, manifest, needle):
-    d = write_csv_height(tmp_path / "drops", 50, 40.0, 8000.0, manifest, n_trials=2)
+    d = write_drops(tmp_path / "drops", 50, 40.0, 8000.0, manifest, n_trials=2)
     r = run("fit", d, "--mass", 0.241)
     assert r.exit_code == 2 and needle in r.message and "drop.yaml" in r.message
 

@@ -21,22 +21,10 @@ from cogniframe import spec as spec_mod
 from cogniframe.analysis import fit_check
 from cogniframe.errors import UserError
 from cogniframe.materials import MIN_THREAD_TURNS, MOTOR_PRESETS, SCREWS
+from presets import preset_spec
 
 ROOT = Path(__file__).resolve().parents[1]
 CLASSES = ("1103", "1104", "1105", "1106", "1202", "1203", "1204", "1404", "1406", "1407", "1408", "1505")
-
-
-def _spec(name: str, **changes) -> spec_mod.Spec:
-    import yaml
-
-    doc = yaml.safe_load((ROOT / "params" / f"{name}.yaml").read_text())
-    for dotted, v in changes.items():
-        node = doc
-        *path, last = dotted.split("__")
-        for k in path:
-            node = node[k]
-        node[last] = v
-    return spec_mod.from_dict(doc, f"{name}.yaml")
 
 
 def _design(spec):
@@ -100,7 +88,7 @@ def test_motor_models_in_the_schema():
 
 @pytest.mark.parametrize("name", ["carbon", "bamboo"])
 def test_presets_pass_the_fit_check(name):
-    spec = _spec(name)
+    spec = preset_spec(name)
     fr, parts = _design(spec)
     r = _fit(spec, fr, parts)
     assert r.ok, r.messages()
@@ -124,7 +112,7 @@ def test_rectangle_example_passes_the_fit_check():
 def test_mount_keeps_the_pairs_that_clear_the_rods(spacing, holes):
     """The authors' rods 25 mm apart leave room for all four holes; 12 mm apart, the pair across the
     arm would cut the rods, so the mount carries the pair on the arm axis."""
-    spec = _spec("carbon", frame__arm_spacing=spacing)
+    spec = preset_spec("carbon", frame__arm_spacing=spacing)
     fr, parts = _design(spec)
     mount = _mount(parts)
     assert len(mount.param("holes")) == holes
@@ -137,7 +125,7 @@ def test_mount_keeps_the_pairs_that_clear_the_rods(spacing, holes):
 @pytest.mark.parametrize("model", CLASSES)
 @pytest.mark.parametrize("spacing", [12.0, 25.0])
 def test_every_motor_class_fits_or_is_refused_on_arm_spacing(model, spacing):
-    spec = _spec("carbon", motors__model=model, frame__arm_spacing=spacing)
+    spec = preset_spec("carbon", motors__model=model, frame__arm_spacing=spacing)
     try:
         fr, parts = _design(spec)
     except UserError as e:
@@ -148,7 +136,7 @@ def test_every_motor_class_fits_or_is_refused_on_arm_spacing(model, spacing):
 
 
 def test_too_narrow_arm_spacing_is_refused_with_the_key():
-    spec = _spec("carbon", frame__arm_spacing=8.0)
+    spec = preset_spec("carbon", frame__arm_spacing=8.0)
     with pytest.raises(UserError) as err:
         _design(spec)
     assert err.value.key == "frame.arm_spacing" and "frame.arm_spacing to at least" in str(err.value)
@@ -159,7 +147,7 @@ def test_too_narrow_arm_spacing_is_refused_with_the_key():
 def test_fails_a_hole_through_a_rod():
     """The carbon preset with its rods 12 mm apart, and the pair across the arm added back: those
     holes sit 1.5 mm from a rod's axis, inside its 3.2 mm bore."""
-    spec = _spec("carbon", frame__arm_spacing=12)
+    spec = preset_spec("carbon", frame__arm_spacing=12)
     fr, parts = _design(spec)
     mount = _mount(parts)
     d0 = np.asarray(mount.param("arm_rods")[0][1], float)
@@ -175,7 +163,7 @@ def test_fails_a_hole_through_a_rod():
 
 def test_fails_a_screw_too_long():
     """An M2 x 8 through the 2.7 mm seat enters the 1104 5.3 mm: past its 2.5 mm thread, into the windings."""
-    spec = _spec("carbon")
+    spec = preset_spec("carbon")
     fr, parts = _design(spec)
     mount = _mount(parts)
     bad = _with(mount, screw_length=8.0)
@@ -187,7 +175,7 @@ def test_fails_a_screw_too_long():
 
 
 def test_fails_a_screw_too_short():
-    spec = _spec("carbon")
+    spec = preset_spec("carbon")
     fr, parts = _design(spec)
     mount = _mount(parts)
     bad = _with(mount, screw_length=3.0)
@@ -197,7 +185,7 @@ def test_fails_a_screw_too_short():
 
 
 def test_fails_a_screw_wider_than_its_hole():
-    spec = _spec("carbon")
+    spec = preset_spec("carbon")
     fr, parts = _design(spec)
     mount = _mount(parts)
     bad = _with(mount, screw_clearance=2.0)
@@ -211,7 +199,7 @@ def test_fails_a_screw_wider_than_its_hole():
 def test_fails_the_pattern_read_as_a_square():
     """The old reading of "9x9": holes on a 9 mm square, 6.36 mm from the axis; the rods 25 mm
     apart so the holes clear them and only the pattern rule can catch it."""
-    spec = _spec("carbon", frame__arm_spacing=25.0)
+    spec = preset_spec("carbon", frame__arm_spacing=25.0)
     fr, parts = _design(spec)
     mount = _mount(parts)
     d0 = np.asarray(mount.param("arm_rods")[0][1], float)
@@ -229,7 +217,7 @@ def test_fails_the_diagonal_pattern_read_on_the_arm_axis():
     """Rods 25 mm apart: the mount carries the four holes at 45 deg to the arm (pattern_turn 45).
     The same holes on a mount that says its pattern lies on the arm axis are 3.44 mm from every
     catalogue hole: the pattern rule reads the turn, it does not accept any hole on the circle."""
-    spec = _spec("carbon", frame__arm_spacing=25.0)
+    spec = preset_spec("carbon", frame__arm_spacing=25.0)
     fr, parts = _design(spec)
     mount = _mount(parts)
     assert mount.param("pattern_turn") == 45.0
@@ -240,7 +228,7 @@ def test_fails_the_diagonal_pattern_read_on_the_arm_axis():
 
 
 def test_fails_a_mount_without_an_opposite_pair():
-    spec = _spec("carbon", frame__arm_spacing=25.0)
+    spec = preset_spec("carbon", frame__arm_spacing=25.0)
     fr, parts = _design(spec)
     mount = _mount(parts)
     holes = mount.param("holes")
@@ -254,7 +242,7 @@ def test_fit_failure_fails_the_verdict(monkeypatch):
     """The fit check's problems are the verdict's: a failing plan makes `check` FAIL, naming both parts."""
     from cogniframe.analysis import verdict
 
-    spec = _spec("carbon", model__stiffness_model="analytic")
+    spec = preset_spec("carbon", model__stiffness_model="analytic")
     from cogniframe.design import design
 
     d = design(spec)
@@ -273,7 +261,7 @@ def test_fit_failure_fails_the_verdict(monkeypatch):
 def test_screws_are_vitamins_at_their_holes():
     from cogniframe.vitamins import thread_pairs, vitamins
 
-    spec = _spec("carbon")
+    spec = preset_spec("carbon")
     fr, parts = _design(spec)
     mount = _mount(parts)
     vits = {v.name: v for v in vitamins(spec, fr, parts)}
@@ -292,7 +280,7 @@ def test_screws_are_vitamins_at_their_holes():
 
 
 def test_bom_lists_the_motor_screws_with_their_length():
-    spec = _spec("carbon")
+    spec = preset_spec("carbon")
     fr, parts = _design(spec)
     mount = _mount(parts)
     (hw,) = mount.hardware
@@ -334,7 +322,7 @@ def test_built_1104_mount_holes_are_4p5mm_from_the_axis_and_clear_the_rods(spaci
     the head's seat keep at least two extrusion lines of TPU to every rod bore."""
     from cogniframe.families import motor_mount
 
-    spec = _spec("carbon", frame__arm_spacing=spacing, joints__wall=wall)
+    spec = preset_spec("carbon", frame__arm_spacing=spacing, joints__wall=wall)
     fr, parts = _design(spec)
     mount = _mount(parts)
     built = motor_mount.solid(mount)
@@ -365,7 +353,7 @@ def test_camera_and_computer_screws_pass_through_board_and_mount_into_a_nut():
     """Carbon: the Pi camera v2 (M2 on 21 x 12.5 mm) through its 1.0 mm board and the 1.6 mm upright,
     and the Pi Zero (M2.5 on 58 x 23 mm) through its 1.4 mm board and the 2.5 mm mount plate, each
     into an ISO 4032 nut it fills."""
-    spec = _spec("carbon")
+    spec = preset_spec("carbon")
     fr, parts = _design(spec)
     fs = {f.name: f for f in fasteners_mod.fasteners(spec, fr, parts)}
     cam = [f for n, f in fs.items() if n.startswith("screw_camera_")]
@@ -384,7 +372,7 @@ def test_camera_and_computer_screws_pass_through_board_and_mount_into_a_nut():
 
 
 def test_fails_a_screw_that_does_not_fill_its_nut():
-    spec = _spec("carbon")
+    spec = preset_spec("carbon")
     fr, parts = _design(spec)
     fs = list(fasteners_mod.fasteners(spec, fr, parts))
     i = next(k for k, f in enumerate(fs) if f.name == "screw_computer_1")

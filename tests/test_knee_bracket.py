@@ -5,37 +5,24 @@ and estimated right across the spacings a design may ask for."""
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 
 from cogniframe import frame as frame_mod
-from cogniframe import spec as spec_mod
 from cogniframe.families import joint as joint_family
+from presets import preset_spec
 
-ROOT = Path(__file__).resolve().parents[1]
 TPU_G_PER_MM3 = 1.22e-3  # TPU 95A, materials.py
 # The budget: the solid-block knee at 12 mm arm spacing, the carbon preset before the U
 # (closed-form estimate 1755 mm^3 = 2.14 g; its CAD 1740 mm^3). At 25 mm that block weighed 3.77 g.
 KNEE_12MM_BLOCK_MM3 = 1755.0
 
 
-def _spec(spacing: float, base: str = "carbon", **changes):
-    data = yaml.safe_load((ROOT / "params" / f"{base}.yaml").read_text(encoding="utf-8"))
-    data["frame"]["arm_spacing"] = spacing
-    for key, value in changes.items():
-        section, field = key.split("__")
-        data[section][field] = value
-    data["name"] = f"{base}-knee-{spacing:g}"
-    return spec_mod.from_dict(data)
-
-
 def _knee(spacing: float, base: str = "carbon", **changes):
     """The knee part alone (the joint family's plan: below about 9 mm a 9x9 motor pattern refuses
     the whole design, but the knee must still build at the schema's floor)."""
-    spec = _spec(spacing, base, **changes)
+    spec = preset_spec(base, frame__arm_spacing=spacing, **changes)
     return next(p for p in joint_family.plan(spec, frame_mod.frame_of(spec)) if p.name == "knee")
 
 
@@ -138,7 +125,7 @@ def test_knee_at_25mm_meshes_and_solves_in_the_joint_fe():
     from cogniframe.analysis import joints as JS
 
     knee = _knee(25.0)
-    js = JS.joint_stiffness(_spec(25.0), knee, "fe", use_cache=False)
+    js = JS.joint_stiffness(preset_spec("carbon", frame__arm_spacing=25.0), knee, "fe", use_cache=False)
     K = js.matrix
     assert np.allclose(K, K.T, rtol=1e-8, atol=1e-6 * np.abs(K).max())
     arms = [i for i, name in enumerate(js.labels) if "arm" in name]

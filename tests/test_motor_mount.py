@@ -9,30 +9,16 @@ square-plate mount's 1.66 g at 12 mm); the fixed-guided beam P L^3 / (12 E I) fo
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 
 from cogniframe import frame as frame_mod
 from cogniframe import partlist
-from cogniframe import spec as spec_mod
 from cogniframe.errors import UserError
+from presets import preset_spec
 
-ROOT = Path(__file__).resolve().parents[1]
 TPU_DENSITY = 1.22  # g/cm^3, materials.py tpu_95a
-
-
-def _spec(base: str = "carbon", **changes) -> spec_mod.Spec:
-    data = yaml.safe_load((ROOT / "params" / f"{base}.yaml").read_text(encoding="utf-8"))
-    for key, value in changes.items():
-        *path, field = key.split("__")
-        node = data
-        for name in path:
-            node = node[name]
-        node[field] = value
-    return spec_mod.from_dict(data, f"{base}.yaml")
 
 
 def _mount(spec):
@@ -60,7 +46,7 @@ def _arm_angle(mount) -> float:
 def test_1104_mount_weighs_no_more_than_the_issue_allows(spacing, most_g):
     """At the authors' 25 mm: at most 1.6 g (their part 1.11 g); at 12 mm: no heavier than the
     square-plate mount (1.66 g). The CAD's volume and the closed form both."""
-    mount = _mount(_spec(frame__arm_spacing=spacing))
+    mount = _mount(preset_spec(frame__arm_spacing=spacing))
     built, mesh = _built(mount)
     cad_g = built.shape.Volume() * TPU_DENSITY / 1000
     assert cad_g <= most_g
@@ -89,7 +75,7 @@ def test_closed_form_tracks_the_cad_and_the_mount_prints_flat(base, changes):
     no unsupported overhang (printed seat down, no supports)."""
     from cogniframe.export.mesh import flat_contact_ratio, overhangs
 
-    mount = _mount(_spec(base, **changes))
+    mount = _mount(preset_spec(base, **changes))
     built, mesh = _built(mount)
     cad = built.shape.Volume()
     assert abs(mount.estimate.volume / cad - 1) < 0.15, (mount.estimate.volume, cad)
@@ -105,14 +91,14 @@ def test_closed_form_tracks_the_cad_and_the_mount_prints_flat(base, changes):
 def test_four_holes_at_45_deg_to_the_arm_at_the_authors_spacing():
     """Rods 25 mm apart: the 1104's four holes 4.5 mm from the shaft at 45 deg to the arm, as the
     authors' motor base; 12 mm apart: the pair on the arm axis only."""
-    wide = _mount(_spec(frame__arm_spacing=25.0))
+    wide = _mount(preset_spec(frame__arm_spacing=25.0))
     assert wide.param("pattern_turn") == 45.0 and len(wide.param("holes")) == 4
     arm = _arm_angle(wide)
     for x, y in wide.param("holes"):
         assert math.hypot(x, y) == pytest.approx(4.5, abs=1e-5)
         assert (math.degrees(math.atan2(y, x)) - arm - 45.0) % 90.0 == pytest.approx(0.0, abs=1e-4) or \
             (math.degrees(math.atan2(y, x)) - arm - 45.0) % 90.0 == pytest.approx(90.0, abs=1e-4)
-    narrow = _mount(_spec(frame__arm_spacing=12.0))
+    narrow = _mount(preset_spec(frame__arm_spacing=12.0))
     assert narrow.param("pattern_turn") == 0.0 and len(narrow.param("holes")) == 2
     for x, y in narrow.param("holes"):
         assert (math.degrees(math.atan2(y, x)) - _arm_angle(narrow)) % 180.0 == pytest.approx(0.0, abs=1e-4) or \
@@ -123,7 +109,7 @@ def test_centre_hole_that_opens_into_a_rod_is_refused_with_the_key():
     """The 1408's 6 mm shaft boss needs a 7 mm hole; rods 9.5 mm apart would pass through it (the
     screw holes on the arm axis clear them). Refused on frame.arm_spacing; the spacing it names builds."""
     with pytest.raises(UserError) as err:
-        _mount(_spec(motors__model="1408", frame__arm_spacing=9.5))
+        _mount(preset_spec(motors__model="1408", frame__arm_spacing=9.5))
     assert err.value.key == "frame.arm_spacing"
     msg = str(err.value)
     assert "shaft boss" in msg and "7 mm hole" in msg
@@ -131,7 +117,7 @@ def test_centre_hole_that_opens_into_a_rod_is_refused_with_the_key():
     assert least == pytest.approx(7.0 + 3.2 + 4 * 0.4, abs=0.05)  # hole + the through-sleeve's bore + two lines each side
     from cogniframe.analysis.fit_check import plan_distance
 
-    mount = _mount(_spec(motors__model="1408", frame__arm_spacing=least))
+    mount = _mount(preset_spec(motors__model="1408", frame__arm_spacing=least))
     for p, d in mount.param("arm_rods"):
         assert plan_distance((0.0, 0.0), p, d) >= mount.param("shaft_hole") / 2 + 0.8 + 3.1 / 2 - 1e-6
 
@@ -142,7 +128,7 @@ def test_whoop_centre_hole_keeps_clear_of_the_screw_holes_and_passes_the_boss():
     from cogniframe.families.motor_mount import HOLE_CLEAR
     from cogniframe.materials import SCREWS
 
-    spec = _spec(motors__model="1103", frame__arm_spacing=25.0)
+    spec = preset_spec(motors__model="1103", frame__arm_spacing=25.0)
     mount = _mount(spec)
     r = mount.param("shaft_hole") / 2
     assert r >= spec.motor.shaft_boss_d / 2 + 0.1
@@ -163,7 +149,7 @@ def test_bridge_sag_and_twist_under_full_thrust_are_below_a_layer_PL3_over_12EI(
     from cogniframe.families.motor_mount import _span
     from cogniframe.analysis import rotors
 
-    spec = _spec(frame__arm_spacing=spacing)
+    spec = preset_spec(frame__arm_spacing=spacing)
     mount = _mount(spec)
     rm = rotors.model(spec, 0.24)
     e_mpa = spec.material(mount.material).e_mpa
@@ -197,7 +183,7 @@ def test_level_arms_build_d_sleeves_that_print_flat(spacing):
     from cogniframe.export.mesh import overhangs
     from cogniframe.families import motor_mount as mm
 
-    spec = _spec(frame__arm_spacing=spacing)
+    spec = preset_spec(frame__arm_spacing=spacing)
     m = _mount(spec)
     rods = tuple((p, tuple(np.round(np.array([d[0], d[1], 0.0]) / math.hypot(d[0], d[1]), 6)))
                  for p, d in m.param("arm_rods"))
