@@ -1,8 +1,9 @@
 """TPU joints (corner_top, corner_bottom, knee, core_link), generated from their sockets.
 
-Every joint is built directly IN PRINT ORIENTATION: `print_from_local(part)` (pure numpy, no CAD)
-maps the part's local frame (sockets, bolt hole) to the printer, and the solid is assembled there
-from "print-safe" pieces, so TPU prints without supports:
+Every joint is built directly IN PRINT ORIENTATION: `print_from_local(part)` (parts/joint_plan.py,
+pure numpy, with the rest of the joints' plan the closed forms share) maps the part's local frame
+(sockets, bolt hole) to the printer, and the solid is assembled there from "print-safe" pieces,
+so TPU prints without supports:
 
 * a socket parallel to the bed gets a D-section sleeve (flat bottom on the bed, vertical sides,
   round top, OD = bore + 2 wall): its hole is a bridge of one bore diameter (<= 6 mm);
