@@ -13,9 +13,9 @@ import hashlib
 import json
 from dataclasses import replace
 
-from .families.base import PartSpec  # noqa: F401  (the part record: the later stages import it from here)
 from .families import registry
 from .frame import Frame
+from .parts.record import PartSpec  # noqa: F401  (the part record: the later stages import it from here)
 from .spec import Spec
 
 

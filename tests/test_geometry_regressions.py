@@ -14,7 +14,7 @@ at a time, each part built and written as an STL):
 
 * a large joints.seat (d22: 174.1 x 155.4 x 111.6 box, seat 5.98): the knee's lower leg leaves
   the knee square to the arms and the seat puts the arm block's back face beyond its sleeve;
-  `_rigid_leg_start` answered a start 51 mm behind the knee (its test looked at one side of the
+  `rigid_leg_start` answered a start 51 mm behind the knee (its test looked at one side of the
   block only) and the knee still printed in two. No start can join them: a hub does.
 * a small seat for the walls (joints.seat 0, or joints.wall 2.9 mm and more with the 3 mm seat):
   the hinge slot cut off the end of the upper leg that the hinge web holds; the knee's seat is now
@@ -90,13 +90,13 @@ def _joints(spec, names=None):
 
 def test_straight_sides_have_a_finite_print_orientation():
     """Pure numpy: the knee's lateral axis is the legs' and arms' plane normal, not 0/0."""
-    from cogniframe.parts.joint import _groups, map_sockets, print_from_local
+    from cogniframe.parts.joint_plan import map_sockets, print_from_local, split_arms
 
     (knee,) = _joints(_variant("carbon", frame__knee_inset=0), ["knee"])
     m = print_from_local(knee)
     assert np.isfinite(m).all() and np.allclose(m[:3, :3] @ m[:3, :3].T, np.eye(3))
     socks = map_sockets(knee, m)
-    arms, legs = _groups(socks)
+    arms, legs = split_arms(socks)
     assert len(arms) == 2 and len(legs) == 2
     assert max(abs(s.direction[2]) for s in socks) < 1e-9  # every socket parallel to the bed
 
@@ -152,9 +152,9 @@ def test_thin_rods_core_links_mesh_watertight(base, height):
 
 def _arm_and_rigid_leg(knee):
     """(arm socket, rigid leg socket, sleeve radius, the arm block's back) of a knee, in print."""
-    from cogniframe.parts.joint import _groups, map_sockets, print_from_local
+    from cogniframe.parts.joint_plan import map_sockets, print_from_local, split_arms
 
-    arms, legs = _groups(map_sockets(knee, print_from_local(knee)))
+    arms, legs = split_arms(map_sockets(knee, print_from_local(knee)))
     a = arms[0]
     rigid = max(legs, key=lambda s: float(s.direction @ a.direction))
     return a, rigid, a.bore / 2 + knee.wall, a.seat - knee.wall
@@ -164,14 +164,14 @@ def test_rigid_leg_reaches_into_the_arm_block():
     """Pure numpy: where the rigid leg's sleeve joins the arm bridge (its start moved back from
     seat - wall far enough; the presets' 25 mm knees), its inner back corner lies at least JOIN
     inside the bridge's footprint; where no start can (2.3 mm rods in a 91 mm frame), a hub joins it."""
-    from cogniframe.parts.joint import JOIN, _rigid_leg_start, horizontal
+    from cogniframe.parts.joint_plan import JOIN, horizontal, rigid_leg_start
 
     starts = []
     for spec in (_variant("carbon", rods__diameter=2.3, frame__height=91),
                  spec_mod.load(ROOT / "params" / "carbon.yaml"), spec_mod.load(ROOT / "params" / "bamboo.yaml")):
         (knee,) = _joints(spec, ["knee"])
         a, rigid, r, s_back = _arm_and_rigid_leg(knee)
-        t = _rigid_leg_start(a, rigid, r, s_back, knee.wall)
+        t = rigid_leg_start(a, rigid, r, s_back, knee.wall)
         starts.append(t)
         if t is None:
             continue
@@ -212,18 +212,18 @@ D22 = {"frame__width": 174.1, "frame__depth": 155.4, "frame__height": 111.6, "jo
 
 def test_a_large_seat_joins_the_lower_leg_by_a_hub():
     """Pure numpy: with the d22 seat no start of the lower leg's sleeve reaches the arm block
-    (`_rigid_leg_start` is None, where it used to answer 51 mm behind the knee), and the hub that
+    (`rigid_leg_start` is None, where it used to answer 51 mm behind the knee), and the hub that
     joins them overlaps both and stays clear of the hinge web and its slots."""
-    from cogniframe.parts.joint import HINGE_GAP, _footprint_rect, _hull, _knee_hub, _rigid_leg_start, knee_hinge
+    from cogniframe.parts.joint_plan import HINGE_GAP, convex_hull, footprint_rect, knee_hinge, knee_hub, rigid_leg_start
 
     for knee in _joints(_variant("carbon", **D22), ["knee", "knee_mirrored"]):
         a, rigid, r, s_back = _arm_and_rigid_leg(knee)
-        assert _rigid_leg_start(a, rigid, r, s_back, knee.wall) is None, knee.name
+        assert rigid_leg_start(a, rigid, r, s_back, knee.wall) is None, knee.name
         web = knee_hinge(knee)
-        hub = _knee_hub(a, rigid, r, s_back, knee.wall, web)
+        hub = knee_hub(a, rigid, r, s_back, knee.wall, web)
         # it overlaps the block's back and the leg's back face (their hull is what it is cut from)
-        block = _hull(np.array(_footprint_rect(a, s_back, s_back + 1.0, r)))
-        leg = _footprint_rect(rigid, rigid.seat - knee.wall, rigid.seat - knee.wall + 1.0, r)
+        block = convex_hull(np.array(footprint_rect(a, s_back, s_back + 1.0, r)))
+        leg = footprint_rect(rigid, rigid.seat - knee.wall, rigid.seat - knee.wall + 1.0, r)
         inside = [p for p in np.array(block) if _in_polygon(p, hub)]
         assert inside, knee.name
         assert any(_in_polygon(p, hub) for p in np.array(leg)), knee.name
@@ -258,17 +258,17 @@ def test_knee_seat_leaves_the_hinge_room(base, change):
     """Pure numpy: the hinged leg's back-face centre lies at least two slots (2 x HINGE_GAP)
     behind the arm block's back face: the web crosses its slot and as much again. The presets'
     3 mm seat already does and is kept."""
-    from cogniframe.parts.joint import (
+    from cogniframe.parts.joint_plan import (
         HINGE_GAP,
-        _groups,
         horizontal,
         map_sockets,
         print_from_local,
+        split_arms,
     )
 
     (knee,) = _joints(_variant(base, **change), ["knee"])
     socks = map_sockets(knee, print_from_local(knee))
-    arms, legs = _groups(socks)
+    arms, legs = split_arms(socks)
     a = arms[0]
     hinged = min(legs, key=lambda s: float(s.direction @ a.direction))
     c = hinged.at(hinged.seat - knee.wall)
@@ -293,7 +293,7 @@ def test_knees_build_across_seats_and_walls(base, change):
 def test_core_link_hub_top_clears_the_strut_sleeve(change):
     """The hub's top was level with the strut sleeve's round top (and, with 5.48 mm walls, 0.03 mm
     above the upper arm's axis): one of the two links' STL had a hole where the top face was."""
-    from cogniframe.parts.joint import TAB_CLEAR, map_sockets, print_from_local
+    from cogniframe.parts.joint_plan import TAB_CLEAR, map_sockets, print_from_local
 
     for link in _parts(_variant("bamboo", **change), ["core_link", "core_link_mirrored"]):
         built = _one_watertight_solid(link)
@@ -311,7 +311,7 @@ def test_core_link_hub_top_clears_the_strut_sleeve(change):
 def test_knee_web_top_clears_the_legs_top():
     """carbon in a 153 x 190.6 x 168.2 box: the web's top, level with the upper leg's round top,
     went missing from the knee's STL."""
-    from cogniframe.parts.joint import (
+    from cogniframe.parts.joint_plan import (
         TAB_CLEAR,
         knee_hinge,
         map_sockets,

@@ -77,11 +77,11 @@ def test_knee_arm_pair_is_two_sleeves_a_bridge_and_a_web():
     """Between the two arm sleeves at 25 mm: solid in the bridge (one OD from their back face),
     past it only the web one wall thick on the pair's plane, open either side of it."""
     from cogniframe.export.mesh import contains
-    from cogniframe.parts.joint import _groups, horizontal, knee_bridge, map_sockets
+    from cogniframe.parts.joint_plan import horizontal, knee_bridge, map_sockets, split_arms
 
     knee = _knee(25.0)
     built, mesh = _built(knee)
-    arms, _ = _groups(map_sockets(knee, built.print_from_local))
+    arms, _ = split_arms(map_sockets(knee, built.print_from_local))
     lo, hi = sorted(arms, key=lambda s: float(s.port[2]))
     r = lo.bore / 2 + knee.wall
     s_back = lo.seat - knee.wall

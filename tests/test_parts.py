@@ -264,7 +264,7 @@ def _rays_to_surface(mesh, origin, dirs):
 def test_socket_bore_and_walls(preset, name):
     """At mid-depth the hole radius is bore/2, and the wall around it and behind its bottom is >= wall."""
     from cogniframe.export.mesh import ray_first_hit
-    from cogniframe.parts.joint import map_sockets
+    from cogniframe.parts.joint_plan import map_sockets
 
     d = built_preset(preset)
     part, m = d.parts[name], d.meshes[name]
@@ -289,13 +289,13 @@ def test_knee_living_hinge_is_a_thin_web_between_slots():
     import dataclasses
 
     from cogniframe.export.mesh import contains, ray_first_hit, tessellate
-    from cogniframe.parts import joint
+    from cogniframe.parts import joint, joint_plan
 
     d = built_preset("carbon")
     knee = d.parts["knee"]
     for h in (1.2, 1.6):
         part = dataclasses.replace(knee, params=tuple((k, h if k == "hinge_thickness" else v) for k, v in knee.params))
-        web = joint.knee_hinge(part)
+        web = joint_plan.knee_hinge(part)
         m = tessellate(joint.solid(part).shape)
         mid = np.r_[web.probe, web.height / 2]
         n = np.r_[web.normal, 0.0]

@@ -69,7 +69,7 @@ def test_every_rod_end_sits_at_a_socket_bottom(preset):
 @pytest.mark.parametrize("preset", PRESETS)
 def test_socket_holes_end_at_the_socket_bottom(preset):
     from cogniframe.export.mesh import ray_first_hit
-    from cogniframe.parts.joint import map_sockets
+    from cogniframe.parts.joint_plan import map_sockets
 
     d = built_preset(preset)
     for name, part in d.parts.items():
@@ -135,7 +135,7 @@ def test_rod_diameter_drives_every_bore_and_the_cut_list(tmp_path):
     from cogniframe import cutlist, frame as frame_mod, partlist, spec as spec_mod
     from cogniframe.export.part_files import build_parts
     from cogniframe.export.mesh import load_stl, ray_first_hit
-    from cogniframe.parts.joint import map_sockets
+    from cogniframe.parts.joint_plan import map_sockets
 
     def bores(spec, out):
         fr = frame_mod.frame_of(spec)

@@ -78,7 +78,8 @@ def designs(mode: str, n: int, first: int = 0):
 def check_fuses() -> None:
     """Make `fuse_all` (in parts.joint and where it is imported) raise when the union it makes of
     all the pieces at once has lost one (see the module docstring)."""
-    from cogniframe.parts import joint, motor_mount
+    from cogniframe.families import motor_mount
+    from cogniframe.parts import joint
 
     at_once = joint.fuse_all
 

@@ -1,6 +1,8 @@
 """The TPU joints (corner_top, corner_bottom, knee, core_link): which parts, where their sockets
-are, and their closed-form volume and surfaces. Pure numpy; the solid is parts/joint.py (the
-joint CAD and the helpers the motor mount shares), imported only when a solid is asked for.
+are, and their closed-form volume and surfaces. Pure numpy. The plan geometry the closed forms
+share with the solid (print orientation, the knee's and the core link's pieces in plan) is
+parts/joint_plan.py; the solid is parts/joint.py (the joint CAD and the helpers the motor mount
+shares), imported only when a solid is asked for.
 
 Rectangular boxes. A corner's sockets are the rotation of the fl corner's only when they are
 symmetric about the corner's 45 deg diagonal. In a square box they are (one part per kind); in a
@@ -20,11 +22,28 @@ import numpy as np
 
 from ..frame import CORNER_SIGN, CORNERS, STACK_BOTTOM, Frame
 from ..materials import SCREWS, STACK_PATTERNS
+from ..parts import joint_plan
+from ..parts.joint_plan import (
+    BAND_PAST,
+    PARALLEL_TOL,
+    TEAR_MIN,
+    TEAR_WEB,
+    PSocket,
+    convex_hull,
+    footprint_rect,
+    hull_ccw,
+    link_bands,
+    link_bed_z,
+    link_is_flat,
+    link_plate_corner,
+    link_plate_region,
+    rigid_leg_start,
+    seat_plan,
+)
 from ..spec import Spec
 from .base import (
     CORNER_ROTATION,
     FIT_TOL,
-    PARALLEL_TOL,
     Estimate,
     HardwareLine,
     PartSpec,
@@ -63,9 +82,9 @@ def solid(part: PartSpec):
 
 
 def print_from_local(part: PartSpec) -> np.ndarray:
-    from ..parts import joint as cad
+    """The joint's 4x4 print <- local transform (bed at z = 0), from its plan: no CAD kernel."""
+    return joint_plan.print_from_local(part)
 
-    return cad.print_from_local(part)
 
 def node_sockets(spec: Spec, frame: Frame, node: str) -> list[Socket]:
     """The sockets of a joint node, in the frame's axes with the node at the origin (from the graph)."""
@@ -289,11 +308,9 @@ def _knee_sleeves(r: float, wall: float, z: np.ndarray, sleeve_l: list[float], p
 def _knee_hub_area(sockets: list[Socket], dirs: np.ndarray, ports: np.ndarray, w: np.ndarray, z: np.ndarray,
                    par: list[int], rest: list[int], r: float, wall: float) -> tuple[float, float]:
     """(plan area, height) of the hub that joins a knee's rigid leg to its arm bridge where no
-    sleeve start can (parts/joint.py `_rigid_leg_start` is None: a large seat): the hull of the two
+    sleeve start can (parts/joint_plan.py `rigid_leg_start` is None: a large seat): the hull of the two
     back faces, from the bed to halfway up the leg's round top (the hinge-side clip not counted).
     (0, 0) where the leg's sleeve joins the bridge itself."""
-    from ..parts.joint import PSocket, _footprint_rect, _hull, _rigid_leg_start
-
     a_i = par[0]
     x = dirs[a_i] - w * (dirs[a_i] @ w)
     x /= np.linalg.norm(x)
@@ -311,11 +328,11 @@ def _knee_hub_area(sockets: list[Socket], dirs: np.ndarray, ports: np.ndarray, w
     s_back = a.seat - wall
     area = height = 0.0
     for s in legs:
-        if s is hinged or _rigid_leg_start(a, s, r, s_back, wall) is not None:
+        if s is hinged or rigid_leg_start(a, s, r, s_back, wall) is not None:
             continue
         t0 = s.seat - wall
-        pts = np.array(_footprint_rect(a, s_back, s_back, r) + _footprint_rect(s, t0, t0, r))
-        area += polygon_area(_hull(pts))
+        pts = np.array(footprint_rect(a, s_back, s_back, r) + footprint_rect(s, t0, t0, r))
+        area += polygon_area(convex_hull(pts))
         height = max(height, float(s.port[2]) + r / 2)
     return area, height
 
@@ -364,27 +381,6 @@ def _link_pieces(spec: Spec, params: dict, sockets: list[Socket], dirs: np.ndarr
     return vol, a_h, a_v
 
 
-def link_plate_corner(params: dict) -> tuple[np.ndarray, np.ndarray]:
-    """The plate corner a core link seats against, in the link's local frame (x, y), and the
-    signs (sx, sy) pointing out of the plate: the plate is {sx (x - cx) <= 0, sy (y - cy) <= 0}."""
-    corner = np.asarray(params["plate_corner"], float)[:2]
-    return corner, np.sign(corner - np.asarray(params["bolt_hole"], float)[:2])  # the bolt is inside the plate
-
-
-def seat_plan(params: dict, ports, d: np.ndarray, s_back: float, r: float) -> list[np.ndarray]:
-    """A core link's seat in plan, in its local frame, before the plate's corner is cut out and the
-    print height clips it: the quadrilateral from 1 mm inside the arm block's back (the arm
-    `ports`, direction `d`, sockets' backs `s_back` out) to past the plate corner, a millimetre
-    past the block's width on both sides."""
-    corner, _ = link_plate_corner(params)
-    e_in = -np.array([d[0], d[1]]) / np.hypot(d[0], d[1])  # horizontal, toward the core
-    e_w = np.array([-e_in[1], e_in[0]])
-    u_b = min(float((np.asarray(p) + d * s_back)[:2] @ e_in) for p in ports) - 1.0
-    w_half = max(abs(float(np.asarray(p)[:2] @ e_w)) for p in ports) + r + 1.0
-    u_far = float(corner @ e_in) + w_half + 1.0
-    return [e_in * u_b - e_w * w_half, e_in * u_far - e_w * w_half, e_in * u_far + e_w * w_half, e_in * u_b + e_w * w_half]
-
-
 def _seat_area(params: dict, ports: np.ndarray, heights: np.ndarray, d: np.ndarray, s_back: float, r: float,
                height: float) -> float:
     """Plan area (mm^2) of a core link's seat as parts/joint.py builds it (`seat_plan`, less the
@@ -416,84 +412,13 @@ def _clip(poly, a: np.ndarray, b: float) -> list:
 
 
 def _hull_area(pts: np.ndarray) -> float:
-    """Area of the convex hull of 2-D points (`_hull_pts` + shoelace)."""
-    hull = _hull_pts(pts)
+    """Area of the convex hull of 2-D points (`hull_ccw` + shoelace)."""
+    hull = hull_ccw(pts)
     x, y = hull[:, 0], hull[:, 1]
     return float(abs(x @ np.roll(y, -1) - y @ np.roll(x, -1)) / 2)
 
 
-# -- the flat core link (level arms) ---------------------------------------------------------------
-# With level arms (frame.level_arms) every core-link socket but the strut is parallel to the
-# plate, so the link prints flat and upside down: its top (the tab's top, on the plate) on the bed,
-# the arm sleeves lying on the bed side by side, the strut rising with a web under it. Nothing then
-# has to be extruded across the arm pair: each arm's sleeve joins the bolt pad through its own band
-# (the tab, split), and the seat is the bands' part below the plate top outside the plate, down to
-# the plate's bottom: it bears on the plate's edges, and it makes each band 9 mm deep (at a 3 mm
-# plate) from its sleeve to the plate, where the hinge the bare arms hang on bends (cubic in depth).
-# A band runs into its sleeve to `BAND_PAST` beyond the socket's bottom: the rod's moment then
-# enters the band through the socket's side wall. Ending at the sleeve's back face (the rod's
-# moment through the thin ring behind the socket's bottom) gave the bare arms' hinge 38 N mm/rad at
-# 25 mm spacing, ending 1.3 mm past the socket's bottom 113 (carbon, joint FE).
-BAND_PAST = 1.5  # mm
-BAND_BACK = 0.2  # mm
-BAND_NARROWER = 0.5  # mm: a band's sides stand this far inside its sleeve's (never tangent to its round: an STL with open edges; at 0.3 carbon 12 mm gave one)
-PAD_SIDES = 16  # the bolt pad's polygon (circumscribes the pad's circle)
-TEAR_WEB = 1.6  # mm: the web under a teardrop arm sleeve (four 0.4 mm lines)
-TEAR_MIN = 1.0  # mm: least web height below a teardrop's apex; lower, the arm sleeve is a D section
-
-
-def link_is_flat(sockets) -> bool:
-    """Whether a core link prints flat: its parallel (arm) sockets are level in the frame."""
-    dirs = [np.asarray(s.direction, float) for s in sockets]
-    arms = [d for d in dirs if sum(float(d @ e) > 1 - PARALLEL_TOL for e in dirs) > 1]
-    return len(arms) >= 2 and all(abs(float(d[2])) < 1e-5 for d in arms)
-
-
-def link_bed_z(params: dict, sockets, r: float) -> float:
-    """The flat link's bed, as a height in its local frame (it prints upside down): the tab's top,
-    or a sleeve's top where one stands higher."""
-    tops = [float(np.asarray(p, float)[2]) + r for s in sockets for p in (s.port, np.asarray(s.port) + np.asarray(s.direction) * (s.seat + s.depth))]
-    return max(float(params["plate_top_z"]) + float(params["tab_thickness"]), *tops)
-
-
-def _hull_pts(pts) -> np.ndarray:
-    """Convex hull of 2-D points, counter-clockwise (monotone chain)."""
-    pts = sorted(map(tuple, np.round(np.asarray(pts, float), 9)))
-
-    def half(seq):
-        out: list = []
-        for p in seq:
-            while len(out) >= 2 and (out[-1][0] - out[-2][0]) * (p[1] - out[-2][1]) - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0]) <= 0:
-                out.pop()
-            out.append(p)
-        return out[:-1]
-
-    return np.array(half(pts) + half(pts[::-1]))
-
-
-def link_bands(params: dict, sockets, wall: float, r: float) -> list[np.ndarray]:
-    """The flat link's bands in plan (local xy, counter-clockwise convex polygons): for each socket
-    the hull of its sleeve's back end (from its back face to `BAND_PAST` beyond the socket's
-    bottom, and past where a sloped sleeve's web begins; `BAND_NARROWER` inside the sleeve's sides)
-    and the bolt pad (a polygon round the screw hole, one `wall` outside it)."""
-    bolt = np.asarray(params["bolt_hole"], float)[:2]
-    r_pad = (float(params["screw_clearance"]) / 2 + wall) / math.cos(math.pi / PAD_SIDES)
-    pad = [bolt + r_pad * np.array([math.cos(a), math.sin(a)]) for a in 2 * math.pi * (np.arange(PAD_SIDES) + 0.5) / PAD_SIDES]
-    out = []
-    for s in sockets:
-        d = np.asarray(s.direction, float)
-        h = d[:2] / np.linalg.norm(d[:2])
-        n = np.array([-h[1], h[0]])
-        t0 = s.seat - wall
-        # a sloped sleeve's web begins r sin a ahead of its back
-        sa, ca = abs(float(d[2])), float(np.linalg.norm(d[:2]))
-        # from BAND_BACK behind the sleeve's back face: a band side turning there met the back
-        # face's edge on the sleeve's round (an STL with open edges: a carbon box 304.6 mm square)
-        ends = [(np.asarray(s.port, float) + d * t)[:2] for t in (t0 - BAND_BACK, s.seat + BAND_PAST + r * sa / ca)]
-        half = r - BAND_NARROWER
-        out.append(_hull_pts([c + n * k * half for c in ends for k in (-1.0, 1.0)] + pad))
-    return out
-
+# -- the flat core link's closed form (its plan, the bands and the plate: parts/joint_plan.py) ------
 
 def convex_clip(poly, other) -> list:
     """The intersection of two convex polygons (`other` counter-clockwise)."""
@@ -517,17 +442,10 @@ def union_area(polys) -> float:
         for group in combinations(polys, k):
             inter = list(group[0])
             for q in group[1:]:
-                inter = convex_clip(inter, _hull_pts(q)) if inter else []
+                inter = convex_clip(inter, hull_ccw(q)) if inter else []
             if len(inter) >= 3:
                 total += (-1) ** (k + 1) * polygon_area(inter)
     return total
-
-
-def link_plate_region(params: dict, big: float = 500.0) -> np.ndarray:
-    """The core plate's corner near the link in plan (local xy, counter-clockwise): the plate is
-    {sx (x - cx) <= 0, sy (y - cy) <= 0}."""
-    c, sign = link_plate_corner(params)
-    return _hull_pts([c, c - np.array([sign[0], 0.0]) * big, c - sign * big, c - np.array([0.0, sign[1]]) * big])
 
 
 def _flat_link_estimate(spec: Spec, params: dict, sockets: list[Socket], r: float) -> Estimate:

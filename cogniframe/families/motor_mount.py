@@ -37,19 +37,17 @@ import numpy as np
 from ..frame import Frame
 from ..materials import MIN_THREAD_TURNS, SCREWS
 from ..parts.joint import (
-    FLIP_X,
     SKIRT,
     STACK_SNAP,
     Built,
     above_bed,
     dsleeve,
     fuse_all,
-    horizontal,
     prism,
     sloped_sleeve,
-    transform,
     vec,
 )
+from ..parts.joint_plan import FLIP_X, horizontal, transform
 from ..spec import Spec
 from .base import CORNER_ROTATION, FIT_TOL, Estimate, HardwareLine, PartSpec, Placement, Vec, rot_z, rounded
 

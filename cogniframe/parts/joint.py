@@ -1,8 +1,9 @@
 """TPU joints (corner_top, corner_bottom, knee, core_link), generated from their sockets.
 
-Every joint is built directly IN PRINT ORIENTATION: `print_from_local(part)` (pure numpy, no CAD)
-maps the part's local frame (sockets, bolt hole) to the printer, and the solid is assembled there
-from "print-safe" pieces, so TPU prints without supports:
+Every joint is built directly IN PRINT ORIENTATION: `print_from_local(part)` (parts/joint_plan.py,
+pure numpy, with the rest of the joints' plan the closed forms share) maps the part's local frame
+(sockets, bolt hole) to the printer, and the solid is assembled there from "print-safe" pieces,
+so TPU prints without supports:
 
 * a socket parallel to the bed gets a D-section sleeve (flat bottom on the bed, vertical sides,
   round top, OD = bore + 2 wall): its hole is a bridge of one bore diameter (<= 6 mm);
@@ -48,21 +49,41 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..frame import HINGE_GAP
-from ..families.base import PARALLEL_TOL, PartSpec
-from ..families.joint import (TEAR_MIN, TEAR_WEB, link_bands, link_bed_z, link_is_flat, link_plate_corner,
-                               link_plate_region, seat_plan)
+from .joint_plan import (
+    JOINT_KINDS,
+    TAB_CLEAR,
+    TEAR_MIN,
+    TEAR_WEB,
+    PSocket,
+    clear_of,
+    convex_hull,
+    footprint_rect,
+    horizontal,
+    kind_of,
+    knee_bridge,
+    knee_hinge,
+    knee_hub,
+    link_bands,
+    link_is_flat,
+    link_plate_region,
+    map_sockets,
+    print_from_local,
+    rigid_leg_start,
+    seat_geometry,
+    seat_plan,
+    sleeve_levels,
+    split_arms,
+)
+from .record import PartSpec
 
 CHAMFER = 0.5  # mm, 45 deg, at every socket mouth
-JOIN = 0.4  # mm, least overlap of the knee's rigid leg sleeve with the arm bridge, each way (one 0.4 mm line)
 # A knee or core-link socket is parallel to the bed below this slope (rad): the stored sockets'
 # 1e-6 rounding tilts a rectangle's by up to ~1e-6, which must not turn a D-section sleeve into a
 # degenerate sloped one (a square box's are level to ~1e-17).
 FLAT = 1e-5
 STACK_SNAP = 1e-3  # mm: the most two arm sleeves are moved to stack them (rounding noise is ~1e-5)
 VOID_MM3 = 1e-6  # a solid smaller than this is a boolean artifact, not a piece of the part
-TAB_CLEAR = 0.2  # mm: a core link's tab top never within this of a sleeve's top (no coincident top faces)
 SKIRT = 0.9  # web under a sloped sleeve, as a fraction of the sleeve OD (never tangent to it)
-JOINT_KINDS = ("corner_top", "corner_bottom", "knee", "core_link")
 
 
 @dataclass(frozen=True)
@@ -72,115 +93,6 @@ class Built:
     shape: object  # cq.Shape
     print_from_local: np.ndarray
     shells: int = 1
-
-
-@dataclass(frozen=True, eq=False)
-class PSocket:
-    """A socket mapped into print coordinates."""
-
-    port: np.ndarray
-    direction: np.ndarray
-    seat: float
-    depth: float
-    bore: float
-    rod: str
-
-    def at(self, s: float) -> np.ndarray:
-        return self.port + self.direction * s
-
-    @property
-    def bottom(self) -> np.ndarray:
-        return self.at(self.seat)
-
-    @property
-    def mouth(self) -> np.ndarray:
-        return self.at(self.seat + self.depth)
-
-
-# -- transforms (pure numpy) ------------------------------------------------------------------
-
-def transform(rot: np.ndarray, shift) -> np.ndarray:
-    m = np.eye(4)
-    m[:3, :3] = rot
-    m[:3, 3] = shift
-    return m
-
-
-FLIP_X = np.diag([1.0, -1.0, -1.0])  # 180 deg about x: upside down, still right-handed
-
-
-def print_from_local(part: PartSpec) -> np.ndarray:
-    """4x4 print <- local transform of a joint (bed at z = 0)."""
-    od = part.sockets[0].bore + 2 * part.wall
-    r = od / 2
-    dirs = np.array([s.direction for s in part.sockets], float)
-    if kind_of(part) in ("corner_top", "corner_bottom"):
-        vertical = dirs[np.abs(dirs[:, 2]) > 1e-6, 2]
-        rot = FLIP_X if vertical.sum() < 0 else np.eye(3)
-        return transform(rot, (0.0, 0.0, r))
-    if kind_of(part) == "core_link" and link_is_flat(part.sockets):
-        # flat and upside down: the arm direction along x, the frame's up pointing into the bed
-        x = horizontal(_arm_direction(part))
-        zp = np.array([0.0, 0.0, -1.0])
-        rot = np.vstack([x, np.cross(zp, x), zp])
-        return transform(rot, (0.0, 0.0, link_bed_z(dict(part.params), part.sockets, r)))
-    if kind_of(part) in ("knee", "core_link"):
-        w = _side_normal(part, dirs)
-        x = _arm_direction(part)
-        x = x - w * (x @ w)
-        x /= np.linalg.norm(x)
-        y = np.cross(w, x)
-        rot = np.vstack([x, y, w])
-        ends = np.array([p for s in part.sockets for p in (s.port, s.mouth())], float)
-        low = float((ends @ w).min())
-        return transform(rot, (0.0, 0.0, r - low))
-    raise ValueError(f"unknown joint {part.name!r}; valid: {', '.join(JOINT_KINDS)}")
-
-
-def kind_of(part: PartSpec) -> str:
-    """The joint kind (a mirrored part such as core_link_mirrored names its kind in its params)."""
-    return str(dict(part.params).get("kind", part.name))
-
-
-def _side_normal(part: PartSpec, dirs: np.ndarray) -> np.ndarray:
-    """The lateral axis (vertical in print): normal to the legs' plane (knee) or to the arm and
-    strut (core link). Every socket lies in that plane (frame.frame_of keeps each corner's fold in the
-    vertical plane through the corner and its core link, in a rectangle too), and the arm pair is
-    offset across it, so the two arm sockets stack into one block."""
-    arm = _arm_direction(part)
-    others = [d for d in dirs if d @ arm < 1 - PARALLEL_TOL]
-    w = np.cross(others[0], others[1]) if len(others) >= 2 else np.zeros(3)
-    if others and np.linalg.norm(w) < 1e-6:
-        # one other socket, or two in one line (frame.knee_inset: 0, straight sides: the upper and
-        # lower legs are one vertical line; the knee's plane is then the legs' and the arms')
-        w = np.cross(arm, others[0])
-    elif not others:  # arm sockets only (frame.struts: false): lie the two arm sleeves side by side on the bed
-        pair = [np.asarray(s.port, float) for s in part.sockets if np.asarray(s.direction) @ arm > 1 - PARALLEL_TOL]
-        w = np.cross(arm, np.cross(arm, pair[1] - pair[0]))
-    w /= np.linalg.norm(w)
-    # Deterministic sign; a mirrored prototype (fr) uses the mirrored reference, so its print is
-    # the exact mirror image of the fl part's.
-    ref = np.array([-1.0, 1.0, 0.25]) if dict(part.params).get("mirror") else np.array([1.0, 1.0, 0.25])
-    return w if w @ ref >= 0 else -w
-
-
-def _arm_direction(part: PartSpec) -> np.ndarray:
-    """Direction shared by the two parallel arm sockets."""
-    dirs = [np.asarray(s.direction, float) for s in part.sockets]
-    for i in range(len(dirs)):
-        for k in range(i + 1, len(dirs)):
-            if dirs[i] @ dirs[k] > 1 - PARALLEL_TOL:
-                return dirs[i]
-    raise ValueError(f"{part.name}: no pair of parallel (arm) sockets")
-
-
-def map_sockets(part: PartSpec, m: np.ndarray) -> list[PSocket]:
-    out = []
-    for s in part.sockets:
-        port = m[:3, :3] @ np.asarray(s.port, float) + m[:3, 3]
-        d = m[:3, :3] @ np.asarray(s.direction, float)
-        out.append(PSocket(port, d / np.linalg.norm(d), float(s.seat), float(s.depth), float(s.bore), s.rod))
-    return out
 
 
 # -- print-safe primitives (CadQuery) --------------------------------------------------------
@@ -193,11 +105,6 @@ def _cq():
 
 def vec(p):
     return _cq().Vector(float(p[0]), float(p[1]), float(p[2]))
-
-
-def horizontal(d) -> np.ndarray:
-    h = np.array([d[0], d[1], 0.0])
-    return h / np.linalg.norm(h)
 
 
 def along(start, d, length: float, axis_z: float, section):
@@ -347,7 +254,7 @@ def _corner(part: PartSpec, socks: list[PSocket], r: float):
     # at once dropped a piece: a bottom corner lost most of its strut sleeve (459 of 648 mm^3) and
     # still came out one watertight solid, its strut socket a hole in the air (8 of 249 random
     # designs, e.g. a carbon box 154.1 x 175.9 x 128.5), or lost everything ("0 solids").
-    pieces = [cylinder((port[0], port[1], 0.0), (0, 0, 1), _clear_of(2 * r, _levels(socks, r)), r + TAB_CLEAR)]  # hub
+    pieces = [cylinder((port[0], port[1], 0.0), (0, 0, 1), clear_of(2 * r, sleeve_levels(socks, r)), r + TAB_CLEAR)]  # hub
     # Every sleeve starts TAB_CLEAR out from the port, its end inside the hub. All the sleeves share
     # the port and the radius r, and two equal cylinders whose axes cross touch at two points level
     # with the crossing: on the rim of a sleeve that started there. A leg and a strut so met made
@@ -374,15 +281,6 @@ def _corner(part: PartSpec, socks: list[PSocket], r: float):
     return finish(body, [socket_cutter(s) for s in socks])
 
 
-def _groups(socks: list[PSocket]) -> tuple[list[PSocket], list[PSocket]]:
-    """(the parallel arm sockets, the others)."""
-    for i in range(len(socks)):
-        par = [s for s in socks if s.direction @ socks[i].direction > 1 - PARALLEL_TOL]
-        if len(par) > 1:
-            return par, [s for s in socks if s not in par]
-    raise ValueError("no parallel arm sockets")
-
-
 def _block(arms: list[PSocket], r: float, start: float):
     """The stacked arm sockets: each arm's sleeve stands on the bed, so together they make one block.
     Every sleeve is built straight above or below the first arm's (`_stacked`)."""
@@ -404,112 +302,6 @@ def _stacked(a: PSocket, s: PSocket) -> PSocket:
     return PSocket(a.port + np.array([0.0, 0.0, off[2]]), a.direction, s.seat, s.depth, s.bore, s.rod)
 
 
-def _footprint_rect(s: PSocket, start: float, end: float, half: float, grow: float = 0.0):
-    """xy corners of a sleeve's footprint from `start` to `end` along it, grown by `grow`."""
-    d = horizontal(s.direction)
-    lat = np.array([-d[1], d[0]])
-    a = s.port[:2] + d[:2] * (start - grow)
-    b = s.port[:2] + d[:2] * (end + grow)
-    h = half + grow
-    return [a - lat * h, b - lat * h, b + lat * h, a + lat * h]
-
-
-@dataclass(frozen=True)
-class Hinge:
-    """The knee's living-hinge web in print coordinates (xy points, z from 0 to `height`)."""
-
-    start: np.ndarray  # xy, inside the upper-leg sleeve
-    end: np.ndarray  # xy, inside the arm bridge
-    normal: np.ndarray  # xy unit vector across the web (the bending direction)
-    thickness: float
-    height: float
-    probe: np.ndarray  # xy on the web's centre line, in the middle of the slot that frees the leg
-
-
-def knee_hinge(part: PartSpec) -> Hinge:
-    """Where the knee's hinge web runs (pure numpy; the CAD and the tests share it)."""
-    m = print_from_local(part)
-    socks = map_sockets(part, m)
-    r = (part.sockets[0].bore + 2 * part.wall) / 2
-    h = float(part.param("hinge_thickness"))
-    arms, legs = _groups(socks)
-    a = arms[0]
-    s_back = a.seat - part.wall
-    hinged = min(legs, key=lambda s: float(s.direction @ a.direction))
-    c = hinged.at(hinged.seat - part.wall)
-    d = horizontal(a.direction)
-    lat = np.array([-d[1], d[0], 0.0])
-    off = float((c - a.port)[:2] @ lat[:2])
-    off = float(np.clip(off, -(r - h / 2 - 0.3), r - h / 2 - 0.3))
-    q = a.port + d * (s_back + 0.6) + lat * off
-    e = (q - c)[:2] / np.linalg.norm((q - c)[:2])
-    probe = (a.port + d * (s_back - HINGE_GAP / 2) + lat * off)[:2]
-    # The web stands on the bed up to just above the legs' top lines: a web top level with the
-    # hinged leg's round top touched it along a line, and OCC's mesher left that face out of the
-    # STL (carbon, 153 x 190.6 x 168.2 box). Clear of the arm sleeves' levels too.
-    top = _clear_of(max(float(s.port[2]) for s in legs) + r, _levels(socks, r))
-    return Hinge(c[:2] - e * 0.6, q[:2], np.array([-e[1], e[0]]), h, float(top), probe)
-
-
-def _rigid_leg_start(a: PSocket, s: PSocket, r: float, s_back: float, wall: float) -> float | None:
-    """Where the rigid (lower) leg's sleeve starts, along it from the port, so that it joins the arm
-    block (`a`: an arm socket, the block from `s_back` along the arm, r either side): at its back
-    face (seat - wall) when the sleeve's inner back corner lies `JOIN` inside the block's footprint
-    there; else further back, just far enough, but never behind the knee centre (t < 0). None when
-    no such start puts that corner inside the block on every side: the leg leaves the knee (nearly)
-    square to the arms and the seat puts the block's back face beyond the sleeve's reach (a large
-    `joints.seat`, d22: 5.98 mm seat, leg at 93 deg); the hub joins them then (`_knee_hub`). The
-    leg joins the knee only through that overlap (the hinged leg is cut free of both), and it
-    shrinks as the leg leans back from the arms: with 2.3 mm rods (r 2.4) and a 91 mm frame the
-    leg, at 107 deg to the arms, missed the block and the knee fell apart in two. Pure numpy; in
-    plan (every knee sleeve stands on the bed)."""
-    t0 = s.seat - wall
-    dx = horizontal(a.direction)
-    lat = np.array([-dx[1], dx[0], 0.0])
-    u = horizontal(s.direction)
-    n = np.array([-u[1], u[0], 0.0])
-    n = n if n @ dx >= 0 else -n  # across the leg, towards the arms
-    side = 1.0 if u @ lat >= 0 else -1.0  # which side of the arms the leg leaves on
-    p0 = (s.port - a.port) * np.array([1.0, 1.0, 0.0]) + n * r  # the inner back corner at t = 0
-    # each margin is c + k t (mm inside the block): along the arm past the block's back face, and
-    # across it inside the block's side the leg leaves on, then inside its other side
-    margins = [(float(p0 @ dx) - s_back - JOIN, float(u @ dx)), (r - side * float(p0 @ lat) - JOIN, -side * float(u @ lat)),
-               (r + side * float(p0 @ lat) - JOIN, side * float(u @ lat))]
-    t = t0
-    for c, k in margins[:2]:
-        if c + k * t < 0 and k < 0:
-            t = min(t, -c / k)  # moving the start back raises this margin
-    if t < min(0.0, t0) or any(c + k * t < -1e-9 for c, k in margins):
-        return None
-    return t
-
-
-def _knee_hub(a: PSocket, s: PSocket, r: float, s_back: float, wall: float, web: Hinge) -> np.ndarray:
-    """The rigid leg's hub in plan (xy polygon): the hull of its sleeve's back face and the arm
-    block's back face, cut back to `HINGE_GAP` from the hinge web's side (the web and the slots
-    either side of it stay as `knee_hinge` draws them). Only where no sleeve start joins the leg to
-    the block (`_rigid_leg_start` is None). Pure numpy."""
-    t0 = s.seat - wall
-    hull = np.array(_hull(np.array(_footprint_rect(a, s_back, s_back, r) + _footprint_rect(s, t0, t0, r))))
-    centre = s.at(t0)[:2]
-    sign = 1.0 if float((centre - web.start) @ web.normal) >= 0 else -1.0
-    keep = web.thickness / 2 + HINGE_GAP  # the kept side: sign * (p - web.start) . normal >= keep
-    return _clip(hull, sign * web.normal, keep + sign * float(web.start @ web.normal))
-
-
-def _clip(poly: np.ndarray, n: np.ndarray, c: float) -> np.ndarray:
-    """The part of convex polygon `poly` (xy, in order) where p . n >= c (one Sutherland-Hodgman pass)."""
-    out = []
-    for i in range(len(poly)):
-        p, q = poly[i], poly[(i + 1) % len(poly)]
-        fp, fq = float(p @ n) - c, float(q @ n) - c
-        if fp >= 0:
-            out.append(p)
-        if fp * fq < 0:
-            out.append(p + (q - p) * (fp / (fp - fq)))
-    return np.array(out)
-
-
 def teardrop(start, d, length: float, axis_z: float, r: float, web: float):
     """A sleeve along horizontal `d` from `start` that stands on a thin web: its round top, 45 deg
     flanks tangent to it below, and a vertical web `web` thick from the flanks down to the bed.
@@ -524,26 +316,6 @@ def teardrop(start, d, length: float, axis_z: float, r: float, web: float):
     return along(start, d, length, axis_z,
                  lambda wp: (wp.moveTo(-h, -axis_z).lineTo(h, -axis_z).lineTo(h, z_web).lineTo(k, -k)
                              .threePointArc((0, r), (-k, -k)).lineTo(-h, z_web).close()))
-
-
-def knee_bridge(a: PSocket, joined: list[tuple[PSocket, float]], r: float, s_back: float) -> float:
-    """Where the knee's bridge ends, along the arm from its port (pure numpy). The arm pair's
-    sleeves are joined by a solid bridge, the old arm block's section (bed to the top arm), from
-    their back face `s_back` over one sleeve OD (the authors' U bracket: two sleeves and a bridge
-    about one OD wide), longer where a rigid leg's inner back corner would not lie `JOIN` inside
-    it (each leg in `joined` with its sleeve start joins the knee there: `_rigid_leg_start`).
-    Where less than a millimetre of sleeve would be left past it, the bridge runs to the mouths
-    (the old block, no sliver)."""
-    end = s_back + 2 * r
-    dx = horizontal(a.direction)
-    for s, t in joined:
-        u = horizontal(s.direction)
-        n = np.array([-u[1], u[0], 0.0])
-        n = n if n @ dx >= 0 else -n
-        corner = (s.port - a.port) * np.array([1.0, 1.0, 0.0]) + u * t + n * r
-        end = max(end, float(corner @ dx) + JOIN)
-    mouth = a.seat + a.depth
-    return mouth if end > mouth - 1.0 else end
 
 
 def _arm_bracket(arms: list[PSocket], r: float, s_back: float, bridge_end: float, web: float):
@@ -570,7 +342,7 @@ def _knee_leg(s: PSocket, start: float, r: float, web: float):
 
 
 def _knee(part: PartSpec, socks: list[PSocket], r: float):
-    arms, legs = _groups(socks)
+    arms, legs = split_arms(socks)
     a = arms[0]
     s_back = a.seat - part.wall
     web_t = part.wall  # the print webs: one socket wall, at least two extrusion lines (spec checks the wall)
@@ -582,11 +354,11 @@ def _knee(part: PartSpec, socks: list[PSocket], r: float):
     hubs = []  # (plan polygon, top z) of each rigid leg that no sleeve start joins to the block
     joined = []  # (leg, sleeve start) of each rigid leg that its sleeve joins to the bridge
     for s in rigid:
-        t = _rigid_leg_start(a, s, r, s_back, part.wall)
+        t = rigid_leg_start(a, s, r, s_back, part.wall)
         if t is None:
             # from the bed to halfway up the leg sleeve's round top: a plane through neither its
             # top line nor the seam of its flat sides (nor the arm block's)
-            hubs.append((_knee_hub(a, s, r, s_back, part.wall, web), _clear_of(float(s.port[2]) + r / 2, _levels(socks, r))))
+            hubs.append((knee_hub(a, s, r, s_back, part.wall, web), clear_of(float(s.port[2]) + r / 2, sleeve_levels(socks, r))))
         else:
             t_back[id(s)] = t
             joined.append((s, t))
@@ -594,9 +366,9 @@ def _knee(part: PartSpec, socks: list[PSocket], r: float):
     rigid_solids = [_knee_leg(s, t_back[id(s)], r, web_t) for s in rigid] + [prism(poly, 0.0, top) for poly, top in hubs]
     # Upper leg, freed from everything rigid by HINGE_GAP ...
     upper = _knee_leg(hinged, t_back[id(hinged)], r, web_t)
-    clear = [prism(_footprint_rect(a, s_back, a.seat + a.depth, r, HINGE_GAP), -1.0, 1000.0)]
-    clear += [prism(_footprint_rect(s, t_back[id(s)], s.seat + s.depth, r, HINGE_GAP), -1.0, 1000.0) for s in rigid]
-    clear += [prism(_hull(_grown(poly, HINGE_GAP)), -1.0, 1000.0) for poly, _ in hubs]
+    clear = [prism(footprint_rect(a, s_back, a.seat + a.depth, r, HINGE_GAP), -1.0, 1000.0)]
+    clear += [prism(footprint_rect(s, t_back[id(s)], s.seat + s.depth, r, HINGE_GAP), -1.0, 1000.0) for s in rigid]
+    clear += [prism(convex_hull(_grown(poly, HINGE_GAP)), -1.0, 1000.0) for poly, _ in hubs]
     upper = upper.cut(fuse_all(clear))
     # ... and joined to the arm bridge by the hinge web (`web`): from the centre of the upper leg's
     # back face straight to the bridge's back face.
@@ -611,16 +383,16 @@ def _grown(pts: np.ndarray, by: float) -> np.ndarray:
 
 def _core_link(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarray):
     """Stacked arm sockets + strut sleeve + a hub + the tab that bolts onto the core plate top."""
-    arms, others = _groups(socks)
+    arms, others = split_arms(socks)
     a = arms[0]
     s_back = a.seat - part.wall
     pieces = [_block(arms, r, s_back)]
-    backs = _footprint_rect(a, s_back, s_back, r)[:2] + _footprint_rect(a, s_back, s_back, r)[2:]
+    backs = footprint_rect(a, s_back, s_back, r)[:2] + footprint_rect(a, s_back, s_back, r)[2:]
     tops = []
     for s in others:
         t0 = s.seat - part.wall
         pieces.append(sleeve(s, t0, r))
-        backs += _footprint_rect(s, t0, t0, r)
+        backs += footprint_rect(s, t0, t0, r)
         tops.append(s.port[2] + r)
     # The tab: local z from plate_top_z to plate_top_z + tab_thickness, from just outside the
     # node to past the bolt hole, standing on the bed (it is a wall in print orientation).
@@ -656,7 +428,7 @@ def _core_link(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarray):
     # touched that round top along a line, and OCC's mesher left the hub's top face out of the STL
     # (bamboo with joints.fit_clearance 0.22); 0.03 mm above the upper arm's axis it made faces
     # of 1e-6 mm^2 (bamboo, joints.wall 5.48).
-    pieces.append(prism(_hull(np.array(backs)), 0.0, _clear_of(max(tops + [z_top]), _levels(socks, r))))
+    pieces.append(prism(convex_hull(np.array(backs)), 0.0, clear_of(max(tops + [z_top]), sleeve_levels(socks, r))))
     pieces.append(_seat(part, arms, socks, r, m, z_top))
     cq = _cq()
     bolt_hole = cq.Solid.makeCylinder(hole_d / 2, t + 2.0, vec(bolt + e_v * (v0 - 1.0)), vec(e_v))
@@ -673,7 +445,7 @@ def _core_link_flat(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarra
     the bores' ceilings (bridges of one bore) and the plate's imprint (the bands' undersides over
     the plate, which face up in print)."""
     params = dict(part.params)
-    arms, others = _groups(socks)
+    arms, others = split_arms(socks)
     rot, o = m[:3, :3], m[:3, 3]
     z_bed = float(o[2])  # the bed, as a height in the local frame (local z maps to z_bed - z)
     v0 = float(part.param("plate_top_z"))
@@ -693,11 +465,11 @@ def _core_link_flat(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarra
     def plan(poly):
         return [rot[:2, :2] @ np.asarray(p, float) + o[:2] for p in poly]
 
-    levels = _levels(socks, r)
+    levels = sleeve_levels(socks, r)
     bands = link_bands(params, part.sockets, part.wall, r)
     # each band from the bed to the plate's bottom (clear of the sleeves' levels); the plate's cut
     # leaves the tab over the plate and the seat beside it
-    bottom = _clear_of(z_bed + v0, levels)
+    bottom = clear_of(z_bed + v0, levels)
     pieces += [prism(plan(b), 0.0, bottom) for b in bands]
     body = fuse_all(pieces)
     plate = prism(plan(link_plate_region(params)), T, 1000.0)  # the plate, under its top
@@ -725,16 +497,6 @@ def _esc_keepout(part: PartSpec, m: np.ndarray):
     return apply(prism(square, float(c[2]), float(c[2]) + 100.0), m)
 
 
-def seat_geometry(part: PartSpec):
-    """The plate corner a core link seats against, in its local frame: (corner xy, signs (sx,
-    sy) pointing out of the plate, plate bottom z, plate top z). The plate is
-    {sx (x - cx) <= 0, sy (y - cy) <= 0, z0 <= z <= z1}."""
-    params = dict(part.params)
-    c, sign = link_plate_corner(params)
-    z1 = float(params["plate_top_z"])
-    return c, sign, -z1, z1  # the link's node lies at the plate's mid-height
-
-
 def _seat(part: PartSpec, arms: list[PSocket], socks: list[PSocket], r: float, m: np.ndarray, cap: float):
     """The seat: TPU filling the gap between the arm block's back and the core plate's two edge
     faces, over the plate's thickness, up to the tab (print coordinates). Without it the arm
@@ -758,28 +520,8 @@ def _seat(part: PartSpec, arms: list[PSocket], socks: list[PSocket], r: float, m
     # wide as the tab it deepens; wider, it weighs more than it stiffens), at most to the top of
     # the highest sleeve less half a millimetre (clear of the round top's tangent line and of the
     # sleeves' levels).
-    top = _clear_of(min(cap, max(float(s.port[2]) for s in arms) + r - 0.5), _levels(socks, r))
+    top = clear_of(min(cap, max(float(s.port[2]) for s in arms) + r - 0.5), sleeve_levels(socks, r))
     clip = cq.Solid.makeBox(2 * big, 2 * big, top, cq.Vector(-big, -big, 0.0))
     return body.cut(plate).intersect(clip)
 
 
-def _clear_of(z: float, levels, gap: float = TAB_CLEAR) -> float:
-    """`z`, or the least height above it that is `gap` clear of every one of `levels` (moving up
-    past one level can bring it near the next)."""
-    for level in sorted(levels):
-        if abs(z - level) < gap:
-            z = level + gap
-    return z
-
-
-def _levels(socks: list[PSocket], r: float) -> list[float]:
-    """The heights where a level sleeve's surface turns (its axis: flat sides meet the round top)
-    or is tangent to a plane (its top line): a flat top there meets the sleeve along a line."""
-    return [float(s.port[2]) + dz for s in socks for dz in (0.0, r)]
-
-
-def _hull(pts: np.ndarray) -> list[np.ndarray]:
-    from scipy.spatial import ConvexHull
-
-    h = ConvexHull(pts)
-    return [pts[i] for i in h.vertices]

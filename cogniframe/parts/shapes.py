@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from ..families.base import PartSpec
+from .record import PartSpec
 
 
 # Bump when any part's CAD changes shape: it is part of every cache key.

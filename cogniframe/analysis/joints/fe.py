@@ -78,10 +78,11 @@ def joint_problem(spec, part, factor: float | None = None, mesh_mm: float | None
     from . import meshing, solid_fe
     from ...parts.shapes import brep_text, shared_brep
     from ...parts import joint as joint_cad
+    from ...parts.joint_plan import print_from_local, seat_geometry
 
     mesh_mm = FE_MESH_MM if mesh_mm is None else mesh_mm
     itf = interface(spec, factor)
-    m = joint_cad.print_from_local(part)
+    m = print_from_local(part)
     # the shape the build's part step stored (the same text), else built here
     shared = shared_brep(part)
     try:
@@ -122,7 +123,7 @@ def joint_problem(spec, part, factor: float | None = None, mesh_mm: float | None
         axis = R @ np.array([0.0, 0.0, 1.0])
         r_hole = float(part.param("screw_clearance")) / 2
         z0 = float(part.param("plate_top_z"))
-        corner, sign, _, _ = joint_cad.seat_geometry(part)
+        corner, sign, _, _ = seat_geometry(part)
 
         def sel_bolt(c, n, bolt=bolt, axis=axis):
             rel = c - bolt[:, None]

@@ -124,8 +124,8 @@ def hinged_socket(part) -> int | None:
 
 
 def hinge_geometry(part) -> tuple[float, float, float]:
-    """(web length, web width, thickness) of the knee's living hinge, mm (as parts/joint.py draws it)."""
-    from ...parts.joint import knee_hinge  # pure numpy (CadQuery only inside its CAD functions)
+    """(web length, web width, thickness) of the knee's living hinge, mm (as parts/joint_plan.py plans it and parts/joint.py draws it)."""
+    from ...parts.joint_plan import knee_hinge
 
     h = knee_hinge(part)
     return float(np.linalg.norm(h.end - h.start)), float(h.height), float(h.thickness)
