@@ -18,7 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from ..spec import Spec
-from .joint import CHAMFER, Built, transform
+from .joint import CHAMFER, Built
+from .joint_plan import transform
 
 CLEARANCES = tuple(round(-0.40 + 0.05 * i, 2) for i in range(15))
 BASE = 2.0  # base plate thickness, mm
