@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..spec import Spec
-from .joint import CHAMFER, Built
+from .joint_solid import CHAMFER, Built
 from .joint_plan import transform
 
 CLEARANCES = tuple(round(-0.40 + 0.05 * i, 2) for i in range(15))
