@@ -56,7 +56,7 @@ def layout(spec: Spec, clearances=CLEARANCES) -> dict:
             "label_dy": -od / 2 - label_h / 2, "depth": depth, "wall": wall}
 
 
-def build(spec: Spec, clearances=CLEARANCES) -> Built:
+def solid(spec: Spec, clearances=CLEARANCES) -> Built:
     import cadquery as cq
 
     g = layout(spec, clearances)
