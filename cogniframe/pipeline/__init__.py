@@ -80,7 +80,7 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
                 key: str, gcode: bool = False, design: design_mod.Derived | None = None, server: bool = False,
                 early=None):
     """Run the build graph (steps.py) into `out`, then write the manifest. `gcode`: keep the
-    sliced G-code per plate (`build --gcode`; read by pipeline.plates.make_slice).
+    sliced G-code per plate (`build --gcode`; read by pipeline.plate_steps.make_slice).
 
     Returns (files, check result, built parts, ((step, "ran" | "cached" | "always"), ...))."""
     design = design_mod.design(spec) if design is None else design
