@@ -127,13 +127,13 @@ def schema() -> None:
 
 
 def _register_commands() -> None:
-    from .commands import explore, fab, impact, maker, server, studio
+    from .commands import drop_fit, explore, fab, maker, server_control, studio
 
-    impact.register(app)
+    drop_fit.register(app)
     fab.register(app)
     maker.register(app)
     explore.register(app)
-    server.register(app)
+    server_control.register(app)
     studio.register(app)
 
 
