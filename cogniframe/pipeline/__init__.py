@@ -37,8 +37,8 @@ class Outcome:
 def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None = None, use_cache: bool = True,
               console: Console | None = None, gcode: bool = False, server: bool = False, early=None) -> Outcome:
     """Build `spec` into `out`. `server`: CAD workers from the CAD server that outlives this build
-    (`runtime.server`; the CLI's default) instead of a process pool of its own. `early`: the
-    server the CLI started before it validated the params (`runtime.server.prestart`); the caller
+    (`runtime.cad_server`; the CLI's default) instead of a process pool of its own. `early`: the
+    server the CLI started before it validated the params (`runtime.cad_server.prestart`); the caller
     releases it (`Early.release`) when the build did not connect to it."""
     console = console or Console(stderr=True)
     with spec.blamed():
