@@ -75,13 +75,13 @@ def _progress_to_stderr():
         log.propagate = before[1]
 
 
-@app.command()
-def build(params: ParamsArg,
-          out: Annotated[Optional[Path], typer.Option("-o", "--out", help="output folder (default out/<name>)")] = None,
-          jobs: Annotated[Optional[int], typer.Option("--jobs", "-j", min=1, help="parallel part builds (default: all cores)")] = None,
-          no_cache: Annotated[bool, typer.Option("--no-cache", help="rebuild every part from scratch")] = False,
-          gcode: Annotated[bool, typer.Option("--gcode", help="also keep the sliced G-code per plate (plates/*.gcode; not byte-stable)")] = False,
-          server: Annotated[Optional[bool], typer.Option("--server/--no-server", help="CAD workers from a server kept between builds (default; COGNIFRAME_CAD_SERVER=0: off)")] = None) -> None:
+@app.command("build")
+def build_command(params: ParamsArg,
+                  out: Annotated[Optional[Path], typer.Option("-o", "--out", help="output folder (default out/<name>)")] = None,
+                  jobs: Annotated[Optional[int], typer.Option("--jobs", "-j", min=1, help="parallel part builds (default: all cores)")] = None,
+                  no_cache: Annotated[bool, typer.Option("--no-cache", help="rebuild every part from scratch")] = False,
+                  gcode: Annotated[bool, typer.Option("--gcode", help="also keep the sliced G-code per plate (plates/*.gcode; not byte-stable)")] = False,
+                  server: Annotated[Optional[bool], typer.Option("--server/--no-server", help="CAD workers from a server kept between builds (default; COGNIFRAME_CAD_SERVER=0: off)")] = None) -> None:
     """Build every printable part (STL, STEP), the assembly, cut list, mass budget and manifest."""
     from . import api
 
@@ -127,13 +127,13 @@ def schema() -> None:
 
 
 def _register_commands() -> None:
-    from .commands import explore, fab, impact, maker, server, studio
+    from .commands import drop_fit, explore, fab, maker, server_control, studio
 
-    impact.register(app)
+    drop_fit.register(app)
     fab.register(app)
     maker.register(app)
     explore.register(app)
-    server.register(app)
+    server_control.register(app)
     studio.register(app)
 
 

@@ -337,7 +337,7 @@ def _node_seat(n: str, pos, edges, inc: list[int], spec: Spec) -> float:
 
 def _hinge_seat(dirs: list[np.ndarray], roles: list[str], wall: float) -> float:
     """The least seat at a knee that leaves its living hinge room. The knee's arm block and the
-    hinged leg's sleeve (the leg at the larger angle to the arms, parts/joint.py) both start at
+    hinged leg's sleeve (the leg at the larger angle to the arms, parts/joint_solid.py) both start at
     seat - wall from the knee centre, and the leg is freed from the block by a `HINGE_GAP` slot;
     the hinge web runs from the centre of the leg's back face to the block's back face. That
     centre lies (seat - wall) (1 - cos angle) behind the block's back face: it must clear the

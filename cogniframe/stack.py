@@ -3,7 +3,7 @@
 `installed()` goes in every build's manifest and key; `versions()` (those and a few more) in
 every step's cache key and in the CAD server's key. Light on purpose (importlib.metadata only):
 `cogniframe build` computes the server's key first thing, to start the server while it validates
-the params (`runtime.server.prestart`).
+the params (`runtime.cad_server.prestart`).
 """
 
 from __future__ import annotations

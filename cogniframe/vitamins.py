@@ -365,7 +365,7 @@ def to_cq(v: Vitamin):
             m = np.eye(4)
             m[:3, :3] = np.asarray(p.rot)
             m[:3, 3] = p.centre
-            from .parts.joint import apply
+            from .parts.joint_solid import apply
 
             solids.append(apply(s, m))
         else:

@@ -60,7 +60,7 @@ def test_a_part_that_fails_in_a_worker_is_the_reported_cause_and_nothing_is_left
 def test_cancel_drops_the_queued_cad_jobs_and_ends_the_running_one(server, tmp_path, monkeypatch):
     """What a failed build does to its CAD work (`CadPool.cancel`): the job under way ends at once
     instead of running to its end, the queued ones never start, and no new job is taken."""
-    from cogniframe.runtime import server as cad_server
+    from cogniframe.runtime import cad_server
     from cogniframe.runtime.pools import CadPool
 
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))

@@ -12,7 +12,7 @@ from ruamel.yaml import YAML
 from typer.testing import CliRunner
 
 from cogniframe.analysis.fit import model_accel_g
-from cogniframe.commands.impact import register
+from cogniframe.commands.drop_fit import register
 from cogniframe.errors import UserError
 from droplogs import write_drops
 

@@ -70,7 +70,7 @@ def test_coupon_is_closed_flat_and_fits_the_bed(coupon):
 
 def test_labels_are_engraved(coupon):
     """Every label cuts a floor 0.6 mm into the base: up-facing area at that depth, under each socket."""
-    from cogniframe.parts import coupon as cp
+    from cogniframe.parts import coupon_solid as cp
 
     spec, _, clearances, mesh = coupon
     z_floor = cp.BASE - cp.ENGRAVE
@@ -93,6 +93,6 @@ def test_coupon_bytes_are_stable(tmp_path):
 
 
 def test_font_is_available_headless():
-    from cogniframe.parts.coupon import font_path
+    from cogniframe.parts.coupon_solid import font_path
 
     assert font_path() is not None, "install fonts-dejavu-core: the coupon labels need a TrueType font"

@@ -76,7 +76,7 @@ def test_same_input_same_bytes_different_input_different_bytes(tmp_path, drop_re
 
 def test_importing_the_physics_modules_does_not_import_matplotlib():
     code = ("import sys; import cogniframe.analysis.impact, cogniframe.analysis.fit, "
-            "cogniframe.report.drop_plots, cogniframe.commands.impact; "
+            "cogniframe.report.drop_plots, cogniframe.commands.drop_fit; "
             "print('matplotlib' in sys.modules, 'cadquery' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=REPO,
                          check=True)

@@ -1,4 +1,4 @@
-"""Joint geometry that used to fall apart or not build at all (parts/joint.py), each case as reported.
+"""Joint geometry that used to fall apart or not build at all (parts/joint_solid.py), each case as reported.
 
 * frame.knee_inset 0 (straight sides): the knee's upper and lower legs are one vertical line, their
   cross product is zero, and the print orientation was NaN ("no parallel arm sockets", exit 3).
@@ -410,9 +410,9 @@ def test_corner_hub_keeps_every_sleeve(box, monkeypatch):
     """Carbon boxes as a maker resizes them: every union the corner is built from holds all its
     pieces (fused all at once as built = fused one by one), and each mirrored corner has its
     original's volume."""
-    from cogniframe.parts import joint
+    from cogniframe.parts import joint_solid
 
-    at_once = joint.fuse_all
+    at_once = joint_solid.fuse_all
 
     def checked(shapes):
         union = at_once(shapes)
@@ -422,7 +422,7 @@ def test_corner_hub_keeps_every_sleeve(box, monkeypatch):
         assert union.Volume() == pytest.approx(one_by_one.Volume(), rel=1e-3)
         return union
 
-    monkeypatch.setattr(joint, "fuse_all", checked)
+    monkeypatch.setattr(joint_solid, "fuse_all", checked)
     width, depth, height, radius, prop = box
     spec = _variant("carbon", frame__width=width, frame__depth=depth, frame__height=height, motors__radius=radius,
                     motors__prop_diameter=prop)

@@ -37,7 +37,7 @@ def _built(part):
 def test_teardrop_sleeve_volume_is_its_section_times_length():
     """The primitive: round top, 45 deg flanks tangent to it, a web to the bed. Its section is
     3/4 of the circle plus the kite (r^2) less the kite's tip below the web's top, plus the web."""
-    from cogniframe.parts.joint import teardrop
+    from cogniframe.parts.joint_solid import teardrop
 
     r, web, h, length = 2.75, 1.2, 15.25, 9.2
     solid = teardrop(np.zeros(3), np.array([1.0, 0.0, 0.0]), length, h, r, web)

@@ -32,11 +32,11 @@ def test_readme_fit_example_gives_the_numbers_it_states(run_cli):
 
 def test_readme_says_what_the_cad_server_is_and_how_to_stop_it(run_cli):
     """The README's CAD server section names the commands, and they exist; its idle time is the server's."""
-    from cogniframe.runtime import server
+    from cogniframe.runtime import cad_server
 
     section = re.search(r"## The CAD server\n(.*?)\n## ", (ROOT / "README.md").read_text(), re.S).group(1)
     assert "`cogniframe server stop`" in section and "`cogniframe server status`" in section
-    assert "10 minutes" in section and server.IDLE_S == 600
+    assert "10 minutes" in section and cad_server.IDLE_S == 600
     assert "COGNIFRAME_CAD_SERVER=0" in section and "--no-server" in section
     code, out, _ = run_cli("server", "status")
     assert code == 0 and ("CAD server running" in out or "no CAD server running" in out)

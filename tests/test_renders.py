@@ -127,7 +127,7 @@ def test_same_bytes_in_another_process(scene, tmp_path):
 
 
 def test_a_shared_part_plotter_gives_the_bytes_of_a_new_one(scene, tmp_path):
-    """The build draws every part render in one plotter (pipeline.report._part_plotter); a cached render
+    """The build draws every part render in one plotter (pipeline.report_steps._part_plotter); a cached render
     was drawn in another order, or alone: the bytes must not depend on what the plotter drew before."""
     d, meshes = scene
     parts = {"knee": ("tpu_95a", meshes["knee"]), "core_plate": ("abs", meshes["core_plate"]),

@@ -1,4 +1,4 @@
-"""The CAD server that `cogniframe build` keeps between builds (runtime/server.py).
+"""The CAD server that `cogniframe build` keeps between builds (runtime/cad_server.py).
 
 Each test runs its own server on its own cache folder (so its own key and address) and stops it;
 the job functions are standard-library ones, picklable by reference in the server's workers.
@@ -13,7 +13,7 @@ import time
 
 import pytest
 
-from cogniframe.runtime import server as cad_server
+from cogniframe.runtime import cad_server
 
 pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the CAD server is Linux-only")
 
@@ -168,7 +168,7 @@ def test_a_killed_build_leaves_no_worker_running(server_env):
 
     script = (
         "import os, time\n"
-        "from cogniframe.runtime import server as cad_server\n"
+        "from cogniframe.runtime import cad_server\n"
         "pool = cad_server.connect(1, idle_s=60)\n"
         "print(pool.submit(os.getpid).result(), cad_server.running(), flush=True)\n"
         "pool.submit(time.sleep, 60)\n"

@@ -26,7 +26,7 @@ def test_the_versions_add_the_extra_libraries_and_are_stable():
 def test_the_server_key_needs_no_heavy_import():
     """`cogniframe build` computes the CAD server's key first thing (to start the server while it
     validates the params): numpy, pydantic and the CAD libraries stay unimported for that."""
-    code = ("import sys; from cogniframe import stack; from cogniframe.runtime import server as cad_server; "
+    code = ("import sys; from cogniframe import stack; from cogniframe.runtime import cad_server; "
             "cad_server.server_key(stack.versions()); "
             "print(sorted(m for m in ('numpy', 'pydantic', 'cadquery', 'OCP', 'trimesh', 'yaml') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)

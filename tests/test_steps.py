@@ -274,7 +274,7 @@ def test_the_cad_pool_connects_once_in_the_background_and_the_first_job_waits_fo
     pool that had to start its server is marked cold."""
     from concurrent.futures import Future
 
-    from cogniframe.runtime import server as cad_server
+    from cogniframe.runtime import cad_server
     from cogniframe.runtime.pools import CadPool
 
     calls, release = [], threading.Event()

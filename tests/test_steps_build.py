@@ -122,7 +122,7 @@ FLIGHT = {"flight"}  # the flight files: the mass properties, the modes, the rot
 @pytest.mark.skipif(not __import__("sys").platform.startswith("linux"), reason="the CAD server is Linux-only")
 def test_builds_through_the_cad_server_give_the_same_bytes(warm, tmp_path, monkeypatch, capsys):
     """A cold `cogniframe build` whose parts, joint FEs, clash check and assembly run in the CAD
-    server's workers (runtime/server.py) equals the module's cold build with a process pool of
+    server's workers (runtime/cad_server.py) equals the module's cold build with a process pool of
     its own; the server is the one the CLI started before validating the params (`prestart`).
     A one-part change then reuses the server and equals a cold build of the changed params."""
     import io
@@ -130,7 +130,7 @@ def test_builds_through_the_cad_server_give_the_same_bytes(warm, tmp_path, monke
     from rich.console import Console
 
     from cogniframe.cli import main
-    from cogniframe.runtime import server as cad_server
+    from cogniframe.runtime import cad_server
     from cogniframe.stack import versions as stack_versions
 
     root, params, first = warm

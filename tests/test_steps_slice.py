@@ -1,4 +1,4 @@
-"""The build's slice step (pipeline.plates.make_slice) slices each plate on its own key: when one
+"""The build's slice step (pipeline.plate_steps.make_slice) slices each plate on its own key: when one
 plate of a material changes, the material's other plates keep their sliced numbers (no
 PrusaSlicer run), and the numbers are those of a fresh slice. PrusaSlicer is replaced by a
 recorder here; the real slicer runs in test_slicer.py and test_steps_build.py."""
@@ -16,7 +16,7 @@ from cogniframe import design as design_mod
 from cogniframe.pipeline import context as steps
 from cogniframe.export import plates as pl
 from cogniframe.export import slicer
-from cogniframe.pipeline.plates import make_slice
+from cogniframe.pipeline.plate_steps import make_slice
 
 ROOT = Path(__file__).resolve().parents[1]
 

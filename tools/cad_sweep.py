@@ -7,7 +7,7 @@ with a watertight STL (the build's own checks: `registry.solid`, `export.mesh.wr
     python tools/cad_sweep.py pairs --n 6           # pairs of keys on an n x n grid
     ... [--out results.jsonl] [--shard 0/2]
 
-`--check-fuse` also checks every union the part builders make (`parts.joint.fuse_all`): all pieces
+`--check-fuse` also checks every union the part builders make (`parts.joint_solid.fuse_all`): all pieces
 at once, as built, against the pieces fused one by one, in order and in reverse. OCC's fuse of many
 pieces can drop one and still give one watertight solid (a corner without its strut sleeve), which
 the STL checks cannot see. The part fails when its union is smaller than its largest piece, or
@@ -76,12 +76,12 @@ def designs(mode: str, n: int, first: int = 0):
 
 
 def check_fuses() -> None:
-    """Make `fuse_all` (in parts.joint and where it is imported) raise when the union it makes of
+    """Make `fuse_all` (in parts.joint_solid and where it is imported) raise when the union it makes of
     all the pieces at once has lost one (see the module docstring)."""
     from cogniframe.families import motor_mount
-    from cogniframe.parts import joint
+    from cogniframe.parts import joint_solid
 
-    at_once = joint.fuse_all
+    at_once = joint_solid.fuse_all
 
     def one_by_one(shapes):
         out = shapes[0]
@@ -100,7 +100,7 @@ def check_fuses() -> None:
                                    f"{', '.join(f'{r:.1f}' for r in refs) or 'failed'}, largest piece {biggest:.1f}")
         return union
 
-    joint.fuse_all = motor_mount.fuse_all = checked
+    joint_solid.fuse_all = motor_mount.fuse_all = checked
 
 
 def main() -> int:

@@ -225,7 +225,7 @@ class Design:
         default, COGNIFRAME_CAD_SERVER). `console`: a rich Console for the progress lines
         (default: stderr)."""
         from ..pipeline import run_build
-        from ..runtime import server as cad_server
+        from ..runtime import cad_server
 
         out_path = Path(out) if out is not None else None
         use_server = cad_server.wanted(server)
@@ -328,7 +328,7 @@ def build_file(path: str | Path, out: str | Path | None = None, *, jobs: int | N
     before the params are read, so that its seconds of imports overlap this process's own and
     the validation; the server is let go again when the build did not connect to it (bad
     params, nothing to build, Ctrl-C)."""
-    from ..runtime import server as cad_server
+    from ..runtime import cad_server
 
     use_server = cad_server.wanted(server)
     early = None

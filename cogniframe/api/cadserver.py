@@ -11,7 +11,7 @@ from __future__ import annotations
 
 def cad_server_pid() -> int | None:
     """The pid of this environment's CAD server; None when none runs."""
-    from ..runtime import server as cad_server
+    from ..runtime import cad_server
     from ..stack import versions
 
     return cad_server.running(versions())
@@ -20,7 +20,7 @@ def cad_server_pid() -> int | None:
 def stop_cad_server() -> int | None:
     """Stop this environment's CAD server (the next build starts a new one); returns its pid,
     None when none ran."""
-    from ..runtime import server as cad_server
+    from ..runtime import cad_server
     from ..stack import versions
 
     return cad_server.stop(versions())

@@ -30,7 +30,7 @@ def build_parts(spec, design, out: Path, *, fe: bool = False, server: bool | Non
     part_values)` after each step; `part_values()` gives the values once every part step is done
     (the files are in `out` then, while the FE may still run)."""
     from .. import pipeline
-    from ..runtime import server as cad_server
+    from ..runtime import cad_server
 
     only = ("part:*", "estimate") if fe else ("part:*",)
     total = len(design.parts) + (1 if fe else 0)

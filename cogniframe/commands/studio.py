@@ -18,7 +18,7 @@ def studio(params: Annotated[Path, typer.Argument(help="params YAML file, e.g. p
            port: Annotated[int, typer.Option("--port", min=0, max=65535, help="port on 127.0.0.1 (0: any free port)")] = 8765,
            no_browser: Annotated[bool, typer.Option("--no-browser", help="do not open a browser; just print the address")] = False) -> None:
     """Edit a design in the browser: live mass, stiffness and crash figures, 3D view, Save and Build (127.0.0.1 only)."""
-    from cogniframe.studio.server import serve
+    from cogniframe.studio.serve import serve
 
     serve(params, port=port, open_browser=not no_browser)
 

@@ -271,7 +271,7 @@ def _vitamin_key(spec: Spec, frame) -> list:
 
 def write_assembly(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path) -> tuple[Path, Path]:
     """Write out_dir/assembly.step (deterministic) and out_dir/assembly.glb (the build makes them
-    as two cached steps of their own: pipeline/cad.py)."""
+    as two cached steps of their own: pipeline/cad_steps.py)."""
     from .mesh import load_stl
 
     out_dir = Path(out_dir)

@@ -119,7 +119,7 @@ def build_part_files(part: PartSpec, bed, out_dir: str, share_shape: bool = Fals
     """Build one part's CAD, fit it on the bed, write its STL and STEP; return its metrics.
     `share_shape`: also store the shape's BREP text in the cache for the joint FE (`shared_brep`)."""
     from ..families import registry
-    from ..parts.joint import apply
+    from ..parts.joint_solid import apply
     from . import mesh as mesh_mod
     from .step import write_step
 

@@ -16,7 +16,7 @@ from ..errors import UserError
 from ..frame import Frame
 from ..materials import CONNECTORS, SCREWS, STACK_PATTERNS
 from ..parts.blocks import pointed, prism_xy, prism_xz
-from ..parts.joint import Built, apply
+from ..parts.joint_solid import Built, apply
 from ..parts.joint_plan import transform
 from ..spec import Spec
 from .base import Estimate, HardwareLine, PartSpec, Placement, hexagon_area, rounded

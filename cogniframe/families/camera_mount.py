@@ -12,7 +12,7 @@ import numpy as np
 from ..frame import CAMERA_BASE_T, Frame
 from ..materials import BOARDS, SCREWS, STACK_PATTERNS
 from ..parts.blocks import pointed, prism_xy
-from ..parts.joint import Built, apply
+from ..parts.joint_solid import Built, apply
 from ..parts.joint_plan import transform
 from ..spec import Spec
 from .base import Estimate, HardwareLine, PartSpec, Placement, hexagon_area, link_hole, rounded

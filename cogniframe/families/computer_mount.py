@@ -9,7 +9,7 @@ import numpy as np
 from ..frame import Frame
 from ..materials import SCREWS, STACK_PATTERNS
 from ..parts.blocks import plate
-from ..parts.joint import Built
+from ..parts.joint_solid import Built
 from ..parts.joint_plan import transform
 from ..spec import Spec
 from .base import HardwareLine, PartSpec, Placement, plate_estimate, rounded

@@ -1,7 +1,7 @@
 """The TPU joints (corner_top, corner_bottom, knee, core_link): which parts, where their sockets
 are, and their closed-form volume and surfaces. Pure numpy. The plan geometry the closed forms
 share with the solid (print orientation, the knee's and the core link's pieces in plan) is
-parts/joint_plan.py; the solid is parts/joint.py (the joint CAD and the helpers the motor mount
+parts/joint_plan.py; the solid is parts/joint_solid.py (the joint CAD and the helpers the motor mount
 shares), imported only when a solid is asked for.
 
 Rectangular boxes. A corner's sockets are the rotation of the fl corner's only when they are
@@ -75,8 +75,8 @@ def plan(spec: Spec, frame: Frame) -> tuple[PartSpec, ...]:
 
 
 def solid(part: PartSpec):
-    """The joint's solid in print orientation (a `parts.joint.Built`)."""
-    from ..parts import joint as cad
+    """The joint's solid in print orientation (a `parts.joint_solid.Built`)."""
+    from ..parts import joint_solid as cad
 
     return cad.solid(part)
 
@@ -180,7 +180,7 @@ LINK_TAB = 6.0  # mm
 
 
 def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict | None = None) -> Estimate:
-    """Closed-form volume/areas of the joint as parts/joint.py builds it, in print orientation.
+    """Closed-form volume/areas of the joint as parts/joint_solid.py builds it, in print orientation.
 
     Pieces (r = OD/2 = bore/2 + wall, L = seat + depth): a sleeve parallel to the bed is a D
     section (2r wide, flat on the bed up to its axis height h, round top: 2 r h + pi r^2 / 2); a
@@ -230,7 +230,7 @@ def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict |
         _, sv, vt = np.linalg.svd(dirs)
         w = vt[-1]
         if sv[1] < 1e-6 * sv[0]:  # parallel arm sockets only (no strut): the SVD's normal is arbitrary;
-            off = ports[1] - ports[0]  # use the one across the pair, as parts/joint.py prints it
+            off = ports[1] - ports[0]  # use the one across the pair, as parts/joint_solid.py prints it
             w = np.cross(dirs[0], np.cross(dirs[0], off))
             w /= np.linalg.norm(w)
         zc = ports @ w
@@ -274,7 +274,7 @@ def _joint_estimate(spec: Spec, sockets: list[Socket], kind: str, params: dict |
 
 def _knee_sleeves(r: float, wall: float, z: np.ndarray, sleeve_l: list[float], par: list[int], rest: list[int],
                   vol: float, a_h: float, a_v: float) -> tuple[float, float, float]:
-    """A knee's sleeves added to the running volume and areas, as parts/joint.py builds them
+    """A knee's sleeves added to the running volume and areas, as parts/joint_solid.py builds them
     (axis heights `z`): the arm pair's bridge (`knee_bridge`: the top arm's D-section, bed up, over
     one sleeve OD from the back; to the mouths where less than a millimetre would be left), the
     lowest arm's D-section sleeve past it, the higher arms' and the legs' teardrops on a `wall`
@@ -314,7 +314,7 @@ def _knee_hub_area(sockets: list[Socket], dirs: np.ndarray, ports: np.ndarray, w
     a_i = par[0]
     x = dirs[a_i] - w * (dirs[a_i] @ w)
     x /= np.linalg.norm(x)
-    rot = np.vstack([x, np.cross(w, x), w])  # print-like axes: the side plane on the bed, as parts/joint.py prints it
+    rot = np.vstack([x, np.cross(w, x), w])  # print-like axes: the side plane on the bed, as parts/joint_solid.py prints it
 
     def psock(i: int) -> PSocket:
         return PSocket(rot @ ports[i] + np.array([0.0, 0.0, z[i] - float(w @ ports[i])]), rot @ dirs[i], float(sockets[i].seat),
@@ -383,7 +383,7 @@ def _link_pieces(spec: Spec, params: dict, sockets: list[Socket], dirs: np.ndarr
 
 def _seat_area(params: dict, ports: np.ndarray, heights: np.ndarray, d: np.ndarray, s_back: float, r: float,
                height: float) -> float:
-    """Plan area (mm^2) of a core link's seat as parts/joint.py builds it (`seat_plan`, less the
+    """Plan area (mm^2) of a core link's seat as parts/joint_solid.py builds it (`seat_plan`, less the
     plate's corner quadrant), from the bed up to `height` in print (the arm pair's two `ports`
     print at `heights`: print height runs across the pair)."""
     corner, sign = link_plate_corner(params)
@@ -449,7 +449,7 @@ def union_area(polys) -> float:
 
 
 def _flat_link_estimate(spec: Spec, params: dict, sockets: list[Socket], r: float) -> Estimate:
-    """Closed form of the flat core link (parts/joint.py `_core_link_flat`): the sleeves (arms:
+    """Closed form of the flat core link (parts/joint_solid.py `_core_link_flat`): the sleeves (arms:
     a teardrop on a web, or a D section, from the bed up; the strut: half a cylinder on a 0.9 x OD
     web), the bands `T` deep (the bed down to the plate top), the seat (the bands outside the
     plate, on down to the plate's bottom), less the bores and the screw hole."""
@@ -485,7 +485,7 @@ def _flat_link_estimate(spec: Spec, params: dict, sockets: list[Socket], r: floa
             run = n * cos_a
             t0, t1 = s.seat - j.wall, s.seat + s.depth
             h_mean = h + sin_a * (t0 + t1) / 2
-            # its run inside the band (parts/joint.py: the band reaches BAND_PAST past the socket's
+            # its run inside the band (parts/joint_solid.py: the band reaches BAND_PAST past the socket's
             # bottom and past where the web begins)
             t_in = min(t1, s.seat + BAND_PAST + r * sin_a / cos_a) - t0
             h_in = h + sin_a * (t0 + t_in / 2)  # the axis's mean height there

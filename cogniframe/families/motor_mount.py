@@ -36,7 +36,7 @@ import numpy as np
 
 from ..frame import Frame
 from ..materials import MIN_THREAD_TURNS, SCREWS
-from ..parts.joint import (
+from ..parts.joint_solid import (
     SKIRT,
     STACK_SNAP,
     Built,

@@ -2,7 +2,7 @@
 
 A family module provides `NAME`, `SIZE_KEY` (the params key that drives its size, for "does not
 fit the bed" errors), `DOC`, `plan(spec, frame)` (its parts, none when the design has no such
-part), `solid(part)` (a `parts.joint.Built`: the solid in print orientation, bed at z = 0, and the
+part), `solid(part)` (a `parts.joint_solid.Built`: the solid in print orientation, bed at z = 0, and the
 4x4 print <- local transform) and `print_from_local(part)` (the transform alone, no CAD import).
 Adding a family: its module, one line in `FAMILIES`, and its params section in spec.py.
 """
@@ -39,7 +39,7 @@ def sizes() -> dict[str, str]:
 
 
 def solid(part: PartSpec):
-    """The part's solid in print orientation (a `parts.joint.Built`)."""
+    """The part's solid in print orientation (a `parts.joint_solid.Built`)."""
     return get(part.family).solid(part)
 
 

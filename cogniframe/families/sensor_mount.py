@@ -13,7 +13,7 @@ import numpy as np
 from ..frame import Frame
 from ..materials import SCREWS, STACK_PATTERNS
 from ..parts.blocks import prism_xy
-from ..parts.joint import Built
+from ..parts.joint_solid import Built
 from ..parts.joint_plan import transform
 from ..spec import Spec
 from .base import Estimate, HardwareLine, PartSpec, Placement, link_hole, polygon_perimeter, rounded

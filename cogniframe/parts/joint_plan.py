@@ -2,7 +2,7 @@
 lies on the bed (`print_from_local`) and its sockets there (`map_sockets`, `PSocket`); the knee in
 plan (its rigid leg's start, the hub where that start cannot join it, the arm bridge, the living
 hinge's web); the core link's seat and the flat link's bands. The joint family's closed forms
-(families/joint.py), its solid (parts/joint.py) and the joint FE (analysis/joints/) read the same
+(families/joint.py), its solid (parts/joint_solid.py) and the joint FE (analysis/joints/) read the same
 plan, so estimate, solid and mesh agree; importing this module imports no CAD kernel, so `check`
 stays fast."""
 

@@ -37,8 +37,8 @@ class Outcome:
 def run_build(spec: Spec, params_path: Path, out: Path | None, jobs: int | None = None, use_cache: bool = True,
               console: Console | None = None, gcode: bool = False, server: bool = False, early=None) -> Outcome:
     """Build `spec` into `out`. `server`: CAD workers from the CAD server that outlives this build
-    (`runtime.server`; the CLI's default) instead of a process pool of its own. `early`: the
-    server the CLI started before it validated the params (`runtime.server.prestart`); the caller
+    (`runtime.cad_server`; the CLI's default) instead of a process pool of its own. `early`: the
+    server the CLI started before it validated the params (`runtime.cad_server.prestart`); the caller
     releases it (`Early.release`) when the build did not connect to it."""
     console = console or Console(stderr=True)
     with spec.blamed():
@@ -80,7 +80,7 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
                 key: str, gcode: bool = False, design: design_mod.Derived | None = None, server: bool = False,
                 early=None):
     """Run the build graph (steps.py) into `out`, then write the manifest. `gcode`: keep the
-    sliced G-code per plate (`build --gcode`; read by pipeline.plates.make_slice).
+    sliced G-code per plate (`build --gcode`; read by pipeline.plate_steps.make_slice).
 
     Returns (files, check result, built parts, ((step, "ran" | "cached" | "always"), ...))."""
     design = design_mod.design(spec) if design is None else design

@@ -1,7 +1,7 @@
 """The build, as a Makefile: every step in the order the main thread takes them.
 
-Each step is declared once, in the module of what it makes (cad, physics, plates, report), beside
-its make and key functions. `table()` prints this list as docs/build.md shows it (a test keeps the
+Each step is declared once, in the module of what it makes (cad_steps, physics_steps,
+plate_steps, report_steps, flight_steps), beside its make and key functions. `table()` prints this list as docs/build.md shows it (a test keeps the
 two the same).
 
 A step with a key runs only when its key changes; otherwise its files come from the cache
@@ -15,29 +15,29 @@ that run.
 
 from __future__ import annotations
 
-from . import cad, flight, physics, plates, report
+from . import cad_steps, flight_steps, physics_steps, plate_steps, report_steps
 
 
 STEPS = (
-    physics.ESTIMATE,
-    cad.PART,
-    plates.PLATES,
-    physics.BUDGET,
-    physics.PHYSICS,
-    cad.CLASH,
-    plates.SLICE,
-    cad.ASSEMBLY,
-    cad.GLB,
-    physics.CHECK,
-    flight.FLIGHT,
-    report.PLOTS,
-    report.FIGURES,
-    plates.PREVIEWS,
-    report.RENDER_PART,
-    report.RENDERS,
-    report.VIEWER,
-    report.BOM,
-    report.REPORT,
+    physics_steps.ESTIMATE,
+    cad_steps.PART,
+    plate_steps.PLATES,
+    physics_steps.BUDGET,
+    physics_steps.PHYSICS,
+    cad_steps.CLASH,
+    plate_steps.SLICE,
+    cad_steps.ASSEMBLY,
+    cad_steps.GLB,
+    physics_steps.CHECK,
+    flight_steps.FLIGHT,
+    report_steps.PLOTS,
+    report_steps.FIGURES,
+    plate_steps.PREVIEWS,
+    report_steps.RENDER_PART,
+    report_steps.RENDERS,
+    report_steps.VIEWER,
+    report_steps.BOM,
+    report_steps.REPORT,
 )
 
 

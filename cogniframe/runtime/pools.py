@@ -3,7 +3,7 @@
 `CadPool` is what the build steps see: `submit(fn, *args, priority=...)` returns a Future,
 `run(...)` its result, `cancel_pending()` drops the jobs not started yet (a failed build), and
 `close()` ends the build's use of it. Behind it the workers are forks of the CAD server
-(`runtime.server`, kept between builds) or a process pool of this build's own (`make_pool`).
+(`runtime.cad_server`, kept between builds) or a process pool of this build's own (`make_pool`).
 
 Every worker, whichever kind, starts with `start_worker`: it dies with the build that asked for
 it and runs `BACKGROUND_NICE` steps nicer than the build (the build's main thread, which draws
@@ -29,9 +29,9 @@ JOB_ORDER = {"part": 0, "clash": 0, "assembly": 0, "joint FE": 1}
 class CadPool:
     """The CAD workers of one build, started by the first job (never on a fully cached build).
     `fe`: the workers preload the joint FE's modules too. `server`: the workers are forks of the
-    CAD server that outlives the build (`runtime.server`; `stack` is part of its key), started by
+    CAD server that outlives the build (`runtime.cad_server`; `stack` is part of its key), started by
     the first build; without one, or when it cannot start, a process pool of this build's own.
-    `early`: the server `cogniframe build` started first thing (`server.prestart`), if any."""
+    `early`: the server `cogniframe build` started first thing (`cad_server.prestart`), if any."""
 
     def __init__(self, workers: int, fe: bool = True, server: bool = False, stack: str = "", log=None, early=None):
         self.workers = workers
@@ -55,7 +55,7 @@ class CadPool:
     @property
     def served(self) -> bool:
         """Whether the workers are the CAD server's (once started)."""
-        from .server import ServerPool
+        from .cad_server import ServerPool
 
         return isinstance(self._pool, ServerPool)
 
@@ -78,9 +78,9 @@ class CadPool:
                 raise RuntimeError("the CAD pool is closed")
             if self._pool is None:
                 if self.server:
-                    from . import server
+                    from . import cad_server
 
-                    self._pool = server.connect(self.workers, self.stack, self.fe, log=self.log,
+                    self._pool = cad_server.connect(self.workers, self.stack, self.fe, log=self.log,
                                                 on_start=self.cold.set, early=self.early)
                 if self._pool is None:
                     self.cold.set()

@@ -4,6 +4,6 @@
     session.py  the state and the background work: validate and check each edit, the 3D view's
                 parts through the build graph, the joints' FE, Save and Build
     app.py      the Starlette app: the page, its assets, the 3D scenes, the build's files, a WebSocket
-    server.py   `serve`: uvicorn on 127.0.0.1, the browser opened, Ctrl-C to stop
+    serve.py    `serve`: uvicorn on 127.0.0.1, the browser opened, Ctrl-C to stop
     static/     studio.js and studio.css (three.js and the viewer come from report/viewer/)
 """

@@ -289,7 +289,7 @@ async def _handle(session: Session, page_: Page, message: dict, reply_later, pen
             t.add_done_callback(pending.discard)
             return None
         if kind == "build":
-            return session.build(msg.get("values"), msg.get("base"))
+            return session.start_build(msg.get("values"), msg.get("base"))
     except Refused as e:
         return {"type": "refused", "message": str(e), "seq": _int(msg.get("seq"))}
     except Exception as e:  # noqa: BLE001 - logged, never a traceback on the terminal

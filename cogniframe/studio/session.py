@@ -468,7 +468,7 @@ class Session:
             return {"type": "rebase-error", "message": problem}
         return {"type": "rebased", "base": text_hash(d.text), "values": self.field_values(d)}
 
-    def build(self, values: Any, base: Any) -> Event:
+    def start_build(self, values: Any, base: Any) -> Event:
         """Start `cogniframe build` of the page's design into out/<name> (a thread)."""
         try:
             d0 = self.base_of(base)

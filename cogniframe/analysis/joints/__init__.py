@@ -51,7 +51,7 @@ def geometry_key(spec, part, method: str, factor: float | None, mesh_mm: float) 
     data = [_CACHE_VERSION, part.digest, method, itf.e, itf.g, itf.h, spec.rods.diameter, mesh_mm, FE_CURVATURE]
     # parts/joint_plan.py: the plan the CAD builds on (print orientation, the knee's and the core
     # link's pieces in plan)
-    return cache.key(data, ("analysis/joints/*.py", "parts/joint.py", "parts/joint_plan.py", "families/joint.py"))
+    return cache.key(data, ("analysis/joints/*.py", "parts/joint_solid.py", "parts/joint_plan.py", "families/joint.py"))
 
 
 def joint_stiffness(spec, part, method: str = "fe", factor: float | None = None,

@@ -1,7 +1,7 @@
 """The solid-FE joint super-element (``method="fe"``, the default): the part's own CAD solid,
 meshed and condensed onto its rods and support.
 
-The solid is exactly what is printed (`parts/joint.py`: D-section sleeves, hub, foot pad, the
+The solid is exactly what is printed (`parts/joint_solid.py`: D-section sleeves, hub, foot pad, the
 knee's slotted living hinge); `meshing` turns it into gmsh tetrahedra and `solid_fe` condenses
 scikit-fem quadratic elasticity onto rigid bodies. This module picks those bodies' surfaces:
 each rod is tied to its bore wall and socket bottom through the elastic interface layer
@@ -77,7 +77,7 @@ def joint_problem(spec, part, factor: float | None = None, mesh_mm: float | None
     """Mesh the part's CAD and pick the tied surfaces (see the module docstring)."""
     from . import meshing, solid_fe
     from ...parts.shapes import brep_text, shared_brep
-    from ...parts import joint as joint_cad
+    from ...parts import joint_solid as joint_cad
     from ...parts.joint_plan import print_from_local, seat_geometry
 
     mesh_mm = FE_MESH_MM if mesh_mm is None else mesh_mm

@@ -44,7 +44,7 @@ def reflection(original, part) -> tuple[np.ndarray, tuple[int, ...]]:
     solves the FE instead) unless everything the CAD and the FE ties read maps too: the other
     params equal, the bolt hole the image of the original's, P keeps the vertical (the plate
     top, the tab and the bed are horizontal), and the two print orientations differ by a
-    reflection that keeps the bed, so the print-safe construction of `parts/joint.py` (built
+    reflection that keeps the bed, so the print-safe construction of `parts/joint_solid.py` (built
     against the bed) is the mirror image of the original's."""
     import itertools
 

@@ -124,7 +124,7 @@ def hinged_socket(part) -> int | None:
 
 
 def hinge_geometry(part) -> tuple[float, float, float]:
-    """(web length, web width, thickness) of the knee's living hinge, mm (as parts/joint_plan.py plans it and parts/joint.py draws it)."""
+    """(web length, web width, thickness) of the knee's living hinge, mm (as parts/joint_plan.py plans it and parts/joint_solid.py draws it)."""
     from ...parts.joint_plan import knee_hinge
 
     h = knee_hinge(part)

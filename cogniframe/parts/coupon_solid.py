@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..spec import Spec
-from .joint import CHAMFER, Built
+from .joint_solid import CHAMFER, Built
 from .joint_plan import transform
 
 CLEARANCES = tuple(round(-0.40 + 0.05 * i, 2) for i in range(15))
@@ -56,7 +56,7 @@ def layout(spec: Spec, clearances=CLEARANCES) -> dict:
             "label_dy": -od / 2 - label_h / 2, "depth": depth, "wall": wall}
 
 
-def build(spec: Spec, clearances=CLEARANCES) -> Built:
+def solid(spec: Spec, clearances=CLEARANCES) -> Built:
     import cadquery as cq
 
     g = layout(spec, clearances)

@@ -458,7 +458,7 @@ def serve(root: Path, key: str, idle_s: float, fe: bool) -> None:
 
 
 _BOOT = ("import json, sys; sys.path[:] = json.loads(sys.argv[1]); "
-         "from cogniframe.runtime.server import main; main(sys.argv[2:])")
+         "from cogniframe.runtime.cad_server import main; main(sys.argv[2:])")
 
 
 def main(argv: list[str]) -> None:
