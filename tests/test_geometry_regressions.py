@@ -45,19 +45,14 @@ import yaml
 
 from cogniframe import design as design_mod
 from cogniframe import spec as spec_mod
+from presets import preset_doc
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def _variant(base: str, **changes) -> spec_mod.Spec:
     """A preset with keys changed: `joints__seat=6` (`joints__fit_clearance__tpu_95a` one level deeper)."""
-    data = yaml.safe_load((ROOT / "params" / f"{base}.yaml").read_text(encoding="utf-8"))
-    for key, value in changes.items():
-        *path, field = key.split("__")
-        node = data
-        for name in path:
-            node = node[name]
-        node[field] = value
+    data = preset_doc(base, **changes)
     data["name"] = f"{base}-variant"
     return spec_mod.from_dict(data)
 
