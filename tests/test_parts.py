@@ -204,7 +204,7 @@ def test_a_new_family_is_one_module_and_one_registry_line(monkeypatch):
     others, with its digest), found by name and listed: nothing else needs to know it."""
     import types
 
-    from cogniframe.families.base import Estimate, PartSpec, Placement
+    from cogniframe.parts.record import Estimate, PartSpec, Placement
 
     fam = types.ModuleType("gps_mount")
     fam.NAME, fam.SIZE_KEY, fam.DOC = "gps_mount", "core.plate_size", "ABS/PLA GPS puck mount"

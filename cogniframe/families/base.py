@@ -1,6 +1,5 @@
-"""What every part family shares: the part record (`PartSpec` and its pieces, defined in
-parts/record.py, where the CAD helpers read it too) and the numpy helpers more than one family's
-plan uses. Pure numpy, no CAD.
+"""The numpy helpers more than one family's plan uses (the part record they fill, `PartSpec` and
+its pieces, is parts/record.py, where the CAD helpers read it too). Pure numpy, no CAD.
 """
 
 from __future__ import annotations
@@ -9,7 +8,7 @@ import math
 
 import numpy as np
 
-from ..parts.record import Estimate, HardwareLine, PartSpec, Placement, Socket, Vec  # noqa: F401  (the families take the record from here)
+from ..parts.record import Estimate, Vec
 from ..spec import Spec
 
 # Rotation about z taking the fl prototype to each corner (clockwise seen from above).

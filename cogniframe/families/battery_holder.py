@@ -19,7 +19,8 @@ from ..parts.blocks import pointed, prism_xy, prism_xz
 from ..parts.joint_solid import Built, apply
 from ..parts.joint_plan import transform
 from ..spec import Spec
-from .base import Estimate, HardwareLine, PartSpec, Placement, hexagon_area, rounded
+from ..parts.record import Estimate, HardwareLine, PartSpec, Placement
+from .base import hexagon_area, rounded
 
 NAME = "battery_holder"
 SIZE_KEY = "core.battery"

@@ -15,7 +15,8 @@ from ..parts.blocks import pointed, prism_xy
 from ..parts.joint_solid import Built, apply
 from ..parts.joint_plan import transform
 from ..spec import Spec
-from .base import Estimate, HardwareLine, PartSpec, Placement, hexagon_area, link_hole, rounded
+from ..parts.record import Estimate, HardwareLine, PartSpec, Placement
+from .base import hexagon_area, link_hole, rounded
 
 NAME = "camera_mount"
 SIZE_KEY = "core.camera"

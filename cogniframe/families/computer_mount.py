@@ -12,7 +12,8 @@ from ..parts.blocks import plate
 from ..parts.joint_solid import Built
 from ..parts.joint_plan import transform
 from ..spec import Spec
-from .base import HardwareLine, PartSpec, Placement, plate_estimate, rounded
+from ..parts.record import HardwareLine, PartSpec, Placement
+from .base import plate_estimate, rounded
 
 NAME = "computer_mount"
 SIZE_KEY = "core.computer.hole_spacing"

@@ -13,7 +13,8 @@ from ..parts.blocks import plate
 from ..parts.joint_solid import Built
 from ..parts.joint_plan import transform
 from ..spec import Spec
-from .base import HardwareLine, PartSpec, Placement, link_hole, plate_estimate, rounded
+from ..parts.record import HardwareLine, PartSpec, Placement
+from .base import link_hole, plate_estimate, rounded
 
 NAME = "core_plate"
 SIZE_KEY = "core.plate_size"

@@ -41,19 +41,8 @@ from ..parts.joint_plan import (
     seat_plan,
 )
 from ..spec import Spec
-from .base import (
-    CORNER_ROTATION,
-    FIT_TOL,
-    Estimate,
-    HardwareLine,
-    PartSpec,
-    Placement,
-    Socket,
-    link_hole,
-    polygon_area,
-    rot_z,
-    rounded,
-)
+from ..parts.record import Estimate, HardwareLine, PartSpec, Placement, Socket
+from .base import CORNER_ROTATION, FIT_TOL, link_hole, polygon_area, rot_z, rounded
 
 NAME = "joint"
 SIZE_KEY = "joints.socket_depth"  # the params key that drives its size (for "does not fit the bed" errors)

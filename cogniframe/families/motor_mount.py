@@ -49,7 +49,8 @@ from ..parts.joint_solid import (
 )
 from ..parts.joint_plan import FLIP_X, horizontal, transform
 from ..spec import Spec
-from .base import CORNER_ROTATION, FIT_TOL, Estimate, HardwareLine, PartSpec, Placement, Vec, rot_z, rounded
+from ..parts.record import Estimate, HardwareLine, PartSpec, Placement, Vec
+from .base import CORNER_ROTATION, FIT_TOL, rot_z, rounded
 
 NAME = "motor_mount"
 SIZE_KEY = "motors.model"

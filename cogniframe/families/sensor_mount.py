@@ -16,7 +16,8 @@ from ..parts.blocks import prism_xy
 from ..parts.joint_solid import Built
 from ..parts.joint_plan import transform
 from ..spec import Spec
-from .base import Estimate, HardwareLine, PartSpec, Placement, link_hole, polygon_perimeter, rounded
+from ..parts.record import Estimate, HardwareLine, PartSpec, Placement
+from .base import link_hole, polygon_perimeter, rounded
 
 NAME = "sensor_mount"
 SIZE_KEY = "core.spacer_thickness"
