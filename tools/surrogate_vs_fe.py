@@ -36,11 +36,13 @@ FIGURES = (  # (label, dotted key of check --json)
 
 
 def dig(d: dict, key: str):
-    for k in key.split("."):
-        if not isinstance(d, dict) or k not in d:
-            return None
-        d = d[k]
-    return d
+    """A dotted key of `check --json` (the report's lookup), None where a design has no such figure."""
+    from cogniframe.report.html import lookup
+
+    try:
+        return lookup(d, key)
+    except (KeyError, TypeError):
+        return None
 
 
 def main(argv=None) -> int:
