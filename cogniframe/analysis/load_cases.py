@@ -324,25 +324,32 @@ def arm_pair_hinge(joints: dict, parts) -> float | None:
     if part is None:
         return None
     js = joints[part.name]
-    K, labs = js.matrix, js.labels
+    labs = js.labels
     arms = [i for i, lab in enumerate(labs) if "arm" in lab]
     if len(arms) != 2 or "body" not in labs:
         return None
     free = [i for i, lab in enumerate(labs) if i not in arms and lab != "body"]
-    a = [6 * i + k for i in arms for k in range(6)]
-    b = [6 * i + k for i in free for k in range(6)]
-    refs = np.asarray(js.refs, float)
-    c = refs[arms].mean(axis=0)
-    T = np.vstack([ff.rigid_transfer(c, refs[i]) for i in arms])
-    lat = refs[arms[1]] - refs[arms[0]]
     try:
-        Kaa = K[np.ix_(a, a)]
-        if b:
-            Kaa = Kaa - K[np.ix_(a, b)] @ np.linalg.solve(K[np.ix_(b, b)], K[np.ix_(b, a)])
-        C = np.linalg.inv(T.T @ Kaa @ T)
+        return pair_hinge(js.matrix, np.asarray(js.refs, float), arms, free)
     except np.linalg.LinAlgError:  # a joint whose arm pair is not held (a mechanism): no figure, not a crash
         return None
-    lat /= np.linalg.norm(lat)
+
+
+def pair_hinge(K: np.ndarray, refs: np.ndarray, arms: list[int], free: list[int]) -> float:
+    """Rotational stiffness (N mm/rad) about the line through two tied bodies' reference points of
+    a condensed super-element ``K`` (6 DOF per body, body i referenced at ``refs[i]``): the two
+    ``arms`` tied rigidly together and free to translate, the ``free`` bodies free, the rest held.
+    Raises LinAlgError when the pair is not held."""
+    a = [6 * i + k for i in arms for k in range(6)]
+    b = [6 * i + k for i in free for k in range(6)]
+    c = refs[arms].mean(axis=0)
+    T = np.vstack([ff.rigid_transfer(c, refs[i]) for i in arms])
+    Kaa = K[np.ix_(a, a)]
+    if b:
+        Kaa = Kaa - K[np.ix_(a, b)] @ np.linalg.solve(K[np.ix_(b, b)], K[np.ix_(b, a)])
+    C = np.linalg.inv(T.T @ Kaa @ T)
+    lat = refs[arms[1]] - refs[arms[0]]
+    lat = lat / np.linalg.norm(lat)
     return float(1.0 / (lat @ C[3:, 3:] @ lat))
 
 

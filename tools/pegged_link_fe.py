@@ -1,0 +1,177 @@
+#!/usr/bin/env python3
+"""The authors' arm-to-core connector against cogniframe's flat core link, in one joint FE.
+
+The authors join each arm to their rigid base with a TPU connector whose two columns each carry
+an arm rod's socket at one end and a solid peg at the other, coaxial with it, pressed into a
+bore of the ABS base (dimensions measured on `Flex_Main_connector_new_bumper.stl` of
+thecognifly/CogniFly-STL, docs/authors-parts.md). This script builds that shape from those
+numbers (never the file), meshes it like every joint, ties each rod to its socket through the
+preset's interface layer and the pegs' sides and ends rigidly to the base (ABS is ~100x stiffer
+than the calibrated TPU), and reports the arm pair's hinge about the axis through both rods: the
+figure `check --json` reports as `stiffness.thrust.arms_only_core_link_hinge_n_mm_per_rad` for
+cogniframe's link, computed here by the same condensation. The flat link's figure comes from the
+preset's own part through the build's joint FE.
+
+    python tools/pegged_link_fe.py [--preset carbon] [--spacing 25]
+
+About a minute of CPU. The table goes to stdout, as docs/stiffness-model.md quotes it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import math
+import sys
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+
+AUTHORS_WALL = 1.8  # the connector's columns: (6.79 - 3.19) / 2
+
+
+@dataclass(frozen=True)
+class Connector:
+    """The authors' connector, print frame (z up, the pegs down, the sockets open at the top).
+
+    Defaults: Flex_Main_connector_new_bumper.stl, axis sections every mm (tools/compare_parts.py):
+    pegs 6.79 across, z -9..0, solid; columns 6.79 across, z 0..8.6, a 3.19 socket from the top
+    down to z 0.3; an arch joining the columns over z 6..9, 6.7 deep; the columns' axes 25.3 apart;
+    a middle column for the strut, 6.79 across, from the arch up to z 21.4, its 3.19 socket 7.4
+    deep (the strut is free in the hinge, so its socket carries no tie). The fillets where the
+    columns meet the arch are left out: 1.94 cm^3 here against the file's 2.10.
+    """
+
+    spacing: float = 25.3
+    peg_d: float = 6.79
+    peg_len: float = 9.0
+    column_d: float = 6.79
+    column_len: float = 8.6
+    bore: float = 3.19
+    depth: float = 8.3
+    arch_z: tuple = (6.0, 9.0)
+    arch_w: float = 6.7
+    strut_top: float = 21.4
+    strut_depth: float = 7.4
+
+    def solid(self):
+        import cadquery as cq
+
+        shape = None
+        for x in (0.0, self.spacing):
+            peg = cq.Workplane("XY").workplane(offset=-self.peg_len).center(x, 0).circle(self.peg_d / 2).extrude(self.peg_len)
+            col = cq.Workplane("XY").center(x, 0).circle(self.column_d / 2).extrude(self.column_len)
+            shape = peg.union(col) if shape is None else shape.union(peg).union(col)
+        z0, z1 = self.arch_z
+        arch = cq.Workplane("XY").box(self.spacing, self.arch_w, z1 - z0, centered=(False, True, False)).translate((0, 0, z0))
+        mid = cq.Workplane("XY").workplane(offset=z1).center(self.spacing / 2, 0).circle(self.column_d / 2).extrude(self.strut_top - z1)
+        shape = shape.union(arch).union(mid)
+        for x, top, depth in ((0.0, self.column_len, self.depth), (self.spacing, self.column_len, self.depth),
+                              (self.spacing / 2, self.strut_top, self.strut_depth)):
+            cut = cq.Workplane("XY").workplane(offset=top - depth).center(x, 0).circle(self.bore / 2).extrude(depth + 1)
+            shape = shape.cut(cut)
+        return shape
+
+    def volume_mm3(self) -> float:
+        return float(self.solid().val().Volume())
+
+
+def with_cogniframe_socket(spec, conn: Connector) -> Connector:
+    """The connector with the preset's blind socket (bore, depth) and joint wall instead of the authors'."""
+    return replace(conn, bore=spec.bore, depth=spec.joints.socket_depth, column_d=spec.bore + 2 * spec.joints.wall)
+
+
+def connector_hinge(spec, conn: Connector, factor: float | None = None) -> tuple[float, int]:
+    """(the arm pair's hinge N mm/rad, tetrahedra) of the connector: each rod tied to its socket's
+    wall and floor through the preset's interface layer, the pegs' sides and ends to the base
+    (held), the pair free to translate (`load_cases.pair_hinge`, as `check` condenses its link)."""
+    from cogniframe.analysis.joints import meshing, solid_fe
+    from cogniframe.analysis.joints.fe import FE_CURVATURE, FE_MESH_MM, _TIE_STIFF, _nu
+    from cogniframe.analysis.joints.model import interface
+    from cogniframe.analysis.load_cases import pair_hinge
+    from cogniframe.parts.shapes import brep_text
+
+    itf = interface(spec, factor)
+    pts, tets = meshing.mesh_brep_text(brep_text(conn.solid().val()), FE_MESH_MM, FE_CURVATURE)
+    tol = 0.1 + 0.5 * conn.bore * (1 - math.cos(math.pi / FE_CURVATURE))
+    ties = []
+    for x in (0.0, conn.spacing):
+        bottom = np.array([x, 0.0, conn.column_len - conn.depth])
+
+        def sel(c, n, bottom=bottom):
+            rel = c - bottom[:, None]
+            t = rel[2]
+            radial = np.hypot(rel[0], rel[1])
+            wall = (t > -tol) & (t < conn.depth + tol) & (np.abs(radial - conn.bore / 2) < tol)
+            floor = (np.abs(t) < tol) & (radial < conn.bore / 2 + tol) & (n[2] > 0.9)
+            return wall | floor
+
+        ties.append(solid_fe.Tie(f"arm{x:g}", sel, (x, 0.0, conn.column_len), itf.e / itf.h, itf.g / itf.h))
+
+    def pegs(c, n):
+        side = (c[2] < 1e-3) & (np.abs(n[2]) < 0.1)
+        end = (np.abs(c[2] + conn.peg_len) < 1e-3) & (n[2] < -0.99)
+        return side | end
+
+    ties.append(solid_fe.Tie("body", pegs, (conn.spacing / 2, 0.0, 0.0), _TIE_STIFF * itf.e, _TIE_STIFF * itf.e))
+    cond = solid_fe.condense(pts, tets, itf.e, _nu(itf.e, itf.g), ties)
+    return pair_hinge(cond.K, cond.refs, [0, 1], []), cond.n_elements
+
+
+def flat_link_hinge(spec) -> tuple[float, float]:
+    """(hinge N mm/rad, TPU volume mm^3) of the preset's own core link through the build's FE."""
+    from cogniframe import frame as frame_mod, partlist
+    from cogniframe.analysis.joints.fe import fe_joint
+    from cogniframe.analysis.joints.model import joint_kind
+    from cogniframe.analysis.load_cases import arm_pair_hinge
+    from cogniframe.parts import joint_solid
+
+    f = frame_mod.frame_of(spec)
+    parts = partlist.part_list(spec, f)
+    link = next(p for p in parts if joint_kind(p) == "core_link")
+    js = fe_joint(spec, link)
+    return arm_pair_hinge({link.name: js}, [link]), float(joint_solid.solid(link).shape.Volume())
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--preset", default="carbon")
+    ap.add_argument("--spacing", type=float, default=None, help="the arm pair's spacing (default: the preset's)")
+    args = ap.parse_args(argv)
+    import yaml
+    from cogniframe import spec as spec_mod
+
+    doc = yaml.safe_load((ROOT / "params" / f"{args.preset}.yaml").read_text(encoding="utf-8"))
+    if args.spacing is not None:
+        doc["frame"]["arm_spacing"] = args.spacing
+    spec = spec_mod.from_dict(doc, f"{args.preset}.yaml")
+    rho = spec.material(spec.joints.material).density_g_mm3
+    s = spec.frame.arm_spacing
+    rows = []
+    hinge, vol = flat_link_hinge(spec)
+    rows.append(("cogniframe's flat core link (the preset's part)", s, hinge, vol))
+    thick = copy.deepcopy(doc)
+    thick["joints"]["wall"] = AUTHORS_WALL
+    hinge, vol = flat_link_hinge(spec_mod.from_dict(thick, f"{args.preset}.yaml"))
+    rows.append((f"the same with the authors' {AUTHORS_WALL} mm walls (joints.wall)", s, hinge, vol))
+    for label, conn in (
+        ("the authors' connector (their dimensions)", Connector(spacing=s)),
+        ("the same, cogniframe's blind socket and wall", with_cogniframe_socket(spec, Connector(spacing=s))),
+    ):
+        h, _ = connector_hinge(spec, conn)
+        rows.append((label, s, h, conn.volume_mm3()))
+    print(f"{args.preset}, TPU factor from the model, arm pair {s:g} mm apart")
+    print("| link | hinge (N mm/rad) | TPU (cm^3, g) |")
+    print("|---|---|---|")
+    for label, _, h, v in rows:
+        print(f"| {label} | {h:.1f} | {v / 1000:.2f}, {v * rho:.2f} |")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
