@@ -49,6 +49,12 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
+# The tests check that a sweep's first round goes out to every worker (`run.evaluate_all`). Work
+# stealing may then move a queued batch to a worker whose own batch was instant (INVALID designs)
+# while the other was still starting: good for a real sweep, a coin toss for "both workers worked".
+NO_STEALING = {"DASK_DISTRIBUTED__SCHEDULER__WORK_STEALING": "False"}
+
+
 @pytest.fixture(scope="module")
 def tcp_cluster(tmp_path_factory):
     """`dask scheduler` + two `dask worker` processes on 127.0.0.1 over TCP; yields the address."""
@@ -61,7 +67,7 @@ def tcp_cluster(tmp_path_factory):
     env = {**os.environ, **one, "PYTHONPATH": str(ROOT), "COGNIFRAME_CACHE": str(home / "cache")}
     dask = [sys.executable, "-m", "distributed.cli.dask_scheduler"]
     procs = [subprocess.Popen([*dask, "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
-                              cwd=home, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+                              cwd=home, env={**env, **NO_STEALING}, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
     try:
         for name in ("w1", "w2"):
             procs.append(subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", addr, "--nthreads", "1",
@@ -197,9 +203,12 @@ def test_killed_sweep_resumes_with_only_the_missing_designs(tcp_cluster, tmp_pat
 def test_cli_default_local_cluster_equals_serial_and_rerun_skips(tmp_path, run_cli):
     """The default LocalCluster (2 worker processes) through the CLI: --json counts, a plain line per
     batch, both workers, rows equal to the serial evaluation, and a rerun that evaluates nothing."""
+    import dask
+
     (tmp_path / "s.yaml").write_text(SWEEP.replace("samples: 10", "samples: 6"))
     out = tmp_path / "out"
-    code, stdout, err = run_cli("sweep", tmp_path / "s.yaml", "-o", out, "--workers", "2", "--json")
+    with dask.config.set({"distributed.scheduler.work-stealing": False}):  # NO_STEALING, in this process
+        code, stdout, err = run_cli("sweep", tmp_path / "s.yaml", "-o", out, "--workers", "2", "--json")
     assert code == 0, err
     got = json.loads(stdout)
     assert got["designs"] == 6 and got["pass"] + got["fail"] + got["invalid"] == 6 and got["workers"] == 2

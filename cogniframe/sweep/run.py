@@ -234,6 +234,9 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[tuple[ob
                            silence_logs=logging.CRITICAL)  # shutdown chatter of the workers is not the user's business
     client = Client(cluster)
     try:
+        # every worker registered before the first batch goes out (evaluate_all spreads the first
+        # round over the workers the scheduler knows)
+        client.wait_for_workers(n, timeout=60)
         yield client, cluster.scheduler_address, n
     finally:
         client.close()
@@ -300,11 +303,17 @@ def evaluate_all(client, base: dict, items: list[dict], timeout_s: float, size: 
     rows_by_batch: dict[int, list[dict]] = {}
     todo = iter(enumerate(batches))
     ac = as_completed()
-    for _ in range(max(1, 2 * n_workers)):
+    # the first round goes round-robin over the connected workers: left to itself the scheduler may
+    # queue a short sweep's every batch on the first worker that asked; the hint is loose, so a
+    # batch whose worker has gone runs on another
+    info = client.scheduler_info(n_workers=-1) if _has_n_workers(client) else client.scheduler_info()
+    addrs = sorted(info.get("workers", {}))
+    for n in range(max(1, 2 * n_workers)):
         nxt = next(todo, None)
         if nxt is None:
             break
-        fut = client.submit(ev.evaluate_batch, base, nxt[1], timeout_s, text, base_name, pure=False)
+        where = dict(workers=[addrs[n % len(addrs)]], allow_other_workers=True) if addrs else {}
+        fut = client.submit(ev.evaluate_batch, base, nxt[1], timeout_s, text, base_name, pure=False, **where)
         index[fut.key] = nxt[0]
         ac.add(fut)
     for fut in ac:
