@@ -12,7 +12,7 @@ figure `check --json` reports as `stiffness.thrust.arms_only_core_link_hinge_n_m
 cogniframe's link, computed here by the same condensation. The flat link's figure comes from the
 preset's own part through the build's joint FE.
 
-    python tools/pegged_link_fe.py [--preset carbon] [--spacing 25]
+    python tools/pegged_link_fe.py [--preset carbon] [--spacing 25] [--thrust]
 
 About a minute of CPU. The table goes to stdout, as docs/stiffness-model.md quotes it.
 """
@@ -142,6 +142,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--preset", default="carbon")
     ap.add_argument("--spacing", type=float, default=None, help="the arm pair's spacing (default: the preset's)")
+    ap.add_argument("--thrust", action="store_true", help="also the thrust case with the link scaled to the connector's hinge")
     args = ap.parse_args(argv)
     import yaml
     from cogniframe import spec as spec_mod
@@ -170,7 +171,32 @@ def main(argv=None) -> int:
     print("|---|---|---|")
     for label, _, h, v in rows:
         print(f"| {label} | {h:.1f} | {v / 1000:.2f}, {v * rho:.2f} |")
+    if args.thrust:
+        print(f"\nthe thrust case with the core link's super-element scaled by {rows[2][2]:.1f} / {rows[0][2]:.1f}")
+        print("| core link | k (N/m) | hinge (N mm/rad) | bare arms, full thrust: mm, deg | full frame (mm) | bare / full |")
+        print("|---|---|---|---|---|---|")
+        for label, scale in (("the flat link", 1.0), ("scaled to the authors' connector", rows[2][2] / rows[0][2])):
+            k, t = scaled_link_thrust(spec, scale)
+            print(f"| {label} | {k:.0f} | {t['arms_only_core_link_hinge_n_mm_per_rad']:.1f} | "
+                  f"{t['arms_only_motor_deflection_mm']:.1f}, {t['arms_only_motor_tilt_deg']:.1f} | "
+                  f"{t['motor_deflection_mm']:.2f} | {t['exoskeleton_stiffening']:.1f}x |")
     return 0
+
+
+def scaled_link_thrust(spec, scale: float) -> tuple[float, dict]:
+    """(secant k N/m, `check`'s thrust case) with the core links' FE super-elements times `scale`:
+    a what-if for a stiffer link, which stiffens its every path (the strut's too) alike."""
+    from cogniframe.analysis.joints.model import joint_kind
+    from cogniframe.analysis.load_cases import _thrust_case
+    from cogniframe.analysis.stiffness import joint_models, masses_g, secant_k
+    from cogniframe.design import design
+
+    d = design(spec)
+    kinds = {p.name: joint_kind(p) for p in d.parts}
+    joints = {n: replace(js, K=tuple(map(tuple, (js.matrix * scale).tolist()))) if kinds[n] == "core_link" else js
+              for n, js in joint_models(spec, d.parts, "fe").items()}
+    return (secant_k(spec, d.frame, d.parts, joints),
+            _thrust_case(spec, d.frame, d.parts, joints, masses_g(spec, d.frame, d.parts, None)))
 
 
 if __name__ == "__main__":
