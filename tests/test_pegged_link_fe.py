@@ -66,3 +66,21 @@ def test_authors_connector_hinges_stiffer_than_the_flat_link_for_less_tpu():
     assert pegs > 4 * flat
     assert pl.Connector(spacing=spec.frame.arm_spacing).volume_mm3() < flat_vol
     assert flat < thin < pegs / 2
+
+
+@pytest.mark.parametrize("name", ["carbon", "bamboo"])
+def test_pegs_tubes_clear_the_core_and_end_where_the_diagonal_geometry_puts_them(name):
+    """docs/stiffness-model.md's placement of the pegs' tubes: no core box in the way at any
+    corner, and each tube's inner end at (u + s/2) / sqrt 2 - P/2 beyond the plate's edge, u its
+    distance out along the diagonal (the link node's, plus the rod's seat, less the peg and the
+    0.3 mm between it and the socket), s the arm spacing, P the plate's side."""
+    spec = preset_spec(name)
+    conn = pl.Connector(spacing=spec.frame.arm_spacing)
+    from cogniframe.design import design
+
+    node = design(spec).frame.nodes["core_link_fl"].pos
+    u = math.hypot(node[0], node[1]) + spec.joints.seat - (conn.column_len - conn.depth) - conn.peg_len
+    expected = (u + spec.frame.arm_spacing / 2) / math.sqrt(2) - spec.core.plate_size / 2
+    for corner, hits, past in pl.lug_study(spec, conn):
+        assert hits == [], corner
+        assert past == pytest.approx([expected, expected], abs=1e-6), corner

@@ -12,7 +12,7 @@ figure `check --json` reports as `stiffness.thrust.arms_only_core_link_hinge_n_m
 cogniframe's link, computed here by the same condensation. The flat link's figure comes from the
 preset's own part through the build's joint FE.
 
-    python tools/pegged_link_fe.py [--preset carbon] [--spacing 25] [--thrust]
+    python tools/pegged_link_fe.py [--preset carbon] [--spacing 25] [--lugs] [--thrust]
 
 About a minute of CPU. The table goes to stdout, as docs/stiffness-model.md quotes it.
 """
@@ -142,6 +142,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--preset", default="carbon")
     ap.add_argument("--spacing", type=float, default=None, help="the arm pair's spacing (default: the preset's)")
+    ap.add_argument("--lugs", action="store_true", help="also where the pegs' ABS tubes would sit on today's layout")
     ap.add_argument("--thrust", action="store_true", help="also the thrust case with the link scaled to the connector's hinge")
     args = ap.parse_args(argv)
     import yaml
@@ -171,6 +172,10 @@ def main(argv=None) -> int:
     print("|---|---|---|")
     for label, _, h, v in rows:
         print(f"| {label} | {h:.1f} | {v / 1000:.2f}, {v * rho:.2f} |")
+    if args.lugs:
+        print(f"\nthe pegs' ABS tubes ({Connector().peg_d:g} mm bores, {LUG_WALL:g} mm walls) with no node moved")
+        for corner, hits, past in lug_study(spec, Connector(spacing=s)):
+            print(f"  {corner}: runs into {', '.join(hits) or 'nothing'}; inner end {', '.join(f'{p:.1f}' for p in past)} mm beyond the plate's edge")
     if args.thrust:
         print(f"\nthe thrust case with the core link's super-element scaled by {rows[2][2]:.1f} / {rows[0][2]:.1f}")
         print("| core link | k (N/m) | hinge (N mm/rad) | bare arms, full thrust: mm, deg | full frame (mm) | bare / full |")
@@ -181,6 +186,40 @@ def main(argv=None) -> int:
                   f"{t['arms_only_motor_deflection_mm']:.1f}, {t['arms_only_motor_tilt_deg']:.1f} | "
                   f"{t['motor_deflection_mm']:.2f} | {t['exoskeleton_stiffening']:.1f}x |")
     return 0
+
+
+LUG_WALL = 1.2  # ABS round a peg's bore: three 0.4 mm lines
+
+
+def lug_study(spec, conn: Connector) -> list[tuple[str, list[str], list[float]]]:
+    """Where the pegs' ABS tubes would sit with no node moved: per corner, the core boxes a tube
+    (bore = peg, `LUG_WALL` round it, the peg's length inward from the rod's end along the arm,
+    at the rod's height) runs into, sampled over its outside, and how far its inner end lies
+    beyond the plate's edge (mm, each rod of the pair)."""
+    from cogniframe.design import design
+
+    f = design(spec).frame
+    core = f.core
+    names = ("holder", "battery", "stack", "computer", "spacer", "flow_sensor", "camera", "camera_base")
+    boxes = {k: getattr(core, k) for k in names if getattr(core, k, None) is not None}
+    r = conn.peg_d / 2 + LUG_WALL
+    up = np.array([0.0, 0.0, 1.0])
+    out = []
+    for corner in ("fl", "fr", "rl", "rr"):
+        pos = np.asarray(f.nodes[f"core_link_{corner}"].pos, float)
+        e = np.array([pos[0], pos[1], 0.0]) / math.hypot(pos[0], pos[1])
+        lat = np.cross(up, e)
+        hits, past = set(), []
+        for side in (-1, 1):
+            top = pos + lat * side * spec.frame.arm_spacing / 2 + e * (spec.joints.seat - conn.column_len + conn.depth)
+            for t in np.linspace(0.0, conn.peg_len, 10):
+                for a in np.linspace(0.0, 2 * math.pi, 24, endpoint=False):
+                    p = top - e * t + r * (math.cos(a) * lat + math.sin(a) * up)
+                    hits |= {k for k, b in boxes.items() if np.all(np.abs(p - np.asarray(b.centre)) < np.asarray(b.size) / 2)}
+            inner = top - e * conn.peg_len - np.asarray(core.plate.centre)
+            past.append(float(max(abs(inner[0]), abs(inner[1])) - core.plate.size[0] / 2))
+        out.append((corner, sorted(hits), past))
+    return out
 
 
 def scaled_link_thrust(spec, scale: float) -> tuple[float, dict]:
