@@ -84,3 +84,11 @@ def test_pegs_tubes_clear_the_core_and_end_where_the_diagonal_geometry_puts_them
     for corner, hits, past in pl.lug_study(spec, conn):
         assert hits == [], corner
         assert past == pytest.approx([expected, expected], abs=1e-6), corner
+    # printed flat, a tube stands on the bed: flush with the plate's top (the plate printed upside
+    # down, the tubes hanging under it) they clear the core too; flush with its underside, carbon's
+    # front tubes would reach into the camera board above the plate's front edge
+    rise = conn.peg_d / 2 + pl.LUG_WALL - spec.core.plate_thickness / 2
+    assert all(hits == [] for _, hits, _ in pl.lug_study(spec, conn, -rise))
+    above = {corner: hits for corner, hits, _ in pl.lug_study(spec, conn, rise)}
+    assert above == ({"fl": ["camera"], "fr": ["camera"], "rl": [], "rr": []} if name == "carbon"
+                     else {"fl": [], "fr": [], "rl": [], "rr": []})

@@ -174,8 +174,15 @@ def main(argv=None) -> int:
         print(f"| {label} | {h:.1f} | {v / 1000:.2f}, {v * rho:.2f} |")
     if args.lugs:
         print(f"\nthe pegs' ABS tubes ({Connector().peg_d:g} mm bores, {LUG_WALL:g} mm walls) with no node moved")
-        for corner, hits, past in lug_study(spec, Connector(spacing=s)):
-            print(f"  {corner}: runs into {', '.join(hits) or 'nothing'}; inner end {', '.join(f'{p:.1f}' for p in past)} mm beyond the plate's edge")
+        # printed flat, a tube stands on the bed, so its axis sits its outer radius from the
+        # plate's underside (the plate printed as it sits) or its top (printed upside down)
+        rise = Connector().peg_d / 2 + LUG_WALL - spec.core.plate_thickness / 2
+        for label, up in (("at today's rod height", 0.0),
+                          (f"flush with the plate's underside: the rods {rise:.1f} mm higher", rise),
+                          (f"flush with the plate's top (printed upside down): the rods {rise:.1f} mm lower", -rise)):
+            print(f"  {label}")
+            for corner, hits, past in lug_study(spec, Connector(spacing=s), up):
+                print(f"    {corner}: runs into {', '.join(hits) or 'nothing'}; inner end {', '.join(f'{p:.1f}' for p in past)} mm beyond the plate's edge")
     if args.thrust:
         print(f"\nthe thrust case with the core link's super-element scaled by {rows[2][2]:.1f} / {rows[0][2]:.1f}")
         print("| core link | k (N/m) | hinge (N mm/rad) | bare arms, full thrust: mm, deg | full frame (mm) | bare / full |")
@@ -191,11 +198,12 @@ def main(argv=None) -> int:
 LUG_WALL = 1.2  # ABS round a peg's bore: three 0.4 mm lines
 
 
-def lug_study(spec, conn: Connector) -> list[tuple[str, list[str], list[float]]]:
+def lug_study(spec, conn: Connector, rise: float = 0.0) -> list[tuple[str, list[str], list[float]]]:
     """Where the pegs' ABS tubes would sit with no node moved: per corner, the core boxes a tube
     (bore = peg, `LUG_WALL` round it, the peg's length inward from the rod's end along the arm,
     at the rod's height) runs into, sampled over its outside, and how far its inner end lies
-    beyond the plate's edge (mm, each rod of the pair)."""
+    beyond the plate's edge (mm, each rod of the pair). ``rise``: the rods (and tubes) that much
+    higher against the core than today."""
     from cogniframe.design import design
 
     f = design(spec).frame
@@ -211,7 +219,7 @@ def lug_study(spec, conn: Connector) -> list[tuple[str, list[str], list[float]]]
         lat = np.cross(up, e)
         hits, past = set(), []
         for side in (-1, 1):
-            top = pos + lat * side * spec.frame.arm_spacing / 2 + e * (spec.joints.seat - conn.column_len + conn.depth)
+            top = pos + lat * side * spec.frame.arm_spacing / 2 + e * (spec.joints.seat - conn.column_len + conn.depth) + up * rise
             for t in np.linspace(0.0, conn.peg_len, 10):
                 for a in np.linspace(0.0, 2 * math.pi, 24, endpoint=False):
                     p = top - e * t + r * (math.cos(a) * lat + math.sin(a) * up)
