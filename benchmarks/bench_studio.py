@@ -1,0 +1,90 @@
+"""Time the studio's edit -> figures latency as a user sees it: `cogniframe studio` on a copy of
+params/carbon.yaml, Debian's Chromium driven by Playwright, ten edits that need no new joint
+geometry (battery grams and capacity, motor KV), each timed in the page from the input event to
+the figures drawn. The target is half a second on a machine not loaded past its cores.
+
+Run: python benchmarks/bench_studio.py [--rounds 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.request
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+FLAGS = ["--headless=new", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+         "--disable-component-update", "--no-first-run", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
+EDITS = (("core.battery.mass", "70"), ("core.battery.mass", "66"), ("motors.kv", "6500"), ("core.battery.mass", "59"),
+         ("core.battery.capacity_mah", "700"), ("core.battery.mass", "64"), ("motors.kv", "7000"),
+         ("core.battery.capacity_mah", "650"), ("core.battery.mass", "58"), ("motors.kv", "6000"))
+
+
+def start(folder: Path) -> tuple[subprocess.Popen, int]:
+    proc = subprocess.Popen([sys.executable, "-m", "cogniframe", "studio", "carbon.yaml", "--port", "0", "--no-browser"],
+                            cwd=folder, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+                            env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    port = int(re.search(r"http://127\.0\.0\.1:(\d+)/", proc.stdout.readline()).group(1))
+    end = time.monotonic() + 60
+    while time.monotonic() < end:  # the port is bound before the server answers
+        try:
+            with urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=5):
+                break
+        except OSError:
+            time.sleep(0.1)
+    return proc, port
+
+
+def edit(tab, key: str, value: str) -> dict:
+    n = tab.evaluate("window.cogniframeStudio.latencies.length")
+    tab.fill(f"[name='{key}']", value)
+    tab.wait_for_function(f"window.cogniframeStudio.latencies.length > {n}", timeout=60_000)
+    return tab.evaluate("window.cogniframeStudio.latencies.at(-1)")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--rounds", type=int, default=3, help="rounds of the ten edits")
+    args = ap.parse_args()
+    from playwright.sync_api import sync_playwright
+
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        shutil.copy(ROOT / "params" / "carbon.yaml", folder / "carbon.yaml")
+        proc, port = start(folder)
+        try:
+            with sync_playwright() as p:
+                browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+                tab = browser.new_page(viewport={"width": 1400, "height": 1000})
+                tab.goto(f"http://127.0.0.1:{port}/")
+                # measured once the studio is idle: its first 3D view and its FE are done
+                tab.wait_for_selector("#cf-viewer[data-ready='1']", timeout=300_000)
+                tab.wait_for_function("document.body.dataset.model === 'fe'", timeout=600_000)
+                for r in range(args.rounds):
+                    recs = [edit(tab, k, v) for k, v in EDITS]
+                    page = [x["ms"] for x in recs]
+                    server = [x["server_ms"] for x in recs]
+                    print(f"round {r + 1}: edit -> figures median {statistics.median(page):.0f} ms (the studio's own work "
+                          f"{statistics.median(server):.0f} ms, the page's {statistics.median(a - b for a, b in zip(page, server)):.0f} ms), "
+                          f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; target 500 ms")
+                browser.close()
+        finally:
+            proc.send_signal(signal.SIGINT)
+            try:
+                proc.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+
+
+if __name__ == "__main__":
+    main()
