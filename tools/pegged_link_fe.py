@@ -91,7 +91,7 @@ def connector_hinge(spec, conn: Connector, factor: float | None = None) -> tuple
     wall and floor through the preset's interface layer, the pegs' sides and ends to the base
     (held), the pair free to translate (`load_cases.pair_hinge`, as `check` condenses its link)."""
     from cogniframe.analysis.joints import meshing, solid_fe
-    from cogniframe.analysis.joints.fe import FE_CURVATURE, FE_MESH_MM, _TIE_STIFF, _nu
+    from cogniframe.analysis.joints.fe import FE_CURVATURE, FE_MESH_MM, _TIE_STIFF, _nu, socket_faces
     from cogniframe.analysis.joints.model import interface
     from cogniframe.analysis.load_cases import pair_hinge
     from cogniframe.parts.shapes import brep_text
@@ -100,17 +100,9 @@ def connector_hinge(spec, conn: Connector, factor: float | None = None) -> tuple
     pts, tets = meshing.mesh_brep_text(brep_text(conn.solid().val()), FE_MESH_MM, FE_CURVATURE)
     tol = 0.1 + 0.5 * conn.bore * (1 - math.cos(math.pi / FE_CURVATURE))
     ties = []
+    up = np.array([0.0, 0.0, 1.0])
     for x in (0.0, conn.spacing):
-        bottom = np.array([x, 0.0, conn.column_len - conn.depth])
-
-        def sel(c, n, bottom=bottom):
-            rel = c - bottom[:, None]
-            t = rel[2]
-            radial = np.hypot(rel[0], rel[1])
-            wall = (t > -tol) & (t < conn.depth + tol) & (np.abs(radial - conn.bore / 2) < tol)
-            floor = (np.abs(t) < tol) & (radial < conn.bore / 2 + tol) & (n[2] > 0.9)
-            return wall | floor
-
+        sel = socket_faces(np.array([x, 0.0, conn.column_len - conn.depth]), up, conn.bore / 2, conn.depth, tol)
         ties.append(solid_fe.Tie(f"arm{x:g}", sel, (x, 0.0, conn.column_len), itf.e / itf.h, itf.g / itf.h))
 
     def pegs(c, n):

@@ -56,6 +56,21 @@ def _fe_joint(spec, part, factor: float | None, mesh_mm: float | None) -> JointS
                           time.perf_counter() - t0)
 
 
+def socket_faces(bottom: np.ndarray, d: np.ndarray, rb: float, depth: float, tol: float):
+    """``select(centroids, normals)`` of a socket's bore wall (radius ``rb``, ``depth`` deep from
+    ``bottom`` along the unit vector ``d``) and its floor: the surface a rod's tie holds."""
+
+    def sel(c, n):
+        rel = c - bottom[:, None]
+        t = d @ rel
+        radial = np.linalg.norm(rel - np.outer(d, t), axis=0)
+        wall = (t > -tol) & (t < depth + tol) & (np.abs(radial - rb) < tol)
+        floor = (np.abs(t) < tol) & (radial < rb + tol) & (np.abs(d @ n) > 0.9)
+        return wall | floor
+
+    return sel
+
+
 @dataclass(frozen=True)
 class JointProblem:
     """A joint's solid FE before condensation: the mesh (print coordinates), the material and
@@ -102,17 +117,7 @@ def joint_problem(spec, part, factor: float | None = None, mesh_mm: float | None
         bottom = R @ np.asarray(s.bottom(), float) + o
         mouth_l = np.asarray(s.mouth(), float)
         refs_local.append(tuple(float(v) for v in mouth_l))
-        rb = s.bore / 2
-        depth = s.depth - joint_cad.CHAMFER
-
-        def sel(c, n, d=d, bottom=bottom, rb=rb, depth=depth):
-            rel = c - bottom[:, None]
-            t = d @ rel
-            radial = np.linalg.norm(rel - np.outer(d, t), axis=0)
-            wall = (t > -tol) & (t < depth + tol) & (np.abs(radial - rb) < tol)
-            floor = (np.abs(t) < tol) & (radial < rb + tol) & (np.abs(d @ n) > 0.9)
-            return wall | floor
-
+        sel = socket_faces(bottom, d, s.bore / 2, s.depth - joint_cad.CHAMFER, tol)
         ties.append(solid_fe.Tie(s.rod, sel, tuple(R @ mouth_l + o), itf.e / itf.h, itf.g / itf.h))
     labels = tuple(s.rod for s in part.sockets)
     if joint_kind(part) == "corner_bottom":
