@@ -197,8 +197,7 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[tuple[ob
                 raise UserError(f"--scheduler {scheduler}: fewer than {want} Dask worker(s) joined within 60 s. "
                                 f"Fix: start workers (`dask worker {scheduler} --nthreads 1`)"
                                 + (" or lower --workers." if workers else ".")) from None
-            info = client.scheduler_info(n_workers=-1) if _has_n_workers(client) else client.scheduler_info()
-            yield client, scheduler, len(info["workers"])
+            yield client, scheduler, len(_worker_addresses(client))
         finally:
             client.close()
         return
@@ -243,10 +242,14 @@ def dask_client(scheduler: str | None, workers: int | None) -> Iterator[tuple[ob
         cluster.close()
 
 
-def _has_n_workers(client) -> bool:
+def _worker_addresses(client) -> list[str]:
+    """The addresses of every worker the scheduler knows, sorted (newer `distributed` lists only
+    the first few unless asked for all)."""
     import inspect
 
-    return "n_workers" in inspect.signature(client.scheduler_info).parameters
+    all_of_them = "n_workers" in inspect.signature(client.scheduler_info).parameters
+    info = client.scheduler_info(n_workers=-1) if all_of_them else client.scheduler_info()
+    return sorted(info.get("workers", {}))
 
 
 MIN_BATCH, MAX_BATCH = 4, 64
@@ -306,8 +309,7 @@ def evaluate_all(client, base: dict, items: list[dict], timeout_s: float, size: 
     # the first round goes round-robin over the connected workers: left to itself the scheduler may
     # queue a short sweep's every batch on the first worker that asked; the hint is loose, so a
     # batch whose worker has gone runs on another
-    info = client.scheduler_info(n_workers=-1) if _has_n_workers(client) else client.scheduler_info()
-    addrs = sorted(info.get("workers", {}))
+    addrs = _worker_addresses(client)
     for n in range(max(1, 2 * n_workers)):
         nxt = next(todo, None)
         if nxt is None:
