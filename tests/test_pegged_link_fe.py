@@ -21,15 +21,18 @@ _spec.loader.exec_module(pl)
 
 def test_connector_volume_is_its_cylinders_and_arch_less_the_sockets():
     """Pegs, columns and the strut's column are cylinders; the arch a box, less the two half
-    columns inside it over z 6..8.6; less three sockets. The connector's flat sides clip the
-    6.79 mm columns by 0.045 mm (3.35 against 3.395): a few hundredths of a mm^2 a side."""
+    columns inside it over z 6..8.6; less three sockets, and the two arm sockets' half bores where
+    they run on through the arch's edge above the columns (z 8.6..9). Left out: the connector's
+    flat sides clip the 6.79 mm columns by 0.045 mm (3.35 against 3.395) where the arch holds
+    them, a few hundredths of a mm^2 a side over 2.6 mm (under 0.5 mm^3)."""
     c = pl.Connector(spacing=25.0)
     a = math.pi * (c.column_d / 2) ** 2
+    a_bore = math.pi * (c.bore / 2) ** 2
     z0, z1 = c.arch_z
     expected = (a * (2 * c.peg_len + 2 * c.column_len + (c.strut_top - z1))
                 + c.spacing * c.arch_w * (z1 - z0) - a * (c.column_len - z0)
-                - math.pi * (c.bore / 2) ** 2 * (2 * c.depth + c.strut_depth))
-    assert c.volume_mm3() == pytest.approx(expected, rel=2e-3)
+                - a_bore * (2 * c.depth + c.strut_depth) - a_bore * (z1 - c.column_len))
+    assert c.volume_mm3() == pytest.approx(expected, abs=0.5)
     # the authors' file is 2.10 cm^3 with the fillets where the columns meet the arch
     assert 0.85 * 2100 < c.volume_mm3() < 2100
 
@@ -60,7 +63,7 @@ def test_authors_connector_hinges_stiffer_than_the_flat_link_for_less_tpu():
     `check` reports: the tool reads it through the build's FE."""
     spec = preset_spec("carbon")
     flat, flat_vol = pl.flat_link_hinge(spec)
-    assert flat == pytest.approx(75.0, rel=0.02)
+    assert flat == pytest.approx(75.0, abs=0.05)  # docs/stiffness-model.md's 75.0
     pegs, _ = pl.connector_hinge(spec, pl.Connector(spacing=spec.frame.arm_spacing))
     thin, _ = pl.connector_hinge(spec, pl.with_cogniframe_socket(spec, pl.Connector(spacing=spec.frame.arm_spacing)))
     assert pegs > 4 * flat
