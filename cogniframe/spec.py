@@ -115,6 +115,7 @@ class CoreSection(_M):
     strap_width: Annotated[float, Field(ge=5, le=30, description="hook-and-loop battery strap width, mm: sets the strap slots at the holder mouth")] = 10
     camera: CameraSection | None = Field(None, description="camera bracket at the front of the core (needs a components line with vitamin: pi_camera_v2)")
     flow_sensor: FlowSensorSection | None = Field(None, description="downward optical-flow + ToF board behind the holder (needs a components line with vitamin: matek_3901_l0x)")
+    link: Literal["tab", "pegs"] = Field("tab", description="how each arm's rod pair joins the core plate: tab = a flat TPU link bolted on the plate corner; pegs = the authors' connector, two TPU pegs pressed into ABS bores")
 
 
 class MotorsSection(_M):
@@ -276,6 +277,9 @@ class Spec(_M):
                               f"set printer.perimeters to at most {max(1, int(2 * self.joints.wall / pr.nozzle + 1e-9))} or thicken joints.wall")
         if self.material(self.rods.material).printed:
             raise _KeyProblem("rods.material", f"{self.rods.material!r} is a printed filament; rods are never printed", "use carbon_rod or bamboo")
+        if self.core.link == "pegs" and self.model.stiffness_model == "analytic":
+            raise _KeyProblem("model.stiffness_model", "the analytic joint model has no closed form for the pegged core link (core.link: pegs)",
+                              "set model.stiffness_model to fe or surrogate, or core.link to tab")
         core_half = self.core.plate_size / 2
         inner_half = min(self.frame.width, self.frame.depth) / 2 - self.frame.knee_inset - self.rods.diameter - 2 * self.joints.wall
         if core_half >= inner_half:

@@ -37,6 +37,7 @@ from ..parts.joint_plan import (
     link_is_flat,
     link_plate_corner,
     link_plate_region,
+    pegged_plan,
     rigid_leg_start,
     seat_plan,
 )
@@ -136,6 +137,11 @@ def _joint(spec: Spec, frame: Frame, name: str, kind: str, proto: str = "fl", co
     params: list[tuple[str, object]] = [("hinge_thickness", spec.joints.hinge_thickness)]
     if name != kind:
         params += [("kind", kind), ("mirror", corner != "fl")]
+    if kind == "core_link" and spec.core.link == "pegs":
+        params += list(PEGS)
+        # no screw: the pegs are pressed into the core's bores
+        return PartSpec(name, "joint", "exoskeleton", spec.joints.material, 1.0, placements, tuple(sockets),
+                        spec.joints.wall, _pegged_link_estimate(spec, sockets, dict(params)), tuple(params), ())
     if kind == "core_link":
         # The link bolts onto the top of the core plate corner with one screw.
         screw = SCREWS[spec.core.stack_screw]
@@ -160,6 +166,21 @@ def _joint(spec: Spec, frame: Frame, name: str, kind: str, proto: str = "fl", co
         params.append(("foot", True))  # the bottom corners are the feet: flat pad on the ground side
     return PartSpec(name, "joint", "exoskeleton", spec.joints.material, 1.0, placements, tuple(sockets),
                     spec.joints.wall, _joint_estimate(spec, sockets, kind, dict(params)), tuple(params), hardware)
+
+
+# The pegged core link (core.link: pegs): the authors' connector, measured on
+# Flex_Main_connector_new_bumper.stl of thecognifly/CogniFly-STL (docs/authors-parts.md,
+# tools/pegged_link_fe.py `Connector`). Each arm socket sits in a TPU column whose far end is a
+# solid peg, pressed into a bore of the ABS core; an arch joins the two columns at their mouths.
+PEGS = (
+    ("link", "pegs"),
+    ("peg_d", 6.8),  # peg diameter, mm (authors' 6.79)
+    ("peg_len", 9.0),  # peg length, mm (authors' 9.0)
+    ("peg_gap", 0.3),  # mm from the socket's bottom to the peg (authors' socket floor 0.3 above the peg)
+    ("column_wall", 1.8),  # TPU round the socket, mm (authors' (6.79 - 3.19) / 2)
+    ("arch_len", 3.0),  # mm along the columns, at their mouths (authors' z 6..9 of a 8.6 mm column)
+    ("arch_depth", 6.7),  # mm across the plane of the arm pair (authors' 6.7)
+)
 
 
 # The core link's tab: it carries an arm's thrust moment from the arm block, across the seat at
@@ -495,3 +516,45 @@ def link_sleeve_area(h: float, r: float) -> float:
     if h - r * math.sqrt(2) >= TEAR_MIN:
         return 0.75 * math.pi * r**2 + r**2 + TEAR_WEB * (h - r * math.sqrt(2)) + TEAR_WEB**2 / 4
     return 2 * r * h + math.pi * r**2 / 2
+
+
+# -- the pegged core link's closed form (its plan: parts/joint_plan.py `pegged_plan`) -----------------
+
+def _disc_band(r: float, lo: float, hi: float) -> float:
+    """Area of a disc of radius `r` (centred at 0) between the lines y = lo and y = hi."""
+    def below(h: float) -> float:
+        h = min(max(h, -r), r)
+        return r * r * math.acos(-h / r) + h * math.sqrt(r * r - h * h)
+
+    return max(0.0, below(hi) - below(lo))
+
+
+def _pegged_link_estimate(spec: Spec, sockets: list[Socket], params: dict) -> Estimate:
+    """Closed form of the pegged core link (parts/joint_solid.py `_core_link_pegged`), in print
+    orientation (the arms' direction up, the pegs' ends on the bed): per arm a peg and a column
+    (cylinders: one cylinder where their diameters are within `PEG_SNAP`), the arch (a box from
+    axis to axis, less the half columns inside it), the strut's sleeve (a cylinder, less the part
+    of it inside the arch: `PeggedPlan.strut_in_arch`), less the bores."""
+    pl = pegged_plan(sockets, params)
+    hole = math.pi / 4 * spec.bore**2
+    vol = a_h = a_v = 0.0
+    for c in pl.columns:
+        vol += math.pi * (pl.peg_r**2 * pl.peg_len + pl.col_r**2 * c.col_len)
+        a_h += 2 * math.pi * pl.peg_r**2  # the peg's end and the shoulder + the column's top
+        a_v += 2 * math.pi * (pl.peg_r * pl.peg_len + pl.col_r * c.col_len)
+    arch_len = pl.arch_hi - pl.arch_lo
+    inside = 2 * 0.5 * _disc_band(pl.col_r, pl.arch_n[0], pl.arch_n[1]) * arch_len
+    vol += pl.spacing * (pl.arch_n[1] - pl.arch_n[0]) * arch_len - inside
+    a_h += 2 * (pl.spacing - 2 * pl.col_r) * (pl.arch_n[1] - pl.arch_n[0])
+    a_v += 2 * (pl.spacing - 2 * pl.col_r) * arch_len
+    for st in pl.struts:
+        n = st.end - st.start
+        vol += math.pi * pl.col_r**2 * n - st.in_arch
+        sin_t = math.sqrt(max(0.0, 1 - st.lean_cos**2))
+        a_h += 2 * math.pi * pl.col_r * n * sin_t
+        a_v += 2 * math.pi * pl.col_r * n * st.lean_cos
+    for s in sockets:
+        vol -= hole * s.depth
+        a_v += math.pi * spec.bore * s.depth
+    env = tuple(sorted(pl.extents))
+    return Estimate(vol, a_h, a_v, (env[2], env[1], env[0]))

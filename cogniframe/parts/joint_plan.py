@@ -68,6 +68,9 @@ def print_from_local(part: PartSpec) -> np.ndarray:
         vertical = dirs[np.abs(dirs[:, 2]) > 1e-6, 2]
         rot = FLIP_X if vertical.sum() < 0 else np.eye(3)
         return transform(rot, (0.0, 0.0, r))
+    if kind_of(part) == "core_link" and is_pegged(part):
+        pl = pegged_plan(part.sockets, dict(part.params))
+        return transform(pl.rot, pl.shift)
     if kind_of(part) == "core_link" and link_is_flat(part.sockets):
         # flat and upside down: the arm direction along x, the frame's up pointing into the bed
         x = horizontal(_arm_direction(part))
@@ -413,3 +416,149 @@ def convex_hull(pts: np.ndarray) -> list[np.ndarray]:
 
     h = ConvexHull(pts)
     return [pts[i] for i in h.vertices]
+
+
+# -- the pegged core link (core.link: pegs) ------------------------------------------------------
+# The authors' connector: per arm socket a TPU column round the socket with a solid peg beyond its
+# bottom, coaxial with the rod, pressed into a bore of the ABS core; an arch joins the two columns
+# at their mouths; the strut's sleeve runs from the arch along the strut. It prints standing: the
+# arms' direction up, the pegs' ends on the bed (families/joint.py `PEGS` has the dimensions).
+PEG_SNAP = 0.2  # mm: a peg and its column closer than this in diameter are one cylinder (no sliver shoulder)
+STACK_SNAP_MM = 1e-3  # mm: the most the two columns are moved to stand level (rounding noise is ~1e-5)
+ARCH_CLEAR = 0.2  # mm: the arch's depth never within this of the column's diameter (no tangent faces)
+
+
+def is_pegged(part: PartSpec) -> bool:
+    """Whether a core link is the pegged connector (core.link: pegs)."""
+    return dict(part.params).get("link") == "pegs"
+
+
+@dataclass(frozen=True)
+class PegColumn:
+    """One arm's peg and column in print: a vertical axis at `axis` (xy), the peg from the bed
+    (`peg0`) to `col0`, the column from there to the socket's mouth `col1`."""
+
+    axis: np.ndarray
+    peg0: float
+    col0: float
+    col1: float
+
+    @property
+    def col_len(self) -> float:
+        return self.col1 - self.col0
+
+
+@dataclass(frozen=True)
+class PegStrut:
+    """The strut's sleeve: a cylinder along its socket from `start` to `end` (along it from the
+    port), `lean_cos` = its direction . up in print, `in_arch` its volume inside the arch (mm^3)."""
+
+    index: int
+    start: float
+    end: float
+    lean_cos: float
+    in_arch: float
+
+
+@dataclass(frozen=True, eq=False)
+class PeggedPlan:
+    rot: np.ndarray  # print <- local rotation: x across the pair (arm 0 to arm 1), z along the arms
+    shift: np.ndarray  # print <- local offset: the pegs' ends on the bed
+    columns: tuple[PegColumn, ...]
+    peg_r: float
+    peg_len: float
+    col_r: float
+    spacing: float  # between the columns' axes
+    arch_x: tuple[float, float]  # print x of the two axes
+    arch_n: tuple[float, float]  # print y: the arch's depth
+    arch_lo: float  # print z
+    arch_hi: float
+    struts: tuple[PegStrut, ...]
+    extents: tuple[float, float, float]  # print x, y, z sizes
+
+
+def pegged_plan(sockets, params: dict) -> PeggedPlan:
+    """The pegged link's pieces in print coordinates, from its sockets (local frame) and params."""
+    dirs = [np.asarray(s.direction, float) for s in sockets]
+    arms = [i for i in range(len(dirs)) if sum(float(dirs[i] @ e) > 1 - PARALLEL_TOL for e in dirs) > 1]
+    if len(arms) != 2:
+        raise ValueError(f"a pegged core link needs two parallel arm sockets, got {len(arms)}")
+    d = dirs[arms[0]] / np.linalg.norm(dirs[arms[0]])
+    ports = [np.asarray(sockets[i].port, float) for i in arms]
+    lat = ports[1] - ports[0]
+    lat = lat - d * float(lat @ d)
+    lat /= np.linalg.norm(lat)
+    rot = np.vstack([lat, np.cross(d, lat), d])
+    peg_len = float(params["peg_len"])
+    gap = float(params["peg_gap"])
+    col_r = sockets[arms[0]].bore / 2 + float(params["column_wall"])
+    peg_r = float(params["peg_d"]) / 2
+    if abs(peg_r - col_r) < PEG_SNAP / 2:
+        peg_r = col_r
+    z_end = float(ports[0] @ d) + sockets[arms[0]].seat - gap - peg_len
+    shift = np.array([0.0, 0.0, -z_end])
+    cols = []
+    # Both columns at the first's heights: stored to 1e-6 mm, a rectangle's pair lies up to ~1e-5
+    # apart along the arms, steps of that size between the columns' and the arch's end faces (an
+    # STL with open edges). The sockets are cut where they are.
+    q0 = rot @ ports[0] + shift
+    for p, i in zip(ports, arms):
+        q = rot @ p + shift
+        if abs(float(q[2] - q0[2])) > STACK_SNAP_MM:
+            raise ValueError(f"the arm sockets of a pegged core link are {float(q[2] - q0[2]):.3g} mm apart along the arms")
+        s = sockets[i]
+        c0 = float(q0[2]) + s.seat - gap
+        cols.append(PegColumn(q[:2].copy(), c0 - peg_len, c0, float(q0[2]) + s.seat + s.depth))
+    y_c = float(cols[0].axis[1])
+    arch_hi = min(c.col1 for c in cols)
+    arch_lo = arch_hi - float(params["arch_len"])
+    h = float(params["arch_depth"]) / 2
+    if abs(h - col_r) < ARCH_CLEAR / 2:
+        h = col_r + ARCH_CLEAR / 2
+    n0, n1 = -h, h
+    struts_at = [i for i in range(len(sockets)) if i not in arms]
+    for i in struts_at:  # the arch reaches the strut's sleeve: at least half its radius into it at the mouth
+        s = sockets[i]
+        m = rot @ (np.asarray(s.port, float) + dirs[i] * (s.seat + s.depth)) + shift
+        n0, n1 = min(n0, float(m[1]) - y_c + col_r / 2), max(n1, float(m[1]) - y_c - col_r / 2)
+        arch_lo = min(arch_lo, float(m[2]) - col_r / 2)
+    x0, x1 = sorted(float(c.axis[0]) for c in cols)
+    arch_n = (y_c + n0, y_c + n1)
+    struts = []
+    lo = [min(x0, x1) - max(peg_r, col_r), y_c - max(peg_r, col_r, -n0), 0.0]
+    hi = [max(x0, x1) + max(peg_r, col_r), y_c + max(peg_r, col_r, n1), max(c.col1 for c in cols)]
+    for i in struts_at:
+        s = sockets[i]
+        ds = rot @ dirs[i]
+        t0, t1 = s.seat - float(params["column_wall"]), s.seat + s.depth
+        p0 = rot @ np.asarray(s.port, float) + shift
+        struts.append(PegStrut(i, t0, t1, float(ds[2]), _cylinder_in_box(p0, ds, t0, t1, col_r,
+                                                                         (x0, arch_n[0], arch_lo), (x1, arch_n[1], arch_hi))))
+        for t in (t0, t1):
+            e = p0 + ds * t
+            pad = col_r * np.sqrt(np.clip(1 - ds**2, 0.0, 1.0))
+            lo = [min(a, b) for a, b in zip(lo, e - pad)]
+            hi = [max(a, b) for a, b in zip(hi, e + pad)]
+    ext = tuple(float(b - a) for a, b in zip(lo, hi))
+    return PeggedPlan(rot, shift, tuple(cols), peg_r, peg_len, col_r, x1 - x0, (x0, x1), arch_n, arch_lo, arch_hi,
+                      tuple(struts), ext)
+
+
+def _cylinder_in_box(p0, d, t0: float, t1: float, r: float, lo, hi, n: int = 48) -> float:
+    """Volume (mm^3) of the cylinder of radius `r` along unit `d` from p0 + d t0 to p0 + d t1
+    inside the axis-aligned box lo..hi: the midpoint rule in the cylinder's own coordinates (n
+    steps along it and round it, n / 3 across its radius; exact to ~0.1 % of a small overlap)."""
+    d = np.asarray(d, float)
+    a = np.cross(d, [1.0, 0.0, 0.0] if abs(d[0]) < 0.9 else [0.0, 1.0, 0.0])
+    a /= np.linalg.norm(a)
+    b = np.cross(d, a)
+    nr = max(4, n // 3)
+    t = t0 + (np.arange(n) + 0.5) * (t1 - t0) / n
+    rho = (np.arange(nr) + 0.5) * r / nr
+    phi = (np.arange(n) + 0.5) * 2 * math.pi / n
+    T, P, F = np.meshgrid(t, rho, phi, indexing="ij")
+    pts = (np.asarray(p0, float)[:, None] + d[:, None] * T.ravel() + a[:, None] * (P * np.cos(F)).ravel()
+           + b[:, None] * (P * np.sin(F)).ravel())
+    inside = np.all((pts >= np.asarray(lo, float)[:, None]) & (pts <= np.asarray(hi, float)[:, None]), axis=0)
+    w = (P.ravel() * (r / nr) * (2 * math.pi / n) * ((t1 - t0) / n))
+    return float(w[inside].sum())

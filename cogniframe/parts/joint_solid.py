@@ -59,6 +59,7 @@ from .joint_plan import (
     convex_hull,
     footprint_rect,
     horizontal,
+    is_pegged,
     kind_of,
     knee_bridge,
     knee_hinge,
@@ -67,6 +68,7 @@ from .joint_plan import (
     link_is_flat,
     link_plate_region,
     map_sockets,
+    pegged_plan,
     print_from_local,
     rigid_leg_start,
     seat_geometry,
@@ -235,6 +237,8 @@ def solid(part: PartSpec) -> Built:
         shape = _corner(part, socks, r)
     elif kind == "knee":
         shape = _knee(part, socks, r)
+    elif kind == "core_link" and is_pegged(part):
+        shape = _core_link_pegged(part, socks)
     elif kind == "core_link" and link_is_flat(part.sockets):
         shape = _core_link_flat(part, socks, r, m)
     elif kind == "core_link":
@@ -485,6 +489,28 @@ def _core_link_flat(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarra
     hole_d = float(part.param("screw_clearance"))
     bolt_hole = cq.Solid.makeCylinder(hole_d / 2, T + 2.0, vec((bolt[0], bolt[1], -1.0)), vec((0.0, 0.0, 1.0)))
     return finish(above_bed(body), [socket_cutter(s) for s in socks] + [bolt_hole])
+
+
+def _core_link_pegged(part: PartSpec, socks: list[PSocket]):
+    """The pegged core link (parts/joint_plan.py `pegged_plan`), standing in print: per arm a solid
+    peg from the bed and a column round the socket above it, the arch joining the columns at their
+    mouths, the strut's sleeve along its socket into the arch; less the sockets."""
+    cq = _cq()
+    pl = pegged_plan(part.sockets, dict(part.params))
+    pieces = []
+    for c in pl.columns:
+        x, y = float(c.axis[0]), float(c.axis[1])
+        if pl.peg_r == pl.col_r:  # one cylinder (parts/joint_plan.py `PEG_SNAP`)
+            pieces.append(cylinder((x, y, c.peg0), (0, 0, 1), c.col1 - c.peg0, pl.col_r))
+        else:
+            pieces += [cylinder((x, y, c.peg0), (0, 0, 1), c.col0 - c.peg0, pl.peg_r),
+                       cylinder((x, y, c.col0), (0, 0, 1), c.col_len, pl.col_r)]
+    (x0, x1), (n0, n1) = pl.arch_x, pl.arch_n
+    pieces.append(cq.Solid.makeBox(x1 - x0, n1 - n0, pl.arch_hi - pl.arch_lo, cq.Vector(x0, n0, pl.arch_lo)))
+    for st in pl.struts:
+        s = socks[st.index]
+        pieces.append(cylinder(s.at(st.start), s.direction, st.end - st.start, pl.col_r))
+    return finish(fuse_all(pieces), [socket_cutter(s) for s in socks])
 
 
 def _esc_keepout(part: PartSpec, m: np.ndarray):

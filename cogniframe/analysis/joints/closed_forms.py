@@ -122,6 +122,10 @@ def _socket_frame(direction) -> np.ndarray:
 def analytic_joint(spec, part, factor: float | None = None) -> JointStiffness:
     """Super-element from closed forms: per socket a 6x6 spring mouth <-> joint centre, the
     centre kept as the "body" (condensed out when the joint has no support)."""
+    if dict(part.params).get("link") == "pegs":
+        # its sleeves are the pegs' columns, held by the core's bores: no closed form here models them
+        raise ValueError(f"joint {part.name}: the analytic joint model has no closed form for the pegged core link "
+                         "(core.link: pegs); use model.stiffness_model: fe or surrogate")
     t0 = time.perf_counter()
     itf = interface(spec, factor)
     rod = spec.material(spec.rods.material)

@@ -5,9 +5,10 @@ The solid is exactly what is printed (`parts/joint_solid.py`: D-section sleeves,
 knee's slotted living hinge); `meshing` turns it into gmsh tetrahedra and `solid_fe` condenses
 scikit-fem quadratic elasticity onto rigid bodies. This module picks those bodies' surfaces:
 each rod is tied to its bore wall and socket bottom through the elastic interface layer
-(`model.interface`); the support body is tied stiffly to the pad (floor) or to the bolt hole and
-the tab's underside where it lies on the plate (core plate; `contact.py` measures what tying it
-both ways overstates under thrust). It also holds the mesh settings, which are part of the joint
+(`model.interface`); the support body is tied stiffly to the pad (floor), to the bolt hole and
+the tab's underside where it lies on the plate (the tab core link; `contact.py` measures what tying
+it both ways overstates under thrust), or to the pegs' sides and inner ends (the pegged core link,
+whose pegs the core's ABS bores hold). It also holds the mesh settings, which are part of the joint
 cache key.
 """
 
@@ -93,7 +94,7 @@ def joint_problem(spec, part, factor: float | None = None, mesh_mm: float | None
     from . import meshing, solid_fe
     from ...parts.shapes import brep_text, shared_brep
     from ...parts import joint_solid as joint_cad
-    from ...parts.joint_plan import print_from_local, seat_geometry
+    from ...parts.joint_plan import is_pegged, pegged_plan, print_from_local, seat_geometry
 
     mesh_mm = FE_MESH_MM if mesh_mm is None else mesh_mm
     itf = interface(spec, factor)
@@ -123,6 +124,22 @@ def joint_problem(spec, part, factor: float | None = None, mesh_mm: float | None
     if joint_kind(part) == "corner_bottom":
         ties.append(solid_fe.Tie("body", lambda c, n: (c[2] < 1e-3) & (np.abs(n[2]) > 0.99), tuple(o),
                                  _TIE_STIFF * itf.e, _TIE_STIFF * itf.e))
+    elif joint_kind(part) == "core_link" and is_pegged(part):
+        # the ABS bores hold the pegs both ways: their sides and their inner ends (on the bed in print)
+        pl = pegged_plan(part.sockets, dict(part.params))
+
+        tol_peg = 0.1 + pl.peg_r * (1 - math.cos(math.pi / FE_CURVATURE))  # the facets' sagitta on the peg
+
+        def sel_pegs(c, n, pl=pl):
+            on_peg = np.zeros(c.shape[1], bool)
+            for col in pl.columns:
+                radial = np.hypot(c[0] - col.axis[0], c[1] - col.axis[1])
+                side = (np.abs(radial - pl.peg_r) < tol_peg) & (c[2] < col.col0 + 1e-3) & (np.abs(n[2]) < 0.1)
+                end = (np.abs(c[2] - col.peg0) < 1e-3) & (radial < pl.peg_r + tol) & (n[2] < -0.99)
+                on_peg |= side | end
+            return on_peg
+
+        ties.append(solid_fe.Tie("body", sel_pegs, tuple(o), _TIE_STIFF * itf.e, _TIE_STIFF * itf.e))
     elif joint_kind(part) == "core_link":
         bolt = R @ np.asarray(part.param("bolt_hole"), float) + o
         axis = R @ np.array([0.0, 0.0, 1.0])

@@ -281,6 +281,8 @@ def _why_outside(fams: dict, spec, part) -> str | None:
 
     if is_mirror(part):  # fitted on originals: a mirror is its original's prediction, reflected
         return "a mirrored joint (reflected from its original's prediction, not predicted itself)"
+    if dict(part.params).get("link") == "pegs":  # its features describe the tab link's geometry
+        return "a pegged core link (core.link: pegs); the surrogate was fitted on the tab link"
     fam = fams.get(joint_kind(part))
     if fam is None:
         return f"no surrogate for {joint_kind(part)} joints"

@@ -1,0 +1,176 @@
+"""The pegged core link (`core.link: pegs`): the authors' connector as an option of the core link.
+Per arm a TPU column round the socket and a solid peg beyond it, pressed into an ABS bore; an arch
+joining the columns; the strut's sleeve. It must be one watertight solid standing on its pegs'
+ends, its closed form must follow its CAD, its mirrored part must be its mirror image, and its
+joint FE must hold the arm pair as the authors' connector does (tools/pegged_link_fe.py)."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import sys
+
+import numpy as np
+import pytest
+
+from conftest import ROOT
+from presets import preset_spec
+
+from cogniframe import design as design_mod
+from cogniframe.families.joint import PEGS
+
+_spec = importlib.util.spec_from_file_location("pegged_link_fe", ROOT / "tools" / "pegged_link_fe.py")
+pl = importlib.util.module_from_spec(_spec)
+sys.modules[_spec.name] = pl  # its dataclass looks its module up there
+_spec.loader.exec_module(pl)
+
+
+def _links(spec):
+    return {p.name: p for p in design_mod.design(spec).parts if dict(p.params).get("kind", p.name) == "core_link"}
+
+
+def _pegs_spec(name="carbon", **changes):
+    return preset_spec(name, core__link="pegs", **changes)
+
+
+def test_the_default_is_the_tab_link_and_pegs_drop_its_screw():
+    """The key defaults to the tab link (the presets do not set it); a pegged link has no screw,
+    no bolt hole and no hardware line, and carries the authors' dimensions."""
+    assert preset_spec("carbon").core.link == "tab"
+    tab = _links(preset_spec("carbon"))["core_link"]
+    assert dict(tab.params).get("bolt_hole") is not None and tab.hardware
+    for p in _links(_pegs_spec()).values():
+        params = dict(p.params)
+        assert params["link"] == "pegs" and "bolt_hole" not in params and "screw" not in params
+        assert p.hardware == ()
+        assert (params["peg_d"], params["peg_len"], params["column_wall"], params["arch_depth"]) == (6.8, 9.0, 1.8, 6.7)
+    assert dict(PEGS)["column_wall"] == pytest.approx((6.79 - 3.19) / 2, abs=0.01)  # the authors' connector
+
+
+def test_the_closed_form_is_the_connectors_cylinders_arch_and_strut_by_hand():
+    """Carbon (2.85 mm bores, 8 mm sockets, 25 mm pair): two pegs (r 3.4, 9 mm) and two columns
+    (r 1.425 + 1.8, 8.3 mm), the arch 25 x 6.7 x 3 less the two half columns in it, the strut's
+    sleeve (r 3.225, 9.8 mm) less its part in the arch, less three sockets: the hand sum with the
+    strut's overlap taken from the plan."""
+    from cogniframe.parts.joint_plan import pegged_plan
+
+    p = _links(_pegs_spec())["core_link"]
+    plan = pegged_plan(p.sockets, dict(p.params))
+    rc = 1.425 + 1.8
+    assert plan.col_r == pytest.approx(rc) and plan.peg_r == pytest.approx(3.4) and plan.spacing == pytest.approx(25.0, abs=1e-6)
+    overlap = plan.struts[0].in_arch
+    assert 0 < overlap < math.pi * rc**2 * 9.8 / 4
+    by_hand = (2 * math.pi * (3.4**2 * 9 + rc**2 * 8.3) + (25 * 6.7 - math.pi * rc**2) * 3
+               + math.pi * rc**2 * 9.8 - overlap - 3 * math.pi * 1.425**2 * 8)
+    assert p.estimate.volume == pytest.approx(by_hand, rel=1e-3)
+
+
+@pytest.mark.slow
+def test_pegged_link_is_one_watertight_solid_standing_on_its_pegs(tmp_path):
+    """Carbon with core.link: pegs, both parts: one watertight solid, its closed form within 2 % of
+    the CAD (exact but for the mouths' chamfers; test_parts allows the joints 15 %) and its
+    envelope within 0.1 mm of the CAD's box; in print the arms point up (+z), nothing is below
+    the bed and what lies on it is the two pegs' ends (their discs, faceted); the mirrored part
+    has the same volume and the mirrored box."""
+    from cogniframe.export.mesh import write_stl
+    from cogniframe.families import registry
+    from cogniframe.parts.joint_plan import map_sockets, pegged_plan, print_from_local
+
+    spec = _pegs_spec()
+    links = _links(spec)
+    assert set(links) == {"core_link", "core_link_mirrored"}
+    vols, boxes = {}, {}
+    for name, p in links.items():
+        built = registry.solid(p)
+        mesh = write_stl(built.shape, tmp_path / f"{name}.stl", name=name)  # raises unless watertight
+        assert mesh.body_count == 1
+        vol = built.shape.Volume()
+        assert p.estimate.volume == pytest.approx(vol, rel=0.02)
+        bb = built.shape.BoundingBox()
+        assert sorted(p.estimate.envelope) == pytest.approx(sorted([bb.xlen, bb.ylen, bb.zlen]), abs=0.1)
+        assert mesh.bounds[0, 2] == pytest.approx(0.0, abs=1e-6)
+        arms = [s for s in map_sockets(p, print_from_local(p)) if "arm" in s.rod]
+        assert len(arms) == 2 and all(s.direction == pytest.approx([0.0, 0.0, 1.0], abs=1e-6) for s in arms)
+        # the faces on the bed: the pegs' two end discs, around the columns' axes
+        plan = pegged_plan(p.sockets, dict(p.params))
+        tri = mesh.vertices[mesh.faces]
+        on_bed = np.all(np.abs(tri[:, :, 2]) < 1e-6, axis=1)
+        area = 0.5 * np.linalg.norm(np.cross(tri[on_bed, 1] - tri[on_bed, 0], tri[on_bed, 2] - tri[on_bed, 0]), axis=1).sum()
+        assert area == pytest.approx(2 * math.pi * 3.4**2, rel=0.03)
+        centres = np.array([c.axis for c in plan.columns])
+        dist = np.linalg.norm(tri[on_bed][:, :, :2].reshape(-1, 2)[:, None, :] - centres[None], axis=2).min(axis=1)
+        assert dist.max() <= 3.4 + 1e-6
+        vols[name], boxes[name] = vol, (bb.xmin, bb.xmax, bb.ymin, bb.ymax, bb.zmin, bb.zmax)
+    assert vols["core_link_mirrored"] == pytest.approx(vols["core_link"], rel=1e-9)
+    x0, x1, *rest = boxes["core_link"]
+    assert boxes["core_link_mirrored"] == pytest.approx((-x1, -x0, *rest), abs=1e-6)
+
+
+def test_mirrored_pegged_link_is_found_as_the_mirror_image():
+    """The FE reflects the mirrored link's super-element from its original's (`mirror_original`):
+    that needs the two print orientations to be mirror images on the bed."""
+    from cogniframe.analysis.joints import mirror_original
+
+    links = _links(_pegs_spec())
+    found = mirror_original(links["core_link_mirrored"], list(links.values()))
+    assert found is not None and found[0].name == "core_link"
+    assert np.linalg.det(found[1]) == pytest.approx(-1.0)
+
+
+@pytest.mark.slow
+def test_pegged_link_hinge_matches_the_authors_connector_in_the_same_fe():
+    """The arm pair's hinge (`load_cases.arm_pair_hinge` on the link's FE, the pegs' sides and ends
+    tied to the core) against tools/pegged_link_fe.py's `connector_hinge` of a `Connector` with
+    the same dimensions (the preset's bore and socket, 1.8 mm walls, the 6.8 x 9 mm pegs, the arch
+    over the columns' outer 3 mm): the same physics, within 10 % (the strut's sleeve and the arch's
+    exact extent differ); and far above the tab link's (75 N mm/rad, test_pegged_link_fe.py)."""
+    from cogniframe.analysis.joints.fe import fe_joint
+    from cogniframe.analysis.load_cases import arm_pair_hinge
+
+    spec = _pegs_spec()
+    link = _links(spec)["core_link"]
+    hinge = arm_pair_hinge({link.name: fe_joint(spec, link)}, [link])
+    depth = spec.joints.socket_depth
+    conn = pl.Connector(spacing=spec.frame.arm_spacing, peg_d=6.8, peg_len=9.0, column_d=spec.bore + 3.6, column_len=depth + 0.3,
+                        bore=spec.bore, depth=depth, arch_z=(depth + 0.3 - 3.0, depth + 0.3))
+    ref, _ = pl.connector_hinge(spec, conn)
+    assert hinge == pytest.approx(ref, rel=0.10)
+    flat, _ = pl.flat_link_hinge(preset_spec("carbon"))
+    assert hinge > 3 * flat
+
+
+def test_surrogate_leaves_the_pegged_link_to_the_fe_and_says_so():
+    """The surrogate was fitted on the tab link: a pegged link (and its mirror, which follows its
+    original) is outside its box, solved by the FE, and `check` notes it."""
+    from cogniframe.analysis.joints import surrogate as sg
+    from cogniframe.analysis.joints import surrogate_notes
+
+    spec = _pegs_spec()
+    parts = [p for p in design_mod.design(spec).parts if p.family == "joint"]
+    why = sg.outside_reasons(spec, parts)
+    assert "core.link: pegs" in why["core_link"]
+    assert why["core_link_mirrored"] == "its original core_link is outside"
+    link = next(p for p in parts if p.name == "core_link")
+    assert sg.predict(spec, link) == (None, why["core_link"])
+    notes = surrogate_notes(spec, parts)
+    assert any(n.startswith("joint core_link:") and "core.link: pegs" in n and "solid FE" in n for n in notes)
+    # the tab link stays inside (the presets' joints are in the training box)
+    tab = [p for p in design_mod.design(preset_spec("carbon")).parts if p.family == "joint"]
+    assert not [n for n in sg.outside_reasons(preset_spec("carbon"), tab) if "core_link" in n]
+
+
+def test_analytic_model_refuses_the_pegged_link_naming_the_key():
+    """No closed form models the pegs: the params are refused (the key and the fix named), and the
+    closed-form joint itself refuses rather than use the tab link's formulas."""
+    from cogniframe.analysis.joints import analytic_joint
+    from cogniframe.errors import UserError
+    from presets import preset_doc
+    from cogniframe import spec as spec_mod
+
+    doc = preset_doc("carbon", core__link="pegs", model__stiffness_model="analytic")
+    with pytest.raises(UserError) as e:
+        spec_mod.from_dict(doc, "carbon.yaml")
+    assert "model.stiffness_model" in str(e.value) and "core.link: pegs" in str(e.value)
+    link = _links(_pegs_spec())["core_link"]
+    with pytest.raises(ValueError, match="core.link: pegs"):
+        analytic_joint(_pegs_spec(), link)
