@@ -174,3 +174,18 @@ def test_analytic_model_refuses_the_pegged_link_naming_the_key():
     link = _links(_pegs_spec())["core_link"]
     with pytest.raises(ValueError, match="core.link: pegs"):
         analytic_joint(_pegs_spec(), link)
+
+
+def test_a_strut_far_off_the_arms_refuses_the_pegs_naming_the_key():
+    """A tall, narrow box (150 x 150 x 180) brings the strut in at 51 deg to the arms: standing on
+    its pegs (the arms upright) the link's strut sleeve would overhang past 45 deg, so the params
+    are refused, naming core.link and the fix; the tab link still builds that box."""
+    from cogniframe.errors import UserError
+
+    box = dict(frame__width=150, frame__depth=150, frame__height=180, motors__radius=82 * 150 / 210,
+               motors__prop_diameter=76.2 * 150 / 210)
+    assert _links(preset_spec("carbon", **box))
+    with pytest.raises(UserError) as e:
+        _links(_pegs_spec(**box))
+    msg = str(e.value)
+    assert "core.link" in msg and "51 deg" in msg and "core.link: tab" in msg

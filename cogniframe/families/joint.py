@@ -139,6 +139,15 @@ def _joint(spec: Spec, frame: Frame, name: str, kind: str, proto: str = "fl", co
         params += [("kind", kind), ("mirror", corner != "fl")]
     if kind == "core_link" and spec.core.link == "pegs":
         params += list(PEGS)
+        dirs = [np.asarray(s.direction, float) for s in sockets]
+        arm = next(d for d in dirs if sum(float(d @ e) > 1 - PARALLEL_TOL for e in dirs) > 1)  # the arm pair's
+        for s in sockets:
+            lean = math.degrees(math.acos(min(1.0, float(np.asarray(s.direction, float) @ arm))))
+            if lean > PEG_LEAN_MAX + 1e-6:
+                raise spec.error("core.link", f"the pegged core link prints standing on its pegs, the arms upright, and the strut "
+                                 f"leaves the arms at {lean:.0f} deg: its sleeve would overhang more than {PEG_LEAN_MAX:g} deg "
+                                 "and need supports", "set core.link: tab, or shape the frame so the struts leave the core "
+                                 f"within {PEG_LEAN_MAX:g} deg of the arms (level arms, a lower or wider box)")
         # no screw: the pegs are pressed into the core's bores
         return PartSpec(name, "joint", "exoskeleton", spec.joints.material, 1.0, placements, tuple(sockets),
                         spec.joints.wall, _pegged_link_estimate(spec, sockets, dict(params)), tuple(params), ())
@@ -181,6 +190,7 @@ PEGS = (
     ("arch_len", 3.0),  # mm along the columns, at their mouths (authors' z 6..9 of a 8.6 mm column)
     ("arch_depth", 6.7),  # mm across the plane of the arm pair (authors' 6.7)
 )
+PEG_LEAN_MAX = 45.0  # deg: the most a socket of the standing pegged link leans from the arms (print overhang)
 
 
 # The core link's tab: it carries an arm's thrust moment from the arm block, across the seat at
