@@ -544,7 +544,8 @@ def _pegged_link_estimate(spec: Spec, sockets: list[Socket], params: dict) -> Es
     orientation (the arms' direction up, the pegs' ends on the bed): per arm a peg and a column
     (cylinders: one cylinder where their diameters are within `PEG_SNAP`), the arch (a box from
     axis to axis, less the half columns inside it), the strut's sleeve (a cylinder, less the part
-    of it inside the arch: `PeggedPlan.strut_in_arch`), less the bores."""
+    of it inside the arch: `PegStrut.in_arch`), less the bores. Where the two arm ports' along-arm
+    heights differ by rounding only, the columns stand level (`STACK_SNAP_MM`)."""
     pl = pegged_plan(sockets, params)
     hole = math.pi / 4 * spec.bore**2
     vol = a_h = a_v = 0.0

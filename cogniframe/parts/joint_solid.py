@@ -20,6 +20,9 @@ Print orientations
 * corner_top: ring plane on the bed, upside down (the leg socket then points up; the flat bed face
   is the top of the frame). corner_bottom: as in the frame, ring sleeves and a foot pad on the bed:
   the bottom corners are the feet, and the foot pad is what touches the ground.
+* the pegged core link (core.link: pegs): standing, the arms' direction up and the pegs' ends on
+  the bed (parts/joint_plan.py `pegged_plan`); the arch's underside is a bridge between the
+  columns, as in the authors' connector.
 * knee, core_link: every socket direction lies in the frame's diagonal side plane and the two arm
   rods are offset across it, so the joint is printed lying on its side: the lateral axis is vertical,
   every socket is parallel to the bed, the two arm sockets are stacked. The core link holds them in
