@@ -139,6 +139,26 @@ def test_pegged_link_hinge_matches_the_authors_connector_in_the_same_fe():
     assert hinge > 3 * flat
 
 
+@pytest.mark.slow
+def test_the_core_holds_the_pegs_sides_and_ends_only():
+    """The support body's tie in the joint FE is the pegs' cylindrical sides and inner ends, the
+    faces the ABS bores hold: its meshed area is the two pegs' 2 (2 pi r L + pi r^2) (r 3.4, L 9:
+    457 mm^2), within the faceting of the mesh; the rods' ties are the sockets'."""
+    from cogniframe.analysis.joints import solid_fe
+    from cogniframe.analysis.joints.fe import joint_problem
+
+    spec = _pegs_spec()
+    link = _links(spec)["core_link"]
+    pb = joint_problem(spec, link)
+    assert pb.labels[-1] == "body"
+    area = solid_fe.assemble(pb.points, pb.tets, pb.e, pb.nu, list(pb.ties)).tied_area
+    assert area[-1] == pytest.approx(2 * (2 * math.pi * 3.4 * 9.0 + math.pi * 3.4**2), rel=0.03)
+    # each rod's socket: its wall over the depth less the chamfer, and its floor
+    bore, depth = spec.bore, spec.joints.socket_depth - 0.5
+    for a in area[:-1]:
+        assert a == pytest.approx(math.pi * bore * depth + math.pi * bore**2 / 4, rel=0.05)
+
+
 def test_surrogate_leaves_the_pegged_link_to_the_fe_and_says_so():
     """The surrogate was fitted on the tab link: a pegged link (and its mirror, which follows its
     original) is outside its box, solved by the FE, and `check` notes it."""
