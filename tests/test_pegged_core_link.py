@@ -196,6 +196,20 @@ def test_analytic_model_refuses_the_pegged_link_naming_the_key():
         analytic_joint(_pegs_spec(), link)
 
 
+def test_the_studios_fast_model_of_a_pegged_design_is_the_design_itself():
+    """The studio shows the closed forms while a joint's FE solves (`with_fast_model`); with no
+    closed form for the pegs, a pegged design is shown by its own model rather than refused."""
+    import yaml
+
+    from cogniframe import api
+    from presets import preset_doc
+
+    d = api.from_text(yaml.safe_dump(preset_doc("carbon", core__link="pegs")), "carbon.yaml")
+    assert d.with_fast_model() is d
+    tab = api.from_text(yaml.safe_dump(preset_doc("carbon")), "carbon.yaml")
+    assert tab.with_fast_model()._spec.model.stiffness_model == "analytic"
+
+
 def test_a_strut_far_off_the_arms_refuses_the_pegs_naming_the_key():
     """A tall, narrow box (150 x 150 x 180) brings the strut in at 51 deg to the arms: standing on
     its pegs (the arms upright) the link's strut sleeve would overhang past 45 deg, so the params
