@@ -172,7 +172,7 @@ def samples(overrides_list: list[dict], work: Path) -> list[dict]:
     """Per design and non-mirrored joint: its part, features, FE unit (factor 1) and log target."""
     from cogniframe.analysis.joints import is_mirror
     from cogniframe.analysis.joints import surrogate as sg
-    from cogniframe.analysis.joints.model import JointStiffness, joint_kind, tpu_moduli
+    from cogniframe.analysis.joints.model import JointStiffness, tpu_moduli
 
     out = []
     for ov in overrides_list:
@@ -190,7 +190,7 @@ def samples(overrides_list: list[dict], work: Path) -> list[dict]:
             unit = JointStiffness.from_json(d)
             names, x = sg.features(s, p)
             e = tpu_moduli(s, 1.0)[0]
-            out.append({"overrides": ov, "kind": joint_kind(p), "part": p, "spec": s, "unit": unit, "names": names,
+            out.append({"overrides": ov, "kind": sg.family_of(p), "part": p, "spec": s, "unit": unit, "names": names,
                         "x": x, "y": sg.log_target(unit, p, e), "e": e})
     return out
 

@@ -276,16 +276,22 @@ def outside_reasons(spec, parts) -> dict[str, str]:
     return out
 
 
+def family_of(part) -> str:
+    """The fit a joint belongs to: its kind, and for a core link its joint to the core (the pegged
+    connector and the bolted tab are different shapes with different features)."""
+    kind = joint_kind(part)
+    link = dict(part.params).get("link")
+    return f"{kind}_{link}" if kind == "core_link" and link not in (None, "tab") else kind
+
+
 def _why_outside(fams: dict, spec, part) -> str | None:
     from .mirror import is_mirror
 
     if is_mirror(part):  # fitted on originals: a mirror is its original's prediction, reflected
         return "a mirrored joint (reflected from its original's prediction, not predicted itself)"
-    if dict(part.params).get("link") == "pegs":  # its features describe the tab link's geometry
-        return "a pegged core link (core.link: pegs); the surrogate was fitted on the tab link"
-    fam = fams.get(joint_kind(part))
+    fam = fams.get(family_of(part))
     if fam is None:
-        return f"no surrogate for {joint_kind(part)} joints"
+        return f"no surrogate for {family_of(part)} joints"
     n = len(part.sockets) + (1 if len(fam.labels) > len(part.sockets) else 0)
     if n != len(fam.labels):
         return f"{n} bodies, trained on {len(fam.labels)}"
@@ -305,7 +311,7 @@ def predict(spec, part, factor: float | None = None, path: Path | None = None) -
     why = _why_outside(fams, spec, part)
     if why is not None:
         return None, why
-    fam = fams[joint_kind(part)]
+    fam = fams[family_of(part)]
     labels = tuple(s.rod for s in part.sockets) + (("body",) if len(fam.labels) > len(part.sockets) else ())
     _, x = features(spec, part)
     y = fam.log_entries(x[None, :])
