@@ -182,6 +182,7 @@ def _joint(spec: Spec, frame: Frame, name: str, kind: str, proto: str = "fl", co
 # Flex_Main_connector_new_bumper.stl of thecognifly/CogniFly-STL (docs/authors-parts.md,
 # tools/pegged_link_fe.py `Connector`). Each arm socket sits in a TPU column whose far end is a
 # solid peg, pressed into a bore of the ABS core; an arch joins the two columns at their mouths.
+# The strut has a peg of its own, parallel to the arms' (parts/joint_plan.py `pegged_plan`).
 PEGS = (
     ("link", "pegs"),
     ("peg_d", 6.8),  # peg diameter, mm (authors' 6.79)

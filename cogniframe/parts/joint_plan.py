@@ -522,7 +522,7 @@ def pegged_plan(sockets, params: dict) -> PeggedPlan:
             raise ValueError(f"the arm sockets of a pegged core link are {float(q[2] - q0[2]):.3g} mm apart along the arms")
         s = sockets[i]
         c0 = float(q0[2]) + s.seat - gap
-        cols.append(PegColumn(q[:2].copy(), c0 - peg_len, c0, float(q0[2]) + s.seat + s.depth))
+        cols.append(PegColumn(q[:2].copy(), c0 - peg_len, c0, float(q0[2]) + s.seat + s.depth, i))
     y_c = float(cols[0].axis[1])
     arch_hi = min(c.col1 for c in cols)
     arch_lo = arch_hi - float(params["arch_len"])
