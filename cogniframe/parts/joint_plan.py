@@ -600,8 +600,8 @@ def _peg_under(p0, d, seat: float, t1: float, r: float, shoulder: float, n: int 
         ok = (tc >= seat) & (tc <= t1)
         cross = np.asarray(p0, float)[:, None] + d[:, None] * tc[None, :] + r * ring
         pts = np.hstack([pts, cross[:, ok]])
-    t_axis = (shoulder - float(np.asarray(p0, float)[2])) / d[2]
     if pts.shape[1] == 0:
+        t_axis = (shoulder - float(np.asarray(p0, float)[2])) / d[2] if abs(d[2]) > 1e-9 else 0.0
         return (np.asarray(p0, float) + d * t_axis)[:2].copy(), 0.0
     xy = np.unique(np.round(pts[:2].T, 9), axis=0)
 
@@ -651,7 +651,8 @@ def _sleeve_overlap(p0, d, t0: float, t1: float, r: float, shoulder: float, axis
 
     w = P.ravel() * (r / nr) * (2 * math.pi / n) * ((t1 - t0) / n)
     overlap = float(w[~own(at(T, P, F))].sum())
-    # the piece's bounds: its wall and top end (a convex piece's extremes lie on its boundary)
+    # the piece's bounds from its wall inside the cone (its top end's rim is on the wall; where the
+    # cone trims it, within a few tenths of the shoulder, the peg's disc bounds it to ~0.1 mm)
     tw = t0 + np.arange(4 * n + 1) * (t1 - t0) / (4 * n)
     Tw, Fw = np.meshgrid(tw, np.arange(2 * n) * math.pi / n, indexing="ij")
     wall = at(Tw, np.full(Tw.shape, r), Fw)
