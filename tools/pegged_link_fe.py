@@ -58,6 +58,10 @@ class Connector:
     arch_w: float = 6.7
     strut_top: float = 21.4
     strut_depth: float = 7.4
+    # cogniframe's pegged link gives the strut its own peg: None is the authors' connector (none);
+    # a number y puts a peg (peg_d x peg_len) and a column (column_d) up to the arch's top under
+    # the middle, y off the arms' plane, held in the base like the others
+    mid_peg_y: float | None = None
 
     def solid(self):
         import cadquery as cq
@@ -71,6 +75,11 @@ class Connector:
         arch = cq.Workplane("XY").box(self.spacing, self.arch_w, z1 - z0, centered=(False, True, False)).translate((0, 0, z0))
         mid = cq.Workplane("XY").workplane(offset=z1).center(self.spacing / 2, 0).circle(self.column_d / 2).extrude(self.strut_top - z1)
         shape = shape.union(arch).union(mid)
+        if self.mid_peg_y is not None:
+            x, y = self.spacing / 2, self.mid_peg_y
+            peg = cq.Workplane("XY").workplane(offset=-self.peg_len).center(x, y).circle(self.peg_d / 2).extrude(self.peg_len)
+            col = cq.Workplane("XY").center(x, y).circle(self.column_d / 2).extrude(z1)
+            shape = shape.union(peg).union(col)
         for x, top, depth in ((0.0, self.column_len, self.depth), (self.spacing, self.column_len, self.depth),
                               (self.spacing / 2, self.strut_top, self.strut_depth)):
             cut = cq.Workplane("XY").workplane(offset=top - depth).center(x, 0).circle(self.bore / 2).extrude(depth + 1)

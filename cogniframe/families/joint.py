@@ -148,6 +148,7 @@ def _joint(spec: Spec, frame: Frame, name: str, kind: str, proto: str = "fl", co
                                  f"leaves the arms at {lean:.0f} deg: its sleeve would overhang more than {PEG_LEAN_MAX:g} deg "
                                  "and need supports", "set core.link: tab, or shape the frame so the struts leave the core "
                                  f"within {PEG_LEAN_MAX:g} deg of the arms (level arms, a lower or wider box)")
+        _pegs_fit(spec, pegged_plan(sockets, dict(params)))
         # no screw: the pegs are pressed into the core's bores
         return PartSpec(name, "joint", "exoskeleton", spec.joints.material, 1.0, placements, tuple(sockets),
                         spec.joints.wall, _pegged_link_estimate(spec, sockets, dict(params)), tuple(params), ())
@@ -181,6 +182,7 @@ def _joint(spec: Spec, frame: Frame, name: str, kind: str, proto: str = "fl", co
 # Flex_Main_connector_new_bumper.stl of thecognifly/CogniFly-STL (docs/authors-parts.md,
 # tools/pegged_link_fe.py `Connector`). Each arm socket sits in a TPU column whose far end is a
 # solid peg, pressed into a bore of the ABS core; an arch joins the two columns at their mouths.
+# The strut has a peg of its own, parallel to the arms' (parts/joint_plan.py `pegged_plan`).
 PEGS = (
     ("link", "pegs"),
     ("peg_d", 6.8),  # peg diameter, mm (authors' 6.79)
@@ -191,6 +193,28 @@ PEGS = (
     ("arch_depth", 6.7),  # mm across the plane of the arm pair (authors' 6.7)
 )
 PEG_LEAN_MAX = 45.0  # deg: the most a socket of the standing pegged link leans from the arms (print overhang)
+# mm: the least ABS between two of the core's peg bores (five 0.4 mm perimeters: a press fit's
+# bore with a thinner web between it and the next splits as the pegs go in)
+PEG_WEB = 2.0
+
+
+def _pegs_fit(spec: Spec, pl) -> None:
+    """Refuse (naming core.link) a pegged link whose pegs' bores would run into each other in the
+    core, or whose strut bore would come closer to its peg's side than the columns' TPU wall."""
+    cols = pl.columns
+    for i in range(len(cols)):
+        for j in range(i):
+            gap = float(np.linalg.norm(cols[i].axis - cols[j].axis)) - 2 * pl.peg_r
+            if gap < PEG_WEB - 1e-6:
+                raise spec.error("core.link", f"the pegged core link's pegs ({2 * pl.peg_r:g} mm, one per arm and one "
+                                 f"for the strut) stand {gap:.1f} mm apart: the core's bores need {PEG_WEB:g} mm of ABS "
+                                 "between them", "set core.link: tab, or space the arms wider (frame.arm_spacing)")
+    wall = float(dict(PEGS)["column_wall"])
+    for st in pl.struts:
+        if st.wall < wall - 1e-6:
+            raise spec.error("core.link", f"the strut's bore dips into its peg and would leave {st.wall:.2f} mm of TPU "
+                             f"to the peg's side (the columns have {wall:g} mm)",
+                             "set core.link: tab, or use thinner rods (rods.diameter)")
 
 
 # The core link's tab: it carries an arm's thrust moment from the arm block, across the seat at
@@ -541,11 +565,12 @@ def _disc_band(r: float, lo: float, hi: float) -> float:
 
 def _pegged_link_estimate(spec: Spec, sockets: list[Socket], params: dict) -> Estimate:
     """Closed form of the pegged core link (parts/joint_solid.py `_core_link_pegged`), in print
-    orientation (the arms' direction up, the pegs' ends on the bed): per arm a peg and a column
+    orientation (the arms' direction up, the pegs' ends on the bed): per peg a peg and a column
     (cylinders: one cylinder where their diameters are within `PEG_SNAP`), the arch (a box from
-    axis to axis, less the half columns inside it), the strut's sleeve (a cylinder, less the part
-    of it inside the arch: `PegStrut.in_arch`), less the bores. Where the two arm ports' along-arm
-    heights differ by rounding only, the columns stand level (`STACK_SNAP_MM`)."""
+    axis to axis, less the half arm columns inside it and less the strut's column inside it: a
+    disc's band), the strut's sleeve (a cylinder, less what is not its own piece's:
+    `PegStrut.overlap`), less the bores. Where the two arm ports' along-arm heights differ by
+    rounding only, the columns stand level (`STACK_SNAP_MM`)."""
     pl = pegged_plan(sockets, params)
     hole = math.pi / 4 * spec.bore**2
     vol = a_h = a_v = 0.0
@@ -554,13 +579,17 @@ def _pegged_link_estimate(spec: Spec, sockets: list[Socket], params: dict) -> Es
         a_h += 2 * math.pi * pl.peg_r**2  # the peg's end and the shoulder + the column's top
         a_v += 2 * math.pi * (pl.peg_r * pl.peg_len + pl.col_r * c.col_len)
     arch_len = pl.arch_hi - pl.arch_lo
-    inside = 2 * 0.5 * _disc_band(pl.col_r, pl.arch_n[0], pl.arch_n[1]) * arch_len
+    arms = [c for c in pl.columns if c.socket not in {st.index for st in pl.struts}]
+    inside = len(arms) * 0.5 * _disc_band(pl.col_r, pl.arch_n[0], pl.arch_n[1]) * arch_len
     vol += pl.spacing * (pl.arch_n[1] - pl.arch_n[0]) * arch_len - inside
     a_h += 2 * (pl.spacing - 2 * pl.col_r) * (pl.arch_n[1] - pl.arch_n[0])
     a_v += 2 * (pl.spacing - 2 * pl.col_r) * arch_len
     for st in pl.struts:
+        c = pl.columns[st.column]
+        y = float(c.axis[1])
+        vol -= _disc_band(pl.col_r, pl.arch_n[0] - y, pl.arch_n[1] - y) * max(0.0, min(c.col1, pl.arch_hi) - max(c.col0, pl.arch_lo))
         n = st.end - st.start
-        vol += math.pi * pl.col_r**2 * n - st.in_arch
+        vol += math.pi * pl.col_r**2 * n - st.overlap
         sin_t = math.sqrt(max(0.0, 1 - st.lean_cos**2))
         a_h += 2 * math.pi * pl.col_r * n * sin_t
         a_v += 2 * math.pi * pl.col_r * n * st.lean_cos

@@ -497,7 +497,9 @@ def _core_link_flat(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarra
 def _core_link_pegged(part: PartSpec, socks: list[PSocket]):
     """The pegged core link (parts/joint_plan.py `pegged_plan`), standing in print: per arm a solid
     peg from the bed and a column round the socket above it, the arch joining the columns at their
-    mouths, the strut's sleeve along its socket into the arch; less the sockets."""
+    mouths; the strut's peg and column into the arch, and its sleeve along its socket, kept above
+    the peg's shoulder and inside the 45 deg cone from the peg's rim (its first layers stand on
+    the peg); less the sockets."""
     cq = _cq()
     pl = pegged_plan(part.sockets, dict(part.params))
     pieces = []
@@ -512,7 +514,10 @@ def _core_link_pegged(part: PartSpec, socks: list[PSocket]):
     pieces.append(cq.Solid.makeBox(x1 - x0, n1 - n0, pl.arch_hi - pl.arch_lo, cq.Vector(x0, n0, pl.arch_lo)))
     for st in pl.struts:
         s = socks[st.index]
-        pieces.append(cylinder(s.at(st.start), s.direction, st.end - st.start, pl.col_r))
+        c = pl.columns[st.column]
+        cone = cq.Solid.makeCone(st.cone_r0, st.cone_r0 + st.cone_h, st.cone_h,
+                                 cq.Vector(float(c.axis[0]), float(c.axis[1]), c.col0), cq.Vector(0, 0, 1))
+        pieces.append(cylinder(s.at(st.start), s.direction, st.end - st.start, pl.col_r).intersect(cone))
     return finish(fuse_all(pieces), [socket_cutter(s) for s in socks])
 
 
