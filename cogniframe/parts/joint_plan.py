@@ -544,6 +544,29 @@ def pegged_plan(sockets, params: dict) -> PeggedPlan:
                       tuple(struts), ext)
 
 
+@dataclass(frozen=True, eq=False)
+class PegAxis:
+    """One peg of a pegged core link in the link's local frame: its axis from the free `end` to
+    the `shoulder` where it meets its column, and its radius."""
+
+    end: np.ndarray
+    shoulder: np.ndarray
+    radius: float
+
+
+def peg_axes(sockets, params: dict) -> tuple[PegAxis, ...]:
+    """The pegs of a pegged core link in its local frame, one per column of `pegged_plan` (each
+    runs from `peg0` to `col0` along print z at the column's axis, taken back through the plan's
+    print <- local transform): the core's bores that hold them (families/core_plate.py) follow
+    every column the plan has."""
+    pl = pegged_plan(sockets, params)
+
+    def local(xy, z: float) -> np.ndarray:
+        return pl.rot.T @ (np.array([float(xy[0]), float(xy[1]), z]) - pl.shift)
+
+    return tuple(PegAxis(local(c.axis, c.peg0), local(c.axis, c.col0), pl.peg_r) for c in pl.columns)
+
+
 def _cylinder_in_box(p0, d, t0: float, t1: float, r: float, lo, hi, n: int = 48) -> float:
     """Volume (mm^3) of the cylinder of radius `r` along unit `d` from p0 + d t0 to p0 + d t1
     inside the axis-aligned box lo..hi: the midpoint rule in the cylinder's own coordinates (n
