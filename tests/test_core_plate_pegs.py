@@ -245,3 +245,16 @@ def test_bamboo_with_pegs_has_no_clash(tmp_path):
     built = build_parts(spec, frame, plist, tmp_path)
     res = check_clashes(spec, frame, plist, built, tmp_path)
     assert res.ok and res.clashes == (), res.messages()
+
+
+def test_assembly_steps_press_the_pegs_in_rather_than_bolt():
+    """The builder is told to press each link's pegs into the plate's tubes, with no screw, and
+    the tab link's bolting text is gone (it stays for the tab)."""
+    from cogniframe import design as design_mod
+    from cogniframe.report.assembly_steps import assembly_steps
+
+    core = next(s for s in assembly_steps(design_mod.design(preset_spec("carbon", core__link="pegs"))) if s.title == "Core")
+    assert "pegs all the way into the pair of ABS tubes" in core.text and "screw down through the link tab" not in core.text
+    assert "pressed in" in core.glue
+    tab = next(s for s in assembly_steps(design_mod.design(preset_spec("carbon"))) if s.title == "Core")
+    assert "screw down through the link tab" in tab.text
