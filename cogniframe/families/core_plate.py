@@ -147,18 +147,19 @@ def _clip_halfplane(poly, n: np.ndarray, c: float) -> list:
     return out
 
 
-def web_outside(web, half: float) -> tuple[list, float]:
-    """The part of a web (convex, plan) outside the plate |x|, |y| <= `half`, and the length of its
-    side on the plate's edge: the web lies beyond one edge, so it is the web's part beyond that
-    edge's line."""
-    pts = np.asarray(web, float)
-    k = int(np.argmax(np.abs(pts).max(axis=0)))
-    sign = math.copysign(1.0, float(pts[np.argmax(np.abs(pts[:, k])), k]))
-    n = np.zeros(2)
-    n[k] = sign
-    out = _clip_halfplane(web, n, half)
-    on_line = [float(p[1 - k]) for p in out if abs(float(p[k]) * sign - half) < 1e-9]
-    return out, (max(on_line) - min(on_line) if on_line else 0.0)
+def web_outside(web, half: float) -> tuple[float, float]:
+    """(area, perimeter) of the part of a web (convex, plan) outside the plate |x|, |y| <= `half`:
+    the web less its intersection with the plate (wherever it reaches in), and the web's
+    perimeter less its sides inside the plate (its sides along the plate's edge are no surface)."""
+    inside = list(np.asarray(web, float))
+    for k in range(2):
+        for sign in (1.0, -1.0):
+            n = np.zeros(2)
+            n[k] = -sign
+            inside = _clip_halfplane(inside, n, -half) if len(inside) >= 3 else []
+    a_in = polygon_area(inside) if len(inside) >= 3 else 0.0
+    p_in = polygon_perimeter(inside) if len(inside) >= 3 else 0.0
+    return polygon_area(web) - a_in, polygon_perimeter(web) - p_in
 
 
 def _with_tubes(plate: Estimate, params: dict) -> Estimate:
@@ -167,7 +168,8 @@ def _with_tubes(plate: Estimate, params: dict) -> Estimate:
     bore r_b, outside r_o, its axis r_o above the bed, the web's top h = r_o - t below the axis)
     adds its outside circle's part above the web, less the bore: L (pi r_o^2 - seg(h) - pi r_b^2),
     seg(h) = r_o^2 acos(h / r_o) - h sqrt(r_o^2 - h^2) (the circle below a chord h from its
-    centre). Exact but for faceting: the web lies under the whole tube, the bore inside the two."""
+    centre). Exact but for faceting wherever the tubes and webs keep clear of each other and of
+    the plate's holes: the web (or the plate) lies under the whole tube, the bore inside the two."""
     t, half = float(params["thickness"]), float(params["size"]) / 2
     r_b = float(params["tube_bore"]) / 2
     r_o = r_b + float(params["tube_wall"])
@@ -180,11 +182,10 @@ def _with_tubes(plate: Estimate, params: dict) -> Estimate:
     pts = [np.array([x, y]) for x in (-half, half) for y in (-half, half)]
     for (e, s), web in zip(params["tubes"], params["webs"]):
         L = float(np.linalg.norm(np.asarray(s, float) - np.asarray(e, float)))
-        out, on_edge = web_outside(web, half)
-        a_w = polygon_area(out)
+        a_w, p_w = web_outside(web, half)
         vol += a_w * t + L * (above - math.pi * r_b**2)
         a_h += 2 * a_w - chord * L + arc * L / 2  # the web's faces (the tube on its top), half the round
-        a_v += arc * L / 2 + 2 * math.pi * r_b * L + 2 * (above - math.pi * r_b**2) + t * (polygon_perimeter(out) - 2 * on_edge)
+        a_v += arc * L / 2 + 2 * math.pi * r_b * L + 2 * (above - math.pi * r_b**2) + t * p_w
         pts += [np.asarray(p, float) for p in web]
     p = np.asarray(pts)
     ext = np.ptp(p, axis=0)
