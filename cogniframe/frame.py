@@ -352,8 +352,8 @@ def _hinge_seat(dirs: list[np.ndarray], roles: list[str], wall: float) -> float:
 
 
 # The pegged core link (core.link: pegs) presses each peg into an ABS tube on the core plate:
-# the peg's diameter is the tube's bore, the authors' MainBase bore (measured 6.8 mm on
-# MainBase.stl of thecognifly/CogniFly-STL; their peg 6.79), and the tube's wall three 0.4 mm lines.
+# the peg's diameter is the tube's bore, the authors' MainBase peg bore (6.8 mm; their connector's
+# peg 6.79: docs/authors-parts.md), and the tube's wall three 0.4 mm lines.
 PEG_D = 6.8  # mm
 PEG_TUBE_WALL = 1.2  # mm
 

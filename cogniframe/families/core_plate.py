@@ -23,6 +23,7 @@ import numpy as np
 
 from ..frame import PEG_TUBE_WALL, Frame
 from ..materials import SCREWS, STACK_PATTERNS
+from ..parts.blocks import plate
 from ..parts.joint_plan import FLIP_X, hull_ccw, transform
 from ..parts.joint_solid import Built
 from ..spec import Spec
@@ -40,11 +41,11 @@ NYLON_STANDOFF_G_PER_MM = 0.0135
 # mm: a web reaches this far into the plate (its CAD overlaps the plate instead of touching it
 # along a face; the closed form counts only what lies outside the plate)
 WEB_INTO_PLATE = 0.5
-LEVEL_TOL = 1e-6  # mm: a tube's two axis ends at one height (level arms)
+LEVEL_TOL = 1e-5  # mm: a tube's axis level and flush as planned (sockets and placements are stored to 1e-6)
 # mm: OCC's fuzzy boolean tolerance for the tubes and webs. A web's outer end face is the plane
 # of its tube's end (the web runs under the whole tube); with the arms off the diagonal (a
 # rectangle) the exact booleans left the union split along such faces, in up to 25 solids of the
-# right total volume; fuzzy, each design of 12 random ones gave one solid of the same volume.
+# right total volume; fuzzy, each of 20 random designs gave one solid of the same volume.
 FUZZ = 1e-4
 
 
@@ -162,7 +163,7 @@ def web_outside(web, half: float) -> tuple[float, float]:
     return polygon_area(web) - a_in, polygon_perimeter(web) - p_in
 
 
-def _with_tubes(plate: Estimate, params: dict) -> Estimate:
+def _with_tubes(base: Estimate, params: dict) -> Estimate:
     """The plate's closed form plus the tubes and webs, in print (upside down: the plate's top on
     the bed). Each web is a prism `t` thick over its plan outside the plate; each tube (length L,
     bore r_b, outside r_o, its axis r_o above the bed, the web's top h = r_o - t below the axis)
@@ -178,7 +179,7 @@ def _with_tubes(plate: Estimate, params: dict) -> Estimate:
     above = math.pi * r_o**2 - seg
     chord = 2 * math.sqrt(r_o**2 - h * h)
     arc = r_o * (2 * math.pi - 2 * math.acos(h / r_o))
-    vol, a_h, a_v = plate.volume, plate.area_h, plate.area_v
+    vol, a_h, a_v = base.volume, base.area_h, base.area_v
     pts = [np.array([x, y]) for x in (-half, half) for y in (-half, half)]
     for (e, s), web in zip(params["tubes"], params["webs"]):
         L = float(np.linalg.norm(np.asarray(s, float) - np.asarray(e, float)))
@@ -218,7 +219,7 @@ def _with_tube_solids(shape, params: dict, m: np.ndarray):
     bed) to its round top, the bore through it."""
     import cadquery as cq
 
-    from ..parts.joint_solid import cylinder, finish, prism
+    from ..parts.joint_solid import VOID_MM3, cylinder, prism
 
     t = float(params["thickness"])
     r_b = float(params["tube_bore"]) / 2
@@ -238,10 +239,7 @@ def _with_tube_solids(shape, params: dict, m: np.ndarray):
     first, *rest = pieces
     body = first.fuse(*rest, tol=FUZZ).clean()
     bore = bores[0].fuse(*bores[1:], tol=FUZZ) if len(bores) > 1 else bores[0]
-    return finish(body.cut(bore, tol=FUZZ), [])
-
-
-def plate(size_x: float, size_y: float, t: float, holes):
-    from ..parts.blocks import plate as block
-
-    return block(size_x, size_y, t, holes)
+    solids = [x for x in body.cut(bore, tol=FUZZ).clean().Solids() if x.Volume() > VOID_MM3]
+    if len(solids) != 1:
+        raise RuntimeError(f"the core plate with its peg tubes came out as {len(solids)} solids instead of 1")
+    return solids[0]
