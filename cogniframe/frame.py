@@ -214,7 +214,7 @@ def frame_of(spec: Spec) -> Frame:
     hx, hy = f.width / 2 - inset, f.depth / 2 - inset
     z_top, z_bot = f.height - inset, inset
     core = _core(spec)
-    z_link = core.plate.centre[2]
+    z_link = core.plate.centre[2] - peg_drop(spec)
     z_knee = z_link if f.level_arms else f.height * f.knee_height
     a_link = c.plate_size / 2 + inset  # link socket centre just outside the plate corner
 
@@ -351,6 +351,22 @@ def _hinge_seat(dirs: list[np.ndarray], roles: list[str], wall: float) -> float:
     return wall + 2 * HINGE_GAP / max(1.0 - min(legs), 1e-6)
 
 
+# The pegged core link (core.link: pegs) presses each peg into an ABS tube on the core plate:
+# the peg's diameter is the tube's bore, the authors' MainBase peg bore (6.8 mm; their connector's
+# peg 6.79: docs/authors-parts.md), and the tube's wall three 0.4 mm lines.
+PEG_D = 6.8  # mm
+PEG_TUBE_WALL = 1.2  # mm
+
+
+def peg_drop(spec: Spec) -> float:
+    """How far the core links' nodes (the arms' axes) lie below the core plate's mid-plane, mm:
+    0 for the tab link. With pegs each tube hangs under the plate, its top flush with the plate's
+    top: the plate prints upside down, its top and the tubes on the bed together."""
+    if spec.core.link != "pegs":
+        return 0.0
+    return PEG_D / 2 + PEG_TUBE_WALL - spec.core.plate_thickness / 2
+
+
 STACK_H = 16.0  # FC + 4-in-1 ESC on 8 mm standoffs, mm
 STACK_BOTTOM = 3.0  # soft-mount grommets / nylon nuts under the ESC, mm: the core links' tabs keep below it
 CAMERA_BASE_T = 2.0  # camera mount base plate under the stack, mm
@@ -367,7 +383,8 @@ def _core(spec: Spec) -> Core:
     strap slots at the mouth), spacer / sensor mount, core plate, camera-mount base, FC stack,
     computer mount and computer. The flow board hangs under the sensor mount's rear pad, behind
     the holder; the camera stands on the plate's front edge. With level arms everything from the
-    plate up is lifted `hang` mm onto standoffs, to the knees' height."""
+    plate up is lifted `hang` mm onto standoffs, to the knees' height (with pegs, `peg_drop` above
+    it: the arms run through the tubes under the plate)."""
     from .materials import BOARDS
 
     c, b = spec.core, spec.core.battery
@@ -393,13 +410,15 @@ def _core(spec: Spec) -> Core:
     if spec.frame.level_arms:
         # whole millimetres: M2 standoffs come in 1 mm steps; the knees then follow the plate
         z_knee = spec.frame.height * spec.frame.knee_height
-        hang = float(round(z_knee - plate_z))
+        drop = peg_drop(spec)
+        hang = float(round(z_knee + drop - plate_z))
         if hang < 0:
+            where = "at the knees' height" if drop == 0 else f"{drop:.1f} mm above the knees' height (the pegs' tubes hang under it)"
             raise spec.error(
                 "frame.knee_height",
-                f"level arms need the core plate at the knees' height, z = {z_knee:.1f} mm, but the battery holder "
+                f"level arms need the core plate {where}, z = {z_knee + drop:.1f} mm, but the battery holder "
                 f"({c.battery_clearance:g} mm clearance, {holder_h:.1f} mm tall) and the spacer already put it at "
-                f"z = {plate_z:.1f} mm", f"raise frame.knee_height to at least {math.ceil(plate_z / spec.frame.height * 100) / 100:.2f}, "
+                f"z = {plate_z:.1f} mm", f"raise frame.knee_height to at least {math.ceil((plate_z - drop) / spec.frame.height * 100) / 100:.2f}, "
                 "or set frame.level_arms: false (the arms then climb from the plate to the knees)")
         plate_z += hang
     plate = Box("core_plate", (0.0, 0.0, plate_z), (c.plate_size, c.plate_size, c.plate_thickness))

@@ -280,6 +280,10 @@ class Spec(_M):
         if self.core.link == "pegs" and self.model.stiffness_model == "analytic":
             raise _KeyProblem("model.stiffness_model", "the analytic joint model has no closed form for the pegged core link (core.link: pegs)",
                               "set model.stiffness_model to fe or surrogate, or core.link to tab")
+        if self.core.link == "pegs" and not self.frame.level_arms:
+            raise _KeyProblem("core.link", "the pegged core link's pegs press into ABS tubes that lie on the bed under the "
+                              "upside-down core plate, level with the arms; climbing arms (frame.level_arms: false) would "
+                              "tilt them off the bed", "set frame.level_arms: true, or core.link: tab")
         core_half = self.core.plate_size / 2
         inner_half = min(self.frame.width, self.frame.depth) / 2 - self.frame.knee_inset - self.rods.diameter - 2 * self.joints.wall
         if core_half >= inner_half:

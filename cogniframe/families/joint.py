@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from ..frame import CORNER_SIGN, CORNERS, STACK_BOTTOM, Frame
+from ..frame import CORNER_SIGN, CORNERS, PEG_D, STACK_BOTTOM, Frame
 from ..materials import SCREWS, STACK_PATTERNS
 from ..parts import joint_plan
 from ..parts.joint_plan import (
@@ -56,12 +56,17 @@ def plan(spec: Spec, frame: Frame) -> tuple[PartSpec, ...]:
         *_joints(spec, frame, "corner_top"),
         *_joints(spec, frame, "corner_bottom"),
         *_joints(spec, frame, "knee"),
-        # The core links are chiral (printed on their side, D-section sleeves standing on the bed),
-        # and the battery holder is a rectangle, not a square: a link rotated from fl to fr meets
-        # the holder differently. So fr and rl get the mirror image of the fl/rr link.
-        _joint(spec, frame, "core_link", "core_link", corners=("fl", "rr")),
-        _joint(spec, frame, "core_link_mirrored", "core_link", proto="fr", corners=("fr", "rl")),
+        *core_links(spec, frame),
     )
+
+
+def core_links(spec: Spec, frame: Frame) -> tuple[PartSpec, PartSpec]:
+    """The core link parts: the fl/rr link and its mirror image for fr and rl. The links are chiral
+    (printed on their side or standing, sleeves on the bed), and the battery holder is a
+    rectangle, not a square: a link rotated from fl to fr meets the holder differently. The core
+    plate's peg tubes (core.link: pegs) are placed from these same parts."""
+    return (_joint(spec, frame, "core_link", "core_link", corners=("fl", "rr")),
+            _joint(spec, frame, "core_link_mirrored", "core_link", proto="fr", corners=("fr", "rl")))
 
 
 def solid(part: PartSpec):
@@ -185,7 +190,7 @@ def _joint(spec: Spec, frame: Frame, name: str, kind: str, proto: str = "fl", co
 # The strut has a peg of its own, parallel to the arms' (parts/joint_plan.py `pegged_plan`).
 PEGS = (
     ("link", "pegs"),
-    ("peg_d", 6.8),  # peg diameter, mm (authors' 6.79)
+    ("peg_d", PEG_D),  # peg diameter, mm (authors' 6.79): the core plate's tube bore (frame.py)
     ("peg_len", 9.0),  # peg length, mm (authors' 9.0)
     ("peg_gap", 0.3),  # mm from the socket's bottom to the peg (authors' socket floor 0.3 above the peg)
     ("column_wall", 1.8),  # TPU round the socket, mm (authors' (6.79 - 3.19) / 2)

@@ -570,6 +570,29 @@ def pegged_plan(sockets, params: dict) -> PeggedPlan:
                       tuple(struts), ext)
 
 
+@dataclass(frozen=True, eq=False)
+class PegAxis:
+    """One peg of a pegged core link in the link's local frame: its axis from the free `end` to
+    the `shoulder` where it meets its column, and its radius."""
+
+    end: np.ndarray
+    shoulder: np.ndarray
+    radius: float
+
+
+def peg_axes(sockets, params: dict) -> tuple[PegAxis, ...]:
+    """The pegs of a pegged core link in its local frame, one per column of `pegged_plan` (each
+    runs from `peg0` to `col0` along print z at the column's axis, taken back through the plan's
+    print <- local transform): the core's bores that hold them (families/core_plate.py) follow
+    every column the plan has."""
+    pl = pegged_plan(sockets, params)
+
+    def local(xy, z: float) -> np.ndarray:
+        return pl.rot.T @ (np.array([float(xy[0]), float(xy[1]), z]) - pl.shift)
+
+    return tuple(PegAxis(local(c.axis, c.peg0), local(c.axis, c.col0), pl.peg_r) for c in pl.columns)
+
+
 def _frame_of(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Two unit vectors square to unit `d` and to each other."""
     a = np.cross(d, [1.0, 0.0, 0.0] if abs(d[0]) < 0.9 else [0.0, 1.0, 0.0])

@@ -141,8 +141,9 @@ def assembly_steps(design: "Derived") -> tuple[Step, ...]:
     spacer = next((n for n in ("sensor_mount", "core_spacer") if n in parts), None)
     core_parts = [n for n in ("core_plate", spacer, "battery_holder", "core_link", "core_link_mirrored") if n and n in parts]
     mirrored = "core_link_mirrored" in parts
-    add("Core", core_parts, [], "none: the core links are bolted, so the core stays removable",
-        _core_text(spacer, mirrored),
+    pegs = spec.core.link == "pegs"
+    add("Core", core_parts, [], f"none: the core links are {'pressed in' if pegs else 'bolted'}, so the core stays removable",
+        _core_text(spacer, mirrored, pegs),
         hw("core_link", "core_link_mirrored", "core_plate", "battery_holder", *([spacer] if spacer else [])))
     add("Hang the core", [], [], "none: arm and strut ends are only pushed into the core links",
         "Hold the core in the middle of the frame and push the free ends of both arm rods"
@@ -169,13 +170,18 @@ def _rods_by_role(frame) -> dict[str, list[str]]:
     return out
 
 
-def _core_text(spacer: str | None, mirrored: bool) -> str:
-    """Bolting the core links to the plate and stacking plate, spacer and holder."""
-    return ("Bolt a TPU core link onto each corner of the core plate"
-            + (" (core_link at front-left and rear-right, its mirror image core_link_mirrored at front-right and rear-left)"
-               if mirrored else "")
-            + ": screw down through the link tab and the plate"
-            + (f", nut in the hex trap under the {spacer}" if spacer else ", nut underneath") + ". "
+def _core_text(spacer: str | None, mirrored: bool, pegs: bool = False) -> str:
+    """Fixing the core links to the plate (bolted, or their pegs pressed into the plate's tubes)
+    and stacking plate, spacer and holder."""
+    which = (" (core_link at front-left and rear-right, its mirror image core_link_mirrored at front-right and rear-left)"
+             if mirrored else "")
+    if pegs:
+        fix = (f"Press a TPU core link onto each corner of the core plate{which}: push its two pegs all the way into the "
+               "pair of ABS tubes under the plate's edges there, up to the columns' shoulders (no screw). ")
+    else:
+        fix = (f"Bolt a TPU core link onto each corner of the core plate{which}: screw down through the link tab and the plate"
+               + (f", nut in the hex trap under the {spacer}" if spacer else ", nut underneath") + ". ")
+    return (fix
             + (f"Lay the {spacer} on the battery holder and the plate on it; " if spacer else "Put the plate on the battery holder; ")
             + "screw them together with the stack screws. The holder's open end faces the front so the battery slides in.")
 

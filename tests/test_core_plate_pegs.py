@@ -1,0 +1,301 @@
+"""The core plate with the pegged core link (`core.link: pegs`): one ABS tube per peg (the peg's
+6.8 mm bore, a 1.2 mm wall, as long as the peg) hanging under the plate, its top flush with the
+plate's top, joined to the nearest edge by a plate-thick web; the plate printed upside down. The
+pegs must go into the tubes (their axes one line), the frame must hang the plate so, the closed
+form must be the CAD's volume, the part must print, and nothing may clash in either preset."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from presets import preset_spec
+
+from cogniframe import frame as frame_mod
+from cogniframe import partlist
+from cogniframe.errors import UserError
+from cogniframe.parts.joint_plan import PEG_SNAP, peg_axes, pegged_plan
+
+PRESETS = ("carbon", "bamboo")
+R_BORE, WALL, PEG_LEN = 3.4, 1.2, 9.0  # the authors' MainBase bore and the connector's peg; three 0.4 mm lines
+
+
+def _planned(name: str, **changes):
+    spec = preset_spec(name, core__link="pegs", **changes)
+    frame = frame_mod.frame_of(spec)
+    parts = {p.name: p for p in partlist.part_list(spec, frame)}
+    return spec, frame, parts
+
+
+def _links(parts):
+    return [p for p in parts.values() if dict(p.params).get("kind", p.name) == "core_link"]
+
+
+def _placed(part, pl, p) -> np.ndarray:
+    m = pl.matrix()
+    return m[:3, :3] @ np.asarray(p, float) + m[:3, 3]
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_each_arm_rods_axis_carries_a_peg(preset):
+    """`peg_axes` against the sockets themselves: one peg per column of the link's plan, and on
+    each arm socket's axis (port + direction s) a peg from s = seat - peg_gap - peg_len to
+    seat - peg_gap, radius peg_d / 2. To 1e-5 mm: the sockets are stored to 1e-6 (ports and unit
+    directions, the latter over ~12 mm), and the plan stands both columns at the first's height."""
+    _, _, parts = _planned(preset)
+    for link in _links(parts):
+        params = dict(link.params)
+        axes = peg_axes(link.sockets, params)
+        assert len(axes) == len(pegged_plan(link.sockets, params).columns) >= 2
+        arms = [s for s in link.sockets if "arm" in s.rod]
+        assert len(arms) == 2
+        gap, length = float(params["peg_gap"]), float(params["peg_len"])
+        for s in arms:
+            p, d = np.asarray(s.port, float), np.asarray(s.direction, float)
+            ax = min(axes, key=lambda a: float(np.linalg.norm(a.end - (p + d * (s.seat - gap - length)))))
+            assert ax.end == pytest.approx(p + d * (s.seat - gap - length), abs=1e-5)
+            assert ax.shoulder == pytest.approx(p + d * (s.seat - gap), abs=1e-5)
+            assert ax.radius == pytest.approx(float(params["peg_d"]) / 2)
+            assert abs(ax.radius - (s.bore / 2 + float(params["column_wall"]))) >= PEG_SNAP / 2  # a peg, not the column
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_one_tube_per_peg_coaxial_with_it(preset):
+    """The plate carries pegs per link x 4 tubes; every placed link's every peg (its axis taken to
+    the frame through the link copy's placement, then into the plate's frame) has a tube whose
+    axis ends coincide with the peg's to 1e-6 mm and whose bore is the peg's diameter; the tubes
+    are level, and their tops are flush with the plate's top."""
+    spec, frame, parts = _planned(preset)
+    plate = parts["core_plate"]
+    tubes = [tuple(np.asarray(p, float) for p in t) for t in plate.param("tubes")]
+    links = _links(parts)
+    per_link = {len(pegged_plan(link.sockets, dict(link.params)).columns) for link in links}
+    assert len(per_link) == 1 and sum(len(link.placements) for link in links) == 4
+    assert len(tubes) == per_link.pop() * 4
+    assert plate.param("tube_bore") == pytest.approx(2 * R_BORE) and plate.param("tube_wall") == WALL
+    centre = np.asarray(frame.core.plate.centre, float)
+    left = list(tubes)
+    for link in links:
+        for pl in link.placements:
+            for ax in peg_axes(link.sockets, dict(link.params)):
+                e, s = _placed(link, pl, ax.end) - centre, _placed(link, pl, ax.shoulder) - centre
+                i = int(np.argmin([np.linalg.norm(t[0] - e) + np.linalg.norm(t[1] - s) for t in left]))
+                assert left[i][0] == pytest.approx(e, abs=1e-6) and left[i][1] == pytest.approx(s, abs=1e-6)
+                left.pop(i)
+    assert not left
+    t = spec.core.plate_thickness
+    for e, s in tubes:
+        assert np.linalg.norm(s - e) == pytest.approx(PEG_LEN, abs=1e-6)
+        assert e[2] == pytest.approx(s[2], abs=1e-6)
+        assert e[2] + R_BORE + WALL == pytest.approx(t / 2, abs=1e-6)  # the tube's top in the plate's top plane
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_the_plate_hangs_higher_by_the_tubes_drop(preset):
+    """With pegs the arms run 3.1 mm below the plate's mid-plane (tube radius 4.6 less half the
+    3 mm plate), and the plate's standoffs make that up to the whole millimetre: the hang is
+    round(knee height + 3.1 - the plate on the spacer), the standoff line in the BOM says so, and
+    the core links' nodes (and the level knees) sit 3.1 mm under the plate's centre."""
+    tab = frame_mod.frame_of(preset_spec(preset))
+    spec, frame, parts = _planned(preset)
+    drop = R_BORE + WALL - spec.core.plate_thickness / 2
+    assert frame_mod.peg_drop(spec) == pytest.approx(3.1) == pytest.approx(drop)
+    base = tab.core.plate.centre[2] - tab.core.hang  # the plate resting on the spacer
+    z_knee = spec.frame.height * spec.frame.knee_height
+    assert frame.core.hang == round(z_knee + drop - base)
+    assert frame.core.hang == tab.core.hang + 3  # carbon 21 -> 24, bamboo 15 -> 18
+    assert frame.core.plate.centre[2] == pytest.approx(base + frame.core.hang)
+    for k in frame_mod.CORNERS:
+        assert frame.nodes[f"core_link_{k}"].pos[2] == pytest.approx(frame.core.plate.centre[2] - drop, abs=1e-9)
+        assert frame.nodes[f"knee_{k}"].pos[2] == pytest.approx(frame.nodes[f"core_link_{k}"].pos[2], abs=1e-9)
+    standoff = [h for h in parts["core_plate"].hardware if "standoff, female-female" in h.item]
+    assert len(standoff) == 1 and f"x {frame.core.hang:g} mm" in standoff[0].item
+
+
+def test_the_bom_drops_the_link_screws_and_the_plate_their_holes():
+    """Pegs press in: no core-link screw anywhere in the hardware, and the plate keeps only the
+    four stack holes (the tab link's four bolt holes go)."""
+    _, _, parts = _planned("carbon")
+    items = [h.item for p in parts.values() for h in p.hardware]
+    assert not [i for i in items if "core link" in i]
+    assert len(parts["core_plate"].param("holes")) == 4
+    tab_spec = preset_spec("carbon")
+    tab = {p.name: p for p in partlist.part_list(tab_spec, frame_mod.frame_of(tab_spec))}
+    assert [h.item for p in tab.values() for h in p.hardware if "core link to plate" in h.item]
+    assert len(tab["core_plate"].param("holes")) == 8
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_closed_form_is_plate_webs_and_tubes_by_hand(preset):
+    """The estimate by hand: the 3 mm plate less four 2.4 mm holes, each web's plan outside the
+    plate (manifold3d's 2-D boolean) times 3 mm, and each tube's ring above its web:
+    9 (pi 4.6^2 - seg - pi 3.4^2), seg the circle below a chord 1.6 mm under its centre."""
+    import manifold3d as m3
+
+    spec, _, parts = _planned(preset)
+    p = parts["core_plate"]
+    a, t = spec.core.plate_size, spec.core.plate_thickness
+    r_o, h = R_BORE + WALL, R_BORE + WALL - t
+    seg = r_o**2 * math.acos(h / r_o) - h * math.sqrt(r_o**2 - h * h)
+    square = m3.CrossSection.square((a, a), center=True)
+    webs = p.param("webs")
+    assert len(webs) == len(p.param("tubes")) >= 8
+    by_hand = a * a * t - 4 * math.pi * 1.2**2 * t
+    for web in webs:
+        outside = (m3.CrossSection([[tuple(map(float, q)) for q in web]]) - square).area()
+        assert 0 < outside < m3.CrossSection([[tuple(map(float, q)) for q in web]]).area()  # it reaches into the plate
+        by_hand += outside * t + PEG_LEN * (math.pi * r_o**2 - seg - math.pi * R_BORE**2)
+    assert p.estimate.volume == pytest.approx(by_hand, rel=1e-9)
+
+
+def test_climbing_arms_refuse_the_pegs_naming_the_key():
+    """The tubes lie on the bed under the upside-down plate, level with the arms: with climbing
+    arms the params are refused, naming core.link and the fix."""
+    with pytest.raises(UserError) as e:
+        preset_spec("carbon", core__link="pegs", frame__level_arms=False)
+    msg = str(e.value)
+    assert "core.link" in msg and "frame.level_arms: true" in msg
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("preset", PRESETS)
+def test_plate_with_tubes_is_one_watertight_solid_printed_upside_down(preset, tmp_path):
+    """The CAD: one watertight solid, its volume the closed form's within test_parts' 0.5 % (the
+    BRep's volume; the STL's faceting within it too), lying on its top (the plate's top plane, the
+    webs and the tubes' tops on the bed: z = 0 over 3 mm of plate), no unsupported overhang, and
+    every tube's bore where its peg goes: points on the peg's axis and 0.05 mm inside its radius
+    are outside the solid, 0.05 mm outside its radius inside it."""
+    from cogniframe.export.mesh import contains, flat_contact_ratio, overhangs, write_stl
+    from cogniframe.families import registry
+
+    spec, _, parts = _planned(preset)
+    p = parts["core_plate"]
+    built = registry.solid(p)
+    mesh = write_stl(built.shape, tmp_path / "core_plate.stl", name="core_plate")  # raises unless watertight
+    assert mesh.is_watertight and mesh.body_count == 1
+    assert built.shape.Volume() == pytest.approx(p.estimate.volume, rel=0.005)
+    assert mesh.volume == pytest.approx(p.estimate.volume, rel=0.005)
+    assert mesh.bounds[0, 2] == pytest.approx(0.0, abs=1e-6)
+    assert mesh.bounds[1, 2] == pytest.approx(2 * (R_BORE + WALL), abs=1e-3)
+    assert flat_contact_ratio(mesh) >= 0.20
+    oh = overhangs(mesh)
+    assert oh["area"] < 1.0 and oh["fraction"] < 0.01, oh
+    m = built.print_from_local
+    assert m[2, 2] == -1.0  # upside down
+    for e, s in p.param("tubes"):
+        pe, ps = (m[:3, :3] @ np.asarray(q, float) + m[:3, 3] for q in (e, s))
+        d = (ps - pe) / np.linalg.norm(ps - pe)
+        n1 = np.cross(d, [0.0, 0.0, 1.0])
+        n1 /= np.linalg.norm(n1)
+        n2 = np.cross(d, n1)
+        probes_in, probes_bore = [], []
+        for f in (0.1, 0.5, 0.9):
+            c = pe + (ps - pe) * f
+            probes_bore.append(c)
+            for ang in np.linspace(0, 2 * math.pi, 8, endpoint=False):
+                radial = math.cos(ang) * n1 + math.sin(ang) * n2
+                probes_bore.append(c + radial * (R_BORE - 0.05))
+                probes_in.append(c + radial * (R_BORE + 0.05))
+        assert not contains(mesh, probes_bore).any()
+        assert contains(mesh, probes_in).all()
+
+
+@pytest.mark.slow
+def test_build_with_pegs_gives_a_watertight_plate_and_no_clash(tmp_path):
+    """`cogniframe build` of carbon with core.link: pegs: the core plate's STL is one watertight
+    volume with the eight tubes' mass in it, and the build's clash check (every part copy, rod
+    and vitamin; the pegs in their tubes) finds nothing."""
+    import json
+    import subprocess
+    import sys
+
+    import trimesh
+    import yaml
+
+    from presets import preset_doc
+    from conftest import ROOT
+
+    doc = preset_doc("carbon", core__link="pegs")
+    params = tmp_path / "carbon-pegs.yaml"
+    params.write_text(yaml.safe_dump(doc), encoding="utf-8")
+    out = tmp_path / "out"
+    r = subprocess.run([sys.executable, "-m", "cogniframe", "build", str(params), "-o", str(out), "--no-server"],
+                       cwd=ROOT, capture_output=True, text=True, timeout=1200,
+                       env={**__import__("os").environ, "PYTHONPATH": str(ROOT)})
+    assert (out / "clash.json").exists(), r.stdout[-2000:] + r.stderr[-2000:]
+    mesh = trimesh.load(out / "stl" / "abs" / "core_plate.stl")  # the STLs sorted by material
+    assert mesh.is_watertight and mesh.body_count == 1
+    spec, _, parts = _planned("carbon")
+    assert mesh.volume == pytest.approx(parts["core_plate"].estimate.volume, rel=0.005)
+    clash = json.loads((out / "clash.json").read_text())
+    assert clash["ok"] and clash["clashes"] == []
+    assert clash["pairs_tested"] > 0
+
+
+@pytest.mark.slow
+def test_bamboo_with_pegs_has_no_clash(tmp_path):
+    """The clash check over bamboo's built parts with core.link: pegs (no analysis): 0 clashes,
+    the pegs in their tubes included."""
+    from cogniframe.export.assembly import check_clashes
+    from cogniframe.export.part_files import build_parts
+
+    spec, frame, parts = _planned("bamboo")
+    plist = list(parts.values())
+    built = build_parts(spec, frame, plist, tmp_path)
+    res = check_clashes(spec, frame, plist, built, tmp_path)
+    assert res.ok and res.clashes == (), res.messages()
+
+
+def test_assembly_steps_press_the_pegs_in_rather_than_bolt():
+    """The builder is told to press each link's pegs into the plate's tubes, with no screw, and
+    the tab link's bolting text is gone (it stays for the tab)."""
+    from cogniframe import design as design_mod
+    from cogniframe.report.assembly_steps import assembly_steps
+
+    core = next(s for s in assembly_steps(design_mod.design(preset_spec("carbon", core__link="pegs"))) if s.title == "Core")
+    assert "pegs all the way into the pair of ABS tubes" in core.text and "screw down through the link tab" not in core.text
+    assert "pressed in" in core.glue
+    tab = next(s for s in assembly_steps(design_mod.design(preset_spec("carbon"))) if s.title == "Core")
+    assert "screw down through the link tab" in tab.text
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", range(3))
+def test_random_designs_with_pegs_give_one_watertight_plate(seed, tmp_path):
+    """tests/design_space.py's random edits (other boxes, rectangles with the arms off the
+    diagonal, other plates and motors) with core.link: pegs and level arms: the first two designs
+    the params accept each give a plate with pegs per link x 4 tubes that is one watertight
+    solid, its closed form within 0.5 % of the CAD, printable without supports."""
+    import random
+
+    import design_space
+    from cogniframe import spec as spec_mod
+    from cogniframe.export.mesh import overhangs, write_stl
+    from cogniframe.families import registry
+
+    rnd = random.Random(700 + seed)
+    done = 0
+    for _ in range(100):
+        doc = design_space.random_design(rnd, "edit")
+        doc["core"]["link"] = "pegs"
+        doc["frame"]["level_arms"] = True
+        try:
+            spec = spec_mod.from_dict(doc, "random.yaml")
+            frame = frame_mod.frame_of(spec)
+            parts = {p.name: p for p in partlist.part_list(spec, frame)}
+        except UserError:
+            continue
+        p = parts["core_plate"]
+        link = parts["core_link"]
+        assert len(p.param("tubes")) == 4 * len(pegged_plan(link.sockets, dict(link.params)).columns)
+        built = registry.solid(p)
+        mesh = write_stl(built.shape, tmp_path / f"plate{done}.stl", name="core_plate")  # raises unless watertight
+        assert mesh.body_count == 1 and mesh.bounds[0, 2] == pytest.approx(0.0, abs=1e-6)
+        assert p.estimate.volume == pytest.approx(built.shape.Volume(), rel=0.005)
+        assert overhangs(mesh)["area"] < 1.0
+        done += 1
+        if done == 2:
+            break
+    assert done == 2, "fewer than two accepted designs in 100 draws"
