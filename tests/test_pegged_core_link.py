@@ -51,26 +51,28 @@ def test_the_default_is_the_tab_link_and_pegs_drop_its_screw():
 
 def test_the_closed_form_is_the_connectors_cylinders_arch_and_strut_by_hand():
     """Carbon (2.85 mm bores, 8 mm sockets, 25 mm pair): three pegs (r 3.4, 9 mm), two arm columns
-    (r 1.425 + 1.8, 8.3 mm) and the strut's column (from the shoulder to under the strut's mouth),
-    the arch 25 x 6.7 x 3 less the two half arm columns and the strut column's part in it (a disc
-    less the segment past the arch's face), the strut's sleeve (r 3.225, 9.8 mm) less what is not
-    its own, less three sockets: the hand sum with the sleeve's overlap taken from the plan."""
+    (r 1.425 + 1.8, 8.3 mm) and the strut's column (as wide as its peg, from the shoulder to under
+    the strut's mouth), the arch 25 x 6.7 x 3 less the two half arm columns and the strut column's
+    part in it (a disc less the segment past the arch's face), the strut's sleeve (r 3.225, 9.8 mm)
+    less what is not its own, less three sockets: the hand sum with the sleeve's overlap taken
+    from the plan."""
     from cogniframe.parts.joint_plan import pegged_plan
 
     p = _links(_pegs_spec())["core_link"]
     plan = pegged_plan(p.sockets, dict(p.params))
-    rc = 1.425 + 1.8
-    assert plan.col_r == pytest.approx(rc) and plan.peg_r == pytest.approx(3.4) and plan.spacing == pytest.approx(25.0, abs=1e-6)
+    rc, rp = 1.425 + 1.8, 3.4
+    assert plan.col_r == pytest.approx(rc) and plan.peg_r == pytest.approx(rp) and plan.spacing == pytest.approx(25.0, abs=1e-6)
     assert len(plan.columns) == 3 and len(plan.struts) == 1
     mid = plan.columns[plan.struts[0].column]
+    assert mid.col_r == rp and [c.col_r for c in plan.columns if c is not mid] == [rc, rc]
     overlap = plan.struts[0].overlap
     assert 0 < overlap < math.pi * rc**2 * 9.8  # most of the sleeve is in its column
     # the strut column in the arch: its disc less the segment beyond the arch's +y face
     d = plan.arch_n[1] - float(mid.axis[1])
-    segment = rc**2 * math.acos(d / rc) - d * math.sqrt(rc**2 - d**2)
-    in_arch = (math.pi * rc**2 - segment) * (mid.col1 - 14.3)
-    by_hand = (3 * math.pi * 3.4**2 * 9 + math.pi * rc**2 * (2 * 8.3 + mid.col1 - 9.0) + (25 * 6.7 - math.pi * rc**2) * 3
-               - in_arch + math.pi * rc**2 * 9.8 - overlap - 3 * math.pi * 1.425**2 * 8)
+    segment = rp**2 * math.acos(d / rp) - d * math.sqrt(rp**2 - d**2)
+    in_arch = (math.pi * rp**2 - segment) * (mid.col1 - 14.3)
+    by_hand = (3 * math.pi * rp**2 * 9 + math.pi * rc**2 * 2 * 8.3 + math.pi * rp**2 * (mid.col1 - 9.0)
+               + (25 * 6.7 - math.pi * rc**2) * 3 - in_arch + math.pi * rc**2 * 9.8 - overlap - 3 * math.pi * 1.425**2 * 8)
     assert p.estimate.volume == pytest.approx(by_hand, rel=1e-3)
 
 
@@ -134,7 +136,12 @@ def test_pegs_too_close_for_the_cores_bores_are_refused_naming_the_key():
     with pytest.raises(UserError) as e:
         _links(_pegs_spec(frame__arm_spacing=14))
     msg = str(e.value)
-    assert "core.link" in msg and "2 mm of ABS" in msg and "frame.arm_spacing" in msg
+    assert "core.link" in msg and "2.8 mm of ABS" in msg and "frame.arm_spacing" in msg
+    # at 18 mm the bores keep 2.3 mm apart, but the plate's tubes round them (1.2 mm walls and a
+    # line of gap: 2.8 mm) would run into each other
+    with pytest.raises(UserError):
+        _links(_pegs_spec(frame__arm_spacing=18))
+    assert len(_links(_pegs_spec(frame__arm_spacing=20))) == 2
 
 
 @pytest.mark.slow

@@ -28,7 +28,7 @@ from ..parts.joint_plan import FLIP_X, hull_ccw, transform
 from ..parts.joint_solid import Built
 from ..spec import Spec
 from ..parts.record import Estimate, HardwareLine, PartSpec, Placement
-from .base import link_hole, plate_estimate, polygon_area, polygon_perimeter, rounded
+from .base import link_hole, plate_estimate, rounded
 
 NAME = "core_plate"
 SIZE_KEY = "core.plate_size"
@@ -104,11 +104,14 @@ def peg_tubes(spec: Spec, frame: Frame) -> tuple[tuple[tuple, tuple], float]:
             for ax in axes:
                 e, s = (m[:3, :3] @ p + m[:3, 3] - centre for p in (ax.end, ax.shoulder))
                 r_out = ax.radius + PEG_TUBE_WALL
-                # the frame hangs the plate so that each tube's top is flush with the plate's top
-                # (frame.peg_drop); a tube elsewhere is a bug, not a design
-                if abs(e[2] - s[2]) > LEVEL_TOL or abs(e[2] + r_out - top) > LEVEL_TOL:
+                # the frame hangs the plate so that the arms' tubes are flush with the plate's top
+                # (frame.peg_drop); the strut's peg may lie lower (its column stands under the
+                # strut's bore), its tube then sunk into its web. A tube above the plate's top
+                # (below the bed in print), off the web, or not level is a bug, not a design.
+                if abs(e[2] - s[2]) > LEVEL_TOL or e[2] + r_out > top + LEVEL_TOL or e[2] + r_out < top - LEVEL_TOL - r_out:
                     raise RuntimeError(f"{link.name} at {pl.instance}: its peg's axis runs from z {e[2]:.6f} to {s[2]:.6f} "
-                                       f"in the plate's frame, not level at {top - r_out:.6f} (the tube's top flush with the plate's)")
+                                       f"in the plate's frame: its tube (outside radius {r_out:g}) is not level within the "
+                                       f"plate's {2 * top:g} mm under its top")
                 tubes.append((rounded(e), rounded(s)))
                 radii.add(round(ax.radius, 9))
     if len(radii) != 1:
@@ -134,63 +137,63 @@ def tube_web(end, shoulder, r_out: float, half: float) -> tuple:
     return tuple((round(float(x), 6), round(float(y), 6)) for x, y in hull_ccw(rect + feet))
 
 
-def _clip_halfplane(poly, n: np.ndarray, c: float) -> list:
-    """The part of convex polygon `poly` where p . n >= c."""
-    out = []
-    pts = [np.asarray(p, float) for p in poly]
-    for i in range(len(pts)):
-        p, q = pts[i], pts[(i + 1) % len(pts)]
-        fp, fq = float(p @ n) - c, float(q @ n) - c
-        if fp >= 0:
-            out.append(p)
-        if fp * fq < 0:
-            out.append(p + (q - p) * (fp / (fp - fq)))
-    return out
+def webs_outside(webs, half: float) -> tuple[float, float]:
+    """(area, perimeter) of the union of the webs (plan) outside the plate |x|, |y| <= `half`:
+    where a link's webs overlap (arms off the plate's diagonal) they are one prism, as in the CAD.
+    The perimeter leaves out the union's sides along the plate's edge (they join the plate: no
+    surface). manifold3d's exact 2-D boolean, the library the meshes already use."""
+    import manifold3d as m3
 
-
-def web_outside(web, half: float) -> tuple[float, float]:
-    """(area, perimeter) of the part of a web (convex, plan) outside the plate |x|, |y| <= `half`:
-    the web less its intersection with the plate (wherever it reaches in), and the web's
-    perimeter less its sides inside the plate (its sides along the plate's edge are no surface)."""
-    inside = list(np.asarray(web, float))
-    for k in range(2):
-        for sign in (1.0, -1.0):
-            n = np.zeros(2)
-            n[k] = -sign
-            inside = _clip_halfplane(inside, n, -half) if len(inside) >= 3 else []
-    a_in = polygon_area(inside) if len(inside) >= 3 else 0.0
-    p_in = polygon_perimeter(inside) if len(inside) >= 3 else 0.0
-    return polygon_area(web) - a_in, polygon_perimeter(web) - p_in
+    square = m3.CrossSection.square((2 * half, 2 * half), center=True)
+    union = m3.CrossSection([[tuple(map(float, q)) for q in webs[0]]])
+    for w in webs[1:]:
+        union = union + m3.CrossSection([[tuple(map(float, q)) for q in w]])
+    out = union - square
+    per = 0.0
+    for poly in out.to_polygons():
+        pts = np.asarray(poly, float)
+        for a, b in zip(pts, np.roll(pts, -1, axis=0)):
+            on_edge = any(abs(abs(a[k]) - half) < 1e-6 and abs(abs(b[k]) - half) < 1e-6 and a[k] * b[k] > 0 for k in range(2))
+            if not on_edge:
+                per += float(np.linalg.norm(b - a))
+    return float(out.area()), per
 
 
 def _with_tubes(base: Estimate, params: dict) -> Estimate:
     """The plate's closed form plus the tubes and webs, in print (upside down: the plate's top on
-    the bed). Each web is a prism `t` thick over its plan outside the plate; each tube (length L,
-    bore r_b, outside r_o, its axis r_o above the bed, the web's top h = r_o - t below the axis)
+    the bed). The webs are one prism `t` thick over their union's plan outside the plate; each tube (length L,
+    bore r_b, outside r_o, its axis z above the bed, the web's top h = z - t below the axis)
     adds its outside circle's part above the web, less the bore: L (pi r_o^2 - seg(h) - pi r_b^2),
+    h its axis's height over the web (r_o - t flush with the plate's top; a sunk tube's higher),
     seg(h) = r_o^2 acos(h / r_o) - h sqrt(r_o^2 - h^2) (the circle below a chord h from its
-    centre). Exact but for faceting wherever the tubes and webs keep clear of each other and of
-    the plate's holes: the web (or the plate) lies under the whole tube, the bore inside the two."""
+    centre). Exact but for faceting wherever the tubes keep clear of each other (families/joint.py
+    `PEG_WEB`) and of the plate's holes: the webs (or the plate) lie under every tube, the bore
+    inside the two."""
     t, half = float(params["thickness"]), float(params["size"]) / 2
     r_b = float(params["tube_bore"]) / 2
     r_o = r_b + float(params["tube_wall"])
-    h = min(max(r_o - t, -r_o), r_o)
-    seg = r_o**2 * math.acos(h / r_o) - h * math.sqrt(r_o**2 - h * h)
-    above = math.pi * r_o**2 - seg
-    chord = 2 * math.sqrt(r_o**2 - h * h)
-    arc = r_o * (2 * math.pi - 2 * math.acos(h / r_o))
-    vol, a_h, a_v = base.volume, base.area_h, base.area_v
+    a_w, p_w = webs_outside(params["webs"], half)
+    vol = base.volume + a_w * t
+    a_h = base.area_h + 2 * a_w
+    a_v = base.area_v + t * p_w
     pts = [np.array([x, y]) for x in (-half, half) for y in (-half, half)]
+    z_top = t
     for (e, s), web in zip(params["tubes"], params["webs"]):
+        z = t / 2 - float(e[2])  # the axis's height in print: r_o for a tube flush with the plate's top
+        h = min(max(z - t, -r_o), r_o)
+        seg = r_o**2 * math.acos(h / r_o) - h * math.sqrt(r_o**2 - h * h)
+        above = math.pi * r_o**2 - seg
+        chord = 2 * math.sqrt(r_o**2 - h * h)
+        arc = r_o * (2 * math.pi - 2 * math.acos(h / r_o))
         L = float(np.linalg.norm(np.asarray(s, float) - np.asarray(e, float)))
-        a_w, p_w = web_outside(web, half)
-        vol += a_w * t + L * (above - math.pi * r_b**2)
-        a_h += 2 * a_w - chord * L + arc * L / 2  # the web's faces (the tube on its top), half the round
-        a_v += arc * L / 2 + 2 * math.pi * r_b * L + 2 * (above - math.pi * r_b**2) + t * p_w
+        vol += L * (above - math.pi * r_b**2)
+        a_h += -chord * L + arc * L / 2  # the tube on its web's top, half its round
+        a_v += arc * L / 2 + 2 * math.pi * r_b * L + 2 * (above - math.pi * r_b**2)
         pts += [np.asarray(p, float) for p in web]
+        z_top = max(z_top, z + r_o)
     p = np.asarray(pts)
     ext = np.ptp(p, axis=0)
-    return Estimate(vol, a_h, a_v, (float(ext[0]), float(ext[1]), max(t, 2 * r_o)))
+    return Estimate(vol, a_h, a_v, (float(ext[0]), float(ext[1]), z_top))
 
 
 # -- the solid --------------------------------------------------------------------------------

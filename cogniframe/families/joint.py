@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from ..frame import CORNER_SIGN, CORNERS, PEG_D, STACK_BOTTOM, Frame
+from ..frame import CORNER_SIGN, CORNERS, PEG_D, PEG_TUBE_WALL, STACK_BOTTOM, Frame
 from ..materials import SCREWS, STACK_PATTERNS
 from ..parts import joint_plan
 from ..parts.joint_plan import (
@@ -198,9 +198,10 @@ PEGS = (
     ("arch_depth", 6.7),  # mm across the plane of the arm pair (authors' 6.7)
 )
 PEG_LEAN_MAX = 45.0  # deg: the most a socket of the standing pegged link leans from the arms (print overhang)
-# mm: the least ABS between two of the core's peg bores (five 0.4 mm perimeters: a press fit's
-# bore with a thinner web between it and the next splits as the pegs go in)
-PEG_WEB = 2.0
+# mm: the least ABS between two of the core's peg bores: each bore's tube wall and a gap of one
+# 0.4 mm line between the tubes, so the tubes never touch (a press fit's tube merged into its
+# neighbour's splits as the pegs go in, and the plate's closed form counts each tube whole)
+PEG_WEB = 2 * PEG_TUBE_WALL + 0.4
 
 
 def _pegs_fit(spec: Spec, pl) -> None:
@@ -580,9 +581,9 @@ def _pegged_link_estimate(spec: Spec, sockets: list[Socket], params: dict) -> Es
     hole = math.pi / 4 * spec.bore**2
     vol = a_h = a_v = 0.0
     for c in pl.columns:
-        vol += math.pi * (pl.peg_r**2 * pl.peg_len + pl.col_r**2 * c.col_len)
+        vol += math.pi * (pl.peg_r**2 * pl.peg_len + c.col_r**2 * c.col_len)
         a_h += 2 * math.pi * pl.peg_r**2  # the peg's end and the shoulder + the column's top
-        a_v += 2 * math.pi * (pl.peg_r * pl.peg_len + pl.col_r * c.col_len)
+        a_v += 2 * math.pi * (pl.peg_r * pl.peg_len + c.col_r * c.col_len)
     arch_len = pl.arch_hi - pl.arch_lo
     arms = [c for c in pl.columns if c.socket not in {st.index for st in pl.struts}]
     inside = len(arms) * 0.5 * _disc_band(pl.col_r, pl.arch_n[0], pl.arch_n[1]) * arch_len
@@ -592,7 +593,7 @@ def _pegged_link_estimate(spec: Spec, sockets: list[Socket], params: dict) -> Es
     for st in pl.struts:
         c = pl.columns[st.column]
         y = float(c.axis[1])
-        vol -= _disc_band(pl.col_r, pl.arch_n[0] - y, pl.arch_n[1] - y) * max(0.0, min(c.col1, pl.arch_hi) - max(c.col0, pl.arch_lo))
+        vol -= _disc_band(c.col_r, pl.arch_n[0] - y, pl.arch_n[1] - y) * max(0.0, min(c.col1, pl.arch_hi) - max(c.col0, pl.arch_lo))
         n = st.end - st.start
         vol += math.pi * pl.col_r**2 * n - st.overlap
         sin_t = math.sqrt(max(0.0, 1 - st.lean_cos**2))

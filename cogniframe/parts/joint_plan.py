@@ -440,13 +440,15 @@ def is_pegged(part: PartSpec) -> bool:
 class PegColumn:
     """One peg and its column in print: a vertical axis at `axis` (xy), the peg from the bed
     (`peg0`) to `col0`, the column from there to `col1` (an arm's: its socket's mouth; the
-    strut's: into the arch, below the strut's mouth). `socket`: the index of the socket it holds."""
+    strut's: into the arch, below the strut's mouth) of radius `col_r`. `socket`: the index of the
+    socket it holds."""
 
     axis: np.ndarray
     peg0: float
     col0: float
     col1: float
-    socket: int = -1
+    socket: int
+    col_r: float
 
     @property
     def col_len(self) -> float:
@@ -522,7 +524,7 @@ def pegged_plan(sockets, params: dict) -> PeggedPlan:
             raise ValueError(f"the arm sockets of a pegged core link are {float(q[2] - q0[2]):.3g} mm apart along the arms")
         s = sockets[i]
         c0 = float(q0[2]) + s.seat - gap
-        cols.append(PegColumn(q[:2].copy(), c0 - peg_len, c0, float(q0[2]) + s.seat + s.depth, i))
+        cols.append(PegColumn(q[:2].copy(), c0 - peg_len, c0, float(q0[2]) + s.seat + s.depth, i, col_r))
     y_c = float(cols[0].axis[1])
     arch_hi = min(c.col1 for c in cols)
     arch_lo = arch_hi - float(params["arch_len"])
@@ -536,6 +538,11 @@ def pegged_plan(sockets, params: dict) -> PeggedPlan:
         m = rot @ (np.asarray(s.port, float) + dirs[i] * (s.seat + s.depth)) + shift
         n0, n1 = min(n0, float(m[1]) - y_c + col_r / 2), max(n1, float(m[1]) - y_c - col_r / 2)
         arch_lo = min(arch_lo, float(m[2]) - col_r / 2)
+    # the strut's mouth sets the depth anywhere: it too keeps off the columns' outline
+    if abs(n0 + col_r) < ARCH_CLEAR / 2:
+        n0 = -col_r - ARCH_CLEAR / 2
+    if abs(n1 - col_r) < ARCH_CLEAR / 2:
+        n1 = col_r + ARCH_CLEAR / 2
     x0, x1 = sorted(float(c.axis[0]) for c in cols)
     arch_n = (y_c + n0, y_c + n1)
     struts = []
@@ -550,14 +557,18 @@ def pegged_plan(sockets, params: dict) -> PeggedPlan:
         p0 = rot @ np.asarray(s.port, float) + shift
         axis, reach = _peg_under(p0, ds, s.seat, t1, s.bore / 2, shoulder)
         # the column rises into the arch, and no higher than the strut's mouth plane over its disc
-        # (past the mouth it would lengthen the socket on one side and bury its chamfer)
+        # (past the mouth it would lengthen the socket on one side and bury its chamfer). It is as
+        # wide as its peg, one cylinder: a column as wide as the sleeve, whose axis crosses the
+        # sleeve's, meets it in two crossing ellipses, a singular intersection that OCC's boolean
+        # resolves differently in a link and its mirror image.
+        strut_r = peg_r
         m = p0 + ds * t1
         flat = math.hypot(float(ds[0]), float(ds[1]))
-        below_mouth = float(m[2]) - (float((axis - m[:2]) @ ds[:2]) + col_r * flat) / float(ds[2])
+        below_mouth = float(m[2]) - (float((axis - m[:2]) @ ds[:2]) + strut_r * flat) / float(ds[2])
         top = min(arch_hi, max(below_mouth, arch_lo + 0.5 * (arch_hi - arch_lo)))
-        cols.append(PegColumn(axis, shoulder - peg_len, shoulder, top, i))
+        cols.append(PegColumn(axis, shoulder - peg_len, shoulder, top, i, strut_r))
         cone_h = max(float((p0 + ds * t1)[2]) - shoulder + col_r, 1.0)
-        overlap, rim = _sleeve_overlap(p0, ds, t0, t1, col_r, shoulder, axis, peg_r, cols[-1].col1, col_r, box)
+        overlap, rim = _sleeve_overlap(p0, ds, t0, t1, col_r, shoulder, axis, peg_r, cols[-1].col1, strut_r, box)
         struts.append(PegStrut(i, t0, t1, float(ds[2]), len(cols) - 1, peg_r, cone_h, overlap, peg_r - reach))
         e = p0 + ds * t1
         pad = col_r * np.sqrt(np.clip(1 - ds**2, 0.0, 1.0))

@@ -505,11 +505,11 @@ def _core_link_pegged(part: PartSpec, socks: list[PSocket]):
     pieces = []
     for c in pl.columns:
         x, y = float(c.axis[0]), float(c.axis[1])
-        if pl.peg_r == pl.col_r:  # one cylinder (parts/joint_plan.py `PEG_SNAP`)
-            pieces.append(cylinder((x, y, c.peg0), (0, 0, 1), c.col1 - c.peg0, pl.col_r))
+        if pl.peg_r == c.col_r:  # one cylinder (the strut's; an arm's within parts/joint_plan.py `PEG_SNAP`)
+            pieces.append(cylinder((x, y, c.peg0), (0, 0, 1), c.col1 - c.peg0, c.col_r))
         else:
             pieces += [cylinder((x, y, c.peg0), (0, 0, 1), c.col0 - c.peg0, pl.peg_r),
-                       cylinder((x, y, c.col0), (0, 0, 1), c.col_len, pl.col_r)]
+                       cylinder((x, y, c.col0), (0, 0, 1), c.col_len, c.col_r)]
     (x0, x1), (n0, n1) = pl.arch_x, pl.arch_n
     pieces.append(cq.Solid.makeBox(x1 - x0, n1 - n0, pl.arch_hi - pl.arch_lo, cq.Vector(x0, n0, pl.arch_lo)))
     for st in pl.struts:
