@@ -156,6 +156,148 @@ def test_battery_holder_volume_is_box_minus_cavity_and_openings():
     assert lw > 10.2
 
 
+# -- the open camera and computer mounts ---------------------------------------------------------
+
+def _ring(centre, r, n=24):
+    a = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    return np.c_[centre[0] + r * np.cos(a), centre[1] + r * np.sin(a)]
+
+
+def _computer_mount_closed_form(p):
+    (a, b), t = p.param("size"), p.param("thickness")
+    holes = 4 * math.pi / 4 * (p.param("computer_hole_d") ** 2 + p.param("stack_hole_d") ** 2)
+    windows = sum((x1 - x0) * (y1 - y0) for x0, y0, x1, y1 in p.param("windows"))
+    return (a * b - windows - holes) * t
+
+
+def _assert_computer_mount_frame_carries_its_screws(spec, p, mesh, print_from_local):
+    """Each hole's nut (M2.5 ISO 4032: 5.0 across flats, 5.77 across corners) or screw head bears
+    on solid frame all round (points on the across-corners circle, mid-thickness, lie in the
+    mesh); the bars between windows and every rail are at least two lines of the nozzle wide."""
+    from cogniframe.export.mesh import contains
+    from cogniframe.materials import SCREWS
+
+    for key, screw in (("computer_holes", spec.core.computer.screw), ("stack_holes", spec.core.stack_screw)):
+        s = SCREWS[screw]
+        r = max(s.head_d / 2, s.nut_af / math.sqrt(3))
+        for h in p.param(key):
+            pts = np.c_[_ring(h, r), np.zeros(24), np.ones(24)]  # on the plate's local mid-plane
+            inside = contains(mesh, (pts @ np.asarray(print_from_local).T)[:, :3])
+            assert inside.all(), f"{key} {h}: the {screw} nut/head overhangs a window"
+    (a, b) = p.param("size")
+    wins = sorted(p.param("windows"))
+    assert wins, "the computer mount is open between its bars"
+    min_member = 2 * spec.printer.nozzle
+    for x0, y0, x1, y1 in wins:
+        assert b / 2 - y1 >= min_member and y0 + b / 2 >= min_member and x0 + a / 2 >= min_member and a / 2 - x1 >= min_member
+    for (_, _, x1, _), (x0, _, _, _) in zip(wins, wins[1:]):
+        assert x0 - x1 >= min_member
+
+
+def test_computer_mount_is_an_open_frame_of_plate_less_windows_and_holes():
+    """Carbon: the mount is the authors' kind of part (RPI_Support_new, a 2.0 mm frame of bars,
+    1.65 cm^3): its CAD volume is the closed form plate - windows - holes, it is under half the
+    65 x 30 mm plate it replaces (4.76 cm^3), and it still carries the Pi Zero's 58 x 23 mm holes
+    (Raspberry Pi Zero mechanical drawing) and the 20 x 20 stack's."""
+    d = built_preset("carbon")
+    p = d.parts["computer_mount"]
+    cad = d.built["computer_mount"].volume_mm3
+    assert cad == pytest.approx(_computer_mount_closed_form(p), rel=1e-3)
+    assert cad < 0.5 * (65 * 30 * 2.5)
+    assert p.param("thickness") == 2.0
+    assert sorted(p.param("computer_holes")) == sorted((x, y) for x in (-29.0, 29.0) for y in (-11.5, 11.5))
+    assert sorted(p.param("stack_holes")) == sorted((x, y) for x in (-10.0, 10.0) for y in (-10.0, 10.0))
+    _assert_computer_mount_frame_carries_its_screws(d.spec, p, d.meshes["computer_mount"],
+                                                    d.built["computer_mount"].print_from_local)
+
+
+def _camera_mount_closed_form(p, stack_d):
+    """Untilted: base (box - two front corner triangles - window - stack holes) x base_t + upright
+    (board-wide, `height` tall above the base, less the slot and the camera holes) x wall."""
+    from cogniframe.families.camera_mount import CAMERA_SPINE
+
+    w, yf, yb, bt, wall, h = (p.param(k) for k in ("width", "y_front", "y_back", "base_t", "wall", "height"))
+    k = p.param("corner_cut") - (yf - wall)
+    x0 = max(k, CAMERA_SPINE)
+    corner = (max(0.0, w / 2 - k) ** 2 - max(0.0, min(x0, w / 2) - k) ** 2) / 2
+    wx0, wy0, wx1, wy1 = p.param("base_window")
+    base = w * (yf - yb) - 2 * corner - (wx1 - wx0) * (wy1 - wy0) - 4 * math.pi / 4 * stack_d**2
+    up = w * h - 2 * p.param("slot") * h - 4 * math.pi / 4 * p.param("camera_hole_d") ** 2
+    return base * bt + up * wall
+
+
+def test_camera_mount_is_two_stiles_on_an_open_base():
+    """Carbon: the camera bracket is the authors' kind of support (CameraConnectorLeft/Right, two
+    stile brackets, 2 x 0.51 cm^3): the base opens between the stack holes and the upright is two
+    stiles with a slot open at the top. Its CAD volume is the closed form; it is under 75 % of the
+    solid L it replaces (2.32 cm^3); every camera hole (Pi camera v2 drawing: 21 x 12.5 mm, M2)
+    keeps the M2 head's 3.8 mm circle on solid stile, and every stack hole the M2 head's circle."""
+    from cogniframe.export.mesh import contains
+    from cogniframe.families.camera_mount import camera_upright_matrix
+    from cogniframe.materials import SCREWS
+
+    d = built_preset("carbon")
+    p = d.parts["front_camera_mount"]
+    g = dict(p.params)
+    assert g["tilt_deg"] == 0.0 and g["slot"] > 0 and g["base_window"]
+    cad = d.built["front_camera_mount"].volume_mm3
+    assert cad == pytest.approx(_camera_mount_closed_form(p, g["stack_hole_d"]), rel=1e-3)
+    assert cad < 0.75 * 2322.5
+    hx = {abs(x) for x, _ in g["camera_holes"]}
+    assert hx == {10.5} and sorted({z for _, z in g["camera_holes"]}) == pytest.approx([12.5, 25.0])
+    mesh, m = d.meshes["front_camera_mount"], np.asarray(d.built["front_camera_mount"].print_from_local)
+    r = SCREWS["M2"].head_d / 2
+    up = camera_upright_matrix(g)
+    for x, z in g["camera_holes"]:
+        ring = _ring((x, z - g["base_t"]), r)
+        pts = np.c_[ring[:, 0], np.full(24, -g["wall"] / 2), ring[:, 1], np.ones(24)]
+        assert contains(mesh, (pts @ (m @ up).T)[:, :3]).all(), (x, z)
+    for h in g["stack_holes"]:
+        ring = _ring(h, r)
+        pts = np.c_[ring, np.full(24, g["base_t"] / 2), np.ones(24)]
+        assert contains(mesh, (pts @ m.T)[:, :3]).all(), h
+    # the stiles are wider than two nozzle lines
+    assert g["width"] / 2 - g["slot"] >= 2 * d.spec.printer.nozzle
+
+
+@pytest.mark.parametrize("overrides", [
+    {"core": {"stack_pattern": "30.5x30.5", "stack_screw": "M2.5", "camera": {"tilt_deg": 30.0},
+              "computer": {"hole_spacing": [30.0, 20.0]}},
+     "printer": {"nozzle": 0.8}, "joints": {"wall": 1.6}},
+    {"core": {"plate_thickness": 6.0, "camera": {"tilt_deg": -20.0}, "computer": {"hole_spacing": [58.0, 49.0]}}},
+], ids=["30.5-M2.5-nozzle0.8", "thick-plate-pi4-holes"])
+def test_open_mounts_build_across_the_design_space(overrides, tmp_path):
+    """Off the preset (the wider stack, M2.5 stack screws, a 0.8 mm nozzle, a small computer or a
+    Raspberry Pi 4's 58 x 49 mm holes, a tilted camera, a thick plate): both mounts build as one
+    closed solid, flat, without supports, the computer mount's volume is its closed form and its
+    frame still carries every nut."""
+    from cogniframe.export.part_files import build_parts
+    from cogniframe.export.mesh import load_stl, overhangs
+
+    data = spec_mod.load(ROOT / "params" / "carbon.yaml").model_dump(mode="json")
+
+    def merge(node, over):
+        for k, v in over.items():
+            if isinstance(v, dict) and isinstance(node.get(k), dict):
+                merge(node[k], v)
+            else:
+                node[k] = v
+
+    merge(data, overrides)
+    spec = spec_mod.from_dict(data)
+    frame = frame_mod.frame_of(spec)
+    parts = [p for p in partlist.part_list(spec, frame) if p.family in ("camera_mount", "computer_mount")]
+    assert len(parts) == 2
+    for b, p in zip(build_parts(spec, frame, parts, tmp_path), parts):
+        m = load_stl(tmp_path / b.stl)
+        assert m.is_watertight and m.body_count == 1 and m.bounds[0, 2] == pytest.approx(0.0, abs=1e-6)
+        assert overhangs(m)["fraction"] < 0.03
+        assert abs(p.estimate.volume / b.volume_mm3 - 1) < 0.05
+        if p.family == "computer_mount":
+            assert b.volume_mm3 == pytest.approx(_computer_mount_closed_form(p), rel=1e-3)
+            _assert_computer_mount_frame_carries_its_screws(spec, p, m, b.print_from_local)
+
+
 # -- the overhang measure itself ---------------------------------------------------------------
 
 def _mesh(shape):

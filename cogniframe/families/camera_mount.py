@@ -1,6 +1,9 @@
-"""The front camera's bracket (ABS/PLA): an L of a base plate under the FC stack and an upright at
+"""The front camera's bracket (ABS/PLA): an L of a base frame under the FC stack and an upright at
 the plate's front edge, tilted back by core.camera.tilt_deg; its local origin is the plate top's
-centre, axes as the frame. Printed as it sits.
+centre, axes as the frame. Printed as it sits. The base is open between the stack holes and the
+upright is two stiles carrying the camera's holes with a slot between them, open at the top: the
+authors hold the camera on two small brackets (`CameraConnectorLeft`/`Right`), each a stile with
+two of the camera's holes, and the board itself ties the stiles.
 """
 
 from __future__ import annotations
@@ -11,16 +14,17 @@ import numpy as np
 
 from ..frame import CAMERA_BASE_T, Frame
 from ..materials import BOARDS, SCREWS, STACK_PATTERNS
-from ..parts.blocks import pointed, prism_xy
+from ..parts.blocks import prism_xy
 from ..parts.joint_solid import Built, apply
 from ..parts.joint_plan import transform
 from ..spec import Spec
 from ..parts.record import Estimate, HardwareLine, PartSpec, Placement
-from .base import hexagon_area, link_hole, rounded
+from .base import link_hole, rounded
+from .computer_mount import BEARING_WALL, RAIL, bar_half_width
 
 NAME = "camera_mount"
 SIZE_KEY = "core.camera"
-DOC = "ABS/PLA camera bracket (base under the FC stack, tilted upright), printed on its side"
+DOC = "ABS/PLA camera bracket (open base under the FC stack, tilted two-stile upright), printed as it sits"
 
 
 def plan(spec: Spec, frame: Frame) -> tuple[PartSpec, ...]:
@@ -28,12 +32,14 @@ def plan(spec: Spec, frame: Frame) -> tuple[PartSpec, ...]:
 
 CAMERA_WALL = 1.6  # camera mount upright thickness, mm
 CAMERA_SPINE = 3.0  # mm: the camera mount's base keeps at least this either side of its centre line up to the upright
+MIN_OPENING = 2.0  # mm: a narrower window or slot stays closed
 
 
 def camera_mount_geometry(spec: Spec, frame: Frame) -> dict:
     """The camera bracket in its local frame (origin: plate top centre, axes as the frame): an L of a
-    base plate under the FC stack and an upright at the plate's front edge, tilted back by tilt_deg
-    about its bottom front edge. Printed on its side (local x up), so the L profile lies on the bed."""
+    base under the FC stack and an upright at the plate's front edge, tilted back by tilt_deg about
+    its bottom front edge. `base_window` (x0, y0, x1, y1) is the base's opening between the stack
+    holes, `slot` the half width of the upright's opening between its stiles (0: none)."""
     c = spec.core
     cb = BOARDS[c.camera.model]
     pitch, _ = STACK_PATTERNS[c.stack_pattern]
@@ -45,11 +51,23 @@ def camera_mount_geometry(spec: Spec, frame: Frame) -> dict:
     z_top = CAMERA_BASE_T + 1.0 + cb.size[1]  # camera board top edge (upright coordinates, untilted)
     cam_holes = tuple((sx * hx, round(z_top - 2.0 - dz, 4)) for sx in (-1, 1) for dz in (0.0, hz))
     stack = tuple((sx * pitch / 2, sy * pitch / 2) for sx in (-1, 1) for sy in (-1, 1))
+    corner_cut = round(2 * link_hole(spec) - 7.0, 4)
+    # the base's window: inside the stack holes' bosses (a nut or head bears round each), a rail
+    # from the base's sides, its back edge, the upright and the front corner cuts (|x| + y = corner_cut)
+    inner = pitch / 2 - bar_half_width(c.stack_screw, spec.printer.nozzle)
+    xw = min(inner, width / 2 - RAIL)
+    y0 = max(-inner, y_back + RAIL)
+    y1 = min(inner, y_front - CAMERA_WALL - RAIL, corner_cut - RAIL * math.sqrt(2) - xw)
+    window = (round(-xw, 4), round(y0, 4), round(xw, 4), round(y1, 4)) if min(2 * xw, y1 - y0) >= MIN_OPENING else None
+    # the upright's slot: between the camera holes' stiles, each as wide as the nut behind the
+    # board (or the screw head) needs plus two perimeters
+    sm = SCREWS["M2"]
+    slot = hx - max(sm.head_d, sm.nut_af) / 2 - max(BEARING_WALL, 2 * spec.printer.nozzle)
     return {"width": width, "y_front": y_front, "y_back": y_back, "base_t": CAMERA_BASE_T, "wall": CAMERA_WALL,
             "height": height, "tilt_deg": c.camera.tilt_deg, "camera_holes": cam_holes, "camera_hole_d": cb.hole_d,
             "stack_holes": stack, "stack_hole_d": SCREWS[c.stack_screw].clearance_d,
             # the base's front corners are cut along |x| + y = corner_cut, clear of the core links' bolt tabs
-            "corner_cut": round(2 * link_hole(spec) - 7.0, 4)}
+            "corner_cut": corner_cut, "base_window": window, "slot": round(slot, 4) if 2 * slot >= MIN_OPENING else 0.0}
 
 
 def _camera_mount(spec: Spec, frame: Frame) -> PartSpec:
@@ -60,15 +78,20 @@ def _camera_mount(spec: Spec, frame: Frame) -> PartSpec:
     k = g["corner_cut"] - (yf - wall)  # where each front corner cut (behind the upright) meets the upright's back face, |x|
     x0 = max(k, CAMERA_SPINE)  # never nearer the centre line (as `solid` cuts it)
     corner = (max(0.0, w / 2 - k) ** 2 - max(0.0, min(x0, w / 2) - k) ** 2) / 2  # area of each corner cut off the base
-    bw, hy = min(w / 2 - 4.0, 6.0), min(5.0, (yf - yb) / 2 - 8.0)
-    base_win = hexagon_area(2 * bw, 2 * hy) if bw > 2.0 and hy > 1.0 and bw >= hy else 0.0
-    up_win = hexagon_area(height - 12.0, 10.0) if height - 6.0 > 10.0 and abs(g["tilt_deg"]) <= 5.0 else 0.0
+    bwin = g["base_window"]
+    base_win = (bwin[2] - bwin[0]) * (bwin[3] - bwin[1]) if bwin else 0.0
+    up_win = 2 * g["slot"] * height
     base_a = w * (yf - yb) - 2 * corner - base_win - 4 * math.pi / 4 * screw.clearance_d**2
     up_a = w * height - up_win - 4 * math.pi / 4 * g["camera_hole_d"] ** 2
     vol = base_a * bt + up_a * wall
     # printed as it sits: the base's faces are horizontal, the upright's vertical
     area_v = 2 * up_a + 2 * (w + yf - yb) * bt
-    est = Estimate(vol, 2 * base_a + w * wall, area_v, (w, yf - yb, height + bt))
+    if bwin:
+        area_v += 2 * (bwin[2] - bwin[0] + bwin[3] - bwin[1]) * bt
+    # the upright's two ends and the slot's two sides; the holes' bores
+    area_v += (4 if g["slot"] else 2) * height * wall
+    area_v += 4 * math.pi * (screw.clearance_d * bt + g["camera_hole_d"] * wall)
+    est = Estimate(vol, 2 * base_a + (w - 2 * g["slot"]) * wall, area_v, (w, yf - yb, height + bt))
     origin = (0.0, 0.0, frame.core.plate.hi[2])
     params = tuple((k, v) for k, v in g.items())
     hw = (HardwareLine("M2 x 6 screw + nut (camera to mount)", 4, SCREWS["M2"].mass_g + 0.1),)
@@ -105,8 +128,9 @@ def camera_upright_matrix(part_params: dict) -> np.ndarray:
 
 
 def solid(part: PartSpec) -> Built:
-    """Base plate under the FC stack + the camera upright at the plate's front edge (tilted), printed
-    as it sits: windows pointed along z, camera holes are 2.2 mm horizontal holes."""
+    """Base under the FC stack + the camera upright at the plate's front edge (tilted), printed as
+    it sits: the base's window is a vertical opening, the upright's slot is open at the top (no roof
+    at any tilt) and the camera holes are 2.2 mm horizontal holes."""
     import cadquery as cq
 
     p = dict(part.params)
@@ -119,12 +143,10 @@ def solid(part: PartSpec) -> Built:
     hd = float(p["camera_hole_d"])
     tools = [cq.Solid.makeCylinder(hd / 2, wall + 2.0, cq.Vector(float(x), -wall - 1.0, float(z) - bt), cq.Vector(0, 1, 0))
              for x, z in p["camera_holes"]]
-    win_half = 5.0
-    if height - 6.0 > 2 * win_half and abs(float(p["tilt_deg"])) <= 5.0:
-        # window behind the board (its connector side), pointed along z; a tilted upright would
-        # turn one of its 45 deg roofs into an overhang, so tilted uprights stay solid
-        pts = [(a, z) for z, a in pointed(3.0, height - 9.0, win_half)]
-        tools.append(cq.Workplane("XZ", origin=(0, 1.0, 0)).polyline(pts).close().extrude(wall + 2.0).val())
+    slot = float(p["slot"])
+    if slot > 0.0:
+        # from the upright's foot (z 0: the base fills what lies below) out through its top
+        tools.append(cq.Solid.makeBox(2 * slot, wall + 2.0, height + 1.0, cq.Vector(-slot, -wall - 1.0, 0.0)))
     up = apply(up.cut(*tools) if tools else up, camera_upright_matrix(p))
     body = base.fuse(up)
     # cut everything below the base (a tilted upright's heel) and, below the base top, in front of
@@ -146,9 +168,9 @@ def solid(part: PartSpec) -> Built:
         tools.append(prism_xy(tri, -1.0, bt))
     hole_d = float(p["stack_hole_d"])
     tools += [cq.Solid.makeCylinder(hole_d / 2, bt + 2.0, cq.Vector(float(x), float(y), -1.0)) for x, y in p["stack_holes"]]
-    bw, hy = min(w / 2 - 4.0, 6.0), min(5.0, (yf - yb) / 2 - 8.0)
-    if bw > 2.0 and hy > 1.0 and 2 * bw >= 2 * hy:  # lightening window between the stack holes, pointed along x (print z)
-        tools.append(prism_xy(pointed(-bw, bw, hy), -1.0, bt + 1.0))
+    if p["base_window"]:
+        x0, y0, x1, y1 = (float(v) for v in p["base_window"])
+        tools.append(cq.Solid.makeBox(x1 - x0, y1 - y0, bt + 2.0, cq.Vector(x0, y0, -1.0)))
     body = body.cut(*tools)  # one boolean with every tool
     solids = body.clean().Solids()
     if len(solids) != 1:
