@@ -437,6 +437,13 @@ def _strain(spec, frame, parts, joints, mdl: Model, u: np.ndarray, eps_break: fl
             "peak": round(max(eps_h, eps_s), 4), "ratio_to_break": round(max(eps_h, eps_s) / eps_break, 4)}
 
 
+def _web_roots(parts) -> list:
+    from ..families.core_plate import web_roots
+
+    plate = next(p for p in parts if p.name == "core_plate")
+    return web_roots(plate.param("webs"), float(plate.param("size")) / 2)
+
+
 def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: dict, itf, hinged_socket,
                        hinge_geometry) -> dict:
     """What each part carries per newton of payload force (u: the payload case per newton), for
@@ -450,9 +457,12 @@ def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: d
     - ``core_plate_mpa_per_n``: the core plate's bending stress where a core link loads its
       corner: the link's vertical force times its lever to the nearest stack screw, plus the
       link's moment across the plate, on the section across the corner there, w = 2 sqrt 2
-      (plate/2 - pitch/2) wide (the corner as a cantilever off the stack). The spacer under the
-      plate is clamped to it by the link's bolt and the stack screws, so the two bend together
-      without shear transfer (the lower bound of their sharing): sigma = 6 M t_p / (w (t_p^3 + t_s^3))."""
+      (plate/2 - pitch/2) wide (the corner as a cantilever off the stack). Where the plate rests
+      on the spacer and the tab link's bolt clamps the two, they bend together without shear
+      transfer (the lower bound of their sharing): sigma = 6 M t_p / (w (t_p^3 + t_s^3)); on
+      standoffs (level arms) or with pegs, t_s = 0. With pegs, also the webs' roots on the plate's
+      edges in the link's corner (`core_plate.web_roots`, their total length w_r), the link's
+      force levered from its node to the plate: sigma = 6 (F d + M) / (w_r t_p^2)."""
     from ..materials import STACK_PATTERNS
 
     fe = mdl.fe
@@ -489,6 +499,11 @@ def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: d
     s = STACK_PATTERNS[c.stack_pattern][0] / 2
     half = c.plate_size / 2
     w = 2 * math.sqrt(2) * max(half - s, 1.0)
+    t_p = c.plate_thickness
+    # the spacer bends with the plate only where the plate rests on it and a link's bolt clamps
+    # the two (level arms hang the plate on standoffs above it; pegs have no bolt)
+    t_s = c.spacer_thickness if frame.core.hang == 0 and c.link == "tab" else 0.0
+    roots = _web_roots(parts) if c.link == "pegs" else []
     sig_core = 0.0
     for nodes, Ks in fe.springs:
         for j, n in enumerate(nodes):
@@ -498,6 +513,11 @@ def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: d
                 fz, mh = abs(f[6 * j + 2]), math.hypot(f[6 * j + 3], f[6 * j + 4])
                 p = fe.nodes[n]
                 lever = math.hypot(abs(p[0]) - s, abs(p[1]) - s)
-                sig_core = max(sig_core, 6 * (fz * lever + mh) * c.plate_thickness
-                               / (w * (c.plate_thickness**3 + c.spacer_thickness**3)))
+                sig_core = max(sig_core, 6 * (fz * lever + mh) * t_p / (w * (t_p**3 + t_s**3)))
+                if roots:
+                    # the pegs' tubes hand the load to the plate through their webs' roots on the
+                    # plate's edges in this corner; the lever from the link to the plate
+                    w_root = sum(length for (x, y), length in roots if x * p[0] > 0 and y * p[1] > 0)
+                    out = math.hypot(max(abs(p[0]) - half, 0.0), max(abs(p[1]) - half, 0.0))
+                    sig_core = max(sig_core, 6 * (fz * out + mh) / (w_root * t_p**2))
     return {"rods": rods, "joints": joints, "core_plate_mpa_per_n": sig_core}

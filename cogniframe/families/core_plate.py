@@ -137,26 +137,39 @@ def tube_web(end, shoulder, r_out: float, half: float) -> tuple:
     return tuple((round(float(x), 6), round(float(y), 6)) for x, y in hull_ccw(rect + feet))
 
 
-def webs_outside(webs, half: float) -> tuple[float, float]:
-    """(area, perimeter) of the union of the webs (plan) outside the plate |x|, |y| <= `half`:
-    where a link's webs overlap (arms off the plate's diagonal) they are one prism, as in the CAD.
-    The perimeter leaves out the union's sides along the plate's edge (they join the plate: no
-    surface). manifold3d's exact 2-D boolean, the library the meshes already use."""
+def _webs_off_plate(webs, half: float) -> list[np.ndarray]:
+    """The union of the webs (plan) outside the plate |x|, |y| <= `half`, as polygons: where a
+    link's webs overlap (arms off the plate's diagonal) they are one prism, as in the CAD
+    (manifold3d's exact 2-D boolean, the library the meshes already use)."""
     import manifold3d as m3
 
     square = m3.CrossSection.square((2 * half, 2 * half), center=True)
     union = m3.CrossSection([[tuple(map(float, q)) for q in webs[0]]])
     for w in webs[1:]:
         union = union + m3.CrossSection([[tuple(map(float, q)) for q in w]])
-    out = union - square
-    per = 0.0
-    for poly in out.to_polygons():
-        pts = np.asarray(poly, float)
-        for a, b in zip(pts, np.roll(pts, -1, axis=0)):
-            on_edge = any(abs(abs(a[k]) - half) < 1e-6 and abs(abs(b[k]) - half) < 1e-6 and a[k] * b[k] > 0 for k in range(2))
-            if not on_edge:
-                per += float(np.linalg.norm(b - a))
-    return float(out.area()), per
+    return [np.asarray(poly, float) for poly in (union - square).to_polygons()], float((union - square).area())
+
+
+def _on_edge(a, b, half: float) -> bool:
+    return any(abs(abs(a[k]) - half) < 1e-6 and abs(abs(b[k]) - half) < 1e-6 and a[k] * b[k] > 0 for k in range(2))
+
+
+def webs_outside(webs, half: float) -> tuple[float, float]:
+    """(area, perimeter) of the webs' union outside the plate |x|, |y| <= `half`; the perimeter
+    leaves out its sides along the plate's edge (they join the plate: no surface)."""
+    polys, area = _webs_off_plate(webs, half)
+    per = sum(float(np.linalg.norm(b - a)) for pts in polys for a, b in zip(pts, np.roll(pts, -1, axis=0))
+              if not _on_edge(a, b, half))
+    return area, per
+
+
+def web_roots(webs, half: float) -> list[tuple[tuple[float, float], float]]:
+    """Where the webs join the plate: each side of their union that lies along the plate's edge,
+    as (its midpoint in plan, its length), mm: the section a pegged link's load crosses into the
+    plate (analysis/load_cases.py)."""
+    polys, _ = _webs_off_plate(webs, half)
+    return [(tuple(float(v) for v in (a + b) / 2), float(np.linalg.norm(b - a)))
+            for pts in polys for a, b in zip(pts, np.roll(pts, -1, axis=0)) if _on_edge(a, b, half)]
 
 
 def _with_tubes(base: Estimate, params: dict) -> Estimate:
