@@ -452,7 +452,11 @@ def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: d
       link's moment across the plate, on the section across the corner there, w = 2 sqrt 2
       (plate/2 - pitch/2) wide (the corner as a cantilever off the stack). The spacer under the
       plate is clamped to it by the link's bolt and the stack screws, so the two bend together
-      without shear transfer (the lower bound of their sharing): sigma = 6 M t_p / (w (t_p^3 + t_s^3))."""
+      without shear transfer (the lower bound of their sharing): sigma = 6 M t_p / (w (t_p^3 + t_s^3)).
+      The pegged plate (core.link: pegs) hangs on standoffs with no spacer against it, and its
+      link's pull reaches the stack hole along a ribbed stem: the section where the rib starts,
+      RIB_START past the hole's centre (clear of the standoff clamping the plate there), w_r wide
+      and t_p + rib deep, its lever the link's less RIB_START: sigma = 6 M / (w_r (t_p + rib)^2)."""
     from ..materials import STACK_PATTERNS
 
     fe = mdl.fe
@@ -489,6 +493,10 @@ def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: d
     s = STACK_PATTERNS[c.stack_pattern][0] / 2
     half = c.plate_size / 2
     w = 2 * math.sqrt(2) * max(half - s, 1.0)
+    if c.link == "pegs":
+        # the pegged plate's stem: no spacer against it (it hangs on standoffs), its section
+        # where the rib starts, past the standoff clamping it (families/core_plate.py)
+        from ..families.core_plate import PLATE_RAIL, RIB, RIB_START
     sig_core = 0.0
     for nodes, Ks in fe.springs:
         for j, n in enumerate(nodes):
@@ -498,6 +506,9 @@ def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: d
                 fz, mh = abs(f[6 * j + 2]), math.hypot(f[6 * j + 3], f[6 * j + 4])
                 p = fe.nodes[n]
                 lever = math.hypot(abs(p[0]) - s, abs(p[1]) - s)
-                sig_core = max(sig_core, 6 * (fz * lever + mh) * c.plate_thickness
-                               / (w * (c.plate_thickness**3 + c.spacer_thickness**3)))
+                if c.link == "pegs":
+                    sig_core = max(sig_core, 6 * (fz * (lever - RIB_START) + mh) / (PLATE_RAIL * (c.plate_thickness + RIB) ** 2))
+                else:
+                    sig_core = max(sig_core, 6 * (fz * lever + mh) * c.plate_thickness
+                                   / (w * (c.plate_thickness**3 + c.spacer_thickness**3)))
     return {"rods": rods, "joints": joints, "core_plate_mpa_per_n": sig_core}
