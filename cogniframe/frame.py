@@ -397,9 +397,7 @@ def _core(spec: Spec) -> Core:
     battery = Box("battery", (0.0, 0.0, holder_bottom + floor + b.height / 2), (b.width, b.length, b.height))
     h_top = holder_bottom + holder_h
     spacer = flow = None
-    # with pegs (level arms, no link bolt) a spacer with no flow board to carry has no job: the
-    # standoffs stand on the holder, as much longer
-    if c.spacer_thickness > 0 and (c.flow_sensor or c.link != "pegs"):
+    if c.spacer_thickness > 0:
         spacer = Box("sensor_mount" if c.flow_sensor else "core_spacer", (0.0, 0.0, h_top + c.spacer_thickness / 2),
                      (c.plate_size, c.plate_size, c.spacer_thickness))
     if c.flow_sensor:
@@ -407,7 +405,7 @@ def _core(spec: Spec) -> Core:
         fz = fb.size[2] + fb.parts_block[2]
         fy = y0 - SENSOR_GAP - fb.size[1] / 2
         flow = Box("flow_sensor", (0.0, fy, h_top - fz / 2), (fb.size[0], fb.size[1], fz))
-    plate_z = h_top + (c.spacer_thickness if spacer else 0.0) + c.plate_thickness / 2
+    plate_z = h_top + c.spacer_thickness + c.plate_thickness / 2
     hang = 0.0
     if spec.frame.level_arms:
         # whole millimetres: M2 standoffs come in 1 mm steps; the knees then follow the plate

@@ -5,7 +5,7 @@ centre (an X like the authors' plus-shaped MainBase); the plate printed upside d
 must go into the tubes (their axes one line), the frame must hang the plate so, the closed form
 must be the CAD's volume, the stem must be as strong as the square plate's corner was, the part
 must print, nothing may clash in either preset, and the presets with pegs must meet the paper's
-masses (the spacer that has no job left goes, the flow board's mount keeps only its rear feet).
+masses (the spacer keeps only its pad on the two rear standoffs).
 """
 
 from __future__ import annotations
@@ -113,23 +113,18 @@ def test_the_plate_hangs_higher_by_the_tubes_drop(preset):
     assert frame_mod.peg_drop(spec) == pytest.approx(3.1) == pytest.approx(drop)
     base = tab.core.plate.centre[2] - tab.core.hang  # the plate resting on the spacer
     spacer = spec.core.spacer_thickness
-    if frame.core.spacer is None:  # bamboo: no flow board, so no spacer: the plate would rest on the holder
-        base -= spacer
     z_knee = spec.frame.height * spec.frame.knee_height
     assert frame.core.hang == round(z_knee + drop - base)
-    # carbon 21 -> 24; bamboo 15 -> 20 (3 + the 2 mm spacer it no longer has)
-    assert frame.core.hang == tab.core.hang + 3 + (spacer if frame.core.spacer is None else 0)
+    assert frame.core.hang == tab.core.hang + 3  # carbon 21 -> 24, bamboo 15 -> 18
     assert frame.core.plate.centre[2] == pytest.approx(base + frame.core.hang)
     for k in frame_mod.CORNERS:
         assert frame.nodes[f"core_link_{k}"].pos[2] == pytest.approx(frame.core.plate.centre[2] - drop, abs=1e-9)
         assert frame.nodes[f"knee_{k}"].pos[2] == pytest.approx(frame.nodes[f"core_link_{k}"].pos[2], abs=1e-9)
+    # the rear two on the spacer's bar, the front two on the holder, the spacer's 2 mm longer
     standoff = {h.item: h.qty for h in parts["core_plate"].hardware if "standoff, female-female" in h.item}
-    if frame.core.spacer is None:
-        assert list(standoff.values()) == [4] and f"x {frame.core.hang:g} mm" in next(iter(standoff))
-    else:  # carbon: rear two on the sensor mount, front two on the holder, the spacer's 2 mm longer
-        assert sorted(standoff.values()) == [2, 2]
-        assert any(f"x {frame.core.hang:g} mm" in i and "rear" in i for i in standoff)
-        assert any(f"x {frame.core.hang + spacer:g} mm" in i and "front" in i for i in standoff)
+    assert sorted(standoff.values()) == [2, 2]
+    assert any(f"x {frame.core.hang:g} mm" in i and "rear" in i for i in standoff)
+    assert any(f"x {frame.core.hang + spacer:g} mm" in i and "front" in i for i in standoff)
 
 
 def test_the_bom_drops_the_link_screws_and_the_plate_their_holes():
@@ -252,30 +247,31 @@ def test_the_pegged_presets_meet_the_papers_masses():
     assert bamboo.total_g <= 245.0
 
 
-def test_the_spacer_keeps_only_what_the_flow_board_needs():
-    """With pegs (level arms, no link bolt) the spacer carries only the flow board: bamboo (no
-    flow board) has none; carbon's sensor mount is one bar under the two rear stack standoffs
-    with its neck and pad (no link holes, no nut traps), its closed form the bar, the neck
-    between bar and pad and the pad less its holes and slots. The tab keeps its X with the links'
+@pytest.mark.parametrize("preset", PRESETS)
+def test_the_spacer_keeps_only_its_pad_on_the_rear_standoffs(preset):
+    """With pegs (level arms, no link bolt) the spacer carries only its pad (carbon: the flow board
+    behind the holder, on a 10 mm neck; bamboo: the receiver, right behind the bar, on the
+    holder): one 7 mm bar under the two rear stack standoffs, 3.5 mm past each hole, no link holes
+    or nut traps; its closed form the bar, the neck between bar and pad and the pad, less two
+    2.4 mm holes and four 3.2 x 1.8 mm zip slots, 2 mm thick. The tab keeps its X with the links'
     holes."""
-    _, bframe, bparts = _planned("bamboo")
-    assert bframe.core.spacer is None and "core_spacer" not in bparts
-    spec, frame, parts = _planned("carbon")
-    m = parts["sensor_mount"]
+    spec, frame, parts = _planned(preset)
+    m = parts["sensor_mount" if spec.core.flow_sensor else "core_spacer"]
     assert m.param("link_holes") == () and m.param("stack_holes") == ((-10.0, -10.0), (10.0, -10.0))
     pieces = m.param("pieces")
-    assert len(pieces) == 3  # bar, neck, pad
-    pad_half, pad_y0, pad_y1 = None, None, None
-    xs = [x for x, _ in pieces[2]]
-    ys = [y for _, y in pieces[2]]
+    assert len(pieces) == (3 if spec.core.flow_sensor else 2)  # bar, (neck,) pad
+    xs, ys = [x for x, _ in pieces[-1]], [y for _, y in pieces[-1]]
     pad_half, pad_y0, pad_y1 = max(xs), max(ys), min(ys)
+    if not spec.core.flow_sensor:
+        assert (pad_half, pad_y0, pad_y1) == (10.0, -13.5, -24.0)
     area = 27.0 * 7.0 + 10.0 * (-10.0 - 3.5 - pad_y0) + 2 * pad_half * (pad_y0 - pad_y1)
-    area -= 2 * math.pi / 4 * 2.4**2 + 4 * 3.2 * 1.8
-    assert m.estimate.volume == pytest.approx(area * spec.core.spacer_thickness, rel=1e-9)
-    assert _union(pieces).area() == pytest.approx(area + 2 * math.pi / 4 * 2.4**2 + 4 * 3.2 * 1.8, rel=1e-9)
-    tab_spec = preset_spec("carbon")
+    openings = 2 * math.pi / 4 * 2.4**2 + 4 * 3.2 * 1.8
+    assert _union(pieces).area() == pytest.approx(area, rel=1e-9)
+    assert m.estimate.volume == pytest.approx((area - openings) * spec.core.spacer_thickness, rel=1e-9)
+    tab_spec = preset_spec(preset)
     tab = {p.name: p for p in partlist.part_list(tab_spec, frame_mod.frame_of(tab_spec))}
-    assert len(tab["sensor_mount"].param("link_holes")) == 4 and len(tab["sensor_mount"].param("pieces")) == 4
+    t = tab["sensor_mount" if spec.core.flow_sensor else "core_spacer"]
+    assert len(t.param("link_holes")) == 4 and len(t.param("stack_holes")) == 4
 
 
 def test_climbing_arms_refuse_the_pegs_naming_the_key():

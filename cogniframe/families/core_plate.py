@@ -91,9 +91,10 @@ def _core_plate(spec: Spec, frame: Frame) -> PartSpec:
         # their tops, short screws come up through the holder (and spacer) into their bottoms
         from .sensor_mount import rear_only
 
-        if rear_only(spec):  # the sensor mount under the rear two only: the front two stand on the holder
+        if rear_only(spec):  # the spacer under the rear two only: the front two stand on the holder
             front = hang + c.spacer_thickness
-            legs = (HardwareLine(f"{screw.name} x {hang:g} mm nylon standoff, female-female (plate on the sensor mount, rear)", 2,
+            under = "sensor mount" if c.flow_sensor else "spacer"
+            legs = (HardwareLine(f"{screw.name} x {hang:g} mm nylon standoff, female-female (plate on the {under}'s bar, rear)", 2,
                                  round(NYLON_STANDOFF_G_PER_MM * hang, 3)),
                     HardwareLine(f"{screw.name} x {front:g} mm nylon standoff, female-female (plate on the battery holder, front)", 2,
                                  round(NYLON_STANDOFF_G_PER_MM * front, 3)))

@@ -65,6 +65,9 @@ def sensor_mount_outline(spec: Spec, frame: Frame) -> dict:
     flow = frame.core.flow_sensor
     if flow is not None:
         pad_half, pad_y0, pad_y1 = flow.size[0] / 2 + 3.0, rear - 1.5, flow.lo[1] - 2.0
+    elif bar:  # the receiver's pad right behind the bar, on the holder (no flow board to see past it)
+        pad_half, pad_y0 = 10.0, -pitch / 2 - SPACER_RAIL / 2
+        pad_y1 = pad_y0 - 10.5
     else:
         pad_half, pad_y0, pad_y1 = 10.0, rear - 1.5, rear - 12.0
     h = SPACER_NECK / 2
@@ -76,9 +79,11 @@ def sensor_mount_outline(spec: Spec, frame: Frame) -> dict:
     yc = (pad_y0 + pad_y1) / 2
     sx_ = pad_half - 1.5 - ZIP_SLOT[1] / 2
     zips = ((-sx_, yc), (sx_, yc), (-3.5, pad_y1 + 2.5), (3.5, pad_y1 + 2.5))  # receiver + flow board; antenna
-    pieces = tuple(tuple((round(float(x), 4), round(float(y), 4)) for x, y in poly) for poly in (*rails, neck, pad))
+    neck_len = (-pitch / 2 - SPACER_RAIL / 2 - pad_y0) if bar else 0.0
+    pieces = tuple(tuple((round(float(x), 4), round(float(y), 4)) for x, y in poly)
+                   for poly in (*rails, *((neck,) if not bar or neck_len > 0 else ()), pad))
     if bar:
-        area = 2 * reach * SPACER_RAIL + SPACER_NECK * (-pitch / 2 - SPACER_RAIL / 2 - pad_y0) + 2 * pad_half * (pad_y0 - pad_y1)
+        area = 2 * reach * SPACER_RAIL + SPACER_NECK * neck_len + 2 * pad_half * (pad_y0 - pad_y1)
         extent = (2 * max(reach, pad_half), -pitch / 2 + SPACER_RAIL / 2 - pad_y1)
     else:
         area = 2 * SPACER_RAIL * 2 * reach * math.sqrt(2) - SPACER_RAIL**2 + SPACER_NECK * (-pad_y0 - SPACER_RAIL) + 2 * pad_half * (pad_y0 - pad_y1)
@@ -89,12 +94,13 @@ def sensor_mount_outline(spec: Spec, frame: Frame) -> dict:
 
 
 def rear_only(spec: Spec) -> bool:
-    """Whether the sensor mount is a bar under the two rear stack standoffs only, with its neck
-    and pad: with pegs (level arms, no link bolt) it carries nothing but the flow board, and the
-    front standoffs stand on the holder, the spacer's thickness longer (whole millimetres: the
-    standoffs' steps; else the X under all four)."""
+    """Whether the sensor mount / spacer is a bar under the two rear stack standoffs only, with its
+    pad (behind the holder on a neck for a flow board, else on the holder for the receiver): with
+    pegs (level arms, no link bolt) the pad is all it carries, and the front standoffs stand on the
+    holder, the spacer's thickness longer (whole millimetres: the standoffs' steps; else the X
+    under all four)."""
     c = spec.core
-    return c.link == "pegs" and c.flow_sensor is not None and float(c.spacer_thickness).is_integer()
+    return c.link == "pegs" and float(c.spacer_thickness).is_integer()
 
 
 def _sensor_mount(spec: Spec, frame: Frame) -> PartSpec:
