@@ -3,16 +3,14 @@ holes, printed as it sits (translated up by half its thickness); its local frame
 its placement origin, axes as the frame.
 
 With the pegged core link (core.link: pegs) the plate has no link bolt holes; it carries one ABS
-tube per peg instead, the bore the peg presses into (`frame.PEG_D`, `frame.PEG_TUBE_WALL`
-round it, as long as the peg and coaxial with it), hanging under the plate with its top flush
-with the plate's top (frame.py `peg_drop` puts the arms there). The tubes lie beyond the plate's
-edges (7 mm in both presets), and each is joined to the nearest edge by a web as thick as the
-plate: the hull of the tube's footprint and its inner end's footprint corners projected onto that
-edge. Webs, not a larger (plus-shaped) plate: they carry the same peg into the same edge for a
-fraction of the ABS, and the web under the whole tube is what lets the round tube print. The
-plate then prints upside down: its top, the webs and the tubes' tops on the bed, each tube lying
-along the bed (its bore's ceiling is a bridge 4.8 mm wide, its round outside above the web never
-steeper than 45 deg).
+tube per peg instead, the bore the peg presses into (`frame.PEG_D`, `frame.PEG_TUBE_WALL` round
+it, as long as the peg and coaxial with it), hanging under the plate with its top flush with the
+plate's top (frame.py `peg_drop` puts the arms there). The plate is then an X like the authors'
+plus-shaped MainBase rather than the square (`pegged_layout`): per link a bar under its tubes, a
+stem from its stack hole to them, ribbed underneath where the link's pull bends it, and a strip
+on to the centre. It prints upside down: its top, the bars and the tubes' tops on the bed, each
+tube lying along the bed on its bar (its bore's ceiling a bridge 4.8 mm wide, its round outside
+above the slab never steeper than 45 deg), the ribs standing up from the stems.
 """
 
 from __future__ import annotations
@@ -55,10 +53,10 @@ RIB_START = 2.5
 RIB_GAP = 1.0
 GUSSET = 20.0
 LEVEL_TOL = 1e-5  # mm: a tube's axis level and flush as planned (sockets and placements are stored to 1e-6)
-# mm: OCC's fuzzy boolean tolerance for the tubes and webs. A web's outer end face is the plane
-# of its tube's end (the web runs under the whole tube); with the arms off the diagonal (a
-# rectangle) the exact booleans left the union split along such faces, in up to 25 solids of the
-# right total volume; fuzzy, each of 20 random designs gave one solid of the same volume.
+# mm: OCC's fuzzy boolean tolerance for the slab, ribs and tubes. A bar's outer edge is the plane
+# of its tubes' outer ends (the bar runs under the whole tube) and a rib's sides are its stem's;
+# exact booleans left such unions split along those faces (the webs before the bars: up to 25
+# solids of the right total volume); fuzzy, one (tests/test_core_plate_pegs.py's random designs).
 FUZZ = 1e-4
 
 
@@ -131,8 +129,8 @@ def peg_tubes(spec: Spec, frame: Frame) -> tuple[tuple[tuple, tuple], float]:
                 r_out = ax.radius + PEG_TUBE_WALL
                 # the frame hangs the plate so that the arms' tubes are flush with the plate's top
                 # (frame.peg_drop); the strut's peg may lie lower (its column stands under the
-                # strut's bore), its tube then sunk into its web. A tube above the plate's top
-                # (below the bed in print), off the web, or not level is a bug, not a design.
+                # strut's bore), its tube then sunk into its bar. A tube above the plate's top
+                # (below the bed in print), off the bar, or not level is a bug, not a design.
                 if abs(e[2] - s[2]) > LEVEL_TOL or e[2] + r_out > top + LEVEL_TOL or e[2] + r_out < top - LEVEL_TOL - r_out:
                     raise RuntimeError(f"{link.name} at {pl.instance}: its peg's axis runs from z {e[2]:.6f} to {s[2]:.6f} "
                                        f"in the plate's frame: its tube (outside radius {r_out:g}) is not level within the "

@@ -1,7 +1,8 @@
 """The sensor mount / core spacer (ABS/PLA): an X of two rails between the battery holder and
 the core plate, with a neck back to a pad for the flow board and zip-tie slots, printed flat as it
 sits (its local origin: the plate square's centre, z = 0 its bottom). Named core_spacer when the
-design has no flow sensor.
+design has no flow sensor. With pegs the plate hangs on standoffs and no link bolt needs a nut
+trap: the X shrinks to a bar under the two rear standoffs with the pad (`rear_only`).
 """
 
 from __future__ import annotations
@@ -79,6 +80,9 @@ def sensor_mount_outline(spec: Spec, frame: Frame) -> dict:
     yc = (pad_y0 + pad_y1) / 2
     sx_ = pad_half - 1.5 - ZIP_SLOT[1] / 2
     zips = ((-sx_, yc), (sx_, yc), (-3.5, pad_y1 + 2.5), (3.5, pad_y1 + 2.5))  # receiver + flow board; antenna
+    if bar:  # a short holder: the pad reaches up to the bar, no further
+        pad_y0 = min(pad_y0, -pitch / 2 - SPACER_RAIL / 2)
+        pad = ((-pad_half, pad_y1), (pad_half, pad_y1), (pad_half, pad_y0), (-pad_half, pad_y0))
     neck_len = (-pitch / 2 - SPACER_RAIL / 2 - pad_y0) if bar else 0.0
     pieces = tuple(tuple((round(float(x), 4), round(float(y), 4)) for x, y in poly)
                    for poly in (*rails, *((neck,) if not bar or neck_len > 0 else ()), pad))
