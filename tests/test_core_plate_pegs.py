@@ -1,8 +1,12 @@
 """The core plate with the pegged core link (`core.link: pegs`): one ABS tube per peg (the peg's
 6.8 mm bore, a 1.2 mm wall, as long as the peg) hanging under the plate, its top flush with the
-plate's top, joined to the nearest edge by a plate-thick web; the plate printed upside down. The
-pegs must go into the tubes (their axes one line), the frame must hang the plate so, the closed
-form must be the CAD's volume, the part must print, and nothing may clash in either preset."""
+plate's top; per link a bar under its tubes, a ribbed stem to its stack hole and a strip to the
+centre (an X like the authors' plus-shaped MainBase); the plate printed upside down. The pegs
+must go into the tubes (their axes one line), the frame must hang the plate so, the closed form
+must be the CAD's volume, the stem must be as strong as the square plate's corner was, the part
+must print, nothing may clash in either preset, and the presets with pegs must meet the paper's
+masses (the spacer keeps only its pad on the two rear standoffs).
+"""
 
 from __future__ import annotations
 
@@ -108,6 +112,7 @@ def test_the_plate_hangs_higher_by_the_tubes_drop(preset):
     drop = R_BORE + WALL - spec.core.plate_thickness / 2
     assert frame_mod.peg_drop(spec) == pytest.approx(3.1) == pytest.approx(drop)
     base = tab.core.plate.centre[2] - tab.core.hang  # the plate resting on the spacer
+    spacer = spec.core.spacer_thickness
     z_knee = spec.frame.height * spec.frame.knee_height
     assert frame.core.hang == round(z_knee + drop - base)
     assert frame.core.hang == tab.core.hang + 3  # carbon 21 -> 24, bamboo 15 -> 18
@@ -115,8 +120,11 @@ def test_the_plate_hangs_higher_by_the_tubes_drop(preset):
     for k in frame_mod.CORNERS:
         assert frame.nodes[f"core_link_{k}"].pos[2] == pytest.approx(frame.core.plate.centre[2] - drop, abs=1e-9)
         assert frame.nodes[f"knee_{k}"].pos[2] == pytest.approx(frame.nodes[f"core_link_{k}"].pos[2], abs=1e-9)
-    standoff = [h for h in parts["core_plate"].hardware if "standoff, female-female" in h.item]
-    assert len(standoff) == 1 and f"x {frame.core.hang:g} mm" in standoff[0].item
+    # the rear two on the spacer's bar, the front two on the holder, the spacer's 2 mm longer
+    standoff = {h.item: h.qty for h in parts["core_plate"].hardware if "standoff, female-female" in h.item}
+    assert sorted(standoff.values()) == [2, 2]
+    assert any(f"x {frame.core.hang:g} mm" in i and "rear" in i for i in standoff)
+    assert any(f"x {frame.core.hang + spacer:g} mm" in i and "front" in i for i in standoff)
 
 
 def test_the_bom_drops_the_link_screws_and_the_plate_their_holes():
@@ -132,33 +140,138 @@ def test_the_bom_drops_the_link_screws_and_the_plate_their_holes():
     assert len(tab["core_plate"].param("holes")) == 8
 
 
-@pytest.mark.parametrize("preset", PRESETS)
-def test_closed_form_is_plate_webs_and_tubes_by_hand(preset):
-    """The estimate by hand: the 3 mm plate less four 2.4 mm holes, each web's plan outside the
-    plate (manifold3d's 2-D boolean) times 3 mm, and each tube's ring above its web:
-    9 (pi 4.6^2 - seg - pi 3.4^2), seg the circle below a chord h under its centre: 1.6 mm for a
-    tube flush with the plate's top, more for the strut's, sunk into its web."""
+def _union(pieces):
     import manifold3d as m3
 
+    out = None
+    for q in pieces:
+        cs = m3.CrossSection([[tuple(map(float, v)) for v in q]])
+        out = cs if out is None else out + cs
+    return out
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_closed_form_is_outline_ribs_and_tubes_by_hand(preset):
+    """The estimate by hand: the outline's union (manifold3d's 2-D boolean) 3 mm thick less four
+    2.4 mm stack holes; four ribs 7 x 3.5 mm times their length; each tube's ring above the slab:
+    9 (pi 4.6^2 - seg - pi 3.4^2), seg the circle below a chord h under its centre: 1.6 mm for a
+    tube flush with the plate's top, more for the strut's, sunk into its slab."""
     spec, _, parts = _planned(preset)
     p = parts["core_plate"]
-    a, t = spec.core.plate_size, spec.core.plate_thickness
+    t = spec.core.plate_thickness
     r_o = R_BORE + WALL
-    square = m3.CrossSection.square((a, a), center=True)
-    webs = p.param("webs")
-    assert len(webs) == len(p.param("tubes")) >= 8
-    by_hand = a * a * t - 4 * math.pi * 1.2**2 * t
-    union = None
-    for web, (e, _) in zip(webs, p.param("tubes")):
-        h = (t / 2 - e[2]) - t  # the axis's height in print (upside down) over the web's top
+    assert len(p.param("outline")) == 4 * 4 and len(p.param("ribs")) == 4
+    union = _union(p.param("outline"))
+    assert len(union.to_polygons()) == 1  # one piece, no enclosed hole
+    by_hand = union.area() * t - 4 * math.pi * 1.2**2 * t
+    for a, b in p.param("ribs"):
+        by_hand += 7.0 * 3.5 * float(np.linalg.norm(np.subtract(b, a)))
+    for e, _ in p.param("tubes"):
+        h = (t / 2 - e[2]) - t  # the axis's height in print (upside down) over the slab's top
         seg = r_o**2 * math.acos(h / r_o) - h * math.sqrt(r_o**2 - h * h)
-        cs = m3.CrossSection([[tuple(map(float, q)) for q in web]])
-        outside = (cs - square).area()
-        assert 0 < outside < cs.area()  # it reaches into the plate
-        union = cs if union is None else union + cs
         by_hand += PEG_LEN * (math.pi * r_o**2 - seg - math.pi * R_BORE**2)
-    by_hand += (union - square).area() * t
-    assert p.estimate.volume == pytest.approx(by_hand, rel=1e-9)
+    # 1e-8: the 2-D boolean rounds to its integer grid, union by union (1e-5 mm^2 apart)
+    assert p.estimate.volume == pytest.approx(by_hand, rel=1e-8)
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_every_tube_stands_on_the_slab_and_every_hole_in_it(preset):
+    """Each tube's footprint (its axis 4.6 mm either side) lies inside the outline (a bar under the
+    whole tube: it prints on it, and its load goes into it); each stack hole has at least 2.3 mm of
+    slab round its 2.4 mm clearance (points on a 3.5 mm circle round it inside the outline), so a
+    4 mm standoff seats on it; the outline keeps clear of the sliver rule everywhere (no strip
+    under 4 mm: ten 0.4 mm lines)."""
+    import manifold3d as m3
+
+    _, _, parts = _planned(preset)
+    p = parts["core_plate"]
+    union = _union(p.param("outline"))
+    for e, s in p.param("tubes"):
+        e, s = np.asarray(e, float)[:2], np.asarray(s, float)[:2]
+        u = (s - e) / np.linalg.norm(s - e)
+        n = np.array([-u[1], u[0]]) * (R_BORE + WALL - 1e-3)
+        foot = m3.CrossSection([[tuple(q) for q in (e - n, s - n, s + n, e + n)]])
+        assert (foot - union).area() < 1e-6
+    for x, y in p.param("holes"):
+        ring = m3.CrossSection.circle(3.5, 64).translate((x, y))
+        assert (ring - union).area() < 1e-6
+    assert union.offset(-2.0 + 1e-3, m3.JoinType.Miter).offset(2.0 - 1e-3, m3.JoinType.Miter).area() == pytest.approx(union.area(), rel=0.02)
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_each_stem_is_as_strong_as_the_square_plates_corner(preset):
+    """A link's pull bends its stem as a cantilever off the stack standoffs (analysis/load_cases.py
+    `core_plate_mpa_per_n`). The rib makes the stem 7 mm wide and 3 + 3.5 = 6.5 mm deep from 2.5 mm
+    past the stack hole: bending modulus 7 x 6.5^2 / 6 = 49.3 mm^3, more than the 40 mm square's
+    corner across the hole had (2 sqrt 2 x 10 = 28.3 mm of 3 mm plate: 42.4). Where the rib stops,
+    1 mm before the tubes, the 20 mm gusset (20 x 3^2 / 6 = 30 mm^3) carries a shorter lever: its
+    stress (lever / modulus, from the link's node) under the rib's."""
+    spec, frame, parts = _planned(preset)
+    p = parts["core_plate"]
+    assert p.param("rib_width") == 7.0 and p.param("rib_depth") == 3.5
+    z_rib = 7.0 * (3.0 + 3.5) ** 2 / 6
+    assert z_rib == pytest.approx(49.29, abs=0.01)
+    assert z_rib > 2 * math.sqrt(2) * 10.0 * 3.0**2 / 6
+    for a, b in p.param("ribs"):
+        a, b = np.asarray(a, float), np.asarray(b, float)
+        hole = min((np.asarray(h, float) for h in p.param("holes")), key=lambda h: np.linalg.norm(h - a))
+        assert np.linalg.norm(a - hole) == pytest.approx(2.5, abs=1e-6)
+        k = next(k for k in frame_mod.CORNERS if np.sign(frame.nodes[f"core_link_{k}"].pos[0]) == np.sign(a[0])
+                 and np.sign(frame.nodes[f"core_link_{k}"].pos[1]) == np.sign(a[1]))
+        node = np.asarray(frame.nodes[f"core_link_{k}"].pos[:2]) - np.asarray(frame.core.plate.centre[:2])
+        u = (b - a) / np.linalg.norm(b - a)
+        at_rib = float((node - a) @ u) / z_rib
+        at_gusset = float((node - b) @ u) / (20.0 * 3.0**2 / 6)
+        assert at_gusset < at_rib
+        # the rib stops 1 mm before the nearest tube footprint (no face of it on a tube's)
+        feet = []
+        for e, s in p.param("tubes"):
+            e, s = np.asarray(e, float)[:2], np.asarray(s, float)[:2]
+            if np.sign(e[0]) == np.sign(a[0]) and np.sign(e[1]) == np.sign(a[1]):
+                v = (s - e) / np.linalg.norm(s - e)
+                n = np.array([-v[1], v[0]]) * (R_BORE + WALL)
+                feet += [e - n, e + n, s - n, s + n]
+        assert min(float((f - b) @ u) for f in feet) == pytest.approx(1.0, abs=1e-6)
+
+
+def test_the_pegged_presets_meet_the_papers_masses():
+    """With core.link: pegs the carbon preset's central ABS parts are within 10 % of the paper's
+    25 g and its all-up mass within 5 % of 236 g; bamboo's all-up at most 245 g (issue: room for a
+    heavier pack). Estimates, as `check` gives them."""
+    from cogniframe.analysis import verdict
+
+    carbon = verdict.check(preset_spec("carbon", core__link="pegs")).mass
+    assert carbon.by_material["abs"] == pytest.approx(25, rel=0.10)
+    assert carbon.total_g == pytest.approx(236, rel=0.05)
+    bamboo = verdict.check(preset_spec("bamboo", core__link="pegs")).mass
+    assert bamboo.total_g <= 245.0
+
+
+@pytest.mark.parametrize("preset", PRESETS)
+def test_the_spacer_keeps_only_its_pad_on_the_rear_standoffs(preset):
+    """With pegs (level arms, no link bolt) the spacer carries only its pad (carbon: the flow board
+    behind the holder, on a 10 mm neck; bamboo: the receiver, right behind the bar, on the
+    holder): one 7 mm bar under the two rear stack standoffs, 3.5 mm past each hole, no link holes
+    or nut traps; its closed form the bar, the neck between bar and pad and the pad, less two
+    2.4 mm holes and four 3.2 x 1.8 mm zip slots, 2 mm thick. The tab keeps its X with the links'
+    holes."""
+    spec, frame, parts = _planned(preset)
+    m = parts["sensor_mount" if spec.core.flow_sensor else "core_spacer"]
+    assert m.param("link_holes") == () and m.param("stack_holes") == ((-10.0, -10.0), (10.0, -10.0))
+    pieces = m.param("pieces")
+    assert len(pieces) == (3 if spec.core.flow_sensor else 2)  # bar, (neck,) pad
+    xs, ys = [x for x, _ in pieces[-1]], [y for _, y in pieces[-1]]
+    pad_half, pad_y0, pad_y1 = max(xs), max(ys), min(ys)
+    if not spec.core.flow_sensor:
+        assert (pad_half, pad_y0, pad_y1) == (10.0, -13.5, -24.0)
+    area = 27.0 * 7.0 + 10.0 * (-10.0 - 3.5 - pad_y0) + 2 * pad_half * (pad_y0 - pad_y1)
+    openings = 2 * math.pi / 4 * 2.4**2 + 4 * 3.2 * 1.8
+    assert _union(pieces).area() == pytest.approx(area, rel=1e-9)
+    assert m.estimate.volume == pytest.approx((area - openings) * spec.core.spacer_thickness, rel=1e-9)
+    tab_spec = preset_spec(preset)
+    tab = {p.name: p for p in partlist.part_list(tab_spec, frame_mod.frame_of(tab_spec))}
+    t = tab["sensor_mount" if spec.core.flow_sensor else "core_spacer"]
+    assert len(t.param("link_holes")) == 4 and len(t.param("stack_holes")) == 4
 
 
 def test_climbing_arms_refuse_the_pegs_naming_the_key():
@@ -288,8 +401,9 @@ def test_assembly_steps_press_the_pegs_in_rather_than_bolt():
 def test_random_designs_with_pegs_give_one_watertight_plate(seed, tmp_path):
     """tests/design_space.py's random edits (other boxes, rectangles with the arms off the
     diagonal, other plates and motors) with core.link: pegs and level arms: the first two designs
-    the params accept each give a plate with pegs per link x 4 tubes that is one watertight
-    solid, its closed form within 0.5 % of the CAD, printable without supports."""
+    the params accept each give a plate with pegs per link x 4 tubes, one outline piece and four
+    ribs, that is one watertight solid, its closed form within 0.5 % of the CAD, printable without
+    supports."""
     import random
 
     import design_space
@@ -312,6 +426,7 @@ def test_random_designs_with_pegs_give_one_watertight_plate(seed, tmp_path):
         p = parts["core_plate"]
         link = parts["core_link"]
         assert len(p.param("tubes")) == 4 * len(pegged_plan(link.sockets, dict(link.params)).columns)
+        assert len(_union(p.param("outline")).to_polygons()) == 1 and len(p.param("ribs")) == 4
         built = registry.solid(p)
         mesh = write_stl(built.shape, tmp_path / f"plate{done}.stl", name="core_plate")  # raises unless watertight
         assert mesh.body_count == 1 and mesh.bounds[0, 2] == pytest.approx(0.0, abs=1e-6)

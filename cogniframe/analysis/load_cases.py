@@ -437,13 +437,6 @@ def _strain(spec, frame, parts, joints, mdl: Model, u: np.ndarray, eps_break: fl
             "peak": round(max(eps_h, eps_s), 4), "ratio_to_break": round(max(eps_h, eps_s) / eps_break, 4)}
 
 
-def _web_roots(parts) -> list:
-    from ..families.core_plate import web_roots
-
-    plate = next(p for p in parts if p.name == "core_plate")
-    return web_roots(plate.param("webs"), float(plate.param("size")) / 2)
-
-
 def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: dict, itf, hinged_socket,
                        hinge_geometry) -> dict:
     """What each part carries per newton of payload force (u: the payload case per newton), for
@@ -459,10 +452,12 @@ def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: d
       link's moment across the plate, on the section across the corner there, w = 2 sqrt 2
       (plate/2 - pitch/2) wide (the corner as a cantilever off the stack). Where the plate rests
       on the spacer and the tab link's bolt clamps the two, they bend together without shear
-      transfer (the lower bound of their sharing): sigma = 6 M t_p / (w (t_p^3 + t_s^3)); on
-      standoffs (level arms) or with pegs, t_s = 0. With pegs, also the webs' roots on the plate's
-      edges in the link's corner (`core_plate.web_roots`, their total length w_r), the link's
-      force levered from its node to the plate: sigma = 6 (F d + M) / (w_r t_p^2)."""
+      transfer (the lower bound of their sharing): sigma = 6 M t_p / (w (t_p^3 + t_s^3)); hung on
+      standoffs (level arms), t_s = 0.
+      The pegged plate (core.link: pegs) hangs on standoffs with no spacer against it, and its
+      link's pull reaches the stack hole along a ribbed stem: the section where the rib starts,
+      RIB_START past the hole's centre (clear of the standoff clamping the plate there), w_r wide
+      and t_p + rib deep, its lever the link's less RIB_START: sigma = 6 M / (w_r (t_p + rib)^2)."""
     from ..materials import STACK_PATTERNS
 
     fe = mdl.fe
@@ -500,10 +495,13 @@ def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: d
     half = c.plate_size / 2
     w = 2 * math.sqrt(2) * max(half - s, 1.0)
     t_p = c.plate_thickness
-    # the spacer bends with the plate only where the plate rests on it and a link's bolt clamps
-    # the two (level arms hang the plate on standoffs above it; pegs have no bolt)
-    t_s = c.spacer_thickness if frame.core.hang == 0 and c.link == "tab" else 0.0
-    roots = _web_roots(parts) if c.link == "pegs" else []
+    # the spacer bends with the plate only where the plate rests on it and the link's bolt clamps
+    # the two (level arms hang the plate on standoffs above it)
+    t_s = c.spacer_thickness if frame.core.hang == 0 else 0.0
+    if c.link == "pegs":
+        # the pegged plate's stem: no spacer against it (it hangs on standoffs), its section
+        # where the rib starts, past the standoff clamping it (families/core_plate.py)
+        from ..families.core_plate import PLATE_RAIL, RIB, RIB_START
     sig_core = 0.0
     for nodes, Ks in fe.springs:
         for j, n in enumerate(nodes):
@@ -513,11 +511,8 @@ def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: d
                 fz, mh = abs(f[6 * j + 2]), math.hypot(f[6 * j + 3], f[6 * j + 4])
                 p = fe.nodes[n]
                 lever = math.hypot(abs(p[0]) - s, abs(p[1]) - s)
-                sig_core = max(sig_core, 6 * (fz * lever + mh) * t_p / (w * (t_p**3 + t_s**3)))
-                if roots:
-                    # the pegs' tubes hand the load to the plate through their webs' roots on the
-                    # plate's edges in this corner; the lever from the link to the plate
-                    w_root = sum(length for (x, y), length in roots if x * p[0] > 0 and y * p[1] > 0)
-                    out = math.hypot(max(abs(p[0]) - half, 0.0), max(abs(p[1]) - half, 0.0))
-                    sig_core = max(sig_core, 6 * (fz * out + mh) / (w_root * t_p**2))
+                if c.link == "pegs":
+                    sig_core = max(sig_core, 6 * (fz * (lever - RIB_START) + mh) / (PLATE_RAIL * (t_p + RIB) ** 2))
+                else:
+                    sig_core = max(sig_core, 6 * (fz * lever + mh) * t_p / (w * (t_p**3 + t_s**3)))
     return {"rods": rods, "joints": joints, "core_plate_mpa_per_n": sig_core}

@@ -3,16 +3,14 @@ holes, printed as it sits (translated up by half its thickness); its local frame
 its placement origin, axes as the frame.
 
 With the pegged core link (core.link: pegs) the plate has no link bolt holes; it carries one ABS
-tube per peg instead, the bore the peg presses into (`frame.PEG_D`, `frame.PEG_TUBE_WALL`
-round it, as long as the peg and coaxial with it), hanging under the plate with its top flush
-with the plate's top (frame.py `peg_drop` puts the arms there). The tubes lie beyond the plate's
-edges (7 mm in both presets), and each is joined to the nearest edge by a web as thick as the
-plate: the hull of the tube's footprint and its inner end's footprint corners projected onto that
-edge. Webs, not a larger (plus-shaped) plate: they carry the same peg into the same edge for a
-fraction of the ABS, and the web under the whole tube is what lets the round tube print. The
-plate then prints upside down: its top, the webs and the tubes' tops on the bed, each tube lying
-along the bed (its bore's ceiling is a bridge 4.8 mm wide, its round outside above the web never
-steeper than 45 deg).
+tube per peg instead, the bore the peg presses into (`frame.PEG_D`, `frame.PEG_TUBE_WALL` round
+it, as long as the peg and coaxial with it), hanging under the plate with its top flush with the
+plate's top (frame.py `peg_drop` puts the arms there). The plate is then an X like the authors'
+plus-shaped MainBase rather than the square (`pegged_layout`): per link a bar under its tubes, a
+stem from its stack hole to them, ribbed underneath where the link's pull bends it, and a strip
+on to the centre. It prints upside down: its top, the bars and the tubes' tops on the bed, each
+tube lying along the bed on its bar (its bore's ceiling a bridge 4.8 mm wide, its round outside
+above the slab never steeper than 45 deg), the ribs standing up from the stems.
 """
 
 from __future__ import annotations
@@ -38,14 +36,27 @@ DOC = "ABS/PLA core plate with stack and core-link holes (or, with pegged links,
 # An M2 hex nylon standoff (4 mm across flats, threaded through): PA66 at 1.14 g/cm^3 over the
 # hexagon less the M2 thread's core, about 11.8 mm^2.
 NYLON_STANDOFF_G_PER_MM = 0.0135
-# mm: a web reaches this far into the plate (its CAD overlaps the plate instead of touching it
-# along a face; the closed form counts only what lies outside the plate)
-WEB_INTO_PLATE = 0.5
+# mm: the pegged plate's rails, centre -> stack hole -> the link's tubes: the M2 stack hole's
+# 2.4 mm clearance with 2.3 mm of ABS either side (five 0.45 mm lines; an M2 standoff's 4 mm hex
+# seats on it), as the spacer's rails (sensor_mount.SPACER_RAIL)
+PLATE_RAIL = 7.0
+# mm: the strips joining the four stems at the centre carry no link's load (the stack's standoffs
+# hold the plate at the holes): ten 0.4 mm lines
+CENTRE_RAIL = 4.0
+# mm: each stem's rib under the plate. A link's pull bends its stem as a cantilever off the stack
+# standoffs (analysis/load_cases.py): the rib makes the stem 7 mm deep, its section 7 x 7 mm
+# (a bending modulus of 57 mm^3, the 40 mm square's corner across its stack hole had 42). It
+# starts clear of the standoff (4 mm across flats, 2.31 mm to a corner) and stops short of the
+# tubes (no face of it on a tube's), where the gusset, a slab `GUSSET` wide, carries on.
+RIB = 3.5
+RIB_START = 2.5
+RIB_GAP = 1.0
+GUSSET = 20.0
 LEVEL_TOL = 1e-5  # mm: a tube's axis level and flush as planned (sockets and placements are stored to 1e-6)
-# mm: OCC's fuzzy boolean tolerance for the tubes and webs. A web's outer end face is the plane
-# of its tube's end (the web runs under the whole tube); with the arms off the diagonal (a
-# rectangle) the exact booleans left the union split along such faces, in up to 25 solids of the
-# right total volume; fuzzy, each of 20 random designs gave one solid of the same volume.
+# mm: OCC's fuzzy boolean tolerance for the slab, ribs and tubes. A bar's outer edge is the plane
+# of its tubes' outer ends (the bar runs under the whole tube) and a rib's sides are its stem's;
+# exact booleans left such unions split along those faces (the webs before the bars: up to 25
+# solids of the right total volume); fuzzy, one (tests/test_core_plate_pegs.py's random designs).
 FUZZ = 1e-4
 
 
@@ -67,16 +78,28 @@ def _core_plate(spec: Spec, frame: Frame) -> PartSpec:
                                         ("hole_d", screw.clearance_d)]
     if pegs:
         tubes, bore = peg_tubes(spec, frame)
-        webs = tuple(tube_web(e, s, bore / 2 + PEG_TUBE_WALL, c.plate_size / 2) for e, s in tubes)
-        params += [("tube_bore", bore), ("tube_wall", PEG_TUBE_WALL), ("tubes", tubes), ("webs", webs)]
-        est = _with_tubes(est, dict(params))
+        r_out = bore / 2 + PEG_TUBE_WALL
+        outline, ribs = pegged_layout(tubes, r_out, holes)
+        params += [("tube_bore", bore), ("tube_wall", PEG_TUBE_WALL), ("tubes", tubes), ("outline", outline),
+                   ("ribs", ribs), ("rib_width", PLATE_RAIL), ("rib_depth", RIB)]
+        est = _with_tubes(dict(params))
     hang = frame.core.hang
     if hang > 0:
         # level arms: the plate stands on four standoffs on the holder; the stack screws end in
         # their tops, short screws come up through the holder (and spacer) into their bottoms
-        hw = (HardwareLine(f"{screw.name} x 20 screw + 8 mm nylon standoffs (FC/ESC stack onto the plate)", 4, 1.0),
-              HardwareLine(f"{screw.name} x {hang:g} mm nylon standoff, female-female (plate on the battery holder)", 4,
-                           round(NYLON_STANDOFF_G_PER_MM * hang, 3)),
+        from .sensor_mount import rear_only
+
+        if rear_only(spec):  # the spacer under the rear two only: the front two stand on the holder
+            front = hang + c.spacer_thickness
+            under = "sensor mount" if c.flow_sensor else "spacer"
+            legs = (HardwareLine(f"{screw.name} x {hang:g} mm nylon standoff, female-female (plate on the {under}'s bar, rear)", 2,
+                                 round(NYLON_STANDOFF_G_PER_MM * hang, 3)),
+                    HardwareLine(f"{screw.name} x {front:g} mm nylon standoff, female-female (plate on the battery holder, front)", 2,
+                                 round(NYLON_STANDOFF_G_PER_MM * front, 3)))
+        else:
+            legs = (HardwareLine(f"{screw.name} x {hang:g} mm nylon standoff, female-female (plate on the battery holder)", 4,
+                                 round(NYLON_STANDOFF_G_PER_MM * hang, 3)),)
+        hw = (HardwareLine(f"{screw.name} x 20 screw + 8 mm nylon standoffs (FC/ESC stack onto the plate)", 4, 1.0), *legs,
               HardwareLine(f"{screw.name} x 6 screw (battery holder to standoff)", 4, screw.mass_of(6)))
     else:
         hw = (HardwareLine(f"{screw.name} x 20 screw + 8 mm nylon standoffs (FC/ESC stack through plate and holder)", 4, 1.0),)
@@ -106,8 +129,8 @@ def peg_tubes(spec: Spec, frame: Frame) -> tuple[tuple[tuple, tuple], float]:
                 r_out = ax.radius + PEG_TUBE_WALL
                 # the frame hangs the plate so that the arms' tubes are flush with the plate's top
                 # (frame.peg_drop); the strut's peg may lie lower (its column stands under the
-                # strut's bore), its tube then sunk into its web. A tube above the plate's top
-                # (below the bed in print), off the web, or not level is a bug, not a design.
+                # strut's bore), its tube then sunk into its bar. A tube above the plate's top
+                # (below the bed in print), off the bar, or not level is a bug, not a design.
                 if abs(e[2] - s[2]) > LEVEL_TOL or e[2] + r_out > top + LEVEL_TOL or e[2] + r_out < top - LEVEL_TOL - r_out:
                     raise RuntimeError(f"{link.name} at {pl.instance}: its peg's axis runs from z {e[2]:.6f} to {s[2]:.6f} "
                                        f"in the plate's frame: its tube (outside radius {r_out:g}) is not level within the "
@@ -119,79 +142,83 @@ def peg_tubes(spec: Spec, frame: Frame) -> tuple[tuple[tuple, tuple], float]:
     return tuple(tubes), 2 * radii.pop()
 
 
-def tube_web(end, shoulder, r_out: float, half: float) -> tuple:
-    """A tube's web in plan (the plate's local xy, counter-clockwise): the hull of the tube's
-    footprint (its axis from `end` to `shoulder`, `r_out` either side) and its inner end's two
-    footprint corners projected onto the plate edge the end lies beyond (`WEB_INTO_PLATE` inside
-    it). The plate is |x|, |y| <= `half`."""
-    e, s = np.asarray(end, float)[:2], np.asarray(shoulder, float)[:2]
-    u = (s - e) / np.linalg.norm(s - e)
-    n = np.array([-u[1], u[0]]) * r_out
-    rect = [e - n, s - n, s + n, e + n]
-    k = int(np.argmax(np.abs(e)))
-    feet = []
-    for p in (e - n, e + n):
-        f = p.copy()
-        f[k] = math.copysign(half - WEB_INTO_PLATE, e[k])
-        feet.append(f)
-    return tuple((round(float(x), 6), round(float(y), 6)) for x, y in hull_ccw(rect + feet))
+def pegged_layout(tubes, r_out: float, stack_holes) -> tuple[tuple, tuple]:
+    """The pegged plate in plan (its local xy), as (pieces, ribs). Per core link (`tubes` come link
+    copy by link copy, `peg_tubes`, the same number each): a bar, the hull of its tubes' footprints
+    (each axis `r_out` either side); a stem `PLATE_RAIL` wide from behind its stack hole to the
+    middle of its tubes; a strip `CENTRE_RAIL` wide from the plate's centre to the hole (the four
+    corners one piece); and a gusset `GUSSET` wide across the stem from `RIB_GAP` + 0.5 before the
+    tubes' inner ends to 0.5 past them. Each piece counter-clockwise. A rib (its axis's two ends)
+    `PLATE_RAIL` wide and `RIB` deep runs under the stem from `RIB_START` past the hole to
+    `RIB_GAP` before the nearest tube footprint."""
+    n = len(tubes) // 4
+    pieces, ribs = [], []
+
+    def strip(a, b, w, back=0.0, ahead=0.0):
+        u = (b - a) / np.linalg.norm(b - a)
+        m = np.array([-u[1], u[0]]) * w / 2
+        a, b = a - u * back, b + u * ahead
+        return [a - m, b - m, b + m, a + m]
+
+    for i in range(0, len(tubes), n):
+        group = [tuple(np.asarray(p, float)[:2] for p in t) for t in tubes[i:i + n]]
+        feet = []
+        for e, s in group:
+            feet += strip(e, s, 2 * r_out)
+        mid = np.mean([(e + s) / 2 for e, s in group], axis=0)
+        hole = np.asarray(min(stack_holes, key=lambda h: float(np.linalg.norm(np.asarray(h, float) - mid))), float)
+        u = (mid - hole) / np.linalg.norm(mid - hole)
+        reach = min(float((f - hole) @ u) for f in feet)  # the tubes' nearest footprint, along the stem
+        end = hole + u * (reach - RIB_GAP)
+        for poly in (feet, strip(hole, mid, PLATE_RAIL, back=PLATE_RAIL / 2), strip(np.zeros(2), hole, CENTRE_RAIL),
+                     strip(end, hole + u * reach, GUSSET, back=0.5, ahead=0.5)):
+            pieces.append(tuple((round(float(x), 6), round(float(y), 6)) for x, y in hull_ccw(poly)))
+        ribs.append(tuple((round(float(x), 6), round(float(y), 6)) for x, y in (hole + u * RIB_START, end)))
+    return tuple(pieces), tuple(ribs)
 
 
-def _webs_off_plate(webs, half: float) -> list[np.ndarray]:
-    """The union of the webs (plan) outside the plate |x|, |y| <= `half`, as polygons: where a
-    link's webs overlap (arms off the plate's diagonal) they are one prism, as in the CAD
-    (manifold3d's exact 2-D boolean, the library the meshes already use)."""
+def outline_union(pieces):
+    """The union of the outline's pieces (manifold3d's exact 2-D boolean, the library the meshes
+    already use): one polygon, counter-clockwise, or an error naming the plate."""
     import manifold3d as m3
 
-    square = m3.CrossSection.square((2 * half, 2 * half), center=True)
-    union = m3.CrossSection([[tuple(map(float, q)) for q in webs[0]]])
-    for w in webs[1:]:
-        union = union + m3.CrossSection([[tuple(map(float, q)) for q in w]])
-    return [np.asarray(poly, float) for poly in (union - square).to_polygons()], float((union - square).area())
+    union = m3.CrossSection.batch_boolean([m3.CrossSection([[tuple(map(float, q)) for q in p]]) for p in pieces],
+                                          m3.OpType.Add)
+    polys = union.to_polygons()
+    if len(polys) != 1:
+        raise RuntimeError(f"the pegged core plate's outline came out as {len(polys)} loops instead of one")
+    return np.asarray(polys[0], float), float(union.area())
 
 
-def _on_edge(a, b, half: float) -> bool:
-    return any(abs(abs(a[k]) - half) < 1e-6 and abs(abs(b[k]) - half) < 1e-6 and a[k] * b[k] > 0 for k in range(2))
-
-
-def webs_outside(webs, half: float) -> tuple[float, float]:
-    """(area, perimeter) of the webs' union outside the plate |x|, |y| <= `half`; the perimeter
-    leaves out its sides along the plate's edge (they join the plate: no surface)."""
-    polys, area = _webs_off_plate(webs, half)
-    per = sum(float(np.linalg.norm(b - a)) for pts in polys for a, b in zip(pts, np.roll(pts, -1, axis=0))
-              if not _on_edge(a, b, half))
-    return area, per
-
-
-def web_roots(webs, half: float) -> list[tuple[tuple[float, float], float]]:
-    """Where the webs join the plate: each side of their union that lies along the plate's edge,
-    as (its midpoint in plan, its length), mm: the section a pegged link's load crosses into the
-    plate (analysis/load_cases.py)."""
-    polys, _ = _webs_off_plate(webs, half)
-    return [(tuple(float(v) for v in (a + b) / 2), float(np.linalg.norm(b - a)))
-            for pts in polys for a, b in zip(pts, np.roll(pts, -1, axis=0)) if _on_edge(a, b, half)]
-
-
-def _with_tubes(base: Estimate, params: dict) -> Estimate:
-    """The plate's closed form plus the tubes and webs, in print (upside down: the plate's top on
-    the bed). The webs are one prism `t` thick over their union's plan outside the plate; each tube (length L,
-    bore r_b, outside r_o, its axis z above the bed, the web's top h = z - t below the axis)
-    adds its outside circle's part above the web, less the bore: L (pi r_o^2 - seg(h) - pi r_b^2),
-    h its axis's height over the web (r_o - t flush with the plate's top; a sunk tube's higher),
+def _with_tubes(params: dict) -> Estimate:
+    """The pegged plate's closed form, in print (upside down: its top on the bed): the outline's
+    union (area A, perimeter P) `t` thick less the stack holes, then each tube (length L, bore r_b,
+    outside r_o, its axis z above the bed, the slab's top h = z - t below the axis) adds its
+    outside circle's part above the slab, less the bore: L (pi r_o^2 - seg(h) - pi r_b^2), h its
+    axis's height over the slab (r_o - t flush with the plate's top; a sunk tube's higher),
     seg(h) = r_o^2 acos(h / r_o) - h sqrt(r_o^2 - h^2) (the circle below a chord h from its
-    centre). Exact but for faceting wherever the tubes keep clear of each other (families/joint.py
-    `PEG_WEB`) and of the plate's holes: the webs (or the plate) lie under every tube, the bore
-    inside the two."""
-    t, half = float(params["thickness"]), float(params["size"]) / 2
+    centre). Each rib (length L_r, width w, depth d) stands on the slab: w d L_r more, its two
+    sides and two ends vertical, its top where the slab's top was. Exact but for faceting wherever
+    the tubes keep clear of each other (families/joint.py `PEG_WEB`) and of the stack holes: the
+    bars lie under every tube, the bore inside the two."""
+    t = float(params["thickness"])
     r_b = float(params["tube_bore"]) / 2
     r_o = r_b + float(params["tube_wall"])
-    a_w, p_w = webs_outside(params["webs"], half)
-    vol = base.volume + a_w * t
-    a_h = base.area_h + 2 * a_w
-    a_v = base.area_v + t * p_w
-    pts = [np.array([x, y]) for x in (-half, half) for y in (-half, half)]
+    poly, area = outline_union(params["outline"])
+    per = float(np.sum(np.linalg.norm(np.roll(poly, -1, axis=0) - poly, axis=1)))
+    r_h = float(params["hole_d"]) / 2
+    n_h = len(params["holes"])
+    vol = (area - n_h * math.pi * r_h**2) * t
+    a_h = 2 * (area - n_h * math.pi * r_h**2)
+    a_v = (per + n_h * 2 * math.pi * r_h) * t
     z_top = t
-    for (e, s), web in zip(params["tubes"], params["webs"]):
+    w_r, d_r = float(params["rib_width"]), float(params["rib_depth"])
+    for a, b in params["ribs"]:
+        L_r = float(np.linalg.norm(np.subtract(b, a)))
+        vol += w_r * d_r * L_r
+        a_v += 2 * (L_r + w_r) * d_r
+        z_top = t + d_r
+    for e, s in params["tubes"]:
         z = t / 2 - float(e[2])  # the axis's height in print: r_o for a tube flush with the plate's top
         h = min(max(z - t, -r_o), r_o)
         seg = r_o**2 * math.acos(h / r_o) - h * math.sqrt(r_o**2 - h * h)
@@ -200,12 +227,10 @@ def _with_tubes(base: Estimate, params: dict) -> Estimate:
         arc = r_o * (2 * math.pi - 2 * math.acos(h / r_o))
         L = float(np.linalg.norm(np.asarray(s, float) - np.asarray(e, float)))
         vol += L * (above - math.pi * r_b**2)
-        a_h += -chord * L + arc * L / 2  # the tube on its web's top, half its round
+        a_h += -chord * L + arc * L / 2  # the tube on its bar's top, half its round
         a_v += arc * L / 2 + 2 * math.pi * r_b * L + 2 * (above - math.pi * r_b**2)
-        pts += [np.asarray(p, float) for p in web]
         z_top = max(z_top, z + r_o)
-    p = np.asarray(pts)
-    ext = np.ptp(p, axis=0)
+    ext = np.ptp(poly, axis=0)
     return Estimate(vol, a_h, a_v, (float(ext[0]), float(ext[1]), z_top))
 
 
@@ -222,33 +247,37 @@ def solid(part: PartSpec) -> Built:
     t = float(part.param("thickness"))
     m = print_from_local(part)
     holes = tuple((float(x), float(y) * float(m[1, 1])) for x, y in part.param("holes"))
-    shape = plate(size, size, t, [(float(part.param("hole_d")), holes)])
     params = dict(part.params)
     if params.get("tubes"):
-        shape = _with_tube_solids(shape, params, m)
-    return Built(shape, m)
+        return Built(_with_tube_solids(params, m, holes), m)
+    return Built(plate(size, size, t, [(float(part.param("hole_d")), holes)]), m)
 
 
-def _with_tube_solids(shape, params: dict, m: np.ndarray):
-    """The plate (print coordinates) with each tube and its web, less the bores: webs on the bed
-    `t` thick, each tube's outside from halfway up the web (inside it: no face tangent to the
-    bed) to its round top, the bore through it."""
+def _with_tube_solids(params: dict, m: np.ndarray, holes):
+    """The pegged plate (print coordinates): the outline's union on the bed `t` thick less the
+    stack holes, each tube's outside from halfway up the slab (inside it: no face tangent to the
+    bed) to its round top, less the bores."""
     import cadquery as cq
 
-    from ..parts.joint_solid import VOID_MM3, cylinder, prism
+    from ..parts.joint_solid import VOID_MM3, box_along, cylinder, prism
 
     t = float(params["thickness"])
     r_b = float(params["tube_bore"]) / 2
     r_o = r_b + float(params["tube_wall"])
     big = 1000.0
     keep = cq.Solid.makeBox(2 * big, 2 * big, big, cq.Vector(-big, -big, t / 2))
-    pieces, bores = [shape], []
-    for (e, s), web in zip(params["tubes"], params["webs"]):
+    poly, _ = outline_union(params["outline"])
+    pieces, bores = [prism([(m[:2, :2] @ p) for p in poly], 0.0, t)], []
+    w_r, d_r = float(params["rib_width"]), float(params["rib_depth"])
+    for a, b in params["ribs"]:
+        pieces.append(box_along(m[:2, :2] @ np.asarray(a, float), m[:2, :2] @ np.asarray(b, float), w_r, t, t + d_r))
+    for x, y in holes:
+        bores.append(cylinder((x, y, -1.0), (0.0, 0.0, 1.0), t + 2.0, float(params["hole_d"]) / 2))
+    for e, s in params["tubes"]:
         pe, ps = (m[:3, :3] @ np.asarray(p, float) + m[:3, 3] for p in (e, s))
         d = ps - pe
         L = float(np.linalg.norm(d))
         d /= L
-        pieces.append(prism([(m[:2, :2] @ np.asarray(p, float)) for p in web], 0.0, t))
         pieces.append(cylinder(pe, d, L, r_o).intersect(keep))
         # the bore from the peg's end on, out past the tube's outer end (no end face of it there)
         bores.append(cylinder(pe, d, L + 1.0, r_b))

@@ -1,7 +1,8 @@
 """The sensor mount / core spacer (ABS/PLA): an X of two rails between the battery holder and
 the core plate, with a neck back to a pad for the flow board and zip-tie slots, printed flat as it
 sits (its local origin: the plate square's centre, z = 0 its bottom). Named core_spacer when the
-design has no flow sensor.
+design has no flow sensor. With pegs the plate hangs on standoffs and no link bolt needs a nut
+trap: the X shrinks to a bar under the two rear standoffs with the pad (`rear_only`).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ DOC = "ABS/PLA X spacer between holder and plate, with the flow board pad and zi
 
 
 def plan(spec: Spec, frame: Frame) -> tuple[PartSpec, ...]:
-    return (_sensor_mount(spec, frame),) if spec.core.spacer_thickness > 0 else ()
+    return (_sensor_mount(spec, frame),) if frame.core.spacer is not None else ()
 
 ZIP_SLOT = (3.2, 1.8)  # zip-tie slot for 2.5 x 1.0 mm ties, mm
 
@@ -46,30 +47,64 @@ def sensor_mount_outline(spec: Spec, frame: Frame) -> dict:
     lie on the diagonals), a neck running back and a pad behind the holder (flow board underneath,
     zip-tie slots for the receiver, the antenna and the board). Each piece is a polygon (x, y)."""
     c = spec.core
-    hole = link_hole(spec)
-    reach = hole + 3.5 / math.sqrt(2) + SPACER_RAIL / 2 / math.sqrt(2)
-    rails = (_rect(np.array([-reach, -reach]), np.array([reach, reach]), SPACER_RAIL),
-             _rect(np.array([reach, -reach]), np.array([-reach, reach]), SPACER_RAIL))
+    pitch, _ = STACK_PATTERNS[c.stack_pattern]
+    bar = rear_only(spec)
+    pegs = c.link == "pegs"
+    if bar:
+        # one bar through the two rear stack holes, as far past them as the X's rails reach
+        # past theirs
+        reach = pitch / 2 + 3.5
+        rails = (_rect(np.array([-reach, -pitch / 2]), np.array([reach, -pitch / 2]), SPACER_RAIL),)
+    else:
+        # the rails run out past the outermost holes on the diagonals: the links' bolts, or with
+        # pegs (pressed into the plate's tubes: no bolt) the stack's
+        hole = pitch / 2 if pegs else link_hole(spec)
+        reach = hole + 3.5 / math.sqrt(2) + SPACER_RAIL / 2 / math.sqrt(2)
+        rails = (_rect(np.array([-reach, -reach]), np.array([reach, reach]), SPACER_RAIL),
+                 _rect(np.array([reach, -reach]), np.array([-reach, reach]), SPACER_RAIL))
     rear = frame.core.holder.lo[1]
     flow = frame.core.flow_sensor
     if flow is not None:
         pad_half, pad_y0, pad_y1 = flow.size[0] / 2 + 3.0, rear - 1.5, flow.lo[1] - 2.0
+    elif bar:  # the receiver's pad right behind the bar, on the holder (no flow board to see past it)
+        pad_half, pad_y0 = 10.0, -pitch / 2 - SPACER_RAIL / 2
+        pad_y1 = pad_y0 - 10.5
     else:
         pad_half, pad_y0, pad_y1 = 10.0, rear - 1.5, rear - 12.0
     h = SPACER_NECK / 2
-    neck = ((-h, pad_y0 - 1.0), (h, pad_y0 - 1.0), (h, 0.0), (-h, 0.0))
+    neck_y = -pitch / 2 if bar else 0.0
+    neck = ((-h, pad_y0 - 1.0), (h, pad_y0 - 1.0), (h, neck_y), (-h, neck_y))
     pad = ((-pad_half, pad_y1), (pad_half, pad_y1), (pad_half, pad_y0), (-pad_half, pad_y0))
-    pitch, _ = STACK_PATTERNS[c.stack_pattern]
-    stack = tuple((sx * pitch / 2, sy * pitch / 2) for sx in (-1, 1) for sy in (-1, 1))
-    links = tuple((sx * hole, sy * hole) for sx in (-1, 1) for sy in (-1, 1))
+    stack = tuple((sx * pitch / 2, sy * pitch / 2) for sx in (-1, 1) for sy in ((-1,) if bar else (-1, 1)))
+    links = () if pegs else tuple((sx * hole, sy * hole) for sx in (-1, 1) for sy in (-1, 1))
     yc = (pad_y0 + pad_y1) / 2
     sx_ = pad_half - 1.5 - ZIP_SLOT[1] / 2
     zips = ((-sx_, yc), (sx_, yc), (-3.5, pad_y1 + 2.5), (3.5, pad_y1 + 2.5))  # receiver + flow board; antenna
-    pieces = tuple(tuple((round(float(x), 4), round(float(y), 4)) for x, y in poly) for poly in (*rails, neck, pad))
-    area = 2 * SPACER_RAIL * 2 * reach * math.sqrt(2) - SPACER_RAIL**2 + SPACER_NECK * (-pad_y0 - SPACER_RAIL) + 2 * pad_half * (pad_y0 - pad_y1)
+    if bar:  # a short holder: the pad reaches up to the bar, no further
+        pad_y0 = min(pad_y0, -pitch / 2 - SPACER_RAIL / 2)
+        pad = ((-pad_half, pad_y1), (pad_half, pad_y1), (pad_half, pad_y0), (-pad_half, pad_y0))
+    neck_len = (-pitch / 2 - SPACER_RAIL / 2 - pad_y0) if bar else 0.0
+    pieces = tuple(tuple((round(float(x), 4), round(float(y), 4)) for x, y in poly)
+                   for poly in (*rails, *((neck,) if not bar or neck_len > 0 else ()), pad))
+    if bar:
+        area = 2 * reach * SPACER_RAIL + SPACER_NECK * neck_len + 2 * pad_half * (pad_y0 - pad_y1)
+        extent = (2 * max(reach, pad_half), -pitch / 2 + SPACER_RAIL / 2 - pad_y1)
+    else:
+        area = 2 * SPACER_RAIL * 2 * reach * math.sqrt(2) - SPACER_RAIL**2 + SPACER_NECK * (-pad_y0 - SPACER_RAIL) + 2 * pad_half * (pad_y0 - pad_y1)
+        extent = (2 * max(reach + SPACER_RAIL / 2, pad_half), reach + SPACER_RAIL / 2 - pad_y1)
     return {"pieces": pieces, "stack_holes": stack, "link_holes": links,
             "zip_slots": tuple((round(x, 4), round(y, 4)) for x, y in zips), "pad": (pad_half, pad_y0, pad_y1), "area": area,
-            "extent": (2 * max(reach + SPACER_RAIL / 2, pad_half), reach + SPACER_RAIL / 2 - pad_y1)}
+            "extent": extent}
+
+
+def rear_only(spec: Spec) -> bool:
+    """Whether the sensor mount / spacer is a bar under the two rear stack standoffs only, with its
+    pad (behind the holder on a neck for a flow board, else on the holder for the receiver): with
+    pegs (level arms, no link bolt) the pad is all it carries, and the front standoffs stand on the
+    holder, the spacer's thickness longer (whole millimetres: the standoffs' steps; else the X
+    under all four)."""
+    c = spec.core
+    return c.link == "pegs" and float(c.spacer_thickness).is_integer()
 
 
 def _sensor_mount(spec: Spec, frame: Frame) -> PartSpec:

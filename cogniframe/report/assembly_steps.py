@@ -177,10 +177,15 @@ def _core_text(spacer: str | None, mirrored: bool, pegs: bool = False) -> str:
              if mirrored else "")
     if pegs:
         fix = (f"Press a TPU core link onto each corner of the core plate{which}: push its two pegs all the way into the "
-               "pair of ABS tubes under the plate's edges there, up to the columns' shoulders (no screw). ")
+               "pair of ABS tubes under the plate's arm there (and the strut's peg into the tube between them), up to the "
+               "columns' shoulders (no screw). ")
     else:
         fix = (f"Bolt a TPU core link onto each corner of the core plate{which}: screw down through the link tab and the plate"
                + (f", nut in the hex trap under the {spacer}" if spacer else ", nut underneath") + ". ")
+    if pegs and spacer:
+        return (fix + f"Screw four standoffs under the plate's stack holes. Lay the {spacer}'s bar on the battery holder under "
+                "the two rear ones, the two longer front ones straight on the holder, and screw the holder (and the bar) to "
+                "them from inside. The holder's open end faces the front so the battery slides in.")
     return (fix
             + (f"Lay the {spacer} on the battery holder and the plate on it; " if spacer else "Put the plate on the battery holder; ")
             + "screw them together with the stack screws. The holder's open end faces the front so the battery slides in.")
