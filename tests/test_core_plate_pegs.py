@@ -436,3 +436,30 @@ def test_random_designs_with_pegs_give_one_watertight_plate(seed, tmp_path):
         if done == 2:
             break
     assert done == 2, "fewer than two accepted designs in 100 draws"
+
+
+def test_random_pegged_designs_plan_or_are_refused_never_an_internal_error():
+    """tests/design_space.py's random edits with core.link: pegs (level arms), plans only: each
+    design gives a part list whose plate has a tube per peg, or is refused with a UserError;
+    nothing else (a deep joints.seat once left the strut's tube off the plate as a RuntimeError)."""
+    import random
+
+    import design_space
+    from cogniframe import spec as spec_mod
+
+    rnd = random.Random(11)
+    planned = refused = 0
+    for _ in range(60):
+        doc = design_space.random_design(rnd, "edit")
+        doc["core"]["link"] = "pegs"
+        doc["frame"]["level_arms"] = True
+        try:
+            spec = spec_mod.from_dict(doc, "random.yaml")
+            parts = {p.name: p for p in partlist.part_list(spec, frame_mod.frame_of(spec))}
+        except UserError:
+            refused += 1
+            continue
+        link = parts["core_link"]
+        assert len(parts["core_plate"].param("tubes")) == 4 * len(pegged_plan(link.sockets, dict(link.params)).columns)
+        planned += 1
+    assert planned >= 10 and refused >= 1, (planned, refused)

@@ -441,3 +441,19 @@ def test_random_designs_with_pegs_build_one_watertight_link_each(seed, tmp_path)
         vols[name] = built.shape.Volume()
         assert p.estimate.volume == pytest.approx(vols[name], rel=0.02)
     assert vols["core_link_mirrored"] == pytest.approx(vols["core_link"], rel=1e-6)
+
+
+def test_a_strut_peg_whose_tube_would_miss_the_plate_is_refused_naming_the_key():
+    """The strut's peg stands under its bore; a deep seat moves that crossing away from the arms'
+    plane. Bamboo at joints.seat 8: the peg 3.1 mm below the arms' (their tubes flush with the
+    3 mm plate's top), so its tube would reach the slab by less than PEG_TUBE_EMBED: refused,
+    naming core.link and the fix, not an internal error in the plate's tubes."""
+    from cogniframe.errors import UserError
+    from cogniframe.families.joint import PEG_TUBE_EMBED
+
+    assert PEG_TUBE_EMBED == 1.0
+    with pytest.raises(UserError) as e:
+        _links(preset_spec("bamboo", core__link="pegs", joints__seat=8))
+    msg = str(e.value)
+    assert "core.link" in msg and "3.1 mm below" in msg and "at most 2 mm below" in msg and "joints.seat" in msg
+    assert len(_links(preset_spec("bamboo", core__link="pegs"))) == 2  # the preset's 3 mm seat: 1.4 mm below

@@ -202,11 +202,13 @@ PEG_LEAN_MAX = 45.0  # deg: the most a socket of the standing pegged link leans 
 # 0.4 mm line between the tubes, so the tubes never touch (a press fit's tube merged into its
 # neighbour's splits as the pegs go in, and the plate's closed form counts each tube whole)
 PEG_WEB = 2 * PEG_TUBE_WALL + 0.4
+PEG_TUBE_EMBED = 1.0  # mm: the least a peg's tube reaches into the core plate's slab (five 0.2 mm layers)
 
 
 def _pegs_fit(spec: Spec, pl) -> None:
     """Refuse (naming core.link) a pegged link whose pegs' bores would run into each other in the
-    core, or whose strut bore would come closer to its peg's side than the columns' TPU wall."""
+    core, whose strut peg's tube would miss the core plate, or whose strut bore would come closer
+    to its peg's side than the columns' TPU wall."""
     cols = pl.columns
     for i in range(len(cols)):
         for j in range(i):
@@ -215,6 +217,21 @@ def _pegs_fit(spec: Spec, pl) -> None:
                 raise spec.error("core.link", f"the pegged core link's pegs ({2 * pl.peg_r:g} mm, one per arm and one "
                                  f"for the strut) stand {gap:.1f} mm apart: the core's bores need {PEG_WEB:g} mm of ABS "
                                  "between them", "set core.link: tab, or space the arms wider (frame.arm_spacing)")
+    # the arms' tubes hang with their tops flush with the core plate's top (frame.peg_drop); the
+    # strut's peg stands under its bore, below the arms' plane, and its tube must still reach
+    # into the plate's slab by PEG_TUBE_EMBED to be held by it
+    arm = next(c for c in cols if c.socket not in {st.index for st in pl.struts})
+    reach = spec.core.plate_thickness - PEG_TUBE_EMBED
+    for st in pl.struts:
+        c = cols[st.column]
+        dz = float(pl.rot[0, 2] * (c.axis[0] - arm.axis[0]) + pl.rot[1, 2] * (c.axis[1] - arm.axis[1]))
+        if dz > 1e-6 or dz < -reach - 1e-6:
+            where = "above" if dz > 0 else "below"
+            raise spec.error("core.link", f"the strut's peg stands {abs(dz):.1f} mm {where} the arms' pegs (it stands under "
+                             f"the strut's bore): its tube in the core plate would not meet the plate's "
+                             f"{spec.core.plate_thickness:g} mm slab (at most {reach:g} mm below)",
+                             "set core.link: tab, or a smaller joints.seat (the strut's bore then crosses nearer the arms' "
+                             "plane), or thicken core.plate_thickness")
     wall = float(dict(PEGS)["column_wall"])
     for st in pl.struts:
         if st.wall < wall - 1e-6:
