@@ -56,7 +56,7 @@ def test_the_closed_form_is_the_connectors_cylinders_arch_and_strut_by_hand():
     part in it (a disc less the segment past the arch's face), the strut's sleeve (r 3.225, 9.8 mm)
     less what is not its own, less three sockets: the hand sum with the sleeve's overlap taken
     from the plan."""
-    from cogniframe.parts.joint_plan import pegged_plan
+    from cogniframe.parts.peg_plan import pegged_plan
 
     p = _links(_pegs_spec())["core_link"]
     plan = pegged_plan(p.sockets, dict(p.params))
@@ -103,7 +103,7 @@ def test_the_strut_has_its_own_peg_parallel_to_the_arms_round_its_bore(preset):
     strut's socket. The strut's bore dips below the shoulder into that peg: sampled from the
     socket alone, it lies within the peg with at least the columns' 1.8 mm of TPU round it, and
     the peg's axis is where that TPU is thickest (a 0.05 mm move any way thins it)."""
-    from cogniframe.parts.joint_plan import pegged_plan
+    from cogniframe.parts.peg_plan import pegged_plan
 
     p = _links(_pegs_spec(preset))["core_link"]
     plan = pegged_plan(p.sockets, dict(p.params))
@@ -153,7 +153,8 @@ def test_pegged_link_is_one_watertight_solid_standing_on_its_pegs(tmp_path):
     has the same volume and the mirrored box."""
     from cogniframe.export.mesh import write_stl
     from cogniframe.families import registry
-    from cogniframe.parts.joint_plan import map_sockets, pegged_plan, print_from_local
+    from cogniframe.parts.joint_plan import map_sockets, print_from_local
+    from cogniframe.parts.peg_plan import pegged_plan
 
     spec = _pegs_spec()
     links = _links(spec)
@@ -209,7 +210,7 @@ def test_pegged_link_hinge_matches_the_authors_connector_in_the_same_fe():
 
     from cogniframe.analysis.joints.fe import fe_joint
     from cogniframe.analysis.load_cases import arm_pair_hinge
-    from cogniframe.parts.joint_plan import pegged_plan
+    from cogniframe.parts.peg_plan import pegged_plan
 
     spec = _pegs_spec()
     link = _links(spec)["core_link"]
@@ -311,7 +312,7 @@ def test_the_pegged_link_prints_with_no_support(preset, tmp_path):
 
     from cogniframe.export.mesh import write_stl
     from cogniframe.families import registry
-    from cogniframe.parts.joint_plan import pegged_plan
+    from cogniframe.parts.peg_plan import pegged_plan
 
     p = _links(_pegs_spec(preset))["core_link"]
     plan = pegged_plan(p.sockets, dict(p.params))

@@ -111,9 +111,9 @@ def _core_plate(spec: Spec, frame: Frame) -> PartSpec:
 
 def peg_tubes(spec: Spec, frame: Frame) -> tuple[tuple[tuple, tuple], float]:
     """((inner end, outer end) of each tube's axis in the plate's local frame, ...), the bore (mm):
-    one tube per peg of every placed core link, coaxial with it and as long (parts/joint_plan.py
+    one tube per peg of every placed core link, coaxial with it and as long (parts/peg_plan.py
     `peg_axes` of the joint family's own link parts, through each copy's placement)."""
-    from ..parts.joint_plan import peg_axes
+    from ..parts.peg_plan import peg_axes
     from .joint import core_links
 
     centre = np.asarray(frame.core.plate.centre, float)

@@ -37,11 +37,11 @@ from ..parts.joint_plan import (
     link_is_flat,
     link_plate_corner,
     link_plate_region,
-    pegged_plan,
     rigid_leg_start,
     seat_plan,
 )
 from ..spec import Spec
+from ..parts.peg_plan import pegged_plan
 from ..parts.record import Estimate, HardwareLine, PartSpec, Placement, Socket
 from .base import CORNER_ROTATION, FIT_TOL, link_hole, polygon_area, rot_z, rounded
 
@@ -187,7 +187,7 @@ def _joint(spec: Spec, frame: Frame, name: str, kind: str, proto: str = "fl", co
 # Flex_Main_connector_new_bumper.stl of thecognifly/CogniFly-STL (docs/authors-parts.md,
 # tools/pegged_link_fe.py `Connector`). Each arm socket sits in a TPU column whose far end is a
 # solid peg, pressed into a bore of the ABS core; an arch joins the two columns at their mouths.
-# The strut has a peg of its own, parallel to the arms' (parts/joint_plan.py `pegged_plan`).
+# The strut has a peg of its own, parallel to the arms' (parts/peg_plan.py `pegged_plan`).
 PEGS = (
     ("link", "pegs"),
     ("peg_d", PEG_D),  # peg diameter, mm (authors' 6.79): the core plate's tube bore (frame.py)
@@ -575,7 +575,7 @@ def link_sleeve_area(h: float, r: float) -> float:
     return 2 * r * h + math.pi * r**2 / 2
 
 
-# -- the pegged core link's closed form (its plan: parts/joint_plan.py `pegged_plan`) -----------------
+# -- the pegged core link's closed form (its plan: parts/peg_plan.py `pegged_plan`) -----------------
 
 def _disc_band(r: float, lo: float, hi: float) -> float:
     """Area of a disc of radius `r` (centred at 0) between the lines y = lo and y = hi."""

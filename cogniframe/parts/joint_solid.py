@@ -21,7 +21,7 @@ Print orientations
   is the top of the frame). corner_bottom: as in the frame, ring sleeves and a foot pad on the bed:
   the bottom corners are the feet, and the foot pad is what touches the ground.
 * the pegged core link (core.link: pegs): standing, the arms' direction up and the pegs' ends on
-  the bed (parts/joint_plan.py `pegged_plan`); the arch's underside is a bridge between the
+  the bed (parts/peg_plan.py `pegged_plan`); the arch's underside is a bridge between the
   columns, as in the authors' connector.
 * knee, core_link: every socket direction lies in the frame's diagonal side plane and the two arm
   rods are offset across it, so the joint is printed lying on its side: the lateral axis is vertical,
@@ -62,7 +62,6 @@ from .joint_plan import (
     convex_hull,
     footprint_rect,
     horizontal,
-    is_pegged,
     kind_of,
     knee_bridge,
     knee_hinge,
@@ -71,7 +70,6 @@ from .joint_plan import (
     link_is_flat,
     link_plate_region,
     map_sockets,
-    pegged_plan,
     print_from_local,
     rigid_leg_start,
     seat_geometry,
@@ -79,6 +77,7 @@ from .joint_plan import (
     sleeve_levels,
     split_arms,
 )
+from .peg_plan import is_pegged, pegged_plan
 from .record import PartSpec
 
 CHAMFER = 0.5  # mm, 45 deg, at every socket mouth
@@ -495,7 +494,7 @@ def _core_link_flat(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarra
 
 
 def _core_link_pegged(part: PartSpec, socks: list[PSocket]):
-    """The pegged core link (parts/joint_plan.py `pegged_plan`), standing in print: per arm a solid
+    """The pegged core link (parts/peg_plan.py `pegged_plan`), standing in print: per arm a solid
     peg from the bed and a column round the socket above it, the arch joining the columns at their
     mouths; the strut's peg and column into the arch, and its sleeve along its socket, kept above
     the peg's shoulder and inside the 45 deg cone from the peg's rim (its first layers stand on
@@ -505,7 +504,7 @@ def _core_link_pegged(part: PartSpec, socks: list[PSocket]):
     pieces = []
     for c in pl.columns:
         x, y = float(c.axis[0]), float(c.axis[1])
-        if pl.peg_r == c.col_r:  # one cylinder (the strut's; an arm's within parts/joint_plan.py `PEG_SNAP`)
+        if pl.peg_r == c.col_r:  # one cylinder (the strut's; an arm's within parts/peg_plan.py `PEG_SNAP`)
             pieces.append(cylinder((x, y, c.peg0), (0, 0, 1), c.col1 - c.peg0, c.col_r))
         else:
             pieces += [cylinder((x, y, c.peg0), (0, 0, 1), c.col0 - c.peg0, pl.peg_r),

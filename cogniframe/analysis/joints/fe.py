@@ -94,7 +94,8 @@ def joint_problem(spec, part, factor: float | None = None, mesh_mm: float | None
     from . import meshing, solid_fe
     from ...parts.shapes import brep_text, shared_brep
     from ...parts import joint_solid as joint_cad
-    from ...parts.joint_plan import is_pegged, pegged_plan, print_from_local, seat_geometry
+    from ...parts.joint_plan import print_from_local, seat_geometry
+    from ...parts.peg_plan import is_pegged, pegged_plan
 
     mesh_mm = FE_MESH_MM if mesh_mm is None else mesh_mm
     itf = interface(spec, factor)
