@@ -14,11 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..frame import HINGE_GAP
-from .record import PartSpec
-
-# Two socket directions count as parallel (an arm pair) when their dot product exceeds 1 - this;
-# directions are stored rounded to 6 decimals, so 1e-6 is too tight (~0.8 deg here).
-PARALLEL_TOL = 1e-4
+from .record import PARALLEL_TOL, PartSpec
 JOIN = 0.4  # mm, least overlap of the knee's rigid leg sleeve with the arm bridge, each way (one 0.4 mm line)
 TAB_CLEAR = 0.2  # mm: a core link's tab top never within this of a sleeve's top (no coincident top faces)
 JOINT_KINDS = ("corner_top", "corner_bottom", "knee", "core_link")

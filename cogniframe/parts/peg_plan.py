@@ -10,8 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .joint_plan import PARALLEL_TOL
-from .record import PartSpec
+from .record import PARALLEL_TOL, PartSpec
 
 # The authors' connector: per arm socket a TPU column round the socket with a solid peg beyond its
 # bottom, coaxial with the rod, pressed into a bore of the ABS core; an arch joins the two columns

@@ -18,6 +18,11 @@ import numpy as np
 Vec = tuple[float, float, float]
 
 
+# Two socket directions count as parallel (an arm pair) when their dot product exceeds 1 - this;
+# directions are stored rounded to 6 decimals, so 1e-6 is too tight (~0.8 deg here).
+PARALLEL_TOL = 1e-4
+
+
 @dataclass(frozen=True)
 class Socket:
     """A blind rod hole in a part's local frame (mm)."""
