@@ -396,6 +396,22 @@ def test_assembly_steps_press_the_pegs_in_rather_than_bolt():
     assert "screw down through the link tab" in tab.text
 
 
+def _random_pegged_parts(rnd):
+    """tests/design_space.py's next random edit with core.link: pegs and level arms (the plate's
+    tubes lie level with the arms): its parts by name, or None when the params are refused."""
+    import design_space
+    from cogniframe import spec as spec_mod
+
+    doc = design_space.random_design(rnd, "edit")
+    doc["core"]["link"] = "pegs"
+    doc["frame"]["level_arms"] = True
+    try:
+        spec = spec_mod.from_dict(doc, "random.yaml")
+        return {p.name: p for p in partlist.part_list(spec, frame_mod.frame_of(spec))}
+    except UserError:
+        return None
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", range(3))
 def test_random_designs_with_pegs_give_one_watertight_plate(seed, tmp_path):
@@ -406,22 +422,14 @@ def test_random_designs_with_pegs_give_one_watertight_plate(seed, tmp_path):
     supports."""
     import random
 
-    import design_space
-    from cogniframe import spec as spec_mod
     from cogniframe.export.mesh import overhangs, write_stl
     from cogniframe.families import registry
 
     rnd = random.Random(700 + seed)
     done = 0
     for _ in range(100):
-        doc = design_space.random_design(rnd, "edit")
-        doc["core"]["link"] = "pegs"
-        doc["frame"]["level_arms"] = True
-        try:
-            spec = spec_mod.from_dict(doc, "random.yaml")
-            frame = frame_mod.frame_of(spec)
-            parts = {p.name: p for p in partlist.part_list(spec, frame)}
-        except UserError:
+        parts = _random_pegged_parts(rnd)
+        if parts is None:
             continue
         p = parts["core_plate"]
         link = parts["core_link"]
@@ -444,19 +452,11 @@ def test_random_pegged_designs_plan_or_are_refused_never_an_internal_error():
     nothing else (a deep joints.seat once left the strut's tube off the plate as a RuntimeError)."""
     import random
 
-    import design_space
-    from cogniframe import spec as spec_mod
-
     rnd = random.Random(11)
     planned = refused = 0
     for _ in range(60):
-        doc = design_space.random_design(rnd, "edit")
-        doc["core"]["link"] = "pegs"
-        doc["frame"]["level_arms"] = True
-        try:
-            spec = spec_mod.from_dict(doc, "random.yaml")
-            parts = {p.name: p for p in partlist.part_list(spec, frame_mod.frame_of(spec))}
-        except UserError:
+        parts = _random_pegged_parts(rnd)
+        if parts is None:
             refused += 1
             continue
         link = parts["core_link"]
