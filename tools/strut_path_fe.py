@@ -117,37 +117,47 @@ def _calibrate(spec, frame, parts, units) -> float:
     return f
 
 
-def main() -> int:
-    from cogniframe.analysis import mass as mass_mod
+def measure(names=("carbon", "bamboo")) -> list[dict]:
+    """Per preset (with pegs) and strut path: the factor fitted on carbon (the one calibration's
+    preset, so `names` holds it), k and the load cases."""
+    if "carbon" not in names:
+        raise ValueError("the factor is fitted on the carbon preset: include it in names")
     from cogniframe.analysis import load_cases as lc
+    from cogniframe.analysis import mass as mass_mod
     from cogniframe.analysis import stiffness as st
     from cogniframe.design import design
 
     cases = {}
-    for name in ("carbon", "bamboo"):
+    for name in names:
         s = _pegged(name)
         d = design(s)
         total = mass_mod.budget(s, d.frame, d.cut, d.parts).total_g
         for free in (False, True):
             cases[(name, free)] = (s, d, total, _units(s, d.parts, free))
-    factors = {free: _calibrate(*(lambda s, d, t, u: (s, d.frame, d.parts, u))(*cases[("carbon", free)]))
-               for free in (False, True)}
+    factors = {}
+    for free in (False, True):
+        s, d, _, units = cases[("carbon", free)]
+        factors[free] = _calibrate(s, d.frame, d.parts, units)
     rows = []
     for (name, free), (s, d, total, units) in cases.items():
-        f = factors[free]
-        joints = _scaled(units, f)
-        k = st.secant_k(s, d.frame, d.parts, joints)
+        joints = _scaled(units, factors[free])
         res = lc.load_cases(s, d.frame, d.parts, total, joints=joints, modes=False)
         t, w = res.thrust, res.wall
-        rows.append((name, "on the arch" if free else "own peg", f, k, w["max_wall_speed_m_s"],
-                     t["arms_only_core_link_hinge_n_mm_per_rad"], t["arms_only_motor_deflection_mm"],
-                     t["arms_only_motor_tilt_deg"], t["motor_deflection_mm"], t["exoskeleton_stiffening"]))
+        rows.append({"preset": name, "strut": "on the arch" if free else "own peg", "factor": factors[free],
+                     "k_n_per_m": st.secant_k(s, d.frame, d.parts, joints), "wall_m_s": w["max_wall_speed_m_s"],
+                     "hinge": t["arms_only_core_link_hinge_n_mm_per_rad"], "bare_mm": t["arms_only_motor_deflection_mm"],
+                     "bare_deg": t["arms_only_motor_tilt_deg"], "full_mm": t["motor_deflection_mm"],
+                     "ratio": t["exoskeleton_stiffening"]})
+    return rows
+
+
+def main() -> int:
     print("| preset | strut | TPU factor (carbon fitted to 7040 N/m) | k, N/m | wall speed, m/s | arm-pair hinge, N mm/rad "
           "| bare arms at full thrust: deflection, tilt | full frame | bare / full |")
     print("|---|---|---|---|---|---|---|---|---|")
-    for r in rows:
-        print(f"| {r[0]} | {r[1]} | {r[2]:.4f} | {r[3]:.0f} | {r[4]:.2f} | {r[5]:.1f} | {r[6]:.2f} mm, {r[7]:.2f} deg "
-              f"| {r[8]:.2f} mm | {r[9]:.1f}x |")
+    for r in measure():
+        print(f"| {r['preset']} | {r['strut']} | {r['factor']:.4f} | {r['k_n_per_m']:.0f} | {r['wall_m_s']:.2f} "
+              f"| {r['hinge']:.1f} | {r['bare_mm']:.2f} mm, {r['bare_deg']:.2f} deg | {r['full_mm']:.2f} mm | {r['ratio']:.1f}x |")
     return 0
 
 
