@@ -48,7 +48,8 @@ class RodEnd:
     """One end of a rod: the joint it enters and where the socket is (mm)."""
 
     node: str
-    port: Vec  # point on the rod axis level with the joint centre (node position + lateral offset)
+    port: Vec  # point on the rod axis level with the joint centre (node position + lateral offset; a pegged
+              # link's strut: `pegged_strut_port`)
     seat: float  # distance from port to the rod end (socket bottom), mm
     depth: float  # how far the rod goes into the socket, mm
 
@@ -248,10 +249,17 @@ def frame_of(spec: Spec) -> Frame:
 
     seats = {n: _node_seat(n, pos, edges, incident[n], spec) for n in pos}
     nodes = {n: Node(n, kind, _t(p), tuple(edges[i][0] for i in incident[n]), seats[n]) for n, (kind, p) in pos.items()}
+    # a pegged link takes the strut on its arch (`pegged_strut_port`): that end's port moves
+    ports = {}
+    if c.link == "pegs" and f.struts:
+        for k in CORNERS:
+            ln = f"core_link_{k}"
+            ports[(f"rod_strut_{k}", ln)] = pegged_strut_port(pos[ln][1], pos[f"knee_{k}"][1], pos[f"corner_bottom_{k}"][1],
+                                                              seats[ln], j.socket_depth, bore)
     rods = {}
     for name, role, na, nb, off in edges:
-        ea = RodEnd(na, _t(pos[na][1] + off), seats[na], j.socket_depth)
-        eb = RodEnd(nb, _t(pos[nb][1] + off), seats[nb], j.socket_depth)
+        ea = RodEnd(na, _t(ports.get((name, na), pos[na][1] + off)), seats[na], j.socket_depth)
+        eb = RodEnd(nb, _t(ports.get((name, nb), pos[nb][1] + off)), seats[nb], j.socket_depth)
         rods[name] = Rod(name, role, ea, eb, d, spec.rods.material)
 
     for r in rods.values():
@@ -356,6 +364,42 @@ def _hinge_seat(dirs: list[np.ndarray], roles: list[str], wall: float) -> float:
 # peg 6.79: docs/authors-parts.md), and the tube's wall three 0.4 mm lines.
 PEG_D = 6.8  # mm
 PEG_TUBE_WALL = 1.2  # mm
+# The link's TPU round each socket (the authors' (6.79 - 3.19) / 2) and between a socket's floor
+# and its peg (their 0.3).
+PEG_COLUMN_WALL = 1.8  # mm
+PEG_GAP = 0.3  # mm
+# The link's arch, as the authors' connector has it: it joins the columns from their mouths down
+# to PEG_ARCH_LIFT above the pegs' shoulder (clear of the core plate's bars, which end in the
+# shoulder's plane), with a round opening under its crown, PEG_ARCH_LEN below the mouths (their
+# 2.8 mm crown under z 9 mouths). The strut hangs on the crown, as their third column does: its
+# sleeve's back end lies in it, the lowest point PEG_SLEEVE_FLOOR above the opening's top. No
+# face only touches another (OCC fuses no tangent faces).
+PEG_ARCH_LEN = 3.0  # mm
+PEG_ARCH_LIFT = 0.5  # mm
+PEG_SLEEVE_FLOOR = 0.5  # mm
+
+
+def pegged_strut_port(link: np.ndarray, knee: np.ndarray, corner: np.ndarray, seat: float, depth: float,
+                      bore: float) -> np.ndarray:
+    """Where the strut's axis enters a pegged core link (its port, `seat` short of its socket's
+    floor): the sleeve's back end (the column wall behind the floor) is centred on the arm pair's
+    mid-line, in the arch's crown: its lowest point PEG_SLEEVE_FLOOR above the crown's underside,
+    which lies PEG_ARCH_LEN inside the arms' mouths (`seat + depth` along the arms). The strut
+    aims at its bottom corner from there: a fixed point (the sleeve's lean depends on the port),
+    met to 1e-12 mm in a few steps since the port moves millimetres on a strut over 100 mm long."""
+    d_a = (knee - link) / np.linalg.norm(knee - link)
+    r = bore / 2 + PEG_COLUMN_WALL
+    t0 = seat - PEG_COLUMN_WALL
+    port = np.asarray(link, float).copy()
+    for _ in range(100):
+        d_s = (corner - port) / np.linalg.norm(corner - port)
+        sin = math.sqrt(max(0.0, 1.0 - float(d_a @ d_s) ** 2))
+        b = seat + depth - PEG_ARCH_LEN + PEG_SLEEVE_FLOOR + r * sin
+        new = link + b * d_a - t0 * d_s
+        if float(np.linalg.norm(new - port)) < 1e-12:
+            return new
+        port = new
+    return port
 
 
 def peg_drop(spec: Spec) -> float:

@@ -127,11 +127,9 @@ def peg_tubes(spec: Spec, frame: Frame) -> tuple[tuple[tuple, tuple], float]:
             for ax in axes:
                 e, s = (m[:3, :3] @ p + m[:3, 3] - centre for p in (ax.end, ax.shoulder))
                 r_out = ax.radius + PEG_TUBE_WALL
-                # the frame hangs the plate so that the arms' tubes are flush with the plate's top
-                # (frame.peg_drop); the strut's peg may lie lower (its column stands under the
-                # strut's bore), its tube then sunk into its bar. A tube above the plate's top
-                # (below the bed in print), off the bar, or not level is a bug, not a design.
-                if abs(e[2] - s[2]) > LEVEL_TOL or e[2] + r_out > top + LEVEL_TOL or e[2] + r_out < top - LEVEL_TOL - r_out:
+                # the frame hangs the plate so that the tubes are flush with the plate's top
+                # (frame.peg_drop). A tube off the plate's top or not level is a bug, not a design.
+                if abs(e[2] - s[2]) > LEVEL_TOL or abs(e[2] + r_out - top) > LEVEL_TOL:
                     raise RuntimeError(f"{link.name} at {pl.instance}: its peg's axis runs from z {e[2]:.6f} to {s[2]:.6f} "
                                        f"in the plate's frame: its tube (outside radius {r_out:g}) is not level within the "
                                        f"plate's {2 * top:g} mm under its top")
@@ -202,7 +200,7 @@ def _with_tubes(params: dict) -> Estimate:
     union (area A, perimeter P) `t` thick less the stack holes, then each tube (length L, bore r_b,
     outside r_o, its axis z above the bed, the slab's top h = z - t below the axis) adds its
     outside circle's part above the slab, less the bore: L (pi r_o^2 - seg(h) - pi r_b^2), h its
-    axis's height over the slab (r_o - t flush with the plate's top; a sunk tube's higher),
+    axis's height over the slab (r_o - t: flush with the plate's top),
     seg(h) = r_o^2 acos(h / r_o) - h sqrt(r_o^2 - h^2) (the circle below a chord h from its
     centre). Each rib (length L_r, width w, depth d) stands on the slab: w d L_r more, its two
     sides and two ends vertical, its top where the slab's top was. Exact but for faceting wherever

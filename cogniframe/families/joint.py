@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from ..frame import CORNER_SIGN, CORNERS, PEG_D, PEG_TUBE_WALL, STACK_BOTTOM, Frame
+from ..frame import CORNER_SIGN, CORNERS, PEG_ARCH_LEN, PEG_COLUMN_WALL, PEG_D, PEG_GAP, PEG_TUBE_WALL, STACK_BOTTOM, Frame
 from ..materials import SCREWS, STACK_PATTERNS
 from ..parts import joint_plan
 from ..parts.joint_plan import (
@@ -186,15 +186,16 @@ def _joint(spec: Spec, frame: Frame, name: str, kind: str, proto: str = "fl", co
 # The pegged core link (core.link: pegs): the authors' connector, measured on
 # Flex_Main_connector_new_bumper.stl of thecognifly/CogniFly-STL (docs/authors-parts.md,
 # tools/pegged_link_fe.py `Connector`). Each arm socket sits in a TPU column whose far end is a
-# solid peg, pressed into a bore of the ABS core; an arch joins the two columns at their mouths.
-# The strut has a peg of its own, parallel to the arms' (parts/peg_plan.py `pegged_plan`).
+# solid peg, pressed into a bore of the ABS core; an arch joins the two columns, and the strut
+# hangs on it (parts/peg_plan.py `pegged_plan`).
 PEGS = (
     ("link", "pegs"),
     ("peg_d", PEG_D),  # peg diameter, mm (authors' 6.79): the core plate's tube bore (frame.py)
     ("peg_len", 9.0),  # peg length, mm (authors' 9.0)
-    ("peg_gap", 0.3),  # mm from the socket's bottom to the peg (authors' socket floor 0.3 above the peg)
-    ("column_wall", 1.8),  # TPU round the socket, mm (authors' (6.79 - 3.19) / 2)
-    ("arch_len", 3.0),  # mm along the columns, at their mouths (authors' z 6..9 of a 8.6 mm column)
+    ("peg_gap", PEG_GAP),  # mm from the socket's bottom to the peg (authors' socket floor 0.3 above the peg)
+    ("column_wall", PEG_COLUMN_WALL),  # TPU round the socket, mm (authors' (6.79 - 3.19) / 2)
+    ("arch_len", PEG_ARCH_LEN),  # the crown's depth under the mouths, mm (authors' z 6.2..9 at mid-span); the
+                                 # arch reaches down the columns to the pegs' shoulder round an opening
     ("arch_depth", 6.7),  # mm across the plane of the arm pair (authors' 6.7)
 )
 PEG_LEAN_MAX = 45.0  # deg: the most a socket of the standing pegged link leans from the arms (print overhang)
@@ -202,42 +203,44 @@ PEG_LEAN_MAX = 45.0  # deg: the most a socket of the standing pegged link leans 
 # 0.4 mm line between the tubes, so the tubes never touch (a press fit's tube merged into its
 # neighbour's splits as the pegs go in, and the plate's closed form counts each tube whole)
 PEG_WEB = 2 * PEG_TUBE_WALL + 0.4
-PEG_TUBE_EMBED = 1.0  # mm: the least a peg's tube reaches into the core plate's slab (five 0.2 mm layers)
+PEG_SLEEVE_GAP = 0.4  # mm: the least air between the strut's sleeve and an arm's column (one 0.4 mm line)
 
 
 def _pegs_fit(spec: Spec, pl) -> None:
     """Refuse (naming core.link) a pegged link whose pegs' bores would run into each other in the
-    core, whose strut peg's tube would miss the core plate, or whose strut bore would come closer
-    to its peg's side than the columns' TPU wall."""
+    core, or whose strut sleeve would run into an arm's column."""
     cols = pl.columns
     for i in range(len(cols)):
         for j in range(i):
             gap = float(np.linalg.norm(cols[i].axis - cols[j].axis)) - 2 * pl.peg_r
             if gap < PEG_WEB - 1e-6:
-                raise spec.error("core.link", f"the pegged core link's pegs ({2 * pl.peg_r:g} mm, one per arm and one "
-                                 f"for the strut) stand {gap:.1f} mm apart: the core's bores need {PEG_WEB:g} mm of ABS "
-                                 "between them", "set core.link: tab, or space the arms wider (frame.arm_spacing)")
-    # the arms' tubes hang with their tops flush with the core plate's top (frame.peg_drop); the
-    # strut's peg stands under its bore, below the arms' plane, and its tube must still reach
-    # into the plate's slab by PEG_TUBE_EMBED to be held by it
-    arm = next(c for c in cols if c.socket not in {st.index for st in pl.struts})
-    reach = spec.core.plate_thickness - PEG_TUBE_EMBED
+                raise spec.error("core.link", f"the pegged core link's pegs ({2 * pl.peg_r:g} mm, one per arm) stand "
+                                 f"{gap:.1f} mm apart: the core's bores need {PEG_WEB:g} mm of ABS between them",
+                                 "set core.link: tab, or space the arms wider (frame.arm_spacing)")
     for st in pl.struts:
-        c = cols[st.column]
-        dz = float(pl.rot[0, 2] * (c.axis[0] - arm.axis[0]) + pl.rot[1, 2] * (c.axis[1] - arm.axis[1]))
-        if dz > 1e-6 or dz < -reach - 1e-6:
-            where = "above" if dz > 0 else "below"
-            raise spec.error("core.link", f"the strut's peg stands {abs(dz):.1f} mm {where} the arms' pegs (it stands under "
-                             f"the strut's bore): its tube in the core plate would not meet the plate's "
-                             f"{spec.core.plate_thickness:g} mm slab (at most {reach:g} mm below)",
-                             "set core.link: tab, or a smaller joints.seat (the strut's bore then crosses nearer the arms' "
-                             "plane), or thicken core.plate_thickness")
-    wall = float(dict(PEGS)["column_wall"])
-    for st in pl.struts:
-        if st.wall < wall - 1e-6:
-            raise spec.error("core.link", f"the strut's bore dips into its peg and would leave {st.wall:.2f} mm of TPU "
-                             f"to the peg's side (the columns have {wall:g} mm)",
-                             "set core.link: tab, or use thinner rods (rods.diameter)")
+        gap = _sleeve_clear(pl, st)
+        if gap < PEG_SLEEVE_GAP - 1e-6:
+            raise spec.error("core.link", f"the strut's sleeve on the pegged core link's arch passes {max(gap, 0.0):.1f} mm "
+                             f"from an arm's column (it needs {PEG_SLEEVE_GAP:g} mm)",
+                             "set core.link: tab, or space the arms wider (frame.arm_spacing)")
+
+
+def _sleeve_clear(pl, st, n: int = 64) -> float:
+    """The least air (mm) between the strut's sleeve and the arm columns: the columns stand
+    upright, so it is the plan distance from the sleeve's axis to a column's, less the column's
+    radius and the sleeve's (its full radius: a bound), over the stretch of the sleeve whose
+    discs reach below the columns' tops."""
+    back, mouth = np.asarray(st.back, float), np.asarray(st.mouth, float)
+    d = (mouth - back) / np.linalg.norm(mouth - back)
+    reach_z = pl.col_r * math.sqrt(max(0.0, 1.0 - float(d[2]) ** 2))
+    best = math.inf
+    for f in np.linspace(0.0, 1.0, n + 1):
+        p = back + f * (mouth - back)
+        for c in pl.columns:
+            if float(p[2]) - reach_z > c.col1:
+                continue
+            best = min(best, float(np.hypot(p[0] - c.axis[0], p[1] - c.axis[1])) - c.col_r - pl.col_r)
+    return best
 
 
 # The core link's tab: it carries an arm's thrust moment from the arm block, across the seat at
@@ -590,10 +593,9 @@ def _pegged_link_estimate(spec: Spec, sockets: list[Socket], params: dict) -> Es
     """Closed form of the pegged core link (parts/joint_solid.py `_core_link_pegged`), in print
     orientation (the arms' direction up, the pegs' ends on the bed): per peg a peg and a column
     (cylinders: one cylinder where their diameters are within `PEG_SNAP`), the arch (a box from
-    axis to axis, less the half arm columns inside it and less the strut's column inside it: a
-    disc's band), the strut's sleeve (a cylinder, less what is not its own piece's:
-    `PegStrut.overlap`), less the bores. Where the two arm ports' along-arm heights differ by
-    rounding only, the columns stand level (`STACK_SNAP_MM`)."""
+    axis to axis, less the half columns inside it and its round opening), the strut's sleeve (a cylinder, less its part
+    inside the arch: `PegStrut.overlap`), less the bores. Where the two arm ports' along-arm
+    heights differ by rounding only, the columns stand level (`STACK_SNAP_MM`)."""
     pl = pegged_plan(sockets, params)
     hole = math.pi / 4 * spec.bore**2
     vol = a_h = a_v = 0.0
@@ -602,15 +604,19 @@ def _pegged_link_estimate(spec: Spec, sockets: list[Socket], params: dict) -> Es
         a_h += 2 * math.pi * pl.peg_r**2  # the peg's end and the shoulder + the column's top
         a_v += 2 * math.pi * (pl.peg_r * pl.peg_len + c.col_r * c.col_len)
     arch_len = pl.arch_hi - pl.arch_lo
-    arms = [c for c in pl.columns if c.socket not in {st.index for st in pl.struts}]
-    inside = len(arms) * 0.5 * _disc_band(pl.col_r, pl.arch_n[0], pl.arch_n[1]) * arch_len
-    vol += pl.spacing * (pl.arch_n[1] - pl.arch_n[0]) * arch_len - inside
-    a_h += 2 * (pl.spacing - 2 * pl.col_r) * (pl.arch_n[1] - pl.arch_n[0])
+    depth = pl.arch_n[1] - pl.arch_n[0]
+    inside = len(pl.columns) * 0.5 * _disc_band(pl.col_r, pl.arch_n[0], pl.arch_n[1]) * arch_len
+    vol += pl.spacing * depth * arch_len - inside
+    a_h += 2 * (pl.spacing - 2 * pl.col_r) * depth
     a_v += 2 * (pl.spacing - 2 * pl.col_r) * arch_len
+    if pl.opening is not None:
+        # the opening: the circle's segment above the arch's underside, through the arch's depth
+        _, zo, ro = pl.opening
+        c = pl.arch_lo - zo  # the chord's distance from the circle's centre
+        half = math.acos(c / ro)
+        vol -= (ro**2 * half - c * math.sqrt(ro**2 - c * c)) * depth
+        a_h += ro * 2 * half * depth - 2 * math.sqrt(ro**2 - c * c) * depth  # its round roof less the chord's floor
     for st in pl.struts:
-        c = pl.columns[st.column]
-        y = float(c.axis[1])
-        vol -= _disc_band(c.col_r, pl.arch_n[0] - y, pl.arch_n[1] - y) * max(0.0, min(c.col1, pl.arch_hi) - max(c.col0, pl.arch_lo))
         n = st.end - st.start
         vol += math.pi * pl.col_r**2 * n - st.overlap
         sin_t = math.sqrt(max(0.0, 1 - st.lean_cos**2))

@@ -495,28 +495,28 @@ def _core_link_flat(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarra
 
 def _core_link_pegged(part: PartSpec, socks: list[PSocket]):
     """The pegged core link (parts/peg_plan.py `pegged_plan`), standing in print: per arm a solid
-    peg from the bed and a column round the socket above it, the arch joining the columns at their
-    mouths; the strut's peg and column into the arch, and its sleeve along its socket, kept above
-    the peg's shoulder and inside the 45 deg cone from the peg's rim (its first layers stand on
-    the peg); less the sockets."""
+    peg from the bed and a column round the socket above it, the arch joining the columns from
+    their mouths down to the pegs' shoulder round its opening, and the strut's sleeve along its
+    socket, its back end in the arch's crown; less the sockets."""
     cq = _cq()
     pl = pegged_plan(part.sockets, dict(part.params))
     pieces = []
     for c in pl.columns:
         x, y = float(c.axis[0]), float(c.axis[1])
-        if pl.peg_r == c.col_r:  # one cylinder (the strut's; an arm's within parts/peg_plan.py `PEG_SNAP`)
+        if pl.peg_r == c.col_r:  # one cylinder (within parts/peg_plan.py `PEG_SNAP`)
             pieces.append(cylinder((x, y, c.peg0), (0, 0, 1), c.col1 - c.peg0, c.col_r))
         else:
             pieces += [cylinder((x, y, c.peg0), (0, 0, 1), c.col0 - c.peg0, pl.peg_r),
                        cylinder((x, y, c.col0), (0, 0, 1), c.col_len, c.col_r)]
     (x0, x1), (n0, n1) = pl.arch_x, pl.arch_n
-    pieces.append(cq.Solid.makeBox(x1 - x0, n1 - n0, pl.arch_hi - pl.arch_lo, cq.Vector(x0, n0, pl.arch_lo)))
+    arch = cq.Solid.makeBox(x1 - x0, n1 - n0, pl.arch_hi - pl.arch_lo, cq.Vector(x0, n0, pl.arch_lo))
+    if pl.opening is not None:
+        xo, zo, ro = pl.opening
+        arch = arch.cut(cylinder((xo, n0 - 1.0, zo), (0, 1, 0), n1 - n0 + 2.0, ro))
+    pieces.append(arch)
     for st in pl.struts:
         s = socks[st.index]
-        c = pl.columns[st.column]
-        cone = cq.Solid.makeCone(st.cone_r0, st.cone_r0 + st.cone_h, st.cone_h,
-                                 cq.Vector(float(c.axis[0]), float(c.axis[1]), c.col0), cq.Vector(0, 0, 1))
-        pieces.append(cylinder(s.at(st.start), s.direction, st.end - st.start, pl.col_r).intersect(cone))
+        pieces.append(cylinder(s.at(st.start), s.direction, st.end - st.start, pl.col_r))
     return finish(fuse_all(pieces), [socket_cutter(s) for s in socks])
 
 

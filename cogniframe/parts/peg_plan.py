@@ -10,18 +10,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..frame import PEG_ARCH_LIFT, PEG_SLEEVE_FLOOR
 from .record import PARALLEL_TOL, PartSpec
 
 # The authors' connector: per arm socket a TPU column round the socket with a solid peg beyond its
-# bottom, coaxial with the rod, pressed into a bore of the ABS core; an arch joins the two columns
-# at their mouths. The strut has its own peg, parallel to the arms' (the link presses in along one
-# direction), standing under where the strut's socket crosses the pegs' shoulder, and a column on
-# it up into the arch; the strut's sleeve leans out of that column, so the strut's load goes into
-# the core through its own peg rather than round the arch. It prints standing: the arms' direction
-# up, the pegs' ends on the bed (families/joint.py `PEGS` has the dimensions).
+# bottom, coaxial with the rod, pressed into a bore of the ABS core; an arch joins the two columns.
+# The strut hangs on the arch, as the authors' third column does: its sleeve starts inside the arch
+# (frame.py `pegged_strut_port` puts its socket there), so the strut's load goes round the arch into
+# the arm pegs, and the arch reaches down the columns to hold the sleeve's back end. It prints
+# standing: the arms' direction up, the pegs' ends on the bed (families/joint.py `PEGS` has the
+# dimensions).
 PEG_SNAP = 0.2  # mm: a peg and its column closer than this in diameter are one cylinder (no sliver shoulder)
 STACK_SNAP_MM = 1e-3  # mm: the most the two columns are moved to stand level (rounding noise is ~1e-5)
 ARCH_CLEAR = 0.2  # mm: the arch's depth never within this of the column's diameter (no tangent faces)
+ARCH_WEB = 0.5  # mm: the arch's underside between a column and the opening (the opening touches no column)
+SLEEVE_TOL = 1e-5  # mm: the strut's sleeve on the crown as planned (sockets are stored to 1e-6)
 
 
 def is_pegged(part: PartSpec) -> bool:
@@ -31,10 +34,9 @@ def is_pegged(part: PartSpec) -> bool:
 
 @dataclass(frozen=True)
 class PegColumn:
-    """One peg and its column in print: a vertical axis at `axis` (xy), the peg from the bed
-    (`peg0`) to `col0`, the column from there to `col1` (an arm's: its socket's mouth; the
-    strut's: into the arch, below the strut's mouth) of radius `col_r`. `socket`: the index of the
-    socket it holds."""
+    """One arm's peg and column in print: a vertical axis at `axis` (xy), the peg from the bed
+    (`peg0`) to `col0`, the column from there to `col1` (its socket's mouth) of radius `col_r`.
+    `socket`: the index of the socket it holds."""
 
     axis: np.ndarray
     peg0: float
@@ -50,23 +52,18 @@ class PegColumn:
 
 @dataclass(frozen=True)
 class PegStrut:
-    """The strut's sleeve: a cylinder along its socket from `start` to `end` (along it from the
-    port), `lean_cos` = its direction . up in print, kept above its peg's shoulder and inside the
-    45 deg cone that rises from the peg's top rim (`cone_r0`: the cone's radius at the shoulder,
-    `cone_h` its height): its first layers stand on the peg. `column`: its peg's index in
-    `PeggedPlan.columns`; `overlap`: the sleeve's volume that is not its own (below the shoulder,
-    outside the cone, inside its column or the arch; mm^3); `wall`: the least TPU, across the
-    axis of the pegs, round the part of its bore below the shoulder (in the peg)."""
+    """The strut's sleeve: a cylinder of the columns' radius along its socket from `start` to
+    `end` (along it from the port), `lean_cos` = its direction . up in print; its back end lies in
+    the arch, the rest leans out of it. `overlap`: the sleeve's volume inside the arch (mm^3);
+    `back`, `mouth`: its axis's ends in print (mm)."""
 
     index: int
     start: float
     end: float
     lean_cos: float
-    column: int
-    cone_r0: float
-    cone_h: float
     overlap: float
-    wall: float
+    back: tuple[float, float, float]
+    mouth: tuple[float, float, float]
 
 
 @dataclass(frozen=True, eq=False)
@@ -82,6 +79,7 @@ class PeggedPlan:
     arch_n: tuple[float, float]  # print y: the arch's depth
     arch_lo: float  # print z
     arch_hi: float
+    opening: tuple[float, float, float] | None  # the round opening under the crown: print x, z of its axis, radius
     struts: tuple[PegStrut, ...]
     extents: tuple[float, float, float]  # print x, y, z sizes
 
@@ -120,58 +118,51 @@ def pegged_plan(sockets, params: dict) -> PeggedPlan:
         cols.append(PegColumn(q[:2].copy(), c0 - peg_len, c0, float(q0[2]) + s.seat + s.depth, i, col_r))
     y_c = float(cols[0].axis[1])
     arch_hi = min(c.col1 for c in cols)
-    arch_lo = arch_hi - float(params["arch_len"])
-    h = float(params["arch_depth"]) / 2
-    if abs(h - col_r) < ARCH_CLEAR / 2:
-        h = col_r + ARCH_CLEAR / 2
-    n0, n1 = -h, h
-    struts_at = [i for i in range(len(sockets)) if i not in arms]
-    for i in struts_at:  # the arch reaches the strut's sleeve: at least half its radius into it at the mouth
-        s = sockets[i]
-        m = rot @ (np.asarray(s.port, float) + dirs[i] * (s.seat + s.depth)) + shift
-        n0, n1 = min(n0, float(m[1]) - y_c + col_r / 2), max(n1, float(m[1]) - y_c - col_r / 2)
-        arch_lo = min(arch_lo, float(m[2]) - col_r / 2)
-    # the strut's mouth sets the depth anywhere: it too keeps off the columns' outline
-    if abs(n0 + col_r) < ARCH_CLEAR / 2:
-        n0 = -col_r - ARCH_CLEAR / 2
-    if abs(n1 - col_r) < ARCH_CLEAR / 2:
-        n1 = col_r + ARCH_CLEAR / 2
-    x0, x1 = sorted(float(c.axis[0]) for c in cols)
-    arch_n = (y_c + n0, y_c + n1)
-    struts = []
-    lo = [min(x0, x1) - max(peg_r, col_r), y_c - max(peg_r, col_r, -n0), 0.0]
-    hi = [max(x0, x1) + max(peg_r, col_r), y_c + max(peg_r, col_r, n1), max(c.col1 for c in cols)]
+    crown = arch_hi - float(params["arch_len"])
     shoulder = cols[0].col0
-    box = ((x0, arch_n[0], arch_lo), (x1, arch_n[1], arch_hi))
-    for i in struts_at:
+    arch_lo = shoulder + PEG_ARCH_LIFT
+    h = float(params["arch_depth"]) / 2
+    x0, x1 = sorted(float(c.axis[0]) for c in cols)
+    # the round opening under the crown: through the crown's underside at mid-span and the arch's
+    # underside ARCH_WEB in from each column (a web there, no face touching a column)
+    half = (x1 - x0) / 2 - col_r - ARCH_WEB
+    rise = crown - arch_lo
+    opening = None
+    if half > 0 and rise > ARCH_WEB:
+        r_o = (half**2 + rise**2) / (2 * rise)
+        opening = ((x0 + x1) / 2, crown - r_o, r_o)
+    # each strut's sleeve: its back end's disc lies in the crown (frame.py `pegged_strut_port`), the
+    # arch deep enough across the pair to hold the disc seen from above
+    sleeves = []
+    for i in [i for i in range(len(sockets)) if i not in arms]:
         s = sockets[i]
         ds = rot @ dirs[i]
         t0, t1 = s.seat - float(params["column_wall"]), s.seat + s.depth
-        p0 = rot @ np.asarray(s.port, float) + shift
-        axis, reach = _peg_under(p0, ds, s.seat, t1, s.bore / 2, shoulder)
-        # the column rises into the arch, and no higher than the strut's mouth plane over its disc
-        # (past the mouth it would lengthen the socket on one side and bury its chamfer). It is as
-        # wide as its peg, one cylinder: a column as wide as the sleeve, whose axis crosses the
-        # sleeve's, meets it in two crossing ellipses, a singular intersection that OCC's boolean
-        # resolves differently in a link and its mirror image.
-        strut_r = peg_r
-        m = p0 + ds * t1
-        flat = math.hypot(float(ds[0]), float(ds[1]))
-        below_mouth = float(m[2]) - (float((axis - m[:2]) @ ds[:2]) + strut_r * flat) / float(ds[2])
-        top = min(arch_hi, max(below_mouth, arch_lo + 0.5 * (arch_hi - arch_lo)))
-        cols.append(PegColumn(axis, shoulder - peg_len, shoulder, top, i, strut_r))
-        cone_h = max(float((p0 + ds * t1)[2]) - shoulder + col_r, 1.0)
-        overlap, rim = _sleeve_overlap(p0, ds, t0, t1, col_r, shoulder, axis, peg_r, cols[-1].col1, strut_r, box)
-        struts.append(PegStrut(i, t0, t1, float(ds[2]), len(cols) - 1, peg_r, cone_h, overlap, peg_r - reach))
-        e = p0 + ds * t1
-        pad = col_r * np.sqrt(np.clip(1 - ds**2, 0.0, 1.0))
-        lo = [min(a, b, c) for a, b, c in zip(lo, e - pad, rim[0])]
-        hi = [max(a, b, c) for a, b, c in zip(hi, e + pad, rim[1])]
-        lo = [min(lo[0], float(axis[0]) - peg_r), min(lo[1], float(axis[1]) - peg_r), lo[2]]
-        hi = [max(hi[0], float(axis[0]) + peg_r), max(hi[1], float(axis[1]) + peg_r), max(hi[2], top)]
+        back = rot @ np.asarray(s.port, float) + shift + ds * t0
+        spread = col_r * np.sqrt(np.clip(1 - ds**2, 0.0, 1.0))  # the disc's half-extent along x, y, z
+        if float(back[2] - spread[2]) < crown + PEG_SLEEVE_FLOOR - SLEEVE_TOL:
+            raise ValueError(f"the strut's sleeve of a pegged core link starts {crown - float(back[2] - spread[2]):.3g} mm "
+                             "below the arch's crown (frame.py `pegged_strut_port` puts it on the crown)")
+        h = max(h, abs(float(back[1]) - y_c) + float(spread[1]))
+        sleeves.append((i, ds, t0, t1, back, spread))
+    # the arch keeps off the columns' outline (no tangent faces)
+    if abs(h - col_r) < ARCH_CLEAR / 2:
+        h = col_r + ARCH_CLEAR / 2
+    arch_n = (y_c - h, y_c + h)
+    box = ((x0, arch_n[0], arch_lo), (x1, arch_n[1], arch_hi))
+    lo = [min(x0, x1) - max(peg_r, col_r), y_c - max(peg_r, col_r, h), 0.0]
+    hi = [max(x0, x1) + max(peg_r, col_r), y_c + max(peg_r, col_r, h), max(c.col1 for c in cols)]
+    struts = []
+    for i, ds, t0, t1, back, spread in sleeves:
+        p0 = back - ds * t0
+        mouth = p0 + ds * t1
+        struts.append(PegStrut(i, t0, t1, float(ds[2]), _sleeve_in_arch(p0, ds, t0, t1, col_r, box, opening),
+                               tuple(map(float, back)), tuple(map(float, mouth))))
+        lo = [min(a, float(c)) for a, c in zip(lo, np.minimum(back - spread, mouth - spread))]
+        hi = [max(a, float(c)) for a, c in zip(hi, np.maximum(back + spread, mouth + spread))]
     ext = tuple(float(b - a) for a, b in zip(lo, hi))
     return PeggedPlan(rot, shift, tuple(cols), peg_r, peg_len, col_r, x1 - x0, (x0, x1), arch_n, arch_lo, arch_hi,
-                      tuple(struts), ext)
+                      opening, tuple(struts), ext)
 
 
 @dataclass(frozen=True, eq=False)
@@ -204,59 +195,11 @@ def _frame_of(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return a, np.cross(d, a)
 
 
-def _peg_under(p0, d, seat: float, t1: float, r: float, shoulder: float, n: int = 96):
-    """Where the strut's peg stands (print xy) and the radius (mm) round that axis that holds the
-    part of its bore below the pegs' shoulder: the centre of the smallest circle holding that
-    part's outline seen from above, so the peg's TPU round it is as thick as it can be. Without
-    such a part (a socket wholly above the shoulder), under where its axis crosses the shoulder."""
-    from scipy.optimize import minimize_scalar  # where used: importing the plan stays light
-
-    d = np.asarray(d, float)
-    a, b = _frame_of(d)
-    phi = np.arange(n) * 2 * math.pi / n
-    ring = np.outer(a, np.cos(phi)) + np.outer(b, np.sin(phi))
-    t = seat + np.arange(4 * n + 1) * (t1 - seat) / (4 * n)
-    # the bore's outline: its floor's rim and its wall, cut at the shoulder; where the wall
-    # crosses the shoulder, the crossing itself (the outline's edge on that plane)
-    wall = np.asarray(p0, float)[:, None, None] + d[:, None, None] * t[None, :, None] + r * ring[:, None, :]
-    pts = wall.reshape(3, -1)
-    pts = pts[:, pts[2] <= shoulder]
-    z_ring = np.asarray(p0, float)[2] + r * ring[2]
-    if abs(d[2]) > 1e-9:
-        tc = (shoulder - z_ring) / d[2]
-        ok = (tc >= seat) & (tc <= t1)
-        cross = np.asarray(p0, float)[:, None] + d[:, None] * tc[None, :] + r * ring
-        pts = np.hstack([pts, cross[:, ok]])
-    if pts.shape[1] == 0:
-        t_axis = (shoulder - float(np.asarray(p0, float)[2])) / d[2] if abs(d[2]) > 1e-9 else 0.0
-        return (np.asarray(p0, float) + d * t_axis)[:2].copy(), 0.0
-    xy = np.unique(np.round(pts[:2].T, 9), axis=0)
-
-    def worst(c):
-        return float(np.max(np.hypot(xy[:, 0] - c[0], xy[:, 1] - c[1])))
-
-    # the farthest point's distance is convex in the centre: nested one-dimensional minima
-    span = float(np.ptp(xy, axis=0).max()) + 1.0
-    mid = xy.mean(axis=0)
-
-    def best_y(x):
-        res = minimize_scalar(lambda y: worst((x, y)), bounds=(mid[1] - span, mid[1] + span), method="bounded",
-                              options={"xatol": 1e-6})
-        return float(res.x), float(res.fun)
-
-    rx = minimize_scalar(lambda x: best_y(x)[1], bounds=(mid[0] - span, mid[0] + span), method="bounded",
-                         options={"xatol": 1e-6})
-    y, reach = best_y(float(rx.x))
-    return np.array([float(rx.x), y]), reach
-
-
-def _sleeve_overlap(p0, d, t0: float, t1: float, r: float, shoulder: float, axis, cone_r0: float, col_top: float,
-                    col_r: float, box, n: int = 96):
-    """The strut sleeve's (radius `r` along unit `d` from p0 + d t0 to p0 + d t1) volume that is not
-    its own piece's (mm^3): below the shoulder, outside the 45 deg cone from the peg's rim, inside
-    its column (radius `col_r` round `axis` up to `col_top`) or inside the arch (the box lo..hi);
-    and the piece's bounds (lo, hi) from its wall. The midpoint rule in the sleeve's coordinates
-    (n steps along and round it, n / 3 across its radius: ~0.1 % of the overlap)."""
+def _sleeve_in_arch(p0, d, t0: float, t1: float, r: float, box, opening, n: int = 96) -> float:
+    """The strut sleeve's (radius `r` along unit `d` from p0 + d t0 to p0 + d t1) volume inside
+    the arch (the box lo..hi less the opening: x, z of its axis along y, radius), mm^3: the
+    midpoint rule in the sleeve's coordinates (n steps along and round it, n / 3 across its
+    radius: ~0.1 % of the volume)."""
     d = np.asarray(d, float)
     a, b = _frame_of(d)
     nr = max(4, n // 3)
@@ -264,27 +207,11 @@ def _sleeve_overlap(p0, d, t0: float, t1: float, r: float, shoulder: float, axis
     rho = (np.arange(nr) + 0.5) * r / nr
     phi = (np.arange(n) + 0.5) * 2 * math.pi / n
     T, P, F = np.meshgrid(t, rho, phi, indexing="ij")
-
-    def at(T, P, F):
-        return (np.asarray(p0, float)[:, None] + d[:, None] * T.ravel() + a[:, None] * (P * np.cos(F)).ravel()
-                + b[:, None] * (P * np.sin(F)).ravel())
-
-    def own(pts):
-        rxy = np.hypot(pts[0] - axis[0], pts[1] - axis[1])
-        lo, hi = (np.asarray(v, float)[:, None] for v in box)
-        in_box = np.all((pts >= lo) & (pts <= hi), axis=0)
-        in_col = (rxy <= col_r) & (pts[2] <= col_top)
-        return (pts[2] >= shoulder) & (rxy <= cone_r0 + (pts[2] - shoulder)) & ~in_box & ~in_col
-
+    pts = (np.asarray(p0, float)[:, None] + d[:, None] * T.ravel() + a[:, None] * (P * np.cos(F)).ravel()
+           + b[:, None] * (P * np.sin(F)).ravel())
+    lo, hi = (np.asarray(v, float)[:, None] for v in box)
+    inside = np.all((pts >= lo) & (pts <= hi), axis=0)
+    if opening is not None:
+        inside &= np.hypot(pts[0] - opening[0], pts[2] - opening[1]) > opening[2]
     w = P.ravel() * (r / nr) * (2 * math.pi / n) * ((t1 - t0) / n)
-    overlap = float(w[~own(at(T, P, F))].sum())
-    # the piece's bounds from its wall inside the cone (its top end's rim is on the wall; where the
-    # cone trims it, within a few tenths of the shoulder, the peg's disc bounds it to ~0.1 mm)
-    tw = t0 + np.arange(4 * n + 1) * (t1 - t0) / (4 * n)
-    Tw, Fw = np.meshgrid(tw, np.arange(2 * n) * math.pi / n, indexing="ij")
-    wall = at(Tw, np.full(Tw.shape, r), Fw)
-    rxy = np.hypot(wall[0] - axis[0], wall[1] - axis[1])
-    keep = (wall[2] >= shoulder) & (rxy <= cone_r0 + (wall[2] - shoulder))
-    wall = wall[:, keep]
-    return overlap, (wall.min(axis=1), wall.max(axis=1))
-
+    return float(w[inside].sum())
