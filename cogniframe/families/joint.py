@@ -610,12 +610,13 @@ def _pegged_link_estimate(spec: Spec, sockets: list[Socket], params: dict) -> Es
     a_h += 2 * (pl.spacing - 2 * pl.col_r) * depth
     a_v += 2 * (pl.spacing - 2 * pl.col_r) * arch_len
     if pl.opening is not None:
-        # the opening: the circle's segment above the arch's underside, through the arch's depth
-        _, zo, ro = pl.opening
-        c = pl.arch_lo - zo  # the chord's distance from the circle's centre
-        half = math.acos(c / ro)
-        vol -= (ro**2 * half - c * math.sqrt(ro**2 - c * c)) * depth
-        a_h += ro * 2 * half * depth - 2 * math.sqrt(ro**2 - c * c) * depth  # its round roof less the chord's floor
+        # the opening through the arch's depth: its floor's area goes, its roof's and its two 45 deg
+        # sides' (each projected once up and once across) come
+        o = pl.opening
+        rise = o.z1 - o.z0
+        vol -= o.area * depth
+        a_h += (2 * o.top_half - 2 * o.half + 2 * rise) * depth
+        a_v += 2 * rise * depth
     for st in pl.struts:
         n = st.end - st.start
         vol += math.pi * pl.col_r**2 * n - st.overlap

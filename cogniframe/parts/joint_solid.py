@@ -511,8 +511,10 @@ def _core_link_pegged(part: PartSpec, socks: list[PSocket]):
     (x0, x1), (n0, n1) = pl.arch_x, pl.arch_n
     arch = cq.Solid.makeBox(x1 - x0, n1 - n0, pl.arch_hi - pl.arch_lo, cq.Vector(x0, n0, pl.arch_lo))
     if pl.opening is not None:
-        xo, zo, ro = pl.opening
-        arch = arch.cut(cylinder((xo, n0 - 1.0, zo), (0, 1, 0), n1 - n0 + 2.0, ro))
+        # the opening's outline (x, z) extruded through the arch's depth, overshooting both faces
+        xz = pl.opening.outline(below=1.0)
+        hole = cq.Workplane("XZ", origin=(0, n1 + 1.0, 0)).polyline(xz).close().extrude(n1 - n0 + 2.0).val()
+        arch = arch.cut(hole)
     pieces.append(arch)
     for st in pl.struts:
         s = socks[st.index]

@@ -66,6 +66,29 @@ class PegStrut:
     mouth: tuple[float, float, float]
 
 
+@dataclass(frozen=True)
+class ArchOpening:
+    """The opening under the arch's crown, through its depth (print y): a trapezoid in print x, z
+    centred at `x`, `half` wide each side at its floor `z0` (the arch's underside), its sides at
+    45 deg up to its roof `z1`, `top_half` wide each side (0: an apex)."""
+
+    x: float
+    half: float
+    top_half: float
+    z0: float
+    z1: float
+
+    def outline(self, below: float = 0.0) -> list[tuple[float, float]]:
+        """Its corners (x, z) counter-clockwise, the floor `below` lower (a cutter's overshoot,
+        the sides carried on down)."""
+        x, h, th = self.x, self.half, self.top_half
+        return [(x - h - below, self.z0 - below), (x + h + below, self.z0 - below), (x + th, self.z1), (x - th, self.z1)]
+
+    @property
+    def area(self) -> float:
+        return (self.half + self.top_half) * (self.z1 - self.z0)
+
+
 @dataclass(frozen=True, eq=False)
 class PeggedPlan:
     rot: np.ndarray  # print <- local rotation: x across the pair (arm 0 to arm 1), z along the arms
@@ -79,7 +102,7 @@ class PeggedPlan:
     arch_n: tuple[float, float]  # print y: the arch's depth
     arch_lo: float  # print z
     arch_hi: float
-    opening: tuple[float, float, float] | None  # the round opening under the crown: print x, z of its axis, radius
+    opening: ArchOpening | None
     struts: tuple[PegStrut, ...]
     extents: tuple[float, float, float]  # print x, y, z sizes
 
@@ -123,14 +146,12 @@ def pegged_plan(sockets, params: dict) -> PeggedPlan:
     arch_lo = shoulder + PEG_ARCH_LIFT
     h = float(params["arch_depth"]) / 2
     x0, x1 = sorted(float(c.axis[0]) for c in cols)
-    # the round opening under the crown: through the crown's underside at mid-span and the arch's
-    # underside ARCH_WEB in from each column (a web there, no face touching a column)
+    # the opening under the crown: its sides rise at 45 deg from the arch's underside, ARCH_WEB in
+    # from each column (a web there: the opening touches no column), to a flat roof at the crown
+    # (a bridge, as the authors print theirs), or to an apex below it where the span is short
     half = (x1 - x0) / 2 - col_r - ARCH_WEB
-    rise = crown - arch_lo
-    opening = None
-    if half > 0 and rise > ARCH_WEB:
-        r_o = (half**2 + rise**2) / (2 * rise)
-        opening = ((x0 + x1) / 2, crown - r_o, r_o)
+    rise = min(crown - arch_lo, half)
+    opening = ArchOpening((x0 + x1) / 2, half, half - rise, arch_lo, arch_lo + rise) if rise > ARCH_WEB else None
     # each strut's sleeve: its back end's disc lies in the crown (frame.py `pegged_strut_port`), the
     # arch deep enough across the pair to hold the disc seen from above
     sleeves = []
@@ -197,7 +218,7 @@ def _frame_of(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _sleeve_in_arch(p0, d, t0: float, t1: float, r: float, box, opening, n: int = 96) -> float:
     """The strut sleeve's (radius `r` along unit `d` from p0 + d t0 to p0 + d t1) volume inside
-    the arch (the box lo..hi less the opening: x, z of its axis along y, radius), mm^3: the
+    the arch (the box lo..hi less its `ArchOpening`), mm^3: the
     midpoint rule in the sleeve's coordinates (n steps along and round it, n / 3 across its
     radius: ~0.1 % of the volume)."""
     d = np.asarray(d, float)
@@ -212,6 +233,8 @@ def _sleeve_in_arch(p0, d, t0: float, t1: float, r: float, box, opening, n: int 
     lo, hi = (np.asarray(v, float)[:, None] for v in box)
     inside = np.all((pts >= lo) & (pts <= hi), axis=0)
     if opening is not None:
-        inside &= np.hypot(pts[0] - opening[0], pts[2] - opening[1]) > opening[2]
+        o = opening
+        in_open = (pts[2] > o.z0) & (pts[2] < o.z1) & (np.abs(pts[0] - o.x) < o.half - (pts[2] - o.z0))
+        inside &= ~in_open
     w = P.ravel() * (r / nr) * (2 * math.pi / n) * ((t1 - t0) / n)
     return float(w[inside].sum())
