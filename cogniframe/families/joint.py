@@ -593,7 +593,7 @@ def _pegged_link_estimate(spec: Spec, sockets: list[Socket], params: dict) -> Es
     """Closed form of the pegged core link (parts/joint_solid.py `_core_link_pegged`), in print
     orientation (the arms' direction up, the pegs' ends on the bed): per peg a peg and a column
     (cylinders: one cylinder where their diameters are within `PEG_SNAP`), the arch (a box from
-    axis to axis, less the half columns inside it and its round opening), the strut's sleeve (a cylinder, less its part
+    axis to axis, less the half columns inside it and its opening; the crown's block), the strut's sleeve (a cylinder, less its part
     inside the arch: `PegStrut.overlap`), less the bores. Where the two arm ports' along-arm
     heights differ by rounding only, the columns stand level (`STACK_SNAP_MM`)."""
     pl = pegged_plan(sockets, params)
@@ -617,6 +617,11 @@ def _pegged_link_estimate(spec: Spec, sockets: list[Socket], params: dict) -> Es
         vol -= o.area * depth
         a_h += (2 * o.top_half - 2 * o.half + 2 * rise) * depth
         a_v += 2 * rise * depth
+    if pl.block is not None:
+        (bx0, by0, bz0), (bx1, by1, bz1) = pl.block
+        vol += (bx1 - bx0) * (by1 - by0) * (bz1 - bz0)
+        a_h += (bx1 - bx0) * (by1 - by0)  # its top (its floor is the arch's top)
+        a_v += 2 * ((bx1 - bx0) + (by1 - by0)) * (bz1 - bz0)
     for st in pl.struts:
         n = st.end - st.start
         vol += math.pi * pl.col_r**2 * n - st.overlap

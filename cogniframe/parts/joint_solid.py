@@ -496,8 +496,8 @@ def _core_link_flat(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarra
 def _core_link_pegged(part: PartSpec, socks: list[PSocket]):
     """The pegged core link (parts/peg_plan.py `pegged_plan`), standing in print: per arm a solid
     peg from the bed and a column round the socket above it, the arch joining the columns from
-    their mouths down to the pegs' shoulder round its opening, and the strut's sleeve along its
-    socket, its back end in the arch's crown; less the sockets."""
+    their mouths down to the pegs' shoulder round its opening, the crown's block over the mouths,
+    and the strut's sleeve along its socket, its back end in the crown; less the sockets."""
     cq = _cq()
     pl = pegged_plan(part.sockets, dict(part.params))
     pieces = []
@@ -516,6 +516,9 @@ def _core_link_pegged(part: PartSpec, socks: list[PSocket]):
         hole = cq.Workplane("XZ", origin=(0, n1 + 1.0, 0)).polyline(xz).close().extrude(n1 - n0 + 2.0).val()
         arch = arch.cut(hole)
     pieces.append(arch)
+    if pl.block is not None:
+        (bx0, by0, bz0), (bx1, by1, bz1) = pl.block
+        pieces.append(cq.Solid.makeBox(bx1 - bx0, by1 - by0, bz1 - bz0, cq.Vector(bx0, by0, bz0)))
     for st in pl.struts:
         s = socks[st.index]
         pieces.append(cylinder(s.at(st.start), s.direction, st.end - st.start, pl.col_r))

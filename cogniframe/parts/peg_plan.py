@@ -20,7 +20,7 @@ from .record import PARALLEL_TOL, PartSpec
 # the arm pegs, and the arch reaches down the columns to hold the sleeve's back end. It prints
 # standing: the arms' direction up, the pegs' ends on the bed (families/joint.py `PEGS` has the
 # dimensions).
-PEG_SNAP = 0.2  # mm: a peg and its column closer than this in diameter are one cylinder (no sliver shoulder)
+PEG_SNAP = 0.2  # mm: a peg and its column closer than this in diameter are one cylinder, the peg's (no sliver shoulder)
 STACK_SNAP_MM = 1e-3  # mm: the most the two columns are moved to stand level (rounding noise is ~1e-5)
 ARCH_CLEAR = 0.2  # mm: the arch's depth never within this of the column's diameter (no tangent faces)
 ARCH_WEB = 0.5  # mm: the arch's underside between a column and the opening (the opening touches no column)
@@ -103,6 +103,7 @@ class PeggedPlan:
     arch_lo: float  # print z
     arch_hi: float
     opening: ArchOpening | None
+    block: tuple | None  # the crown's block over the mouths' plane under the strut's sleeve: (lo, hi) print corners
     struts: tuple[PegStrut, ...]
     extents: tuple[float, float, float]  # print x, y, z sizes
 
@@ -124,7 +125,9 @@ def pegged_plan(sockets, params: dict) -> PeggedPlan:
     col_r = sockets[arms[0]].bore / 2 + float(params["column_wall"])
     peg_r = float(params["peg_d"]) / 2
     if abs(peg_r - col_r) < PEG_SNAP / 2:
-        peg_r = col_r
+        # the column takes the peg's radius: the peg is the core's bore (frame.PEG_D, the press fit
+        # the plate's tubes and frame.peg_drop are made for); the column's wall moves by under 0.1 mm
+        col_r = peg_r
     z_end = float(ports[0] @ d) + sockets[arms[0]].seat - gap - peg_len
     shift = np.array([0.0, 0.0, -z_end])
     cols = []
@@ -171,19 +174,32 @@ def pegged_plan(sockets, params: dict) -> PeggedPlan:
         h = col_r + ARCH_CLEAR / 2
     arch_n = (y_c - h, y_c + h)
     box = ((x0, arch_n[0], arch_lo), (x1, arch_n[1], arch_hi))
+    # the crown's block: the strut's back-end disc leans up past the mouths' plane, so the crown
+    # rises under it, as the authors' does under their third column, to PEG_SLEEVE_FLOOR over the
+    # disc's top: no part of the disc faces the bed unsupported
+    block = None
+    for i, ds, t0, t1, back, spread in sleeves:
+        top = float(back[2] + spread[2]) + PEG_SLEEVE_FLOOR
+        if top > arch_hi:
+            w = float(spread[0]) + ARCH_CLEAR / 2
+            lo_b = (float(back[0]) - w, arch_n[0], arch_hi)
+            hi_b = (float(back[0]) + w, arch_n[1], top)
+            block = (lo_b, hi_b) if block is None else (tuple(map(min, block[0], lo_b)), tuple(map(max, block[1], hi_b)))
     lo = [min(x0, x1) - max(peg_r, col_r), y_c - max(peg_r, col_r, h), 0.0]
     hi = [max(x0, x1) + max(peg_r, col_r), y_c + max(peg_r, col_r, h), max(c.col1 for c in cols)]
     struts = []
     for i, ds, t0, t1, back, spread in sleeves:
         p0 = back - ds * t0
         mouth = p0 + ds * t1
-        struts.append(PegStrut(i, t0, t1, float(ds[2]), _sleeve_in_arch(p0, ds, t0, t1, col_r, box, opening),
+        struts.append(PegStrut(i, t0, t1, float(ds[2]), _sleeve_in_arch(p0, ds, t0, t1, col_r, box, opening, block),
                                tuple(map(float, back)), tuple(map(float, mouth))))
         lo = [min(a, float(c)) for a, c in zip(lo, np.minimum(back - spread, mouth - spread))]
         hi = [max(a, float(c)) for a, c in zip(hi, np.maximum(back + spread, mouth + spread))]
+    if block is not None:
+        hi[2] = max(hi[2], block[1][2])
     ext = tuple(float(b - a) for a, b in zip(lo, hi))
     return PeggedPlan(rot, shift, tuple(cols), peg_r, peg_len, col_r, x1 - x0, (x0, x1), arch_n, arch_lo, arch_hi,
-                      opening, tuple(struts), ext)
+                      opening, block, tuple(struts), ext)
 
 
 @dataclass(frozen=True, eq=False)
@@ -216,9 +232,9 @@ def _frame_of(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return a, np.cross(d, a)
 
 
-def _sleeve_in_arch(p0, d, t0: float, t1: float, r: float, box, opening, n: int = 96) -> float:
+def _sleeve_in_arch(p0, d, t0: float, t1: float, r: float, box, opening, block, n: int = 96) -> float:
     """The strut sleeve's (radius `r` along unit `d` from p0 + d t0 to p0 + d t1) volume inside
-    the arch (the box lo..hi less its `ArchOpening`), mm^3: the
+    the arch (the box lo..hi less its `ArchOpening`, and the crown's block lo..hi), mm^3: the
     midpoint rule in the sleeve's coordinates (n steps along and round it, n / 3 across its
     radius: ~0.1 % of the volume)."""
     d = np.asarray(d, float)
@@ -232,6 +248,9 @@ def _sleeve_in_arch(p0, d, t0: float, t1: float, r: float, box, opening, n: int 
            + b[:, None] * (P * np.sin(F)).ravel())
     lo, hi = (np.asarray(v, float)[:, None] for v in box)
     inside = np.all((pts >= lo) & (pts <= hi), axis=0)
+    if block is not None:
+        blo, bhi = (np.asarray(v, float)[:, None] for v in block)
+        inside |= np.all((pts >= blo) & (pts <= bhi), axis=0)
     if opening is not None:
         o = opening
         in_open = (pts[2] > o.z0) & (pts[2] < o.z1) & (np.abs(pts[0] - o.x) < o.half - (pts[2] - o.z0))
