@@ -70,8 +70,8 @@ def test_one_tube_per_peg_coaxial_with_it(preset):
     """The plate carries pegs per link x 4 tubes; every placed link's every peg (its axis taken to
     the frame through the link copy's placement, then into the plate's frame) has a tube whose
     axis ends coincide with the peg's to 1e-6 mm and whose bore is the peg's diameter; the tubes
-    are level; the arms' tubes' tops are flush with the plate's top, the strut's sunk into its web
-    (its peg stands under the strut's bore, below the arms' plane)."""
+    are level with their tops flush with the plate's top: two per link, the arms' (the strut
+    hangs on the link's arch)."""
     spec, frame, parts = _planned(preset)
     plate = parts["core_plate"]
     tubes = [tuple(np.asarray(p, float) for p in t) for t in plate.param("tubes")]
@@ -91,14 +91,12 @@ def test_one_tube_per_peg_coaxial_with_it(preset):
                 left.pop(i)
     assert not left
     t = spec.core.plate_thickness
-    flush = 0
+    assert len(tubes) == 2 * 4  # the arm pair's two per link
     for e, s in tubes:
         assert np.linalg.norm(s - e) == pytest.approx(PEG_LEN, abs=1e-6)
         assert e[2] == pytest.approx(s[2], abs=1e-6)
         top = e[2] + R_BORE + WALL
-        assert -t / 2 < top <= t / 2 + 1e-6  # never above the plate's top (the bed in print), always in its web
-        flush += abs(top - t / 2) < 1e-6  # the tube's top in the plate's top plane
-    assert flush == 2 * 4  # the arm pair's two per link
+        assert top == pytest.approx(t / 2, abs=1e-6)  # the tube's top in the plate's top plane (the bed in print)
 
 
 @pytest.mark.parametrize("preset", PRESETS)
@@ -107,7 +105,7 @@ def test_the_plate_hangs_higher_by_the_tubes_drop(preset):
     3 mm plate), and the plate's standoffs make that up to the whole millimetre: the hang is
     round(knee height + 3.1 - the plate on the spacer), the standoff line in the BOM says so, and
     the core links' nodes (and the level knees) sit 3.1 mm under the plate's centre."""
-    tab = frame_mod.frame_of(preset_spec(preset))
+    tab = frame_mod.frame_of(preset_spec(preset, core__link="tab"))
     spec, frame, parts = _planned(preset)
     drop = R_BORE + WALL - spec.core.plate_thickness / 2
     assert frame_mod.peg_drop(spec) == pytest.approx(3.1) == pytest.approx(drop)
@@ -134,7 +132,7 @@ def test_the_bom_drops_the_link_screws_and_the_plate_their_holes():
     items = [h.item for p in parts.values() for h in p.hardware]
     assert not [i for i in items if "core link" in i]
     assert len(parts["core_plate"].param("holes")) == 4
-    tab_spec = preset_spec("carbon")
+    tab_spec = preset_spec("carbon", core__link="tab")
     tab = {p.name: p for p in partlist.part_list(tab_spec, frame_mod.frame_of(tab_spec))}
     assert [h.item for p in tab.values() for h in p.hardware if "core link to plate" in h.item]
     assert len(tab["core_plate"].param("holes")) == 8
@@ -268,7 +266,7 @@ def test_the_spacer_keeps_only_its_pad_on_the_rear_standoffs(preset):
     openings = 2 * math.pi / 4 * 2.4**2 + 4 * 3.2 * 1.8
     assert _union(pieces).area() == pytest.approx(area, rel=1e-9)
     assert m.estimate.volume == pytest.approx((area - openings) * spec.core.spacer_thickness, rel=1e-9)
-    tab_spec = preset_spec(preset)
+    tab_spec = preset_spec(preset, core__link="tab")
     tab = {p.name: p for p in partlist.part_list(tab_spec, frame_mod.frame_of(tab_spec))}
     t = tab["sensor_mount" if spec.core.flow_sensor else "core_spacer"]
     assert len(t.param("link_holes")) == 4 and len(t.param("stack_holes")) == 4
@@ -392,7 +390,7 @@ def test_assembly_steps_press_the_pegs_in_rather_than_bolt():
     core = next(s for s in assembly_steps(design_mod.design(preset_spec("carbon", core__link="pegs"))) if s.title == "Core")
     assert "pegs all the way into the pair of ABS tubes" in core.text and "screw down through the link tab" not in core.text
     assert "pressed in" in core.glue
-    tab = next(s for s in assembly_steps(design_mod.design(preset_spec("carbon"))) if s.title == "Core")
+    tab = next(s for s in assembly_steps(design_mod.design(preset_spec("carbon", core__link="tab"))) if s.title == "Core")
     assert "screw down through the link tab" in tab.text
 
 

@@ -24,7 +24,7 @@ PEG_SNAP = 0.2  # mm: a peg and its column closer than this in diameter are one 
 STACK_SNAP_MM = 1e-3  # mm: the most the two columns are moved to stand level (rounding noise is ~1e-5)
 ARCH_CLEAR = 0.2  # mm: the arch's depth never within this of the column's diameter (no tangent faces)
 ARCH_WEB = 0.5  # mm: the arch's underside between a column and the opening (the opening touches no column)
-SLEEVE_TOL = 1e-5  # mm: the strut's sleeve on the crown as planned (sockets are stored to 1e-6)
+SLEEVE_TOL = 1e-4  # mm: the strut's sleeve on the crown as planned (ports and unit directions are stored to 1e-6)
 
 
 def is_pegged(part: PartSpec) -> bool:
