@@ -329,6 +329,31 @@ def predicted(fam, s, part, labels, e: float):
     return sg.matrix_from_log((fam.basis(x[None, :]) @ np.asarray(fam.coef))[0], part, labels, e)
 
 
+def family_frames(hold: list[dict], mine: dict, kind: str, data_out: Path, core_link: str | None) -> list[dict]:
+    """Per held-out design, the frame k with the `kind` joints (`mine`: {(design, family): {part:
+    (FE unit, predicted K)}}) from the FE and from the new fit, every other joint from the data
+    file's surrogate in both: what the family's own error does to the frame k. A design with another
+    joint outside its family's box (it would need the FE) is left out."""
+    from cogniframe.analysis.joints import surrogate as sg
+    from cogniframe.analysis.joints.model import JointStiffness
+
+    out = []
+    for i, ov in enumerate(hold):
+        own = mine.get((i, kind))
+        if not own:
+            continue
+        s, f, parts = design_parts(ov, core_link)
+        others = {p.name: sg.predict(s, p, 1.0, path=data_out)[0] for p in parts if wanted(p, None) and p.name not in own}
+        if any(u is None for u in others.values()):
+            continue
+        fe = {**others, **{n: u for n, (u, _) in own.items()}}
+        sur = {**others, **{n: JointStiffness(u.name, "surrogate", u.labels, u.refs, tuple(map(tuple, kp.tolist())))
+                            for n, (u, kp) in own.items()}}
+        k_fe, k_sur = frame_k(s, f, parts, fe), frame_k(s, f, parts, sur)
+        out.append({"design": i, "k_family_fe": k_fe, "k_surrogate": k_sur, "error": k_sur / k_fe - 1})
+    return out
+
+
 def refresh_main(hd: dict, fams: dict, requested) -> None:
     """Predict again, with the new fits `fams`, the full run's held-out joints of the `requested`
     families (from their stored FE matrices), and the frame k of every design that has one: the
@@ -362,16 +387,14 @@ def fit_and_write(train: list[dict], hold: list[dict], work: Path, data_out: Pat
     """Fit, write the data file (pinning its sha256 when it is the package's) and the held-out file.
     With `fams` (family names) only those are fitted, from their joints alone, and merged into the
     existing files (`merge_data`, `merge_holdout`)."""
-    import numpy as np
-
     from cogniframe.analysis.joints import surrogate as sg
 
     data_out = Path(data_out or sg.DATA_FILE)
     holdout_out = Path(holdout_out or ROOT / "tests" / "data" / "joint_surrogate_holdout.json")
     fitted = fit_families(samples(train, work, core_link, fams))
     if fams is not None and set(fams) - set(fitted):
-        print(f"no training sample of {', '.join(sorted(set(fams) - set(fitted)))} (every FE solve failed?); nothing written",
-              file=sys.stderr)
+        print(f"train_joint_surrogate: no FE solve of a {', '.join(sorted(set(fams) - set(fitted)))} joint succeeded "
+              f"(see the errors in {work / 'fe'}); nothing written", file=sys.stderr)
         return 2
     link = base_link(core_link)
     base = BASE.relative_to(ROOT).as_posix()
@@ -396,6 +419,7 @@ def fit_and_write(train: list[dict], hold: list[dict], work: Path, data_out: Pat
     ho = samples(hold, work, core_link, fams)
     per_joint, frames = [], []
     by_design: dict[str, dict] = {}
+    mine: dict[tuple, dict] = {}  # {(design, family): {part: (FE unit, predicted K)}}
     for r in ho:
         fam = loaded[r["kind"]]
         kp = predicted(fam, r["spec"], r["part"], r["unit"].labels, r["e"])
@@ -403,15 +427,17 @@ def fit_and_write(train: list[dict], hold: list[dict], work: Path, data_out: Pat
         why = sg.out_of_box(fam, r["names"], r["x"])
         per_joint.append({"design": hold.index(r["overrides"]), "part": r["part"].name, "outside": why, **err})
         by_design.setdefault(json.dumps(r["overrides"], sort_keys=True), {})[r["part"].name] = (r["unit"], kp)
+        mine.setdefault((per_joint[-1]["design"], r["kind"]), {})[r["part"].name] = (r["unit"], kp)
     if fams is not None:
-        # a family's own section: its joints' FE and errors (the other joints of these designs are
-        # not solved, so there is no frame k)
+        # a family's own section: its joints' FE and errors, and the frame k it gives (the other
+        # joints of these designs are not solved: they come from the surrogate)
         sections = {k: {"meta": {**record, "holdout_designs": len(hold)},
                         "joints": [{**j, "overrides": hold[j["design"]], "fe": compact(r["unit"])}
-                                   for j, r in zip(per_joint, ho) if r["kind"] == k]} for k in fams}
+                                   for j, r in zip(per_joint, ho) if r["kind"] == k],
+                        "designs": family_frames(hold, mine, k, data_out, core_link)} for k in fams}
         hd = merge_holdout(json.loads(holdout_out.read_text()), sections, digest)
         refresh_main(hd, loaded, set(fams))
-        _report(per_joint, [])
+        _report(per_joint, [fr for sec in sections.values() for fr in sec["designs"]])
         holdout_out.write_text(json.dumps(hd, sort_keys=True, separators=(",", ":")) + "\n")
         print(f"wrote {holdout_out}")
         return 0
