@@ -2,7 +2,8 @@
 """Train the joint surrogate (`model.stiffness_model: surrogate`) from the solid FE.
 
     python tools/train_joint_surrogate.py [--work DIR] [--train 96] [--holdout 16] [--seed 26]
-                                          [--jobs 2] [--scheduler ADDR]
+                                          [--jobs 2] [--scheduler ADDR] [--core-link tab|pegs]
+                                          [--family NAME ...] [--data FILE] [--holdout-file FILE]
 
 1. Design of experiments: a Latin hypercube (scipy.stats.qmc, fixed seed) over the design box
    `BOX` around the carbon preset -- everything that shapes a joint: rod diameter, wall, socket
@@ -18,6 +19,21 @@
 3. The fit (`joints.surrogate.fit`), written to cogniframe/data/joint_surrogate.json, and the
    held-out set (each held-out design's overrides, its joints' FE matrices, and the frame k with
    the FE joints) to tests/data/joint_surrogate_holdout.json, with the surrogate's errors on it.
+
+`--core-link` sets the base's `core.link` for every design (default: the base file's own).
+`--family NAME` (repeatable; a `surrogate.family_of` name, e.g. `core_link_pegs`) trains only those
+families: the same hypercubes, but only their joints are solved and fitted, and the result is
+merged into the existing data file (`--data`): every other family's fit is copied as it is, and
+`meta.families` records per family the base, core link, box, seed and number of designs it was
+trained on. The held-out file (`--holdout-file`) keeps the full run's designs, predicted again
+where they have a joint of a retrained family, and gains the family's own section (`families`):
+its held-out joints' FE and errors, and the frame k it gives with the other joints from the
+surrogate (they are not solved). A family's DOE solves one joint per design, not four:
+
+    python tools/train_joint_surrogate.py --family core_link_pegs --core-link pegs --train 192
+
+The package's sha256 pin (`surrogate.DATA_SHA256`) is rewritten only when `--data` is the package's
+data file: a copy elsewhere (the tests') leaves the package as it is.
 
 Same inputs, same bytes: the designs, the FE (one BLAS thread) and the fit are deterministic.
 """
