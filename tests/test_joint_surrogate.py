@@ -287,6 +287,17 @@ def test_fit_is_deterministic_and_recovers_a_log_linear_family():
     np.testing.assert_allclose(a.basis(x) @ np.asarray(a.coef), [[1 + 0.6 - 0.2, 0.3, 0.3]], atol=1e-3)
 
 
+def test_fit_with_fewer_than_two_samples_a_term_is_refused():
+    rng = np.random.default_rng(3)
+    X = rng.uniform(0, 1, (5, 3))  # 3 components: the intercept and the linear terms need 8 samples
+    Y = X @ [[1.0], [2.0], [3.0]]
+    with pytest.raises(ValueError, match="k: 5 samples are too few to fit its 3 principal components"):
+        sg.fit_family("k", ("r0", "body"), ("a", "b", "c"), X, Y)
+    fam, _ = sg.fit_family("k", ("r0", "body"), ("a", "b", "c"), np.vstack([X, rng.uniform(0, 1, (3, 3))]),
+                           np.vstack([Y, np.zeros((3, 1))]))
+    assert fam.n_train == 8 and fam.quadratic == 0
+
+
 def test_sweep_row_k_equals_checks_fe_k_within_5_percent():
     """A sweep's row (surrogate joints, the sweeps' default) against `check` of the same params
     with `model.stiffness_model: fe`: bamboo rods, geometry no training design has."""

@@ -407,7 +407,11 @@ def fit_and_write(train: list[dict], hold: list[dict], work: Path, data_out: Pat
 
     data_out = Path(data_out or sg.DATA_FILE)
     holdout_out = Path(holdout_out or ROOT / "tests" / "data" / "joint_surrogate_holdout.json")
-    fitted = fit_families(samples(train, work, core_link, fams))
+    try:
+        fitted = fit_families(samples(train, work, core_link, fams))
+    except ValueError as exc:  # too few designs for a family (a short --train)
+        print(f"train_joint_surrogate: {exc}; raise --train; nothing written", file=sys.stderr)
+        return 2
     if fams is not None and set(fams) - set(fitted):
         print(f"train_joint_surrogate: no FE solve of a {', '.join(sorted(set(fams) - set(fitted)))} joint succeeded "
               f"(see the errors in {work / 'fe'}); nothing written", file=sys.stderr)
