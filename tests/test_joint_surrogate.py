@@ -69,8 +69,10 @@ def frame_k(s, f, parts, units: dict) -> float:
 def held_out():
     """Per held-out design: its parts, the FE units and the surrogate's (both at factor 1)."""
     out = []
+    # the core link they were trained on (the tab before the held-out file recorded it), whatever the preset's is now
+    link = HOLDOUT["meta"].get("core_link", "tab")
     for d in HOLDOUT["designs"]:
-        s, f, parts = design(d["overrides"])
+        s, f, parts = design(d["overrides"], **{"core.link": link})
         fe = {}
         sur = {}
         for p in joints_of(parts):
