@@ -326,9 +326,12 @@ def merge_data(old: dict, new: dict, record: dict) -> dict:
 
 def merge_holdout(old: dict, sections: dict, digest: str) -> dict:
     """The held-out document with a section per family trained on its own (`sections`: {name:
-    {"meta", "joints"}}, replacing any earlier one) and the data file's new sha256; the full run's
-    designs and joint errors as `old` has them (`refresh_main` updates the ones a new fit predicts)."""
-    out = dict(old)
+    {"meta", "joints", "designs"}}, replacing any earlier one) and the data file's new sha256; the
+    full run's designs and joint errors as `old` has them (`refresh_main` updates the ones a new fit
+    predicts)."""
+    import copy
+
+    out = copy.deepcopy(old)
     out["meta"] = {**old["meta"], "data_sha256": digest}
     out["families"] = {**old.get("families", {}), **sections}
     return out
