@@ -332,7 +332,8 @@ def fit_family(kind: str, labels, names, X: np.ndarray, Y: np.ndarray, quadratic
     `rel_sv` of the largest: the rest is rounding); the number of leading components with
     quadratic terms (`quadratic`: an int or the candidates) and the ridge weight are picked by the
     leave-one-out error of Y (closed form from the hat matrix), the quadratic terms only where
-    they have at least two samples each. Returns the family and {(quadratic, ridge): LOO RMS}."""
+    they have at least two samples each. Returns the family and {(quadratic, ridge): LOO RMS}.
+    Raises ValueError when there are too few samples for even the linear terms."""
     X = np.asarray(X, float)
     rng = X.max(0) - X.min(0)
     fixed_mask = rng <= _ABS_TOL * np.maximum(1.0, np.abs(X).max(0))
@@ -362,6 +363,9 @@ def fit_family(kind: str, labels, names, X: np.ndarray, Y: np.ndarray, quadratic
             loo[(q, lam)] = err
             if best is None or err < best[0]:
                 best = (err, q, lam, G @ Y)
+    if best is None:  # even the linear terms need two samples each
+        raise ValueError(f"{kind}: {len(X)} samples are too few to fit its {k} principal components "
+                         f"(at least {2 * (k + 1)} are needed)")
     _, q, lam, C = best
     fam = Family(kind, tuple(labels), tuple(names),
                  tuple(float(X[0, j]) if fixed_mask[j] else None for j in range(X.shape[1])),
