@@ -379,6 +379,17 @@ PEG_ARCH_LIFT = 0.5  # mm
 PEG_SLEEVE_FLOOR = 0.5  # mm
 
 
+PEG_SNAP = 0.2  # mm: a peg and its column closer than this in diameter are one cylinder, the peg's (no sliver shoulder)
+
+
+def peg_column_r(bore: float, wall: float = PEG_COLUMN_WALL, peg_d: float = PEG_D) -> float:
+    """The radius of a pegged link's columns (and the strut's sleeve): the socket's bore and its
+    wall, or the peg's own radius when within PEG_SNAP / 2 of it (the peg is the core's bore, the
+    press fit the plate's tubes and `peg_drop` are made for; the wall moves by under 0.1 mm)."""
+    r = bore / 2 + wall
+    return peg_d / 2 if abs(peg_d / 2 - r) < PEG_SNAP / 2 else r
+
+
 def pegged_strut_port(link: np.ndarray, knee: np.ndarray, corner: np.ndarray, seat: float, depth: float,
                       bore: float) -> np.ndarray:
     """Where the strut's axis enters a pegged core link (its port, `seat` short of its socket's
@@ -388,7 +399,7 @@ def pegged_strut_port(link: np.ndarray, knee: np.ndarray, corner: np.ndarray, se
     aims at its bottom corner from there: a fixed point (the sleeve's lean depends on the port),
     met to 1e-12 mm in a few steps since the port moves millimetres on a strut over 100 mm long."""
     d_a = (knee - link) / np.linalg.norm(knee - link)
-    r = bore / 2 + PEG_COLUMN_WALL
+    r = peg_column_r(bore)
     t0 = seat - PEG_COLUMN_WALL
     port = np.asarray(link, float).copy()
     for _ in range(100):

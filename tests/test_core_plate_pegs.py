@@ -20,7 +20,8 @@ from presets import preset_spec
 from cogniframe import frame as frame_mod
 from cogniframe import partlist
 from cogniframe.errors import UserError
-from cogniframe.parts.peg_plan import PEG_SNAP, peg_axes, pegged_plan
+from cogniframe.frame import PEG_SNAP
+from cogniframe.parts.peg_plan import peg_axes, pegged_plan
 
 PRESETS = ("carbon", "bamboo")
 R_BORE, WALL, PEG_LEN = 3.4, 1.2, 9.0  # the authors' MainBase bore and the connector's peg; three 0.4 mm lines

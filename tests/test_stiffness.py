@@ -32,6 +32,11 @@ def _variant(base: str = "carbon", **sections) -> spec_mod.Spec:
     return spec_mod.from_dict(data)
 
 
+def _tab(base: str = "carbon", **sections) -> spec_mod.Spec:
+    """The preset with the bolted tab link: the closed-form (analytic) joints have no pegged link."""
+    return _variant(base, **{**sections, "core": {**sections.get("core", {}), "link": "tab"}})
+
+
 def _design(s):
     f = frame_mod.frame_of(s)
     return s, f, partlist.part_list(s, f)
@@ -176,22 +181,22 @@ def test_parallel_joint_fe_equals_serial(tmp_path, monkeypatch):
     ("hinge_thickness", 0.8, 1.6),  # thicker living hinge
 ])
 def test_k_rises_with_socket_depth_wall_and_hinge(key, lo, hi):
-    assert _k(_variant(joints={key: hi})) > _k(_variant(joints={key: lo}))
+    assert _k(_tab(joints={key: hi})) > _k(_tab(joints={key: lo}))
 
 
 def test_looser_fit_lowers_k():
     # the fit's play is a secant compliance at the design drop's force (stiffness.play_springs)
     def k(c):
-        s, f, p = _design(_variant(joints={"fit_clearance": {"tpu_95a": c}}))
+        s, f, p = _design(_tab(joints={"fit_clearance": {"tpu_95a": c}}))
         return st.secant_k(s, f, p, st.joint_models(s, p, "analytic"))
     assert k(0.3) < k(0.2) < k(0.1)
     assert k(-0.05) > k(0.1)  # an interference fit has no play
 
 
 def test_stiffer_and_thicker_rods_raise_k():
-    assert _k(_variant(rods={"material": "carbon_rod"})) > _k(_variant(rods={"material": "bamboo"}))
-    assert _k(_variant(rods={"diameter": 4.0}, joints={"wall": 1.6, "socket_depth": 8})) > \
-        _k(_variant(rods={"diameter": 3.0}, joints={"wall": 1.6, "socket_depth": 8}))
+    assert _k(_tab(rods={"material": "carbon_rod"})) > _k(_tab(rods={"material": "bamboo"}))
+    assert _k(_tab(rods={"diameter": 4.0}, joints={"wall": 1.6, "socket_depth": 8})) > \
+        _k(_tab(rods={"diameter": 3.0}, joints={"wall": 1.6, "socket_depth": 8}))
 
 
 def test_removing_the_struts_lowers_k_fe(carbon_fe):
@@ -212,7 +217,7 @@ def _first_mode(s, method="analytic") -> float:
     (SOFT_RODS, {"rods": {"material": "carbon_rod"}}),
 ])
 def test_first_mode_rises_with_depth_wall_hinge_and_rod_stiffness(sections_lo, sections_hi):
-    assert _first_mode(_variant(**sections_hi)) > _first_mode(_variant(**sections_lo))
+    assert _first_mode(_tab(**sections_hi)) > _first_mode(_tab(**sections_lo))
 
 
 def test_analytic_and_fe_joints_agree_on_k_within_a_factor_2(carbon_fe):
@@ -220,7 +225,7 @@ def test_analytic_and_fe_joints_agree_on_k_within_a_factor_2(carbon_fe):
     # bending and the sleeve as a plain tube in tension (docs/stiffness-model.md gives the ratios:
     # carbon +3 %, bamboo -43 %; their modes are ~4x too high)
     for base in ("carbon", "bamboo"):
-        s, f, p = _design(spec_mod.load(ROOT / "params" / f"{base}.yaml"))
+        s, f, p = _design(_tab(base))
         fe = st.predict_stiffness(s, f, p).k_n_per_m
         an = st.predict_stiffness(s, f, p, joint_model="analytic").k_n_per_m
         assert fe / 2 < an < fe * 2, base
@@ -237,7 +242,7 @@ def carbon_cases(carbon_fe):
 def test_play_springs_vanish_for_an_interference_fit(carbon_fe):
     s, f, p, joints = carbon_fe
     assert s.fit_clearance < 0 and st.play_springs(s, f, p, joints, 95.0) == {}  # the preset's press fit
-    ls, lf, lp = _design(_variant(joints={"fit_clearance": {"tpu_95a": 0.10}}))
+    ls, lf, lp = _design(_tab(joints={"fit_clearance": {"tpu_95a": 0.10}}))
     assert st.play_springs(ls, lf, lp, st.joint_models(ls, lp, "analytic"), 95.0)
 
 
@@ -293,7 +298,7 @@ def test_cached_k_key_follows_the_materials_library(monkeypatch):
 
 
 def test_a_joint_the_mesher_cannot_handle_falls_back_to_closed_forms(monkeypatch):
-    s, f, p = _design(spec_mod.load(CARBON))
+    s, f, p = _design(_tab())  # the pegged link has no closed form to fall back on
 
     def broken(*a, **k):
         raise RuntimeError("gmsh could not mesh joint")
@@ -309,6 +314,7 @@ def test_a_joint_the_mesher_cannot_handle_falls_back_to_closed_forms(monkeypatch
 def _data(**dotted) -> dict:
     data = copy.deepcopy(yaml.safe_load(CARBON.read_text(encoding="utf-8")))
     data.setdefault("model", {})["stiffness_model"] = "analytic"
+    data["core"]["link"] = "tab"  # the closed forms' link
     for key, v in dotted.items():
         node = data
         *path, last = key.split("__")
@@ -418,7 +424,7 @@ def _fake_fe(calls):
 
 
 def test_reflection_maps_the_core_link_onto_its_mirror_by_geometry_not_order():
-    s, f, p = _design(spec_mod.load(CARBON))
+    s, f, p = _design(_tab())
     o, m = _mirror_pair(p)
     P, order = mirror.reflection(o, m)
     # fl -> fr: x -> -x; the mirror swaps the two arms (its arm 1 is the image of arm 2)
@@ -442,7 +448,7 @@ def test_reflected_closed_form_joint_equals_the_closed_forms_of_the_mirror_exact
     # Benchmark without a mesh: the closed forms of the mirror part itself. Rotations are
     # pseudo-vectors (det(P) P); taking them as vectors (P) was off by 18 % (largest term).
     for preset in ("carbon", "bamboo"):
-        s, f, p = _design(spec_mod.load(ROOT / "params" / f"{preset}.yaml"))
+        s, f, p = _design(_tab(preset))
         o, m = _mirror_pair(p)
         P, order = mirror.reflection(o, m)
         a, b = JS.analytic_joint(s, o), JS.analytic_joint(s, m)

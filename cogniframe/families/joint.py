@@ -592,7 +592,7 @@ def _disc_band(r: float, lo: float, hi: float) -> float:
 def _pegged_link_estimate(spec: Spec, sockets: list[Socket], params: dict) -> Estimate:
     """Closed form of the pegged core link (parts/joint_solid.py `_core_link_pegged`), in print
     orientation (the arms' direction up, the pegs' ends on the bed): per peg a peg and a column
-    (cylinders: one cylinder where their diameters are within `PEG_SNAP`), the arch (a box from
+    (cylinders: one cylinder where their diameters are within frame.PEG_SNAP), the arch (a box from
     axis to axis, less the half columns inside it and its opening; the crown's block), the strut's sleeve (a cylinder, less its part
     inside the arch: `PegStrut.overlap`), less the bores. Where the two arm ports' along-arm
     heights differ by rounding only, the columns stand level (`STACK_SNAP_MM`)."""
@@ -610,13 +610,11 @@ def _pegged_link_estimate(spec: Spec, sockets: list[Socket], params: dict) -> Es
     a_h += 2 * (pl.spacing - 2 * pl.col_r) * depth
     a_v += 2 * (pl.spacing - 2 * pl.col_r) * arch_len
     if pl.opening is not None:
-        # the opening through the arch's depth: its floor's area goes, its roof's and its two 45 deg
-        # sides' (each projected once up and once across) come
+        # the opening through the arch's depth: its floor's area goes, its roof's and its two sides'
+        # (each projected once up and once across) come: up, the roof and sides span the floor
         o = pl.opening
-        rise = o.z1 - o.z0
         vol -= o.area * depth
-        a_h += (2 * o.top_half - 2 * o.half + 2 * rise) * depth
-        a_v += 2 * rise * depth
+        a_v += 2 * (o.z1 - o.z0) * depth
     if pl.block is not None:
         (bx0, by0, bz0), (bx1, by1, bz1) = pl.block
         vol += (bx1 - bx0) * (by1 - by0) * (bz1 - bz0)

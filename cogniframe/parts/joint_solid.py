@@ -503,7 +503,7 @@ def _core_link_pegged(part: PartSpec, socks: list[PSocket]):
     pieces = []
     for c in pl.columns:
         x, y = float(c.axis[0]), float(c.axis[1])
-        if pl.peg_r == c.col_r:  # one cylinder (within parts/peg_plan.py `PEG_SNAP`)
+        if pl.peg_r == c.col_r:  # one cylinder (frame.py `peg_column_r`)
             pieces.append(cylinder((x, y, c.peg0), (0, 0, 1), c.col1 - c.peg0, c.col_r))
         else:
             pieces += [cylinder((x, y, c.peg0), (0, 0, 1), c.col0 - c.peg0, pl.peg_r),

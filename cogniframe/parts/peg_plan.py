@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..frame import PEG_ARCH_LIFT, PEG_SLEEVE_FLOOR
+from ..frame import PEG_ARCH_LIFT, PEG_SLEEVE_FLOOR, peg_column_r
 from .record import PARALLEL_TOL, PartSpec
 
 # The authors' connector: per arm socket a TPU column round the socket with a solid peg beyond its
@@ -20,7 +20,6 @@ from .record import PARALLEL_TOL, PartSpec
 # the arm pegs, and the arch reaches down the columns to hold the sleeve's back end. It prints
 # standing: the arms' direction up, the pegs' ends on the bed (families/joint.py `PEGS` has the
 # dimensions).
-PEG_SNAP = 0.2  # mm: a peg and its column closer than this in diameter are one cylinder, the peg's (no sliver shoulder)
 STACK_SNAP_MM = 1e-3  # mm: the most the two columns are moved to stand level (rounding noise is ~1e-5)
 ARCH_CLEAR = 0.2  # mm: the arch's depth never within this of the column's diameter (no tangent faces)
 ARCH_WEB = 0.5  # mm: the arch's underside between a column and the opening (the opening touches no column)
@@ -70,7 +69,7 @@ class PegStrut:
 class ArchOpening:
     """The opening under the arch's crown, through its depth (print y): a trapezoid in print x, z
     centred at `x`, `half` wide each side at its floor `z0` (the arch's underside), its sides at
-    45 deg up to its roof `z1`, `top_half` wide each side (0: an apex)."""
+    45 deg or steeper up to its roof `z1`, `top_half` wide each side (0: an apex)."""
 
     x: float
     half: float
@@ -82,11 +81,17 @@ class ArchOpening:
         """Its corners (x, z) counter-clockwise, the floor `below` lower (a cutter's overshoot,
         the sides carried on down)."""
         x, h, th = self.x, self.half, self.top_half
-        return [(x - h - below, self.z0 - below), (x + h + below, self.z0 - below), (x + th, self.z1), (x - th, self.z1)]
+        floor = [(x - h - below, self.z0 - below), (x + h + below, self.z0 - below)]
+        return floor + ([(x, self.z1)] if th == 0 else [(x + th, self.z1), (x - th, self.z1)])
 
     @property
     def area(self) -> float:
         return (self.half + self.top_half) * (self.z1 - self.z0)
+
+    def contains(self, x, z):
+        """Whether print points (x, z) lie inside (arrays)."""
+        slope = (self.half - self.top_half) / (self.z1 - self.z0)
+        return (z > self.z0) & (z < self.z1) & (np.abs(x - self.x) < self.half - slope * (z - self.z0))
 
 
 @dataclass(frozen=True, eq=False)
@@ -122,12 +127,9 @@ def pegged_plan(sockets, params: dict) -> PeggedPlan:
     rot = np.vstack([lat, np.cross(d, lat), d])
     peg_len = float(params["peg_len"])
     gap = float(params["peg_gap"])
-    col_r = sockets[arms[0]].bore / 2 + float(params["column_wall"])
     peg_r = float(params["peg_d"]) / 2
-    if abs(peg_r - col_r) < PEG_SNAP / 2:
-        # the column takes the peg's radius: the peg is the core's bore (frame.PEG_D, the press fit
-        # the plate's tubes and frame.peg_drop are made for); the column's wall moves by under 0.1 mm
-        col_r = peg_r
+    # one rule with the frame, which places the strut's sleeve by it
+    col_r = peg_column_r(sockets[arms[0]].bore, float(params["column_wall"]), float(params["peg_d"]))
     z_end = float(ports[0] @ d) + sockets[arms[0]].seat - gap - peg_len
     shift = np.array([0.0, 0.0, -z_end])
     cols = []
@@ -153,8 +155,15 @@ def pegged_plan(sockets, params: dict) -> PeggedPlan:
     # from each column (a web there: the opening touches no column), to a flat roof at the crown
     # (a bridge, as the authors print theirs), or to an apex below it where the span is short
     half = (x1 - x0) / 2 - col_r - ARCH_WEB
-    rise = min(crown - arch_lo, half)
-    opening = ArchOpening((x0 + x1) / 2, half, half - rise, arch_lo, arch_lo + rise) if rise > ARCH_WEB else None
+    rise = crown - arch_lo
+    if half <= rise:  # the 45 deg sides meet below the crown: an apex
+        opening = ArchOpening((x0 + x1) / 2, half, 0.0, arch_lo, arch_lo + half)
+    elif half - rise < ARCH_WEB:  # a roof narrower than a web: an apex at the crown, the sides steeper
+        opening = ArchOpening((x0 + x1) / 2, half, 0.0, arch_lo, crown)
+    else:
+        opening = ArchOpening((x0 + x1) / 2, half, half - rise, arch_lo, crown)
+    if min(half, rise) <= ARCH_WEB:
+        opening = None
     # each strut's sleeve: its back end's disc lies in the crown (frame.py `pegged_strut_port`), the
     # arch deep enough across the pair to hold the disc seen from above
     sleeves = []
@@ -252,8 +261,6 @@ def _sleeve_in_arch(p0, d, t0: float, t1: float, r: float, box, opening, block, 
         blo, bhi = (np.asarray(v, float)[:, None] for v in block)
         inside |= np.all((pts >= blo) & (pts <= bhi), axis=0)
     if opening is not None:
-        o = opening
-        in_open = (pts[2] > o.z0) & (pts[2] < o.z1) & (np.abs(pts[0] - o.x) < o.half - (pts[2] - o.z0))
-        inside &= ~in_open
+        inside &= ~opening.contains(pts[0], pts[2])
     w = P.ravel() * (r / nr) * (2 * math.pi / n) * ((t1 - t0) / n)
     return float(w[inside].sum())
