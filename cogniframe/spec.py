@@ -115,7 +115,7 @@ class CoreSection(_M):
     strap_width: Annotated[float, Field(ge=5, le=30, description="hook-and-loop battery strap width, mm: sets the strap slots at the holder mouth")] = 10
     camera: CameraSection | None = Field(None, description="camera bracket at the front of the core (needs a components line with vitamin: pi_camera_v2)")
     flow_sensor: FlowSensorSection | None = Field(None, description="downward optical-flow + ToF board behind the holder (needs a components line with vitamin: matek_3901_l0x)")
-    link: Literal["tab", "pegs"] = Field("tab", description="how each arm's rod pair joins the core plate: tab = a flat TPU link bolted on the plate corner; pegs = the authors' connector, one TPU peg per arm rod and one for the strut pressed into ABS tubes on the core plate (level arms only)")
+    link: Literal["tab", "pegs"] = Field("tab", description="how each arm's rod pair joins the core plate: pegs (the presets) = the authors' connector, one TPU peg per arm rod pressed into an ABS tube on the core plate, the strut on the link's arch (level arms only); tab = a flat TPU link bolted on the plate corner")
 
 
 class MotorsSection(_M):

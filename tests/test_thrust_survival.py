@@ -321,10 +321,11 @@ def test_socket_push_pull_solid_fe_is_interface_and_sleeve_shear_in_series():
 
 @pytest.mark.parametrize("name", PRESETS)
 def test_arms_only_compliance_is_all_in_the_core_link(checked, name):
-    """Taken apart: rigid rods leave the bare arms' motor deflection within 2 %; the core links'
-    closed forms (rigid hub on Hetenyi sockets) instead of their solid FE make it 50x smaller
-    (carbon 118x, bamboo 60x); every other joint in closed forms changes nothing. The core link's
-    FE is nearly the whole of it."""
+    """Taken apart: rigid rods leave the bare arms' motor deflection within 5 % (carbon 0.5 %,
+    bamboo 3.8 %); the core links' super-elements made 1000x stiffer make it 20x smaller (carbon
+    170x, bamboo 26x); every other joint made 1000x stiffer changes nothing. The core link's FE
+    is nearly the whole of it."""
+    from cogniframe.analysis.joints.model import JointStiffness
     from cogniframe.analysis.stiffness import _drop_unconnected, build_model, joint_models
     from cogniframe.design import design
 
@@ -347,14 +348,17 @@ def test_arms_only_compliance_is_all_in_the_core_link(checked, name):
         u = ff.solve(K, f, _drop_unconnected(K, fixed))
         return float(np.mean([u[6 * idx[m] + 2] for m in mdl.motors]))
 
-    fe, an = joint_models(spec, d.parts, "fe"), joint_models(spec, d.parts, "analytic")
+    def stiffer(u):
+        return JointStiffness(u.name, u.method, u.labels, u.refs, tuple(map(tuple, (1e3 * u.matrix).tolist())), u.n_dofs)
+
+    fe = joint_models(spec, d.parts, "fe")
     links = [n for n in fe if n.startswith("core_link")]
     base = deflection(fe)
     # check's figure includes the fit's play (2-3 % of it); this model has none
     assert base == pytest.approx(checked[name]["stiffness"]["thrust"]["arms_only_motor_deflection_mm_per_n"], rel=0.04)
-    assert deflection(fe, rigid_rods=True) == pytest.approx(base, rel=0.02)
-    assert deflection({**fe, **{n: an[n] for n in links}}) < base / 50
-    assert deflection({**an, **{n: fe[n] for n in links}}) == pytest.approx(base, rel=1e-3)
+    assert deflection(fe, rigid_rods=True) == pytest.approx(base, rel=0.05)
+    assert deflection({**fe, **{n: stiffer(fe[n]) for n in links}}) < base / 20
+    assert deflection({**{n: stiffer(u) for n, u in fe.items()}, **{n: fe[n] for n in links}}) == pytest.approx(base, rel=1e-3)
 
 
 def test_report_says_what_breaks_first_with_every_margin(tmp_path):
