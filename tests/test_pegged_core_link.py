@@ -61,7 +61,7 @@ def test_the_closed_form_is_the_connectors_cylinders_arch_and_strut_by_hand():
     sides from 0.5 mm inside each column, 8.775 mm each side, up to the crown 3 mm under the mouths:
     4.8 mm; its roof 3.975 each side); the strut's sleeve (r 3.225, 9.8 mm) less its part in the
     arch, taken from the plan; the crown's block under the sleeve; less three sockets."""
-    from cogniframe.parts.peg_plan import pegged_plan
+    from cogniframe.parts.peg_plan import pegged_plan, sleeve_in_arch
 
     p = _links(_pegs_spec())["core_link"]
     plan = pegged_plan(p.sockets, dict(p.params))
@@ -72,7 +72,7 @@ def test_the_closed_form_is_the_connectors_cylinders_arch_and_strut_by_hand():
     assert (plan.arch_lo, plan.arch_hi) == pytest.approx((9.5, 17.3))
     o = plan.opening
     assert (o.half, o.top_half, o.z0, o.z1) == pytest.approx((8.775, 3.975, 9.5, 14.3))
-    overlap = plan.struts[0].overlap
+    overlap = sleeve_in_arch(plan, plan.struts[0])
     assert 0 < overlap < math.pi * rc**2 * 9.8
     depth = 6.7
     # the crown's block: the sleeve's width and ARCH_CLEAR, the arch's depth, from the mouths to 0.5

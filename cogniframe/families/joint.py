@@ -41,7 +41,7 @@ from ..parts.joint_plan import (
     seat_plan,
 )
 from ..spec import Spec
-from ..parts.peg_plan import pegged_plan
+from ..parts.peg_plan import pegged_plan, sleeve_in_arch
 from ..parts.record import Estimate, HardwareLine, PartSpec, Placement, Socket
 from .base import CORNER_ROTATION, FIT_TOL, link_hole, polygon_area, rot_z, rounded
 
@@ -594,7 +594,7 @@ def _pegged_link_estimate(spec: Spec, sockets: list[Socket], params: dict) -> Es
     orientation (the arms' direction up, the pegs' ends on the bed): per peg a peg and a column
     (cylinders: one cylinder where their diameters are within frame.PEG_SNAP), the arch (a box from
     axis to axis, less the half columns inside it and its opening; the crown's block), the strut's sleeve (a cylinder, less its part
-    inside the arch: `PegStrut.overlap`), less the bores. Where the two arm ports' along-arm
+    inside the arch: `peg_plan.sleeve_in_arch`), less the bores. Where the two arm ports' along-arm
     heights differ by rounding only, the columns stand level (`STACK_SNAP_MM`)."""
     pl = pegged_plan(sockets, params)
     hole = math.pi / 4 * spec.bore**2
@@ -622,7 +622,7 @@ def _pegged_link_estimate(spec: Spec, sockets: list[Socket], params: dict) -> Es
         a_v += 2 * ((bx1 - bx0) + (by1 - by0)) * (bz1 - bz0)
     for st in pl.struts:
         n = st.end - st.start
-        vol += math.pi * pl.col_r**2 * n - st.overlap
+        vol += math.pi * pl.col_r**2 * n - sleeve_in_arch(pl, st)
         sin_t = math.sqrt(max(0.0, 1 - st.lean_cos**2))
         a_h += 2 * math.pi * pl.col_r * n * sin_t
         a_v += 2 * math.pi * pl.col_r * n * st.lean_cos

@@ -53,14 +53,12 @@ class PegColumn:
 class PegStrut:
     """The strut's sleeve: a cylinder of the columns' radius along its socket from `start` to
     `end` (along it from the port), `lean_cos` = its direction . up in print; its back end lies in
-    the arch, the rest leans out of it. `overlap`: the sleeve's volume inside the arch (mm^3);
-    `back`, `mouth`: its axis's ends in print (mm)."""
+    the arch, the rest leans out of it. `back`, `mouth`: its axis's ends in print (mm)."""
 
     index: int
     start: float
     end: float
     lean_cos: float
-    overlap: float
     back: tuple[float, float, float]
     mouth: tuple[float, float, float]
 
@@ -182,7 +180,6 @@ def pegged_plan(sockets, params: dict) -> PeggedPlan:
     if abs(h - col_r) < ARCH_CLEAR / 2:
         h = col_r + ARCH_CLEAR / 2
     arch_n = (y_c - h, y_c + h)
-    box = ((x0, arch_n[0], arch_lo), (x1, arch_n[1], arch_hi))
     # the crown's block: the strut's back-end disc leans up past the mouths' plane, so the crown
     # rises under it, as the authors' does under their third column, to PEG_SLEEVE_FLOOR over the
     # disc's top: no part of the disc faces the bed unsupported
@@ -200,8 +197,7 @@ def pegged_plan(sockets, params: dict) -> PeggedPlan:
     for i, ds, t0, t1, back, spread in sleeves:
         p0 = back - ds * t0
         mouth = p0 + ds * t1
-        struts.append(PegStrut(i, t0, t1, float(ds[2]), _sleeve_in_arch(p0, ds, t0, t1, col_r, box, opening, block),
-                               tuple(map(float, back)), tuple(map(float, mouth))))
+        struts.append(PegStrut(i, t0, t1, float(ds[2]), tuple(map(float, back)), tuple(map(float, mouth))))
         lo = [min(a, float(c)) for a, c in zip(lo, np.minimum(back - spread, mouth - spread))]
         hi = [max(a, float(c)) for a, c in zip(hi, np.maximum(back + spread, mouth + spread))]
     if block is not None:
@@ -241,11 +237,21 @@ def _frame_of(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return a, np.cross(d, a)
 
 
+def sleeve_in_arch(pl: PeggedPlan, st: PegStrut, n: int = 96) -> float:
+    """The strut sleeve's volume inside the arch (its box less the opening, and the crown's block),
+    mm^3: the midpoint rule in the sleeve's coordinates (n steps along and round it, n / 3 across
+    its radius: ~0.1 % of the volume). Only the closed form needs it, so the plan does not carry it."""
+    back, mouth = np.asarray(st.back, float), np.asarray(st.mouth, float)
+    d = (mouth - back) / np.linalg.norm(mouth - back)
+    p0 = back - d * st.start
+    (x0, x1), (n0, n1) = pl.arch_x, pl.arch_n
+    box = ((x0, n0, pl.arch_lo), (x1, n1, pl.arch_hi))
+    return _sleeve_in_arch(p0, d, st.start, st.end, pl.col_r, box, pl.opening, pl.block, n)
+
+
 def _sleeve_in_arch(p0, d, t0: float, t1: float, r: float, box, opening, block, n: int = 96) -> float:
-    """The strut sleeve's (radius `r` along unit `d` from p0 + d t0 to p0 + d t1) volume inside
-    the arch (the box lo..hi less its `ArchOpening`, and the crown's block lo..hi), mm^3: the
-    midpoint rule in the sleeve's coordinates (n steps along and round it, n / 3 across its
-    radius: ~0.1 % of the volume)."""
+    """`sleeve_in_arch` for a sleeve of radius `r` along unit `d` from p0 + d t0 to p0 + d t1, the
+    box lo..hi, the `ArchOpening` and the block (lo, hi) or None."""
     d = np.asarray(d, float)
     a, b = _frame_of(d)
     nr = max(4, n // 3)
