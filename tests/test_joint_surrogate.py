@@ -92,6 +92,9 @@ def test_holdout_set_is_of_designs_the_fit_never_saw():
     assert len(HOLDOUT["designs"]) >= 12
     trained = json.loads(sg.DATA_FILE.read_text())["meta"]
     assert trained["train_designs"] >= 96
+    # frame k is the held-out figure the calibration moves: its stored values are at today's factor
+    # (after a new calibration: tools/train_joint_surrogate.py --refresh-k)
+    assert meta["tpu_factor"] == TPU_PRINTED_MODULUS_FACTOR
 
 
 # The corners are fitted to the joint level. The knee's living hinge and the flat link's bands make

@@ -289,26 +289,26 @@ def test_the_pegged_link_prints_with_no_support(preset, tmp_path):
     assert area_r == pytest.approx(2 * o.top_half * (plan.arch_n[1] - plan.arch_n[0]), rel=0.1)
 
 
-def test_surrogate_leaves_the_pegged_link_to_the_fe_and_says_so():
-    """The pegged link is its own surrogate family (`family_of`), which the shipped fit does not
-    hold yet: a pegged link (and its mirror, which follows its original) is solved by the FE, and
-    `check` notes it."""
-    from cogniframe.analysis.joints import surrogate as sg
-    from cogniframe.analysis.joints import surrogate_notes
+def test_surrogate_holds_the_pegged_link_in_its_own_family():
+    """The pegged link is its own surrogate family (`family_of`), trained on the pegged carbon
+    preset (tools/train_joint_surrogate.py --family core_link_pegs --core-link pegs): both pegged
+    presets' joints are inside the shipped fit's box and predicted by it, the mirror reflected from
+    its original; the tab link keeps its own family."""
+    import json
 
-    spec = _pegs_spec()
-    parts = [p for p in design_mod.design(spec).parts if p.family == "joint"]
-    why = sg.outside_reasons(spec, parts)
-    assert why["core_link"] == "no surrogate for core_link_pegs joints"
-    assert why["core_link_mirrored"] == "its original core_link is outside"
-    link = next(p for p in parts if p.name == "core_link")
-    assert sg.family_of(link) == "core_link_pegs"
-    assert sg.predict(spec, link) == (None, why["core_link"])
-    notes = surrogate_notes(spec, parts)
-    assert any(n.startswith("joint core_link:") and "core_link_pegs" in n and "solid FE" in n for n in notes)
-    # the tab link stays inside (the presets' joints are in the training box)
-    tab = [p for p in design_mod.design(preset_spec("carbon")).parts if p.family == "joint"]
-    assert not [n for n in sg.outside_reasons(preset_spec("carbon"), tab) if "core_link" in n]
+    from cogniframe.analysis.joints import surrogate as sg
+    from cogniframe.analysis.joints import surrogate_models
+
+    meta = json.loads(sg.DATA_FILE.read_text())["meta"]["families"]
+    assert meta["core_link_pegs"]["core_link"] == "pegs" and meta["core_link"]["core_link"] == "tab"
+    for name in ("carbon", "bamboo"):
+        spec = preset_spec(name)
+        parts = [p for p in design_mod.design(spec).parts if p.family == "joint"]
+        assert sg.outside_reasons(spec, parts) == {}
+        link = next(p for p in parts if p.name == "core_link")
+        assert sg.family_of(link) == "core_link_pegs"
+        assert {u.method for u in surrogate_models(spec, parts).values()} == {"surrogate"}
+    tab = [p for p in design_mod.design(preset_spec("carbon", core__link="tab")).parts if p.family == "joint"]
     assert {sg.family_of(p) for p in tab} == {"corner_top", "corner_bottom", "knee", "core_link"}
 
 

@@ -4,6 +4,7 @@
     python tools/train_joint_surrogate.py [--work DIR] [--train 96] [--holdout 16] [--seed 26]
                                           [--jobs 2] [--scheduler ADDR] [--core-link tab|pegs]
                                           [--family NAME ...] [--data FILE] [--holdout-file FILE]
+    python tools/train_joint_surrogate.py --refresh-k
 
 1. Design of experiments: a Latin hypercube (scipy.stats.qmc, fixed seed) over the design box
    `BOX` around the carbon preset -- everything that shapes a joint: rod diameter, wall, socket
@@ -31,6 +32,11 @@ its held-out joints' FE and errors, and the frame k it gives with the other join
 surrogate (they are not solved). A family's DOE solves one joint per design, not four:
 
     python tools/train_joint_surrogate.py --family core_link_pegs --core-link pegs --train 192
+
+`--refresh-k` only recomputes every held-out design's frame k (the full run's and each family
+section's) at the package's TPU factor, from the stored FE matrices and the shipped fit: frame k
+is the one held-out figure that depends on the factor, so after a new calibration this is all that
+needs to run (the file records the factor it was computed at, and a test holds it to the package's).
 
 The package's sha256 pin (`surrogate.DATA_SHA256`) is rewritten only when `--data` is the package's
 data file: a copy elsewhere (the tests') leaves the package as it is.
@@ -401,12 +407,47 @@ def refresh_main(hd: dict, fams: dict, requested) -> None:
         fr["error"] = fr["k_surrogate"] / fr["k_fe"] - 1
 
 
+def refresh_k(hd: dict, data: Path | None = None) -> None:
+    """Every held-out design's frame k again, at the package's TPU factor, from its stored FE
+    matrices and the fit in `data` (no FE solved, nothing refitted): frame k is the one held-out
+    figure that depends on the factor, so a new calibration needs this and nothing else. Records
+    the factor in the file's meta."""
+    from cogniframe.analysis.joints import surrogate as sg
+    from cogniframe.analysis.joints.model import TPU_PRINTED_MODULUS_FACTOR, JointStiffness, tpu_moduli
+
+    fams = sg.families(data or sg.DATA_FILE)
+    link = hd["meta"].get("core_link", "tab")
+    for fr in hd["designs"]:
+        s, f, parts = design_parts(fr["overrides"], link)
+        by_name = {p.name: p for p in parts}
+        e = tpu_moduli(s, 1.0)[0]
+        fe = {n: unpacked(c) for n, c in fr["joints"].items()}
+        sur = {n: JointStiffness(n, "surrogate", u.labels, u.refs,
+                                 tuple(map(tuple, predicted(fams[sg.family_of(by_name[n])], s, by_name[n], u.labels, e).tolist())))
+               for n, u in fe.items()}
+        fr["k_fe"], fr["k_surrogate"] = frame_k(s, f, parts, fe), frame_k(s, f, parts, sur)
+        fr["error"] = fr["k_surrogate"] / fr["k_fe"] - 1
+    for kind, sec in hd.get("families", {}).items():
+        link = sec["meta"]["core_link"]
+        hold: list = [None] * sec["meta"]["holdout_designs"]
+        mine: dict = {}
+        for j in sec["joints"]:
+            s, _, parts = design_parts(j["overrides"], link)
+            p = next(p for p in parts if p.name == j["part"])
+            u = unpacked(j["fe"])
+            hold[j["design"]] = j["overrides"]
+            mine.setdefault((j["design"], kind), {})[p.name] = (u, predicted(fams[kind], s, p, u.labels, tpu_moduli(s, 1.0)[0]))
+        sec["designs"] = family_frames(hold, mine, kind, data or sg.DATA_FILE, link)
+    hd["meta"]["tpu_factor"] = TPU_PRINTED_MODULUS_FACTOR
+
+
 def fit_and_write(train: list[dict], hold: list[dict], work: Path, data_out: Path | None = None,
                   holdout_out: Path | None = None, core_link: str | None = None, fams=None, seed: int | None = None) -> int:
     """Fit, write the data file (pinning its sha256 when it is the package's) and the held-out file.
     With `fams` (family names) only those are fitted, from their joints alone, and merged into the
     existing files (`merge_data`, `merge_holdout`)."""
     from cogniframe.analysis.joints import surrogate as sg
+    from cogniframe.analysis.joints.model import TPU_PRINTED_MODULUS_FACTOR
 
     data_out = Path(data_out or sg.DATA_FILE)
     holdout_out = Path(holdout_out or ROOT / "tests" / "data" / "joint_surrogate_holdout.json")
@@ -460,6 +501,7 @@ def fit_and_write(train: list[dict], hold: list[dict], work: Path, data_out: Pat
                         "designs": family_frames(hold, mine, k, data_out, core_link)} for k in fams}
         hd = merge_holdout(json.loads(holdout_out.read_text()), sections, digest)
         refresh_main(hd, loaded, set(fams))
+        hd["meta"]["tpu_factor"] = TPU_PRINTED_MODULUS_FACTOR
         _report(per_joint, [fr for sec in sections.values() for fr in sec["designs"]])
         holdout_out.write_text(json.dumps(hd, sort_keys=True, separators=(",", ":")) + "\n")
         print(f"wrote {holdout_out}")
@@ -480,7 +522,7 @@ def fit_and_write(train: list[dict], hold: list[dict], work: Path, data_out: Pat
     _report(per_joint, frames)
     holdout_out.parent.mkdir(parents=True, exist_ok=True)
     hd = {"meta": {**{k: v for k, v in meta.items() if k != "families"}, "holdout_designs": len(hold),
-                   "data_sha256": digest}, "designs": frames,
+                   "data_sha256": digest, "tpu_factor": TPU_PRINTED_MODULUS_FACTOR}, "designs": frames,
           "joint_errors": per_joint}
     holdout_out.write_text(json.dumps(hd, sort_keys=True, separators=(",", ":")) + "\n")
     print(f"wrote {holdout_out}")
@@ -593,7 +635,18 @@ def main(argv=None) -> int:
     ap.add_argument("--data", type=Path, default=sg.DATA_FILE,
                     help="the data file to write (the package's, default, has its sha256 pinned in surrogate.py)")
     ap.add_argument("--holdout-file", type=Path, default=ROOT / "tests" / "data" / "joint_surrogate_holdout.json")
+    ap.add_argument("--refresh-k", action="store_true",
+                    help="only recompute the held-out frame k at the package's TPU factor (after a new calibration)")
     a = ap.parse_args(argv)
+    if a.refresh_k:
+        from cogniframe.analysis.numerics import one_blas_thread
+
+        hd = json.loads(a.holdout_file.read_text())
+        with one_blas_thread():
+            refresh_k(hd, a.data)
+        a.holdout_file.write_text(json.dumps(hd, sort_keys=True, separators=(",", ":")) + "\n")
+        print(f"wrote {a.holdout_file} (frame k at TPU factor {hd['meta']['tpu_factor']:g})")
+        return 0
     fams = tuple(sorted(set(a.family))) or None
     if fams is not None:
         why = refusal(a)
