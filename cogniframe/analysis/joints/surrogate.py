@@ -39,7 +39,7 @@ LENGTH_MM = 10.0  # rotations scaled by this length: translational and rotationa
 DATA_FILE = Path(__file__).resolve().parents[2] / "data" / "joint_surrogate.json"
 # sha256 of the data file this code was fitted with (written by the training tool): a different
 # file is refused, and retraining edits this line, so every cache key over the source changes too
-DATA_SHA256 = "dbf71dc59916111ace0710f6f87455e3cc917b01014cbf8937ad8a6cf63f41b5"
+DATA_SHA256 = "e5fa8c8075c5389608477b5aab966d3d411fde90ca988f8405857847998d6f91"
 _ABS_TOL = 1e-6  # a feature constant over the training set must equal it to this (mm, rad, ratios)
 _BOX_SLACK = 0.02  # a varying feature may exceed its sampled range by this share of it: the design box ends (a hypercube never samples them exactly)
 _IGNORED = {"hinge_thickness"}  # params a family's CAD does not read (the knee's hinge is a feature of knees only)
@@ -109,11 +109,17 @@ def features(spec, part) -> tuple[tuple[str, ...], np.ndarray]:
     d = float(spec.rods.diameter)
     names = ["log_rod_d", "log_interface_h", "log_wall", "nu"]
     vals = [math.log(d), math.log(itf.h), math.log(part.wall), e / (2 * g) - 1]
+    if dict(part.params).get("link") == "pegs":  # its columns' wall is the connector's own, not joints.wall
+        del names[2], vals[2]
     for i, s in enumerate(part.sockets):
         names += [f"s{i}_log_seat", f"s{i}_log_depth", f"s{i}_clearance", *(f"s{i}_dir_{a}" for a in "xyz"),
                   *(f"s{i}_port_{a}" for a in "xyz")]
         vals += [math.log(max(s.seat, 1e-3)), math.log(s.depth), s.bore - d, *map(float, s.direction), *map(float, s.port)]
     kind = joint_kind(part)
+    if dict(part.params).get("link") == "pegs":
+        n, v = _pegged_features(part)
+        names += n
+        vals += v
     for k, v in part.params:
         if k in ("kind", "mirror") or (k in _IGNORED and kind != "knee"):
             continue
@@ -130,6 +136,29 @@ def features(spec, part) -> tuple[tuple[str, ...], np.ndarray]:
             names.append(f"p_{k}={v}")
             vals.append(1.0)
     return tuple(names), np.array(vals, float)
+
+
+def _pegged_features(part) -> tuple[list[str], list[float]]:
+    """The pegged link's shape as its plan builds it (parts/peg_plan.py): the sizes its stiffness
+    follows as power laws (the arch's span, depth and height, the columns' length and radius, the
+    strut sleeve's length), the strut's lean, and the opening's and the crown block's extents,
+    which change the arch's section."""
+    from ...parts.peg_plan import pegged_plan
+
+    pl = pegged_plan(part.sockets, dict(part.params))
+    col = pl.columns[0]
+    names = ["g_log_span", "g_log_arch_depth", "g_log_arch_height", "g_log_col_len", "g_log_col_r"]
+    vals = [math.log(pl.spacing), math.log(pl.arch_n[1] - pl.arch_n[0]), math.log(pl.arch_hi - pl.arch_lo),
+            math.log(col.col_len), math.log(pl.col_r)]
+    o = pl.opening
+    names += ["g_open_half", "g_open_top_half", "g_open_rise"]
+    vals += [o.half, o.top_half, o.z1 - o.z0] if o is not None else [0.0, 0.0, 0.0]
+    names.append("g_block_h")
+    vals.append(pl.block[1][2] - pl.block[0][2] if pl.block is not None else 0.0)
+    for i, st in enumerate(pl.struts):
+        names += [f"g_strut{i}_lean_cos", f"g_strut{i}_log_len"]
+        vals += [st.lean_cos, math.log(st.end - st.start)]
+    return names, vals
 
 
 def socket_frame(direction) -> np.ndarray:
