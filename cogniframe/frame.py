@@ -370,15 +370,13 @@ PEG_COLUMN_WALL = 1.8  # mm
 PEG_GAP = 0.3  # mm
 # The link's arch, as the authors' connector has it: it joins the columns from their mouths down
 # to PEG_ARCH_LIFT above the pegs' shoulder (clear of the core plate's bars, which end in the
-# shoulder's plane), with a round opening under its crown, PEG_ARCH_LEN below the mouths (their
-# 2.8 mm crown under z 9 mouths). The strut hangs on the crown, as their third column does: its
-# sleeve's back end lies in it, the lowest point PEG_SLEEVE_FLOOR above the opening's top. No
-# face only touches another (OCC fuses no tangent faces).
+# shoulder's plane), with an opening under its crown, PEG_ARCH_LEN below the mouths (their 2.8 mm
+# crown under z 9 mouths). The strut hangs on the crown, as their third column does: its sleeve's
+# back end lies in it, the lowest point PEG_SLEEVE_FLOOR above the crown's underside. No face only
+# touches another (OCC fuses no tangent faces).
 PEG_ARCH_LEN = 3.0  # mm
 PEG_ARCH_LIFT = 0.5  # mm
 PEG_SLEEVE_FLOOR = 0.5  # mm
-
-
 PEG_SNAP = 0.2  # mm: a peg and its column closer than this in diameter are one cylinder, the peg's (no sliver shoulder)
 
 

@@ -137,7 +137,7 @@ def test_training_the_pegged_link_alone_keeps_the_other_families_and_adds_it(tmp
         assert json.dumps(new["families"][k], sort_keys=True) == json.dumps(old["families"][k], sort_keys=True)
     rec = new["meta"]["families"]
     assert rec["core_link_pegs"]["core_link"] == "pegs" and rec["core_link_pegs"]["train_designs"] == 4
-    assert {rec[k]["core_link"] for k in others} == {"tab"}
+    assert {k: rec[k] for k in others} == {k: old["meta"]["families"][k] for k in others}  # their records too
     fam = sg.families(tmp_path / "a" / "joint_surrogate.json")["core_link_pegs"]
     assert fam.n_train == 4 and fam.labels == ("rod_arm_fl_1", "rod_arm_fl_2", "rod_strut_fl", "body")
     # the held-out file: the full run's part as it was, the family's own section, the new digest
