@@ -26,3 +26,11 @@ def preset_doc(name: str, **changes) -> dict:
 
 def preset_spec(name: str = "carbon", **changes) -> spec_mod.Spec:
     return spec_mod.from_dict(preset_doc(name, **changes), f"{name}.yaml")
+
+
+def link_for(spacing: float) -> dict:
+    """The core link for a test at `spacing` mm between the arm rods: the presets' pegs, or the tab
+    below 14 mm, where the pegged link's strut sleeve has no room between its columns (refused,
+    naming core.link): tests of the mount or the knee at narrow pairs build them on the tab."""
+    return {"core__link": "tab"} if spacing < 14.0 else {}
+

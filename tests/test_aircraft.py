@@ -437,8 +437,8 @@ def test_thrust_to_weight_below_the_requirement_fails(run_cli, tmp_path):
 
 
 def test_a_build_with_a_clash_exits_1_naming_both_solids(run_cli, tmp_path, monkeypatch):
-    """Bamboo with its plate on the holder (level_arms false) and without its 2 mm spacer: the
-    core links sit on the battery holder's top edges again. The build runs the clash check, writes clash.json and FAILs (exit 1) with a
+    """Bamboo with its plate on the holder (level_arms false, the tab link) and without its 2 mm
+    spacer: the core links sit on the battery holder's top edges again. The build runs the clash check, writes clash.json and FAILs (exit 1) with a
     problem naming both solids. (Plates, slicing and renders are skipped: not what is tested.)"""
     import json
 
@@ -451,6 +451,7 @@ def test_a_build_with_a_clash_exits_1_naming_both_solids(run_cli, tmp_path, monk
     data = yaml.safe_load((ROOT / "params" / "bamboo.yaml").read_text())
     data["core"]["spacer_thickness"] = 0
     data["frame"]["level_arms"] = False
+    data["core"]["link"] = "tab"  # the pegs need level arms
     p = tmp_path / "nospacer.yaml"
     p.write_text(yaml.safe_dump(data))
     code, _, _ = run_cli("build", p, "-o", tmp_path / "out")

@@ -86,7 +86,8 @@ def test_with_values_changes_the_mass_and_not_the_original(carbon, carbon_check)
     assert r.mass_g == pytest.approx(carbon_check.mass_g + 12, abs=0.011)  # a 12 g heavier pack, nothing else
     assert r.verdict == "FAIL" and any("over the 250 g limit" in p for p in r.problems)
     # the issue's example: thicker rods and walls (screened with the analytic joints: milliseconds)
-    d = carbon.with_values({"rods.diameter": 4.0, "joints.wall": 1.6, "model.stiffness_model": "analytic"})
+    d = carbon.with_values({"rods.diameter": 4.0, "joints.wall": 1.6, "model.stiffness_model": "analytic",
+                            "core.link": "tab"})  # the closed forms' link
     assert (d.get("rods.diameter"), d.get("joints.wall")) == (4.0, 1.6)
     fast = d.check()
     assert fast.stiffness_model == "analytic" and fast.mass_g > carbon_check.mass_g + 5  # 4 mm rods weigh more
@@ -260,7 +261,8 @@ def test_repr_html_draws_the_design_offline(carbon, tmp_path):
 @pytest.mark.slow
 def test_sweep_from_a_dict_returns_a_dataframe(carbon):
     df = cf.sweep({"base": carbon, "samples": 3, "sampler": "lhs", "seed": 1,
-                   "set": {"model.stiffness_model": "analytic"}, "vary": {"rods.diameter": [2.4, 3.0]}}, workers=1)
+                   "set": {"model.stiffness_model": "analytic", "core.link": "tab"}, "vary": {"rods.diameter": [2.4, 3.0]}},
+                  workers=1)
     assert len(df) == 3 and set(df["verdict"]) <= {"PASS", "FAIL"}
     assert df["rods.diameter"].between(2.4, 3.0).all()
     assert (df["mass_g"] > 150).all() and df["rods.diameter"].is_unique

@@ -63,7 +63,7 @@ def test_fold_as_you_assemble_order_and_lengths():
     # glue: CA on the ring, never on the core links (the core stays removable)
     assert "CA" in by["Top ring"].glue and "CA" in by["Fold the sides"].glue
     assert by["Core"].glue.startswith("none") and by["Hang the core"].glue.startswith("none")
-    assert any("M2 x 12" in h for h in by["Core"].hardware)
+    assert not any("core link to plate" in h for h in by["Core"].hardware)  # the pegs press in: no link screw
     assert any("motor to mount" in h for h in by["Electronics"].hardware)
 
 

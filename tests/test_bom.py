@@ -54,9 +54,11 @@ def test_lines_cover_the_design(checked):
     threaded = [ln for ln in hw.values() if "screw" in ln.item or "standoff" in ln.item]
     assert all(ln.size.startswith("M") for ln in threaded)
     assert all(ln.size.endswith(" mm") for ln in hw.values() if ln not in threaded)  # strap, zip ties
-    # level arms: the plate stands on four standoffs as long as the gap the frame leaves for them
-    (stand,) = [ln for ln in hw.values() if "standoff, female-female" in ln.item]
-    assert stand.qty == 4 and stand.size == f"M2 x {d.frame.core.hang:g}"
+    # level arms: the plate stands on four standoffs as long as the gap the frame leaves for them,
+    # with pegs the rear two on the spacer's bar and the front two on the holder, the spacer longer
+    stand = sorted((ln for ln in hw.values() if "standoff, female-female" in ln.item), key=lambda ln: ln.size)
+    assert [ln.qty for ln in stand] == [2, 2]
+    assert [ln.size for ln in stand] == [f"M2 x {d.frame.core.hang:g}", f"M2 x {d.frame.core.hang + spec.core.spacer_thickness:g}"]
     (motor,) = [ln for ln in lines if ln.category == "motor"]
     assert motor.qty == 4 and motor.mass_g_each == spec.motor.mass_g
     (prop,) = [ln for ln in lines if ln.category == "propeller"]

@@ -168,7 +168,7 @@ def test_check_leaves_the_progress_log_as_it_found_it(run_cli, tmp_path):
 
     log = logging.getLogger("cogniframe.progress")
     before = (list(log.handlers), log.propagate, log.level)
-    p = _variant(tmp_path, "carbon", model={"stiffness_model": "analytic"})
+    p = _variant(tmp_path, "carbon", model={"stiffness_model": "analytic"}, core={"link": "tab"})
     code, out, _ = run_cli("check", p, "--json")
     assert code == 0 and json.loads(out)["verdict"] == "PASS"
     assert (list(log.handlers), log.propagate, log.level) == before

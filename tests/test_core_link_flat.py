@@ -20,8 +20,10 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _carbon(**frame) -> spec_mod.Spec:
+    """The carbon preset with the flat (tab) core link, `frame` keys changed."""
     data = yaml.safe_load((ROOT / "params" / "carbon.yaml").read_text(encoding="utf-8"))
     data["frame"].update(frame)
+    data["core"]["link"] = "tab"
     return spec_mod.from_dict(data)
 
 

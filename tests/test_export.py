@@ -112,13 +112,13 @@ def test_only_changed_parts_are_rebuilt(tmp_path, monkeypatch):
     build_mod.build_parts(spec2, fr2, parts2, tmp_path / "b", cache_dir=cache)
     assert rebuilt == []
     # frame width: the joints whose socket angles change (a rectangle's fr/rl copies become
-    # mirrored parts of their own), and only those
+    # mirrored parts of their own), and the core plate, whose peg tubes follow the links, and only those
     spec3, fr3, parts3 = _design(frame__width=230)
     build_mod.build_parts(spec3, fr3, parts3, tmp_path / "c", cache_dir=cache)
     before = {p.name: p.digest for p in parts}
     changed = {q.name for q in parts3 if before.get(q.name) != q.digest}
     assert set(rebuilt) == changed and changed
-    assert "core_plate" not in changed and "knee_mirrored" in changed
+    assert "core_plate" in changed and "knee_mirrored" in changed and "battery_holder" not in changed
 
 
 def test_assembly_has_every_part_copy_and_rod_named_and_coloured(tmp_path):

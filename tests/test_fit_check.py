@@ -112,7 +112,7 @@ def test_rectangle_example_passes_the_fit_check():
 def test_mount_keeps_the_pairs_that_clear_the_rods(spacing, holes):
     """The authors' rods 25 mm apart leave room for all four holes; 12 mm apart, the pair across the
     arm would cut the rods, so the mount carries the pair on the arm axis."""
-    spec = preset_spec("carbon", frame__arm_spacing=spacing)
+    spec = preset_spec("carbon", frame__arm_spacing=spacing, core__link="tab")  # the pegs need 14 mm
     fr, parts = _design(spec)
     mount = _mount(parts)
     assert len(mount.param("holes")) == holes
@@ -125,7 +125,7 @@ def test_mount_keeps_the_pairs_that_clear_the_rods(spacing, holes):
 @pytest.mark.parametrize("model", CLASSES)
 @pytest.mark.parametrize("spacing", [12.0, 25.0])
 def test_every_motor_class_fits_or_is_refused_on_arm_spacing(model, spacing):
-    spec = preset_spec("carbon", motors__model=model, frame__arm_spacing=spacing)
+    spec = preset_spec("carbon", motors__model=model, frame__arm_spacing=spacing, core__link="tab")  # the pegs need 14 mm
     try:
         fr, parts = _design(spec)
     except UserError as e:
@@ -136,7 +136,7 @@ def test_every_motor_class_fits_or_is_refused_on_arm_spacing(model, spacing):
 
 
 def test_too_narrow_arm_spacing_is_refused_with_the_key():
-    spec = preset_spec("carbon", frame__arm_spacing=8.0)
+    spec = preset_spec("carbon", frame__arm_spacing=8.0, core__link="tab")  # the mount's own refusal, not the pegs'
     with pytest.raises(UserError) as err:
         _design(spec)
     assert err.value.key == "frame.arm_spacing" and "frame.arm_spacing to at least" in str(err.value)
@@ -147,7 +147,7 @@ def test_too_narrow_arm_spacing_is_refused_with_the_key():
 def test_fails_a_hole_through_a_rod():
     """The carbon preset with its rods 12 mm apart, and the pair across the arm added back: those
     holes sit 1.5 mm from a rod's axis, inside its 3.2 mm bore."""
-    spec = preset_spec("carbon", frame__arm_spacing=12)
+    spec = preset_spec("carbon", frame__arm_spacing=12, core__link="tab")  # the pegs need 14 mm
     fr, parts = _design(spec)
     mount = _mount(parts)
     d0 = np.asarray(mount.param("arm_rods")[0][1], float)
@@ -242,7 +242,7 @@ def test_fit_failure_fails_the_verdict(monkeypatch):
     """The fit check's problems are the verdict's: a failing plan makes `check` FAIL, naming both parts."""
     from cogniframe.analysis import verdict
 
-    spec = preset_spec("carbon", model__stiffness_model="analytic")
+    spec = preset_spec("carbon", model__stiffness_model="analytic", core__link="tab")  # closed forms: the tab's
     from cogniframe.design import design
 
     d = design(spec)
@@ -322,7 +322,7 @@ def test_built_1104_mount_holes_are_4p5mm_from_the_axis_and_clear_the_rods(spaci
     the head's seat keep at least two extrusion lines of TPU to every rod bore."""
     from cogniframe.families import motor_mount
 
-    spec = preset_spec("carbon", frame__arm_spacing=spacing, joints__wall=wall)
+    spec = preset_spec("carbon", frame__arm_spacing=spacing, joints__wall=wall, core__link="tab")  # the pegs need 14 mm
     fr, parts = _design(spec)
     mount = _mount(parts)
     built = motor_mount.solid(mount)

@@ -100,6 +100,7 @@ def test_straight_sides_check_with_closed_form_joints(run_cli, tmp_path):
     data = yaml.safe_load((ROOT / "params" / "carbon.yaml").read_text(encoding="utf-8"))
     data["frame"]["knee_inset"] = 0
     data["model"]["stiffness_model"] = "analytic"
+    data["core"]["link"] = "tab"  # the closed forms' link
     data["name"] = "straight"
     path = tmp_path / "straight.yaml"
     path.write_text(yaml.safe_dump(data), encoding="utf-8")
@@ -290,7 +291,7 @@ def test_core_link_hub_top_clears_the_strut_sleeve(change):
     above the upper arm's axis): one of the two links' STL had a hole where the top face was."""
     from cogniframe.parts.joint_plan import TAB_CLEAR, map_sockets, print_from_local
 
-    for link in _parts(_variant("bamboo", **change), ["core_link", "core_link_mirrored"]):
+    for link in _parts(_variant("bamboo", core__link="tab", **change), ["core_link", "core_link_mirrored"]):
         built = _one_watertight_solid(link)
         socks = map_sockets(link, print_from_local(link))
         r = socks[0].bore / 2 + link.wall
@@ -314,7 +315,7 @@ def test_knee_web_top_clears_the_legs_top():
     )
 
     spec = _variant("carbon", frame__width=153.0, frame__depth=190.6, frame__height=168.2, motors__radius=59.7,
-                    motors__prop_diameter=55.5)
+                    motors__prop_diameter=55.5, core__link="tab")  # the pegs refuse a strut this steep
     for knee in _parts(spec, ["knee", "knee_mirrored"]):
         _one_watertight_solid(knee)
         socks = map_sockets(knee, print_from_local(knee))

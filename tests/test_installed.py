@@ -33,10 +33,11 @@ def test_a_build_from_the_installed_wheel_writes_the_whole_package(tmp_path):
     where = subprocess.run([sys.executable, "-c", "import cogniframe; print(cogniframe.__file__)"], cwd=tmp_path,
                            env=env, capture_output=True, text=True, check=True).stdout.strip()
     assert Path(where).is_relative_to(site), where  # the installed copy, not the checkout
-    # the carbon preset with closed-form joints: the build's own steps, without the joints' FE
+    # the carbon preset with closed-form joints (and the tab link they model): the build's own steps, without
+    # the joints' FE
     text = (ROOT / "params" / "carbon.yaml").read_text()
     params = tmp_path / "carbon.yaml"
-    params.write_text(text.replace("stiffness_model: fe", "stiffness_model: analytic"))
+    params.write_text(text.replace("stiffness_model: fe", "stiffness_model: analytic").replace("link: pegs", "link: tab"))
     assert "stiffness_model: analytic" in params.read_text()
     r = subprocess.run([sys.executable, "-m", "cogniframe", "build", str(params), "-o", str(tmp_path / "out")],
                        cwd=tmp_path, env=env, capture_output=True, text=True, timeout=900)

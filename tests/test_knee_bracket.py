@@ -11,7 +11,7 @@ import pytest
 
 from cogniframe import frame as frame_mod
 from cogniframe.families import joint as joint_family
-from presets import preset_spec
+from presets import link_for, preset_spec
 
 TPU_G_PER_MM3 = 1.22e-3  # TPU 95A, materials.py
 # The budget: the solid-block knee at 12 mm arm spacing, the carbon preset before the U
@@ -22,7 +22,7 @@ KNEE_12MM_BLOCK_MM3 = 1755.0
 def _knee(spacing: float, base: str = "carbon", **changes):
     """The knee part alone (the joint family's plan: below about 9 mm a 9x9 motor pattern refuses
     the whole design, but the knee must still build at the schema's floor)."""
-    spec = preset_spec(base, frame__arm_spacing=spacing, **changes)
+    spec = preset_spec(base, frame__arm_spacing=spacing, **{**link_for(spacing), **changes})
     return next(p for p in joint_family.plan(spec, frame_mod.frame_of(spec)) if p.name == "knee")
 
 

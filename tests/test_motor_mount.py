@@ -16,7 +16,7 @@ import pytest
 from cogniframe import frame as frame_mod
 from cogniframe import partlist
 from cogniframe.errors import UserError
-from presets import preset_spec
+from presets import link_for, preset_spec
 
 TPU_DENSITY = 1.22  # g/cm^3, materials.py tpu_95a
 
@@ -46,7 +46,7 @@ def _arm_angle(mount) -> float:
 def test_1104_mount_weighs_no_more_than_the_issue_allows(spacing, most_g):
     """At the authors' 25 mm: at most 1.6 g (their part 1.11 g); at 12 mm: no heavier than the
     square-plate mount (1.66 g). The CAD's volume and the closed form both."""
-    mount = _mount(preset_spec(frame__arm_spacing=spacing))
+    mount = _mount(preset_spec(frame__arm_spacing=spacing, **link_for(spacing)))
     built, mesh = _built(mount)
     cad_g = built.shape.Volume() * TPU_DENSITY / 1000
     assert cad_g <= most_g
@@ -60,11 +60,11 @@ def test_1104_mount_weighs_no_more_than_the_issue_allows(spacing, most_g):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("base, changes", [
-    ("carbon", {"frame__arm_spacing": 12.0}),
+    ("carbon", {"frame__arm_spacing": 12.0, "core__link": "tab"}),  # the pegs need 14 mm
     ("carbon", {"frame__arm_spacing": 16.0}),
     ("carbon", {"frame__arm_spacing": 25.0}),
     ("carbon", {"frame__arm_spacing": 30.0}),
-    ("carbon", {"frame__arm_spacing": 25.0, "frame__knee_height": 0.3, "frame__level_arms": False}),  # arms rising toward the core
+    ("carbon", {"frame__arm_spacing": 25.0, "frame__knee_height": 0.3, "frame__level_arms": False, "core__link": "tab"}),  # arms rising toward the core (the tab: pegs need level arms)
     ("bamboo", {"frame__arm_spacing": 25.0, "frame__knee_height": 0.38}),  # level arms
     ("carbon", {"frame__arm_spacing": 25.0, "motors__model": "1103"}),
     ("carbon", {"frame__arm_spacing": 25.0, "motors__model": "1505"}),
@@ -98,7 +98,7 @@ def test_four_holes_at_45_deg_to_the_arm_at_the_authors_spacing():
         assert math.hypot(x, y) == pytest.approx(4.5, abs=1e-5)
         assert (math.degrees(math.atan2(y, x)) - arm - 45.0) % 90.0 == pytest.approx(0.0, abs=1e-4) or \
             (math.degrees(math.atan2(y, x)) - arm - 45.0) % 90.0 == pytest.approx(90.0, abs=1e-4)
-    narrow = _mount(preset_spec(frame__arm_spacing=12.0))
+    narrow = _mount(preset_spec(frame__arm_spacing=12.0, core__link="tab"))
     assert narrow.param("pattern_turn") == 0.0 and len(narrow.param("holes")) == 2
     for x, y in narrow.param("holes"):
         assert (math.degrees(math.atan2(y, x)) - _arm_angle(narrow)) % 180.0 == pytest.approx(0.0, abs=1e-4) or \
@@ -109,7 +109,7 @@ def test_centre_hole_that_opens_into_a_rod_is_refused_with_the_key():
     """The 1408's 6 mm shaft boss needs a 7 mm hole; rods 9.5 mm apart would pass through it (the
     screw holes on the arm axis clear them). Refused on frame.arm_spacing; the spacing it names builds."""
     with pytest.raises(UserError) as err:
-        _mount(preset_spec(motors__model="1408", frame__arm_spacing=9.5))
+        _mount(preset_spec(motors__model="1408", frame__arm_spacing=9.5, core__link="tab"))
     assert err.value.key == "frame.arm_spacing"
     msg = str(err.value)
     assert "shaft boss" in msg and "7 mm hole" in msg
@@ -117,7 +117,7 @@ def test_centre_hole_that_opens_into_a_rod_is_refused_with_the_key():
     assert least == pytest.approx(7.0 + 3.2 + 4 * 0.4, abs=0.05)  # hole + the through-sleeve's bore + two lines each side
     from cogniframe.analysis.fit_check import plan_distance
 
-    mount = _mount(preset_spec(motors__model="1408", frame__arm_spacing=least))
+    mount = _mount(preset_spec(motors__model="1408", frame__arm_spacing=least, **link_for(least)))
     for p, d in mount.param("arm_rods"):
         assert plan_distance((0.0, 0.0), p, d) >= mount.param("shaft_hole") / 2 + 0.8 + 3.1 / 2 - 1e-6
 
@@ -149,7 +149,7 @@ def test_bridge_sag_and_twist_under_full_thrust_are_below_a_layer_PL3_over_12EI(
     from cogniframe.families.motor_mount import _span
     from cogniframe.analysis import rotors
 
-    spec = preset_spec(frame__arm_spacing=spacing)
+    spec = preset_spec(frame__arm_spacing=spacing, **link_for(spacing))
     mount = _mount(spec)
     rm = rotors.model(spec, 0.24)
     e_mpa = spec.material(mount.material).e_mpa
@@ -183,7 +183,7 @@ def test_level_arms_build_d_sleeves_that_print_flat(spacing):
     from cogniframe.export.mesh import overhangs
     from cogniframe.families import motor_mount as mm
 
-    spec = preset_spec(frame__arm_spacing=spacing)
+    spec = preset_spec(frame__arm_spacing=spacing, **link_for(spacing))
     m = _mount(spec)
     rods = tuple((p, tuple(np.round(np.array([d[0], d[1], 0.0]) / math.hypot(d[0], d[1]), 6)))
                  for p, d in m.param("arm_rods"))

@@ -108,7 +108,14 @@ def test_part_sits_flat_inside_the_bed(preset, name):
     assert flat_contact_ratio(m) >= 0.20
 
 
-@pytest.mark.parametrize("preset,name", CASES)
+# The pegged core link prints standing on its pegs with two overhangs the authors' connector has
+# too: the arch's first layer beside the columns and the bridge under its crown, 8 mm across, past
+# this check's 6 mm bridges. tests/test_pegged_core_link.py slices it layer by layer and allows
+# exactly those two.
+PEGGED_LINKS = {"core_link", "core_link_mirrored"}
+
+
+@pytest.mark.parametrize("preset,name", [(p, n) for p, n in CASES if n not in PEGGED_LINKS])
 def test_no_unsupported_overhang(preset, name):
     from cogniframe.export.mesh import overhangs
 
@@ -125,11 +132,17 @@ def test_analytic_estimate_tracks_the_cad_volume(preset, name):
 
 
 @pytest.mark.parametrize("preset", PRESETS)
-def test_core_plate_volume_is_box_minus_holes(preset):
+def test_core_plate_volume_is_its_closed_form(preset):
+    """The pegged presets' plate: its X, ribs and tubes (families/core_plate.py `_with_tubes`, by
+    hand in tests/test_core_plate_pegs.py) within 0.5 % of the CAD; a square plate: the box less its
+    holes."""
     d = built_preset(preset)
     p = d.parts["core_plate"]
-    size, t, hole_d = p.param("size"), p.param("thickness"), p.param("hole_d")
-    closed = size * size * t - len(p.param("holes")) * math.pi / 4 * hole_d**2 * t
+    if dict(p.params).get("tubes"):
+        closed = p.estimate.volume
+    else:
+        size, t, hole_d = p.param("size"), p.param("thickness"), p.param("hole_d")
+        closed = size * size * t - len(p.param("holes")) * math.pi / 4 * hole_d**2 * t
     assert d.built["core_plate"].volume_mm3 == pytest.approx(closed, rel=0.005)
 
 

@@ -125,7 +125,8 @@ def connector_hinge(spec, conn: Connector, factor: float | None = None) -> tuple
 
 
 def flat_link_hinge(spec) -> tuple[float, float]:
-    """(hinge N mm/rad, TPU volume mm^3) of the preset's own core link through the build's FE."""
+    """(hinge N mm/rad, TPU volume mm^3) of `spec`'s core link (the flat one with `core.link: tab`)
+    through the build's FE."""
     from cogniframe import frame as frame_mod, partlist
     from cogniframe.analysis.joints.fe import fe_joint
     from cogniframe.analysis.joints.model import joint_kind
@@ -152,6 +153,7 @@ def main(argv=None) -> int:
     doc = yaml.safe_load((ROOT / "params" / f"{args.preset}.yaml").read_text(encoding="utf-8"))
     if args.spacing is not None:
         doc["frame"]["arm_spacing"] = args.spacing
+    doc["core"]["link"] = "tab"  # the flat link, against which the authors' connector is measured
     spec = spec_mod.from_dict(doc, f"{args.preset}.yaml")
     rho = spec.material(spec.joints.material).density_g_mm3
     s = spec.frame.arm_spacing
