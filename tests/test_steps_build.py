@@ -182,15 +182,18 @@ CHANGES = [
     # the mass budget do not
     # (the CAD's mass properties move with the holes: the flight figures and plots rerun)
     ("motors.bolt_spacing", 9.5, False, (_part_change("motor_mount") - MASS) | {"figures", "plots"}),
-    ("joints.wall", 1.4, False, _part_change(*TPU_PARTS)),
+    # the wall insets the frame's joints: the core links move out, and the plate's peg tubes with them
+    ("joints.wall", 1.4, False, _part_change(*TPU_PARTS, "core_plate")),
     # level arms: the plate hangs at the new knee height and the arms stay level, so the motor mount
     # keeps its shape; a larger plate moves the links out along the same level diagonal, so the
     # knees and the motor mounts keep theirs
     ("frame.height", 130, False, _part_change(*(p for p in TPU_PARTS if p != "motor_mount"))),
+    # (the pegged plate's spacer is a bar under the rear standoffs: the plate's size does not move it)
     ("core.plate_size", 44, False, _part_change("core_plate", "core_link", "core_link_mirrored", "corner_bottom",
-                                                "sensor_mount", "front_camera_mount")),
+                                                "front_camera_mount")),
+    # the wider gaps move a part to another plate, which the 3D view lists
     ("printer.margin", 5, True, {f"plates:{TPU}", f"plates:{ABS}", f"previews:{TPU}", f"previews:{ABS}",
-                                 f"slice:{TPU}", f"slice:{ABS}"}),
+                                 f"slice:{TPU}", f"slice:{ABS}", "viewer"}),
     # print settings: no part changes; the plates carry them in the 3MF, the previews stay
     ("core.infill", 0.15, True, MASS | VIEW | FLIGHT | {f"plates:{ABS}", f"slice:{ABS}"}),
     ("printer.layer_height", 0.25, True, MASS | VIEW | FLIGHT | {f"plates:{TPU}", f"plates:{ABS}", f"slice:{TPU}", f"slice:{ABS}"}),

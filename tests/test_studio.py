@@ -113,8 +113,8 @@ def test_session_checks_edits_refuses_bad_values_and_saves(tmp_path, monkeypatch
         base = s.base_hash
         s.edit(page, {}, base, seq=1)
         first = events.wait(lambda e: e["type"] == "figures")
-        if first["pending_fe"]:  # the joints' FE not in the cache yet: the analytic figures at once, then the FE's
-            assert first["model"] == "analytic"
+        if first["pending_fe"]:  # the joints' FE not in the cache yet: the fast figures at once, then the FE's
+            assert first["model"] == "surrogate"  # the pegged link has no closed form: the FE's surrogate
             first = events.wait(lambda e: e["type"] == "figures" and e["after_fe"], timeout=600)
         assert first["model"] == "fe" and not first["pending_fe"]
         assert first["check"] == cf.load("carbon.yaml").check().to_dict()
@@ -284,7 +284,7 @@ def test_a_failed_3d_view_still_brings_the_fe_figures(tmp_path, monkeypatch):
         page = s.connect(events)
         s.edit(page, {"joints.wall": "1.35"}, s.base_hash, seq=1, edited="joints.wall")  # a wall no other test solves
         fast = events.wait(lambda e: e["type"] == "figures" and e["seq"] == 1, timeout=120)
-        assert fast["pending_fe"] and fast["model"] == "analytic"
+        assert fast["pending_fe"] and fast["model"] == "surrogate"  # the pegged preset's fast model
         failed = events.wait(lambda e: e["type"] == "progress" and e.get("error"), timeout=120)
         assert "no view today" in failed["error"]
         solved = events.wait(lambda e: e["type"] == "figures" and e["after_fe"], timeout=600)
@@ -643,10 +643,10 @@ def test_a_new_joint_geometry_shows_the_fast_model_then_the_fe_and_a_new_view(pa
     k_fe = float(_metric(page, "stiffness.k_n_per_m"))
     t0 = time.monotonic()
     rec = _edit(page, "joints.wall", "1.45")  # thicker socket walls: new joint shapes no other test solves, their FE not solved yet
-    assert rec["pending_fe"] and page.get_attribute("#model", "data-model") == "analytic-pending"
+    assert rec["pending_fe"] and page.get_attribute("#model", "data-model") == "surrogate-pending"
     assert "solving the joints' FE" in page.text_content("#model")
     k_fast = float(_metric(page, "stiffness.k_n_per_m"))
-    page.wait_for_function("document.body.dataset.model !== 'analytic-pending'", timeout=600_000)
+    page.wait_for_function("document.body.dataset.model !== 'surrogate-pending'", timeout=600_000)
     assert page.get_attribute("#model", "data-model") == "fe", page.text_content("#model")
     t_fe = time.monotonic() - t0
     k_new = float(_metric(page, "stiffness.k_n_per_m"))

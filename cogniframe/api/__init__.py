@@ -210,13 +210,12 @@ class Design:
     def with_fast_model(self) -> Design:
         """This design with `model.stiffness_model: analytic` (the joints' closed forms, milliseconds):
         the screening model the studio shows while a joint's FE is solved. A pegged core link
-        (core.link: pegs) has no closed form: such a design is its own fast model (the FE)."""
+        (core.link: pegs) has no closed form: its fast model is the FE's surrogate (milliseconds too,
+        the FE itself for a joint outside its training box)."""
         from .. import spec as spec_mod
 
-        if self._spec.core.link == "pegs":
-            return self
         data = self._spec.model_dump(mode="json", exclude_unset=False)
-        data["model"]["stiffness_model"] = "analytic"
+        data["model"]["stiffness_model"] = "surrogate" if self._spec.core.link == "pegs" else "analytic"
         fast = spec_mod.from_dict(data, source=self._source, text=self._text)
         return Design(fast, self._text, self._source, self._path, self._design)
 

@@ -8,7 +8,7 @@ or edits never touches what another page shows. The server keeps the file texts 
 from (`bases`), the newest evaluation of each page (to check it again once a joint's FE is
 solved) and the 3D views. Events (`Page.send(event)`, a JSON-able dict):
 
-    figures   the `check --json` object of the page's design (`model`: "fe", or "analytic" while
+    figures   the `check --json` object of the page's design (`model`: "fe", or the fast model's, "analytic" or "surrogate", while
               a new joint geometry's FE is solved: `pending_fe` true), `seq` of the edit, `ms`
               (from the message to the figures) and `cpu_ms` (the check's own CPU time)
     invalid   the CLI's message for the edited file, the key it names and the field edited

@@ -41,6 +41,8 @@ let lastFigures = null;
 const pendingSaves = {};  // save id -> the changes it saves
 window.cogniframeStudio = { latencies: [], events: [], changes: () => changes(), base: () => base };
 
+const FAST_NAMES = { analytic: "analytic joints", surrogate: "the joints' FE surrogate" };
+
 function fieldValue(el) {
   return el.type === "checkbox" ? (el.checked ? "true" : "false") : el.value;
 }
@@ -229,8 +231,9 @@ function showFigures(ev) {
   verdict.dataset.verdict = check.verdict;
   const problems = document.getElementById("problems");
   problems.replaceChildren(...(check.problems || []).map((p) => Object.assign(document.createElement("li"), { textContent: p })));
-  modelEl.dataset.model = ev.pending_fe ? "analytic-pending" : (ev.model || "");
-  modelEl.textContent = ev.pending_fe ? "fast model (analytic joints): solving the joints' FE…"
+  // the fast model: the closed forms, or the FE's surrogate for a link with none (the pegs)
+  modelEl.dataset.model = ev.pending_fe ? `${ev.model}-pending` : (ev.model || "");
+  modelEl.textContent = ev.pending_fe ? `fast model (${FAST_NAMES[ev.model] || ev.model}): solving the joints' FE…`
     : ev.model === "fe" ? (ev.after_fe ? "FE joints (just solved)" : "FE joints")
     : ev.model === "analytic" ? "analytic joints (model.stiffness_model)" : (ev.model || "");
   document.body.dataset.figuresSeq = String(ev.seq);
@@ -378,10 +381,11 @@ function progress(ev) {
   label.textContent = ev.error ? ev.error : ev.text || "";
   box.dataset.active = active ? "1" : "0";
   box.dataset.error = ev.error || "";
-  if (ev.task === "fe" && ev.error && modelEl.dataset.model === "analytic-pending") {
+  if (ev.task === "fe" && ev.error && modelEl.dataset.model.endsWith("-pending")) {
     // the figures stay the fast model's: say so, instead of a wait that never ends
-    modelEl.dataset.model = document.body.dataset.model = "analytic-fe-failed";
-    modelEl.textContent = `fast model (analytic joints): the joints' FE failed: ${ev.error}`;
+    const fast = modelEl.dataset.model.slice(0, -"-pending".length);
+    modelEl.dataset.model = document.body.dataset.model = `${fast}-fe-failed`;
+    modelEl.textContent = `fast model (${FAST_NAMES[fast] || fast}): the joints' FE failed: ${ev.error}`;
   }
 }
 
