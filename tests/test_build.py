@@ -131,7 +131,9 @@ def test_cad_masses_match_the_papers_table(built):
         assert m["by_material"]["abs"] == pytest.approx(25, rel=0.10)  # central ABS parts
         assert m["total_g"] == pytest.approx(236, rel=0.05)
     else:  # the bamboo build prints about 34 g of TPU and 24 g of PLA
-        assert m["by_material"]["tpu_95a"] == pytest.approx(34, rel=0.10)
+        # their 34 g holds their thin TPU net (Flex_net_thin, 1.11 cm^3: 1.35 g solid,
+        # docs/authors-parts.md), a part cogniframe does not make
+        assert m["by_material"]["tpu_95a"] == pytest.approx(34 - 1.35, rel=0.10)
         # PLA lighter by design: a 40 mm core plate and a one-piece holder, where the authors print
         # a 64.5 mm plus-shaped base and a three-part magnetic holder (docs/authors-parts.md)
         assert 0.6 * 24 < m["by_material"]["pla"] <= 24

@@ -104,10 +104,10 @@ def test_batch_sizes_shrink_towards_the_end_and_cover_every_design():
 
 
 @pytest.mark.parametrize("over, short", [
-    ({"core.plate_thickness": 3.5}, False),  # a thicker core plate: it breaks past 400 cm (~447)
-    ({}, True),  # the carbon preset: the core plate, bending alone on its standoffs, at ~247 cm
-    ({"rods.diameter": 2.5}, True),  # thin carbon rods: a soft frame, the core plate at ~293 cm
-    ({"core.plate_thickness": 2.0}, True),  # a thinner core plate breaks lower still
+    ({"core.plate_thickness": 4.0}, False),  # a thicker core plate: it breaks past 400 cm (~476)
+    ({}, True),  # the carbon preset: the core plate, a stem bent at a link, at ~269 cm
+    ({"rods.diameter": 2.5}, True),  # thin carbon rods: a soft frame, the core plate at ~375 cm
+    ({"core.plate_thickness": 2.0}, True),  # a thinner core plate breaks lower still (~139 cm)
     ({"rods.material": "bamboo", "rods.diameter": 2.6, "joints.wall": 1.6, "frame.height": 110.0}, True),
 ])
 def test_survival_cut_at_the_first_failure_gives_the_whole_sweeps_answer(over, short, tmp_path, monkeypatch):
