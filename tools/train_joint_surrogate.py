@@ -381,8 +381,9 @@ def family_frames(hold: list[dict], mine: dict, kind: str, data_out: Path, core_
 
 def refresh_main(hd: dict, fams: dict, requested) -> None:
     """Predict again, with the new fits `fams`, the full run's held-out joints of the `requested`
-    families (from their stored FE matrices), and the frame k of every design that has one: the
-    held-out set keeps describing the shipped fit."""
+    families (from their stored FE matrices), and the frame k of every design that has one, from
+    the FE and from the fits, at the package's TPU factor: the held-out set keeps describing the
+    shipped fit."""
     from cogniframe.analysis.joints import surrogate as sg
     from cogniframe.analysis.joints.model import JointStiffness, tpu_moduli
 
@@ -394,15 +395,17 @@ def refresh_main(hd: dict, fams: dict, requested) -> None:
         if not any(sg.family_of(by_name[n]) in requested for n in fr["joints"]):
             continue
         e = tpu_moduli(s, 1.0)[0]
-        sur = {}
+        sur, fes = {}, {}
         for n, c in fr["joints"].items():
             p, kind = by_name[n], sg.family_of(by_name[n])
-            fe = unpacked(c)
+            fe = fes[n] = unpacked(c)
             kp = predicted(fams[kind], s, p, fe.labels, e)
             sur[n] = JointStiffness(n, "surrogate", fe.labels, fe.refs, tuple(map(tuple, kp.tolist())))
             if kind in requested and (fr["design"], n) in rows:
                 row = rows[(fr["design"], n)]
                 row.update(joint_error(kp, fe.matrix), outside=sg.out_of_box(fams[kind], *sg.features(s, p)))
+        # both at today's TPU factor: frame k is the held-out figure a new calibration moves
+        fr["k_fe"] = frame_k(s, f, parts, fes)
         fr["k_surrogate"] = frame_k(s, f, parts, sur)
         fr["error"] = fr["k_surrogate"] / fr["k_fe"] - 1
 
@@ -413,20 +416,10 @@ def refresh_k(hd: dict, data: Path | None = None) -> None:
     figure that depends on the factor, so a new calibration needs this and nothing else. Records
     the factor in the file's meta."""
     from cogniframe.analysis.joints import surrogate as sg
-    from cogniframe.analysis.joints.model import TPU_PRINTED_MODULUS_FACTOR, JointStiffness, tpu_moduli
+    from cogniframe.analysis.joints.model import TPU_PRINTED_MODULUS_FACTOR, tpu_moduli
 
     fams = sg.families(data or sg.DATA_FILE)
-    link = hd["meta"].get("core_link", "tab")
-    for fr in hd["designs"]:
-        s, f, parts = design_parts(fr["overrides"], link)
-        by_name = {p.name: p for p in parts}
-        e = tpu_moduli(s, 1.0)[0]
-        fe = {n: unpacked(c) for n, c in fr["joints"].items()}
-        sur = {n: JointStiffness(n, "surrogate", u.labels, u.refs,
-                                 tuple(map(tuple, predicted(fams[sg.family_of(by_name[n])], s, by_name[n], u.labels, e).tolist())))
-               for n, u in fe.items()}
-        fr["k_fe"], fr["k_surrogate"] = frame_k(s, f, parts, fe), frame_k(s, f, parts, sur)
-        fr["error"] = fr["k_surrogate"] / fr["k_fe"] - 1
+    refresh_main(hd, fams, set(fams))
     for kind, sec in hd.get("families", {}).items():
         link = sec["meta"]["core_link"]
         hold: list = [None] * sec["meta"]["holdout_designs"]

@@ -593,8 +593,8 @@ def _pegged_link_estimate(spec: Spec, sockets: list[Socket], params: dict) -> Es
     """Closed form of the pegged core link (parts/joint_solid.py `_core_link_pegged`), in print
     orientation (the arms' direction up, the pegs' ends on the bed): per peg a peg and a column
     (cylinders: one cylinder where their diameters are within frame.PEG_SNAP), the arch (a box from
-    axis to axis, less the half columns inside it and its opening; the crown's block), the strut's sleeve (a cylinder, less its part
-    inside the arch: `peg_plan.sleeve_in_arch`), less the bores. Where the two arm ports' along-arm
+    axis to axis, less the half columns inside it and its opening; the crown's block), the strut's
+    sleeve (a cylinder, less its part inside the arch: `peg_plan.sleeve_in_arch`), less the bores. Where the two arm ports' along-arm
     heights differ by rounding only, the columns stand level (`STACK_SNAP_MM`)."""
     pl = pegged_plan(sockets, params)
     hole = math.pi / 4 * spec.bore**2

@@ -107,16 +107,18 @@ def features(spec, part) -> tuple[tuple[str, ...], np.ndarray]:
     itf = interface(spec, 1.0)
     e, g = tpu_moduli(spec, 1.0)
     d = float(spec.rods.diameter)
-    names = ["log_rod_d", "log_interface_h", "log_wall", "nu"]
-    vals = [math.log(d), math.log(itf.h), math.log(part.wall), e / (2 * g) - 1]
-    if dict(part.params).get("link") == "pegs":  # its columns' wall is the connector's own, not joints.wall
-        del names[2], vals[2]
+    pegged = dict(part.params).get("link") == "pegs"
+    names = ["log_rod_d", "log_interface_h", "nu"]
+    vals = [math.log(d), math.log(itf.h), e / (2 * g) - 1]
+    if not pegged:  # the pegged link's columns have the connector's own wall, not joints.wall
+        names.insert(2, "log_wall")
+        vals.insert(2, math.log(part.wall))
     for i, s in enumerate(part.sockets):
         names += [f"s{i}_log_seat", f"s{i}_log_depth", f"s{i}_clearance", *(f"s{i}_dir_{a}" for a in "xyz"),
                   *(f"s{i}_port_{a}" for a in "xyz")]
         vals += [math.log(max(s.seat, 1e-3)), math.log(s.depth), s.bore - d, *map(float, s.direction), *map(float, s.port)]
     kind = joint_kind(part)
-    if dict(part.params).get("link") == "pegs":
+    if pegged:
         n, v = _pegged_features(part)
         names += n
         vals += v
