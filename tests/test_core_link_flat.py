@@ -12,7 +12,7 @@ import yaml
 
 from cogniframe import design as design_mod
 from cogniframe import spec as spec_mod
-from cogniframe.families.joint import union_area
+from cogniframe.families.joint_kinds.polygons import union_area
 from cogniframe.parts.joint_plan import link_is_flat
 from cogniframe.materials import MATERIALS
 
@@ -47,7 +47,8 @@ def test_flat_link_at_the_authors_spacing_is_lean_printable_and_estimated(tmp_pa
     side-printed link weighed 4.7 g there)."""
     from cogniframe.export.mesh import overhangs, write_stl
     from cogniframe.families import registry
-    from cogniframe.parts.joint_plan import map_sockets, print_from_local
+    from cogniframe.families.joint_kinds.kinds import print_from_local
+    from cogniframe.parts.joint_plan import map_sockets
 
     spec = _carbon(arm_spacing=25, level_arms=True)
     links = _links(spec)

@@ -85,7 +85,8 @@ def _joints(spec, names=None):
 
 def test_straight_sides_have_a_finite_print_orientation():
     """Pure numpy: the knee's lateral axis is the legs' and arms' plane normal, not 0/0."""
-    from cogniframe.parts.joint_plan import map_sockets, print_from_local, split_arms
+    from cogniframe.families.joint_kinds.kinds import print_from_local
+    from cogniframe.parts.joint_plan import map_sockets, split_arms
 
     (knee,) = _joints(_variant("carbon", frame__knee_inset=0), ["knee"])
     m = print_from_local(knee)
@@ -148,7 +149,8 @@ def test_thin_rods_core_links_mesh_watertight(base, height):
 
 def _arm_and_rigid_leg(knee):
     """(arm socket, rigid leg socket, sleeve radius, the arm block's back) of a knee, in print."""
-    from cogniframe.parts.joint_plan import map_sockets, print_from_local, split_arms
+    from cogniframe.families.joint_kinds.kinds import print_from_local
+    from cogniframe.parts.joint_plan import map_sockets, split_arms
 
     arms, legs = split_arms(map_sockets(knee, print_from_local(knee)))
     a = arms[0]
@@ -254,13 +256,8 @@ def test_knee_seat_leaves_the_hinge_room(base, change):
     """Pure numpy: the hinged leg's back-face centre lies at least two slots (2 x HINGE_GAP)
     behind the arm block's back face: the web crosses its slot and as much again. The presets'
     3 mm seat already does and is kept."""
-    from cogniframe.parts.joint_plan import (
-        HINGE_GAP,
-        horizontal,
-        map_sockets,
-        print_from_local,
-        split_arms,
-    )
+    from cogniframe.families.joint_kinds.kinds import print_from_local
+    from cogniframe.parts.joint_plan import HINGE_GAP, horizontal, map_sockets, split_arms
 
     (knee,) = _joints(_variant(base, **change), ["knee"])
     socks = map_sockets(knee, print_from_local(knee))
@@ -289,7 +286,8 @@ def test_knees_build_across_seats_and_walls(base, change):
 def test_core_link_hub_top_clears_the_strut_sleeve(change):
     """The hub's top was level with the strut sleeve's round top (and, with 5.48 mm walls, 0.03 mm
     above the upper arm's axis): one of the two links' STL had a hole where the top face was."""
-    from cogniframe.parts.joint_plan import TAB_CLEAR, map_sockets, print_from_local
+    from cogniframe.families.joint_kinds.kinds import print_from_local
+    from cogniframe.parts.joint_plan import TAB_CLEAR, map_sockets
 
     for link in _parts(_variant("bamboo", core__link="tab", **change), ["core_link", "core_link_mirrored"]):
         built = _one_watertight_solid(link)
@@ -307,12 +305,8 @@ def test_core_link_hub_top_clears_the_strut_sleeve(change):
 def test_knee_web_top_clears_the_legs_top():
     """carbon in a 153 x 190.6 x 168.2 box: the web's top, level with the upper leg's round top,
     went missing from the knee's STL."""
-    from cogniframe.parts.joint_plan import (
-        TAB_CLEAR,
-        knee_hinge,
-        map_sockets,
-        print_from_local,
-    )
+    from cogniframe.families.joint_kinds.kinds import print_from_local
+    from cogniframe.parts.joint_plan import TAB_CLEAR, knee_hinge, map_sockets
 
     spec = _variant("carbon", frame__width=153.0, frame__depth=190.6, frame__height=168.2, motors__radius=59.7,
                     motors__prop_diameter=55.5, core__link="tab")  # the pegs refuse a strut this steep

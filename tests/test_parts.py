@@ -444,23 +444,24 @@ def test_knee_living_hinge_is_a_thin_web_between_slots():
     import dataclasses
 
     from cogniframe.export.mesh import contains, ray_first_hit, tessellate
-    from cogniframe.parts import joint_plan, joint_solid
+    from cogniframe.families import joint as joint_family
+    from cogniframe.parts import joint_plan
 
     d = built_preset("carbon")
     knee = d.parts["knee"]
     for h in (1.2, 1.6):
         part = dataclasses.replace(knee, params=tuple((k, h if k == "hinge_thickness" else v) for k, v in knee.params))
         web = joint_plan.knee_hinge(part)
-        m = tessellate(joint_solid.solid(part).shape)
+        m = tessellate(joint_family.solid(part).shape)
         mid = np.r_[web.probe, web.height / 2]
         n = np.r_[web.normal, 0.0]
         # through the web: material exactly hinge_thickness thick ...
-        start = mid - n * (h / 2 + joint_solid.HINGE_GAP / 2)  # in the slot
+        start = mid - n * (h / 2 + joint_plan.HINGE_GAP / 2)  # in the slot
         t_in = ray_first_hit(m, [start], [n])[0]
         t_out = ray_first_hit(m, [start + n * (t_in + 0.01)], [n])[0] + 0.01
         assert t_out == pytest.approx(h, abs=0.05)
         # ... with open slots on both sides of it
-        assert not contains(m, [mid + n * (h / 2 + joint_solid.HINGE_GAP / 2), mid - n * (h / 2 + joint_solid.HINGE_GAP / 2)]).any()
+        assert not contains(m, [mid + n * (h / 2 + joint_plan.HINGE_GAP / 2), mid - n * (h / 2 + joint_plan.HINGE_GAP / 2)]).any()
 
 
 def test_frame_without_struts_builds_and_fails_the_drop_check(tmp_path):

@@ -20,7 +20,7 @@ from presets import preset_doc, preset_spec
 
 from cogniframe import design as design_mod
 from cogniframe import spec as spec_mod
-from cogniframe.families.joint import PEGS
+from cogniframe.families.joint_kinds.core_link_pegs import PEGS
 
 _spec = importlib.util.spec_from_file_location("pegged_link_fe", ROOT / "tools" / "pegged_link_fe.py")
 pl = importlib.util.module_from_spec(_spec)
@@ -91,7 +91,7 @@ def test_the_strut_stands_on_the_arch_crown_between_the_arm_pegs(preset):
     centred on the pair's mid-line (print x 0, y of the arms' axes) with its lowest point
     PEG_SLEEVE_FLOOR above the crown (frame.pegged_strut_port), over the opening's roof, and the
     sleeve keeps PEG_SLEEVE_GAP clear of both columns."""
-    from cogniframe.families.joint import PEG_SLEEVE_GAP, _sleeve_clear
+    from cogniframe.families.joint_kinds.core_link_pegs import PEG_SLEEVE_GAP, _sleeve_clear
     from cogniframe.frame import PEG_ARCH_LEN, PEG_SLEEVE_FLOOR
     from cogniframe.parts.peg_plan import pegged_plan
 
@@ -131,7 +131,8 @@ def test_pegged_link_is_one_watertight_solid_standing_on_its_pegs(tmp_path):
     has the same volume and the mirrored box."""
     from cogniframe.export.mesh import write_stl
     from cogniframe.families import registry
-    from cogniframe.parts.joint_plan import map_sockets, print_from_local
+    from cogniframe.families.joint_kinds.kinds import print_from_local
+    from cogniframe.parts.joint_plan import map_sockets
     from cogniframe.parts.peg_plan import pegged_plan
 
     spec = _pegs_spec()

@@ -607,7 +607,7 @@ def test_the_joint_fe_meshes_the_shape_the_part_build_shared_to_the_same_bits(tm
     bit, as from its own CAD."""
     from cogniframe.export import part_files as export_build
     from cogniframe.parts import shapes
-    from cogniframe.parts import joint_solid as joint_cad
+    from cogniframe.families.joint_kinds import kinds as joint_cad
 
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))
     s, f, p = _design(_variant())

@@ -184,13 +184,13 @@ def carbon_tab():
     """The carbon preset with the bolted tab link (core.link: tab), its link, and the tab's contact
     solve."""
     from cogniframe.analysis.joints.contact import tab_contact
-    from cogniframe.analysis.joints.model import joint_kind
+    from cogniframe.families.joint_kinds.kinds import node_of
     from cogniframe.design import design
 
     doc = yaml.safe_load((PARAMS / "carbon.yaml").read_text(encoding="utf-8"))
     doc["core"]["link"] = "tab"
     spec = spec_mod.from_dict(doc, "carbon.yaml")
-    link = next(p for p in design(spec).parts if p.family == "joint" and joint_kind(p) == "core_link")
+    link = next(p for p in design(spec).parts if p.family == "joint" and node_of(p) == "core_link")
     return spec, link, tab_contact(spec, link)
 
 

@@ -129,15 +129,14 @@ def flat_link_hinge(spec) -> tuple[float, float]:
     through the build's FE."""
     from cogniframe import frame as frame_mod, partlist
     from cogniframe.analysis.joints.fe import fe_joint
-    from cogniframe.analysis.joints.model import joint_kind
     from cogniframe.analysis.load_cases import arm_pair_hinge
-    from cogniframe.parts import joint_solid
+    from cogniframe.families.joint_kinds.kinds import node_of, solid
 
     f = frame_mod.frame_of(spec)
     parts = partlist.part_list(spec, f)
-    link = next(p for p in parts if joint_kind(p) == "core_link")
+    link = next(p for p in parts if p.family == "joint" and node_of(p) == "core_link")
     js = fe_joint(spec, link)
-    return arm_pair_hinge({link.name: js}, [link]), float(joint_solid.solid(link).shape.Volume())
+    return arm_pair_hinge({link.name: js}, [link]), float(solid(link).shape.Volume())
 
 
 def main(argv=None) -> int:
@@ -236,13 +235,13 @@ def lug_study(spec, conn: Connector, rise: float = 0.0) -> list[tuple[str, list[
 def scaled_link_thrust(spec, scale: float) -> tuple[float, dict]:
     """(secant k N/m, `check`'s thrust case) with the core links' FE super-elements times `scale`:
     a what-if for a stiffer link, which stiffens its every path (the strut's too) alike."""
-    from cogniframe.analysis.joints.model import joint_kind
     from cogniframe.analysis.load_cases import _thrust_case
     from cogniframe.analysis.stiffness import joint_models, masses_g, secant_k
     from cogniframe.design import design
+    from cogniframe.families.joint_kinds.kinds import node_of
 
     d = design(spec)
-    kinds = {p.name: joint_kind(p) for p in d.parts}
+    kinds = {p.name: node_of(p) for p in d.parts}
     joints = {n: replace(js, K=tuple(map(tuple, (js.matrix * scale).tolist()))) if kinds[n] == "core_link" else js
               for n, js in joint_models(spec, d.parts, "fe").items()}
     return (secant_k(spec, d.frame, d.parts, joints),

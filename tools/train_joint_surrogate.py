@@ -98,14 +98,11 @@ def base_link(core_link: str | None = None) -> str:
 
 
 def known_families() -> tuple[str, ...]:
-    """Every family `surrogate.family_of` can name: the joint kinds, and a core link per link style."""
-    import typing
+    """Every family `surrogate.family_of` can name: each registered joint kind's (the tab and the
+    flat core link share one)."""
+    from cogniframe.families.joint_kinds.kinds import KINDS
 
-    from cogniframe.parts.joint_plan import JOINT_KINDS
-    from cogniframe.spec import CoreSection
-
-    links = typing.get_args(CoreSection.model_fields["link"].annotation)
-    return tuple(JOINT_KINDS) + tuple(f"core_link_{x}" for x in links if x != "tab")
+    return tuple(dict.fromkeys(k.surrogate_family for k in KINDS))
 
 
 def designs(n: int, seed: int, core_link: str | None = None) -> list[dict]:

@@ -22,7 +22,7 @@ from . import impact
 _MODULES = ("analysis/stiffness.py", "analysis/load_cases.py", "analysis/peaks.py", "analysis/impact_nl.py",
             "analysis/single_drop.py", "analysis/impact.py", "analysis/framefe.py",
             "analysis/joints/*.py", "analysis/flight.py", "analysis/constants.py",
-            "frame.py", "partlist.py", "families/*.py", "parts/joint_solid.py", "parts/joint_plan.py", "materials.py", "spec.py")
+            "frame.py", "partlist.py", "families/*.py", "families/joint_kinds/*.py", "parts/joint_solid.py", "parts/joint_plan.py", "materials.py", "spec.py")
 
 
 class Session:

@@ -320,7 +320,7 @@ def arm_pair_hinge(joints: dict, parts) -> float | None:
     hangs on. None without a core link. The core link's super-element, condensed."""
     from .joints.model import joint_kind
 
-    part = next((p for p in joint_parts(parts) if joint_kind(p) == "core_link" and p.name in joints), None)
+    part = next((p for p in joint_parts(parts) if joint_kind(p).node == "core_link" and p.name in joints), None)
     if part is None:
         return None
     js = joints[part.name]

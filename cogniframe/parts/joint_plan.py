@@ -1,10 +1,11 @@
-"""The joints' geometry in plan and in print, without the CAD kernel (pure numpy): where a joint
-lies on the bed (`print_from_local`) and its sockets there (`map_sockets`, `PSocket`); the knee in
-plan (its rigid leg's start, the hub where that start cannot join it, the arm bridge, the living
-hinge's web); the core link's seat and the flat link's bands. The joint family's closed forms
-(families/joint.py), its solid (parts/joint_solid.py) and the joint FE (analysis/joints/) read the same
-plan, so estimate, solid and mesh agree; importing this module imports no CAD kernel, so `check`
-stays fast."""
+"""The joints' geometry in plan and in print, without the CAD kernel (pure numpy): how a joint
+printed on its side lies on the bed (`side_print`: the knee, the tab core link; each joint kind's
+`print_from_local` is its module's in families/joint_kinds/) and its sockets there (`map_sockets`,
+`PSocket`); the knee in plan (its rigid leg's start, the hub where that start cannot join it, the
+arm bridge, the living hinge's web); the core link's seat and the flat link's bands. The joint
+kinds' closed forms and solids (families/joint_kinds/, on parts/joint_solid.py's pieces) and the
+joint FE (analysis/joints/) read the same plan, so estimate, solid and mesh agree; importing this
+module imports no CAD kernel, so `check` stays fast."""
 
 from __future__ import annotations
 
@@ -17,7 +18,6 @@ from ..frame import HINGE_GAP
 from .record import PARALLEL_TOL, PartSpec
 JOIN = 0.4  # mm, least overlap of the knee's rigid leg sleeve with the arm bridge, each way (one 0.4 mm line)
 TAB_CLEAR = 0.2  # mm: a core link's tab top never within this of a sleeve's top (no coincident top faces)
-JOINT_KINDS = ("corner_top", "corner_bottom", "knee", "core_link")
 
 
 @dataclass(frozen=True, eq=False)
@@ -55,42 +55,21 @@ def transform(rot: np.ndarray, shift) -> np.ndarray:
 FLIP_X = np.diag([1.0, -1.0, -1.0])  # 180 deg about x: upside down, still right-handed
 
 
-def print_from_local(part: PartSpec) -> np.ndarray:
-    """4x4 print <- local transform of a joint (bed at z = 0)."""
-    od = part.sockets[0].bore + 2 * part.wall
-    r = od / 2
+def side_print(part: PartSpec) -> np.ndarray:
+    """4x4 print <- local transform of a joint printed on its side (the knee, the tab core link):
+    the side normal (`_side_normal`) vertical, the arm direction along x, the lowest socket end
+    one sleeve radius above the bed."""
+    r = (part.sockets[0].bore + 2 * part.wall) / 2
     dirs = np.array([s.direction for s in part.sockets], float)
-    if kind_of(part) in ("corner_top", "corner_bottom"):
-        vertical = dirs[np.abs(dirs[:, 2]) > 1e-6, 2]
-        rot = FLIP_X if vertical.sum() < 0 else np.eye(3)
-        return transform(rot, (0.0, 0.0, r))
-    from .peg_plan import is_pegged, pegged_plan  # its own module; it reads this one's constants
-
-    if kind_of(part) == "core_link" and is_pegged(part):
-        pl = pegged_plan(part.sockets, dict(part.params))
-        return transform(pl.rot, pl.shift)
-    if kind_of(part) == "core_link" and link_is_flat(part.sockets):
-        # flat and upside down: the arm direction along x, the frame's up pointing into the bed
-        x = horizontal(_arm_direction(part))
-        zp = np.array([0.0, 0.0, -1.0])
-        rot = np.vstack([x, np.cross(zp, x), zp])
-        return transform(rot, (0.0, 0.0, link_bed_z(dict(part.params), part.sockets, r)))
-    if kind_of(part) in ("knee", "core_link"):
-        w = _side_normal(part, dirs)
-        x = _arm_direction(part)
-        x = x - w * (x @ w)
-        x /= np.linalg.norm(x)
-        y = np.cross(w, x)
-        rot = np.vstack([x, y, w])
-        ends = np.array([p for s in part.sockets for p in (s.port, s.mouth())], float)
-        low = float((ends @ w).min())
-        return transform(rot, (0.0, 0.0, r - low))
-    raise ValueError(f"unknown joint {part.name!r}; valid: {', '.join(JOINT_KINDS)}")
-
-
-def kind_of(part: PartSpec) -> str:
-    """The joint kind (a mirrored part such as core_link_mirrored names its kind in its params)."""
-    return str(dict(part.params).get("kind", part.name))
+    w = _side_normal(part, dirs)
+    x = arm_direction(part)
+    x = x - w * (x @ w)
+    x /= np.linalg.norm(x)
+    y = np.cross(w, x)
+    rot = np.vstack([x, y, w])
+    ends = np.array([p for s in part.sockets for p in (s.port, s.mouth())], float)
+    low = float((ends @ w).min())
+    return transform(rot, (0.0, 0.0, r - low))
 
 
 def _side_normal(part: PartSpec, dirs: np.ndarray) -> np.ndarray:
@@ -98,7 +77,7 @@ def _side_normal(part: PartSpec, dirs: np.ndarray) -> np.ndarray:
     strut (core link). Every socket lies in that plane (frame.frame_of keeps each corner's fold in the
     vertical plane through the corner and its core link, in a rectangle too), and the arm pair is
     offset across it, so the two arm sockets stack into one block."""
-    arm = _arm_direction(part)
+    arm = arm_direction(part)
     others = [d for d in dirs if d @ arm < 1 - PARALLEL_TOL]
     w = np.cross(others[0], others[1]) if len(others) >= 2 else np.zeros(3)
     if others and np.linalg.norm(w) < 1e-6:
@@ -115,7 +94,7 @@ def _side_normal(part: PartSpec, dirs: np.ndarray) -> np.ndarray:
     return w if w @ ref >= 0 else -w
 
 
-def _arm_direction(part: PartSpec) -> np.ndarray:
+def arm_direction(part: PartSpec) -> np.ndarray:
     """Direction shared by the two parallel arm sockets."""
     dirs = [np.asarray(s.direction, float) for s in part.sockets]
     for i in range(len(dirs)):
@@ -174,7 +153,7 @@ class Hinge:
 
 def knee_hinge(part: PartSpec) -> Hinge:
     """Where the knee's hinge web runs (pure numpy; the CAD and the tests share it)."""
-    m = print_from_local(part)
+    m = side_print(part)
     socks = map_sockets(part, m)
     r = (part.sockets[0].bore + 2 * part.wall) / 2
     h = float(part.param("hinge_thickness"))

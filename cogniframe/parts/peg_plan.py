@@ -11,24 +11,19 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..frame import PEG_ARCH_LIFT, PEG_SLEEVE_FLOOR, peg_column_r
-from .record import PARALLEL_TOL, PartSpec
+from .record import PARALLEL_TOL
 
 # The authors' connector: per arm socket a TPU column round the socket with a solid peg beyond its
 # bottom, coaxial with the rod, pressed into a bore of the ABS core; an arch joins the two columns.
 # The strut hangs on the arch, as the authors' third column does: its sleeve starts inside the arch
 # (frame.py `pegged_strut_port` puts its socket there), so the strut's load goes round the arch into
 # the arm pegs, and the arch reaches down the columns to hold the sleeve's back end. It prints
-# standing: the arms' direction up, the pegs' ends on the bed (families/joint.py `PEGS` has the
+# standing: the arms' direction up, the pegs' ends on the bed (families/joint_kinds/core_link_pegs.py `PEGS` has the
 # dimensions).
 STACK_SNAP_MM = 1e-3  # mm: the most the two columns are moved to stand level (rounding noise is ~1e-5)
 ARCH_CLEAR = 0.2  # mm: the arch's depth never within this of the column's diameter (no tangent faces)
 ARCH_WEB = 0.5  # mm: the arch's underside between a column and the opening (the opening touches no column)
 SLEEVE_TOL = 1e-4  # mm: the strut's sleeve on the crown as planned (ports and unit directions are stored to 1e-6)
-
-
-def is_pegged(part: PartSpec) -> bool:
-    """Whether a core link is the pegged connector (core.link: pegs)."""
-    return dict(part.params).get("link") == "pegs"
 
 
 @dataclass(frozen=True)

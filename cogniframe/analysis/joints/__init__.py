@@ -49,9 +49,10 @@ def geometry_key(spec, part, method: str, factor: float | None, mesh_mm: float) 
     from ... import cache
 
     data = [_CACHE_VERSION, part.digest, method, itf.e, itf.g, itf.h, spec.rods.diameter, mesh_mm, FE_CURVATURE]
-    # parts/joint_plan.py: the plan the CAD builds on (print orientation, the knee's and the core
-    # link's pieces in plan)
-    return cache.key(data, ("analysis/joints/*.py", "parts/joint_solid.py", "parts/joint_plan.py", "families/joint.py"))
+    # parts/joint_plan.py and peg_plan.py: the plan the CAD builds on (the knee's and the core
+    # link's pieces in plan); families/joint_kinds/: each kind's print orientation, solid and support
+    return cache.key(data, ("analysis/joints/*.py", "parts/joint_solid.py", "parts/joint_plan.py", "parts/peg_plan.py",
+                            "families/joint.py", "families/joint_kinds/*.py"))
 
 
 def joint_stiffness(spec, part, method: str = "fe", factor: float | None = None,

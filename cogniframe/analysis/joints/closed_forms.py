@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from .model import Interface, JointStiffness, _block_rot, _has_body, hinge_geometry, hinged_socket, interface
+from .model import Interface, JointStiffness, _block_rot, _has_body, hinge_geometry, hinged_socket, interface, joint_kind
 
 
 def bef_end_flexibility(length: float, ei: float, k_found: float) -> np.ndarray:
@@ -122,8 +122,8 @@ def _socket_frame(direction) -> np.ndarray:
 def analytic_joint(spec, part, factor: float | None = None) -> JointStiffness:
     """Super-element from closed forms: per socket a 6x6 spring mouth <-> joint centre, the
     centre kept as the "body" (condensed out when the joint has no support)."""
-    if dict(part.params).get("link") == "pegs":
-        # its sleeves are the pegs' columns, held by the core's bores: no closed form here models them
+    if not joint_kind(part).closed_form_stiffness:
+        # the pegged link: its sleeves are the pegs' columns, held by the core's bores
         raise ValueError(f"joint {part.name}: the analytic joint model has no closed form for the pegged core link "
                          "(core.link: pegs); use model.stiffness_model: fe or surrogate")
     t0 = time.perf_counter()

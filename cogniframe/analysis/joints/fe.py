@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .model import JointStiffness, _block_rot, _has_body, interface, joint_kind
+from .model import JointStiffness, _block_rot, interface, joint_kind
 
 FE_CURVATURE = 8  # elements per full circle on curved faces (bores)
 FE_MESH_MM = 1.5  # tetrahedron size in the joint FE (converged to < 2 %: tests/test_joint_fe.py)
@@ -92,10 +92,9 @@ class JointProblem:
 def joint_problem(spec, part, factor: float | None = None, mesh_mm: float | None = None) -> JointProblem:
     """Mesh the part's CAD and pick the tied surfaces (see the module docstring)."""
     from . import meshing, solid_fe
+    from ...families.joint_kinds.kinds import print_from_local, solid
+    from ...parts.joint_solid import CHAMFER
     from ...parts.shapes import brep_text, shared_brep
-    from ...parts import joint_solid as joint_cad
-    from ...parts.joint_plan import print_from_local, seat_geometry
-    from ...parts.peg_plan import is_pegged, pegged_plan
 
     mesh_mm = FE_MESH_MM if mesh_mm is None else mesh_mm
     itf = interface(spec, factor)
@@ -103,12 +102,12 @@ def joint_problem(spec, part, factor: float | None = None, mesh_mm: float | None
     # the shape the build's part step stored (the same text), else built here
     shared = shared_brep(part)
     try:
-        pts, tets = meshing.mesh_brep_text(shared or brep_text(joint_cad.solid(part).shape), mesh_mm, FE_CURVATURE)
+        pts, tets = meshing.mesh_brep_text(shared or brep_text(solid(part).shape), mesh_mm, FE_CURVATURE)
     except RuntimeError:
         if shared is None:
             raise
         # a damaged cache file is a miss, never an error
-        pts, tets = meshing.mesh_brep_text(brep_text(joint_cad.solid(part).shape), mesh_mm, FE_CURVATURE)
+        pts, tets = meshing.mesh_brep_text(brep_text(solid(part).shape), mesh_mm, FE_CURVATURE)
     R, o = m[:3, :3], m[:3, 3]
     ties = []
     refs_local = []
@@ -119,51 +118,14 @@ def joint_problem(spec, part, factor: float | None = None, mesh_mm: float | None
         bottom = R @ np.asarray(s.bottom(), float) + o
         mouth_l = np.asarray(s.mouth(), float)
         refs_local.append(tuple(float(v) for v in mouth_l))
-        sel = socket_faces(bottom, d, s.bore / 2, s.depth - joint_cad.CHAMFER, tol)
+        sel = socket_faces(bottom, d, s.bore / 2, s.depth - CHAMFER, tol)
         ties.append(solid_fe.Tie(s.rod, sel, tuple(R @ mouth_l + o), itf.e / itf.h, itf.g / itf.h))
     labels = tuple(s.rod for s in part.sockets)
-    if joint_kind(part) == "corner_bottom":
-        ties.append(solid_fe.Tie("body", lambda c, n: (c[2] < 1e-3) & (np.abs(n[2]) > 0.99), tuple(o),
-                                 _TIE_STIFF * itf.e, _TIE_STIFF * itf.e))
-    elif joint_kind(part) == "core_link" and is_pegged(part):
-        # the ABS bores hold the pegs both ways: their sides and their inner ends (on the bed in print)
-        pl = pegged_plan(part.sockets, dict(part.params))
-
-        tol_peg = 0.1 + pl.peg_r * (1 - math.cos(math.pi / FE_CURVATURE))  # the facets' sagitta on the peg
-
-        def sel_pegs(c, n, pl=pl):
-            on_peg = np.zeros(c.shape[1], bool)
-            for col in pl.columns:
-                radial = np.hypot(c[0] - col.axis[0], c[1] - col.axis[1])
-                side = (np.abs(radial - pl.peg_r) < tol_peg) & (c[2] < col.col0 + 1e-3) & (np.abs(n[2]) < 0.1)
-                end = (np.abs(c[2] - col.peg0) < 1e-3) & (radial < pl.peg_r + tol) & (n[2] < -0.99)
-                on_peg |= side | end
-            return on_peg
-
-        ties.append(solid_fe.Tie("body", sel_pegs, tuple(o), _TIE_STIFF * itf.e, _TIE_STIFF * itf.e))
-    elif joint_kind(part) == "core_link":
-        bolt = R @ np.asarray(part.param("bolt_hole"), float) + o
-        axis = R @ np.array([0.0, 0.0, 1.0])
-        r_hole = float(part.param("screw_clearance")) / 2
-        z0 = float(part.param("plate_top_z"))
-        corner, sign, _, _ = seat_geometry(part)
-
-        def sel_bolt(c, n, bolt=bolt, axis=axis):
-            rel = c - bolt[:, None]
-            t = axis @ rel
-            radial = np.linalg.norm(rel - np.outer(axis, t), axis=0)
-            hole = np.abs(radial - r_hole) < tol
-            # the tab's underside where it lies on the plate: local z = plate_top_z, facing down
-            # (local -z), inside the plate corner; the seat's faces on the plate's edges stay free
-            # (they open under thrust)
-            zl = axis @ (c - o[:, None])
-            cl = R.T @ (c - o[:, None])
-            on = (sign[0] * (cl[0] - corner[0]) < 1e-3) & (sign[1] * (cl[1] - corner[1]) < 1e-3)
-            under = (np.abs(zl - z0) < 1e-3) & ((axis @ n) < -0.99) & on
-            return hole | under
-
-        ties.append(solid_fe.Tie("body", sel_bolt, tuple(o), _TIE_STIFF * itf.e, _TIE_STIFF * itf.e))
-    if _has_body(part):
+    kind = joint_kind(part)
+    support = kind.support_faces(part, m, tol, FE_CURVATURE)  # the floor, the plate's bolt and top, the core's bores
+    if support is not None:
+        ties.append(solid_fe.Tie("body", support, tuple(o), _TIE_STIFF * itf.e, _TIE_STIFF * itf.e))
+    if kind.has_body:
         labels += ("body",)
-    refs = refs_local + ([(0.0, 0.0, 0.0)] if _has_body(part) else [])
+    refs = refs_local + ([(0.0, 0.0, 0.0)] if kind.has_body else [])
     return JointProblem(pts, tets, itf.e, _nu(itf.e, itf.g), tuple(ties), R, o, labels, tuple(refs))

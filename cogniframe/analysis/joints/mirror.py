@@ -48,7 +48,7 @@ def reflection(original, part) -> tuple[np.ndarray, tuple[int, ...]]:
     against the bed) is the mirror image of the original's."""
     import itertools
 
-    from ...parts.joint_plan import print_from_local
+    from ...families.joint_kinds.kinds import print_from_local
 
     if joint_kind(part) != joint_kind(original) or len(part.sockets) != len(original.sockets):
         raise ValueError(f"{part.name} and {original.name} are not the same kind of joint")

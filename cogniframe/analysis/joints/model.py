@@ -9,8 +9,9 @@ and the mirroring share.
   roughness (layer steps about one layer height peak to valley), with normal stiffness E / h_i
   and shear stiffness G / h_i per unit area. A looser fit is a thicker, softer interface; an
   interference fit is the roughness alone;
-- what kind a joint part is (`joint_kind`), whether it has a support body, which socket of a
-  knee hangs on the living hinge and that hinge's size;
+- what kind a joint part is (`joint_kind`: its kind in families/joint_kinds/, which says whether
+  it has a support body and a living hinge), which socket of a knee hangs on the hinge and the
+  hinge's size;
 - the super-element every method produces (`JointStiffness`, with its cache JSON): a 6n x 6n
   stiffness over n rigid reference bodies in the part's local frame -- every rod in its socket,
   referenced at the socket mouth, plus for some joints a support body at the joint centre (the
@@ -23,6 +24,8 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+
+from ...families.joint_kinds.kinds import kind_of
 
 # ------------------------------------------------------------------------------------------
 # THE calibration: effective modulus of printed TPU (100 % infill, 0.2 mm layers) relative to
@@ -100,19 +103,20 @@ def interface(spec, factor: float | None = None) -> Interface:
 
 # -- joint kinds --------------------------------------------------------------------------------
 
-def joint_kind(part) -> str:
-    """What a joint part is, whatever it is called: `core_link_mirrored` is a `core_link`."""
-    return str(dict(part.params).get("kind", part.name))
+def joint_kind(part):
+    """What a joint part is, whatever it is called (`core_link_mirrored` is a core link): its kind
+    (families/joint_kinds/)."""
+    return kind_of(part)
 
 
 def _has_body(part) -> bool:
-    return joint_kind(part) in ("corner_bottom", "core_link")
+    return joint_kind(part).has_body
 
 
 def hinged_socket(part) -> int | None:
     """Index of the knee's hinged (upper-leg) socket: the leg making the larger angle with the arms
     (any knee part: `knee_mirrored`, a rectangle's fr/rl knee, is hinged too)."""
-    if joint_kind(part) != "knee":
+    if not joint_kind(part).hinged:
         return None
     dirs = [np.asarray(s.direction, float) for s in part.sockets]
     arm = None

@@ -42,7 +42,6 @@ DATA_FILE = Path(__file__).resolve().parents[2] / "data" / "joint_surrogate.json
 DATA_SHA256 = "bfd15b9e4cd69b9a7c345ea9355a081bb3718dd9064e17290e29c053b19fc387"
 _ABS_TOL = 1e-6  # a feature constant over the training set must equal it to this (mm, rad, ratios)
 _BOX_SLACK = 0.02  # a varying feature may exceed its sampled range by this share of it: the design box ends (a hypercube never samples them exactly)
-_IGNORED = {"hinge_thickness"}  # params a family's CAD does not read (the knee's hinge is a feature of knees only)
 
 
 @dataclass(frozen=True)
@@ -107,23 +106,21 @@ def features(spec, part) -> tuple[tuple[str, ...], np.ndarray]:
     itf = interface(spec, 1.0)
     e, g = tpu_moduli(spec, 1.0)
     d = float(spec.rods.diameter)
-    pegged = dict(part.params).get("link") == "pegs"
+    kind = joint_kind(part)
     names = ["log_rod_d", "log_interface_h", "nu"]
     vals = [math.log(d), math.log(itf.h), e / (2 * g) - 1]
-    if not pegged:  # the pegged link's columns have the connector's own wall, not joints.wall
+    if kind.surrogate_reads_wall:  # the pegged link's columns have the connector's own wall, not joints.wall
         names.insert(2, "log_wall")
         vals.insert(2, math.log(part.wall))
     for i, s in enumerate(part.sockets):
         names += [f"s{i}_log_seat", f"s{i}_log_depth", f"s{i}_clearance", *(f"s{i}_dir_{a}" for a in "xyz"),
                   *(f"s{i}_port_{a}" for a in "xyz")]
         vals += [math.log(max(s.seat, 1e-3)), math.log(s.depth), s.bore - d, *map(float, s.direction), *map(float, s.port)]
-    kind = joint_kind(part)
-    if pegged:
-        n, v = _pegged_features(part)
-        names += n
-        vals += v
+    n, v = kind.surrogate_features(part)  # the shape of its own (the pegged link's arch and columns)
+    names += n
+    vals += v
     for k, v in part.params:
-        if k in ("kind", "mirror") or (k in _IGNORED and kind != "knee"):
+        if k in ("kind", "mirror") or not kind.surrogate_reads(k):
             continue
         if isinstance(v, bool):
             names.append(f"p_{k}")
@@ -138,29 +135,6 @@ def features(spec, part) -> tuple[tuple[str, ...], np.ndarray]:
             names.append(f"p_{k}={v}")
             vals.append(1.0)
     return tuple(names), np.array(vals, float)
-
-
-def _pegged_features(part) -> tuple[list[str], list[float]]:
-    """The pegged link's shape as its plan builds it (parts/peg_plan.py): the sizes its stiffness
-    follows as power laws (the arch's span, depth and height, the columns' length and radius, the
-    strut sleeve's length), the strut's lean, and the opening's and the crown block's extents,
-    which change the arch's section."""
-    from ...parts.peg_plan import pegged_plan
-
-    pl = pegged_plan(part.sockets, dict(part.params))
-    col = pl.columns[0]
-    names = ["g_log_span", "g_log_arch_depth", "g_log_arch_height", "g_log_col_len", "g_log_col_r"]
-    vals = [math.log(pl.spacing), math.log(pl.arch_n[1] - pl.arch_n[0]), math.log(pl.arch_hi - pl.arch_lo),
-            math.log(col.col_len), math.log(pl.col_r)]
-    o = pl.opening
-    names += ["g_open_half", "g_open_top_half", "g_open_rise"]
-    vals += [o.half, o.top_half, o.z1 - o.z0] if o is not None else [0.0, 0.0, 0.0]
-    names.append("g_block_h")
-    vals.append(pl.block[1][2] - pl.block[0][2] if pl.block is not None else 0.0)
-    for i, st in enumerate(pl.struts):
-        names += [f"g_strut{i}_lean_cos", f"g_strut{i}_log_len"]
-        vals += [st.lean_cos, math.log(st.end - st.start)]
-    return names, vals
 
 
 def socket_frame(direction) -> np.ndarray:
@@ -310,9 +284,7 @@ def outside_reasons(spec, parts) -> dict[str, str]:
 def family_of(part) -> str:
     """The fit a joint belongs to: its kind, and for a core link its joint to the core (the pegged
     connector and the bolted tab are different shapes with different features)."""
-    kind = joint_kind(part)
-    link = dict(part.params).get("link")
-    return f"{kind}_{link}" if kind == "core_link" and link not in (None, "tab") else kind
+    return joint_kind(part).surrogate_family
 
 
 def _why_outside(fams: dict, spec, part) -> str | None:

@@ -1,0 +1,109 @@
+"""What a joint kind is: the hooks every kind of TPU joint answers (`JointKind`), one short
+subclass per kind in this package, one tuple of them in `kinds.py`.
+
+A kind joins one kind of frame node (`node`: corner_top, corner_bottom, knee, core_link; the frame
+makes the nodes) in one way (`variant`: the core link's bolted tab, its flat tab on level arms, its
+pegs). The joint family (families/joint.py) places a part per node kind and asks the kind:
+
+- plan: `plans(spec)` (whether this design makes its node this way), `claims(params, sockets)`
+  (whether a planned part is this kind: the registry asks each kind in turn), `params` and
+  `hardware` (what the part record carries), `refuse` (a design it cannot make: a UserError
+  naming the params key);
+- closed form: `estimate(spec, sockets, params)`, the volume and areas of the solid it builds;
+- print: `print_from_local(part)` (pure numpy, no CAD kernel) and `solid(part)` (CadQuery,
+  imported only when asked for; built in print orientation from parts/joint_solid.py's pieces);
+- stiffness: `has_body` (its super-element holds a support body at the joint centre), `hinged`
+  (one socket hangs on a living hinge), `closed_form_stiffness` (the analytic joint model has a
+  closed form for it), `support_faces(part, m, tol)` (the FE's support tie: which mesh faces the
+  support body holds), `surrogate_family` and `surrogate_features(part)` (which fit of the joint
+  surrogate it belongs to, and its own shape features);
+- assembly words: `fitted` (how the part goes on: "bolted", "pressed in").
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...parts.joint_plan import PSocket, map_sockets
+from ...parts.record import Estimate, HardwareLine, PartSpec
+
+
+class JointKind:
+    """The defaults are a joint with no support body, no hinge, a closed-form stiffness, no
+    params or hardware of its own."""
+
+    node: str = ""  # the frame node kind it joins
+    variant: str = ""  # how, among the kinds of one node ("" for the only one)
+    has_body = False
+    hinged = False
+    closed_form_stiffness = True
+    chiral = False  # always a part for fl/rr and its mirror image for fr/rl, whatever the box
+    fitted = "glued"
+
+    @property
+    def label(self) -> str:
+        """The kind's name: its node, and its variant where the node has several."""
+        return f"{self.node}_{self.variant}" if self.variant else self.node
+
+    @property
+    def surrogate_family(self) -> str:
+        """The joint surrogate's fit this kind's parts belong to (analysis/joints/surrogate.py)."""
+        return self.node
+
+    def __repr__(self) -> str:
+        return f"<joint kind {self.label}>"
+
+    # -- plan ------------------------------------------------------------------------------------
+
+    def plans(self, spec) -> bool:
+        """Whether this design makes its node this way."""
+        return True
+
+    def claims(self, params: dict, sockets) -> bool:
+        """Whether a part of its node, with these params and sockets, is this kind."""
+        return True
+
+    def params(self, spec, frame, corner: str, origin: np.ndarray, sockets) -> list[tuple[str, object]]:
+        """The part's params of this kind (after the common hinge thickness, kind and mirror)."""
+        return []
+
+    def hardware(self, spec, frame) -> tuple[HardwareLine, ...]:
+        return ()
+
+    def refuse(self, spec, sockets, params: dict) -> None:
+        """Raise the spec's error when the design asks for a joint this kind cannot make."""
+
+    # -- closed form, print, solid -------------------------------------------------------------
+
+    def estimate(self, spec, sockets, params: dict) -> Estimate:
+        raise NotImplementedError
+
+    def print_from_local(self, part: PartSpec) -> np.ndarray:
+        raise NotImplementedError
+
+    def solid(self, part: PartSpec):
+        """The solid in print orientation (a cq shape); `kinds.solid` wraps it in a `Built`."""
+        raise NotImplementedError
+
+    def in_print(self, part: PartSpec) -> tuple[np.ndarray, list[PSocket], float]:
+        """(the print <- local transform, the sockets in print, the sleeves' radius)."""
+        m = self.print_from_local(part)
+        return m, map_sockets(part, m), (part.sockets[0].bore + 2 * part.wall) / 2
+
+    # -- stiffness -------------------------------------------------------------------------------
+
+    def support_faces(self, part: PartSpec, m: np.ndarray, tol: float, curvature: int):
+        """``select(centroids, normals)`` of the mesh faces (print coordinates, `m` the print <-
+        local transform; `tol` the bores' tolerance, `curvature` the mesh's elements per circle)
+        the joint FE's support body holds; None without a support body."""
+        return None
+
+    def surrogate_features(self, part: PartSpec) -> tuple[list[str], list[float]]:
+        """Shape features of its own the surrogate fits on, after the sockets'."""
+        return [], []
+
+    surrogate_reads_wall = True  # joints.wall is a feature (the pegged link's columns have their own)
+
+    def surrogate_reads(self, param: str) -> bool:
+        """Whether the surrogate's features include this part param (the solid reads it)."""
+        return param != "hinge_thickness"
