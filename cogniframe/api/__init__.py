@@ -213,9 +213,10 @@ class Design:
         (core.link: pegs) has no closed form: its fast model is the FE's surrogate (milliseconds too,
         the FE itself for a joint outside its training box)."""
         from .. import spec as spec_mod
+        from ..families.joint_kinds.kinds import closed_forms_cover
 
         data = self._spec.model_dump(mode="json", exclude_unset=False)
-        data["model"]["stiffness_model"] = "surrogate" if self._spec.core.link == "pegs" else "analytic"
+        data["model"]["stiffness_model"] = "analytic" if closed_forms_cover(self._spec) else "surrogate"
         fast = spec_mod.from_dict(data, source=self._source, text=self._text)
         return Design(fast, self._text, self._source, self._path, self._design)
 

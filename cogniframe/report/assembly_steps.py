@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Sequence
 
 from ..families import camera_mount, motor_mount, sensor_mount
+from ..families.joint_kinds.kinds import core_link
 
 if TYPE_CHECKING:
     from ..partlist import PartSpec
@@ -141,9 +142,9 @@ def assembly_steps(design: "Derived") -> tuple[Step, ...]:
     spacer = next((n for n in ("sensor_mount", "core_spacer") if n in parts), None)
     core_parts = [n for n in ("core_plate", spacer, "battery_holder", "core_link", "core_link_mirrored") if n and n in parts]
     mirrored = "core_link_mirrored" in parts
-    pegs = spec.core.link == "pegs"
-    add("Core", core_parts, [], f"none: the core links are {'pressed in' if pegs else 'bolted'}, so the core stays removable",
-        _core_text(spacer, mirrored, pegs),
+    link = core_link(spec)
+    add("Core", core_parts, [], f"none: the core links are {link.fitted}, so the core stays removable",
+        _core_text(spacer, mirrored, link),
         hw("core_link", "core_link_mirrored", "core_plate", "battery_holder", *([spacer] if spacer else [])))
     add("Hang the core", [], [], "none: arm and strut ends are only pushed into the core links",
         "Hold the core in the middle of the frame and push the free ends of both arm rods"
@@ -170,22 +171,15 @@ def _rods_by_role(frame) -> dict[str, list[str]]:
     return out
 
 
-def _core_text(spacer: str | None, mirrored: bool, pegs: bool = False) -> str:
-    """Fixing the core links to the plate (bolted, or their pegs pressed into the plate's tubes)
-    and stacking plate, spacer and holder."""
+def _core_text(spacer: str | None, mirrored: bool, link) -> str:
+    """Fixing the core links to the plate (the link kind's words: bolted, or their pegs pressed
+    into the plate's tubes) and stacking plate, spacer and holder."""
     which = (" (core_link at front-left and rear-right, its mirror image core_link_mirrored at front-right and rear-left)"
              if mirrored else "")
-    if pegs:
-        fix = (f"Press a TPU core link onto each corner of the core plate{which}: push its two pegs all the way into the "
-               "pair of ABS tubes under the plate's arm there (and the strut's peg into the tube between them), up to the "
-               "columns' shoulders (no screw). ")
-    else:
-        fix = (f"Bolt a TPU core link onto each corner of the core plate{which}: screw down through the link tab and the plate"
-               + (f", nut in the hex trap under the {spacer}" if spacer else ", nut underneath") + ". ")
-    if pegs and spacer:
-        return (fix + f"Screw four standoffs under the plate's stack holes. Lay the {spacer}'s bar on the battery holder under "
-                "the two rear ones, the two longer front ones straight on the holder, and screw the holder (and the bar) to "
-                "them from inside. The holder's open end faces the front so the battery slides in.")
+    fix = link.fixing_words(which, spacer)
+    stacking = link.stacking_words(spacer)
+    if stacking is not None:
+        return fix + stacking
     return (fix
             + (f"Lay the {spacer} on the battery holder and the plate on it; " if spacer else "Put the plate on the battery holder; ")
             + "screw them together with the stack screws. The holder's open end faces the front so the battery slides in.")

@@ -71,6 +71,10 @@ class CoreLinkTab(JointKind):
         length = next((n for n in (8, 10, 12, 14, 16, 20) if n >= grip), 20)
         return (HardwareLine(f"{screw.name} x {length} socket-head screw + nut (core link to plate)", 1, screw.mass_g * length / 6 + 0.1),)
 
+    def fixing_words(self, which: str, spacer: str | None) -> str:
+        return (f"Bolt a TPU core link onto each corner of the core plate{which}: screw down through the link tab and the plate"
+                + (f", nut in the hex trap under the {spacer}" if spacer else ", nut underneath") + ". ")
+
     def estimate(self, spec, sockets, params: dict) -> Estimate:
         """Closed-form volume/areas of the solid, in print orientation: the arm block and the
         strut's D-section sleeves (less the strut's run inside the block), then the bolt tab, the

@@ -17,7 +17,9 @@ pegs). The joint family (families/joint.py) places a part per node kind and asks
   closed form for it), `support_faces(part, m, tol)` (the FE's support tie: which mesh faces the
   support body holds), `surrogate_family` and `surrogate_features(part)` (which fit of the joint
   surrogate it belongs to, and its own shape features);
-- assembly words: `fitted` (how the part goes on: "bolted", "pressed in").
+- assembly words (the core links): `fitted` (how the link goes on: "bolted", "pressed in"),
+  `fixing_words` (how to fix it to the plate) and `stacking_words` (how the plate, spacer and
+  holder stack where the link changes that).
 """
 
 from __future__ import annotations
@@ -101,6 +103,19 @@ class JointKind:
     def surrogate_features(self, part: PartSpec) -> tuple[list[str], list[float]]:
         """Shape features of its own the surrogate fits on, after the sockets'."""
         return [], []
+
+    # -- assembly words ----------------------------------------------------------------------------
+
+    def fixing_words(self, which: str, spacer: str | None) -> str:
+        """The assembly step's sentence fixing this joint (`which`: the mirrored parts' note)."""
+        return ""
+
+    def stacking_words(self, spacer: str | None) -> str | None:
+        """How the core's plate, spacer and holder stack with this joint, where it changes that;
+        None: the usual stack."""
+        return None
+
+    # -- the surrogate's features ------------------------------------------------------------------
 
     surrogate_reads_wall = True  # joints.wall is a feature (the pegged link's columns have their own)
 

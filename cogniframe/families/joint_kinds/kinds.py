@@ -53,6 +53,12 @@ def core_link(spec) -> JointKind:
     return planned(spec, "core_link")
 
 
+def closed_forms_cover(spec) -> bool:
+    """Whether the analytic joint model has a closed form for every joint this design makes (the
+    pegged link has none: its fast model is the FE's surrogate)."""
+    return all(planned(spec, node).closed_form_stiffness for node in NODES)
+
+
 def labels() -> tuple[str, ...]:
     return tuple(k.label for k in KINDS)
 
