@@ -454,7 +454,7 @@ def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: d
       on the spacer and the tab link's bolt clamps the two, they bend together without shear
       transfer (the lower bound of their sharing): sigma = 6 M t_p / (w (t_p^3 + t_s^3)); hung on
       standoffs (level arms), t_s = 0.
-      The pegged plate (core.link: pegs) hangs on standoffs with no spacer against it, and its
+      The pegged plate (core.link: pegs: a link kind with no plate bolt) hangs on standoffs with no spacer against it, and its
       link's pull reaches the stack hole along a ribbed stem: the section where the rib starts,
       RIB_START past the hole's centre (clear of the standoff clamping the plate there), w_r wide
       and t_p + rib deep, its lever the link's less RIB_START: sigma = 6 M / (w_r (t_p + rib)^2)."""
@@ -498,7 +498,10 @@ def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: d
     # the spacer bends with the plate only where the plate rests on it and the link's bolt clamps
     # the two (level arms hang the plate on standoffs above it)
     t_s = c.spacer_thickness if frame.core.hang == 0 else 0.0
-    if c.link == "pegs":
+    from ..families.joint_kinds.kinds import core_link
+
+    stem = not core_link(spec).plate_bolts(spec)  # no link bolt on the plate: the pegs' tubes on its ribbed stems
+    if stem:
         # the pegged plate's stem: no spacer against it (it hangs on standoffs), its section
         # where the rib starts, past the standoff clamping it (families/core_plate.py)
         from ..families.core_plate import PLATE_RAIL, RIB, RIB_START
@@ -511,7 +514,7 @@ def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: d
                 fz, mh = abs(f[6 * j + 2]), math.hypot(f[6 * j + 3], f[6 * j + 4])
                 p = fe.nodes[n]
                 lever = math.hypot(abs(p[0]) - s, abs(p[1]) - s)
-                if c.link == "pegs":
+                if stem:
                     sig_core = max(sig_core, 6 * (fz * (lever - RIB_START) + mh) / (PLATE_RAIL * (t_p + RIB) ** 2))
                 else:
                     sig_core = max(sig_core, 6 * (fz * lever + mh) * t_p / (w * (t_p**3 + t_s**3)))

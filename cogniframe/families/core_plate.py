@@ -26,7 +26,8 @@ from ..parts.joint_plan import FLIP_X, hull_ccw, transform
 from ..parts.joint_solid import Built
 from ..spec import Spec
 from ..parts.record import Estimate, HardwareLine, PartSpec, Placement
-from .base import link_hole, plate_estimate, rounded
+from .base import plate_estimate, rounded
+from .joint_kinds.kinds import core_link, kind_of
 
 NAME = "core_plate"
 SIZE_KEY = "core.plate_size"
@@ -68,16 +69,13 @@ def _core_plate(spec: Spec, frame: Frame) -> PartSpec:
     c = spec.core
     pitch, _ = STACK_PATTERNS[c.stack_pattern]
     screw = SCREWS[c.stack_screw]
-    pegs = c.link == "pegs"
     holes = [(sx * pitch / 2, sy * pitch / 2) for sx in (-1, 1) for sy in (-1, 1)]
-    if not pegs:
-        hole = link_hole(spec)
-        holes += [(sx * hole, sy * hole) for sx in (-1, 1) for sy in (-1, 1)]
+    holes += core_link(spec).plate_bolts(spec)
     est = plate_estimate(c.plate_size, c.plate_size, c.plate_thickness, [screw.clearance_d] * len(holes))
     params: list[tuple[str, object]] = [("size", c.plate_size), ("thickness", c.plate_thickness), ("holes", tuple(holes)),
                                         ("hole_d", screw.clearance_d)]
-    if pegs:
-        tubes, bore = peg_tubes(spec, frame)
+    tubes, bore = peg_tubes(spec, frame)
+    if tubes:
         r_out = bore / 2 + PEG_TUBE_WALL
         outline, ribs = pegged_layout(tubes, r_out, holes)
         params += [("tube_bore", bore), ("tube_wall", PEG_TUBE_WALL), ("tubes", tubes), ("outline", outline),
@@ -111,9 +109,9 @@ def _core_plate(spec: Spec, frame: Frame) -> PartSpec:
 
 def peg_tubes(spec: Spec, frame: Frame) -> tuple[tuple[tuple, tuple], float]:
     """((inner end, outer end) of each tube's axis in the plate's local frame, ...), the bore (mm):
-    one tube per peg of every placed core link, coaxial with it and as long (parts/peg_plan.py
-    `peg_axes` of the joint family's own link parts, through each copy's placement)."""
-    from ..parts.peg_plan import peg_axes
+    one tube per peg of every placed core link, coaxial with it and as long (its kind's `peg_axes`:
+    parts/peg_plan.py's, of the joint family's own link parts, through each copy's placement);
+    none, bore 0, for a link without pegs."""
     from .joint import core_links
 
     centre = np.asarray(frame.core.plate.centre, float)
@@ -121,7 +119,7 @@ def peg_tubes(spec: Spec, frame: Frame) -> tuple[tuple[tuple, tuple], float]:
     tubes = []
     radii = set()
     for link in core_links(spec, frame):
-        axes = peg_axes(link.sockets, dict(link.params))
+        axes = kind_of(link).peg_axes(link)
         for pl in link.placements:
             m = pl.matrix()
             for ax in axes:
@@ -135,6 +133,8 @@ def peg_tubes(spec: Spec, frame: Frame) -> tuple[tuple[tuple, tuple], float]:
                                        f"plate's {2 * top:g} mm under its top")
                 tubes.append((rounded(e), rounded(s)))
                 radii.add(round(ax.radius, 9))
+    if not tubes:
+        return (), 0.0
     if len(radii) != 1:
         raise RuntimeError(f"the core links' pegs differ in radius: {sorted(radii)}")
     return tuple(tubes), 2 * radii.pop()

@@ -18,7 +18,8 @@ from ..parts.joint_solid import Built
 from ..parts.joint_plan import transform
 from ..spec import Spec
 from ..parts.record import Estimate, HardwareLine, PartSpec, Placement
-from .base import link_hole, polygon_perimeter, rounded
+from .base import polygon_perimeter, rounded
+from .joint_kinds.kinds import core_link
 
 NAME = "sensor_mount"
 SIZE_KEY = "core.spacer_thickness"
@@ -49,16 +50,16 @@ def sensor_mount_outline(spec: Spec, frame: Frame) -> dict:
     c = spec.core
     pitch, _ = STACK_PATTERNS[c.stack_pattern]
     bar = rear_only(spec)
-    pegs = c.link == "pegs"
+    bolts = core_link(spec).plate_bolts(spec)  # the links' (none with pegs, pressed into the plate's tubes)
     if bar:
         # one bar through the two rear stack holes, as far past them as the X's rails reach
         # past theirs
         reach = pitch / 2 + 3.5
         rails = (_rect(np.array([-reach, -pitch / 2]), np.array([reach, -pitch / 2]), SPACER_RAIL),)
     else:
-        # the rails run out past the outermost holes on the diagonals: the links' bolts, or with
-        # pegs (pressed into the plate's tubes: no bolt) the stack's
-        hole = pitch / 2 if pegs else link_hole(spec)
+        # the rails run out past the outermost holes on the diagonals: the links' bolts, or
+        # without (pegs, pressed into the plate's tubes) the stack's
+        hole = max(abs(x) for x, _ in bolts) if bolts else pitch / 2
         reach = hole + 3.5 / math.sqrt(2) + SPACER_RAIL / 2 / math.sqrt(2)
         rails = (_rect(np.array([-reach, -reach]), np.array([reach, reach]), SPACER_RAIL),
                  _rect(np.array([reach, -reach]), np.array([-reach, reach]), SPACER_RAIL))
@@ -76,7 +77,7 @@ def sensor_mount_outline(spec: Spec, frame: Frame) -> dict:
     neck = ((-h, pad_y0 - 1.0), (h, pad_y0 - 1.0), (h, neck_y), (-h, neck_y))
     pad = ((-pad_half, pad_y1), (pad_half, pad_y1), (pad_half, pad_y0), (-pad_half, pad_y0))
     stack = tuple((sx * pitch / 2, sy * pitch / 2) for sx in (-1, 1) for sy in ((-1,) if bar else (-1, 1)))
-    links = () if pegs else tuple((sx * hole, sy * hole) for sx in (-1, 1) for sy in (-1, 1))
+    links = tuple(bolts)
     yc = (pad_y0 + pad_y1) / 2
     sx_ = pad_half - 1.5 - ZIP_SLOT[1] / 2
     zips = ((-sx_, yc), (sx_, yc), (-3.5, pad_y1 + 2.5), (3.5, pad_y1 + 2.5))  # receiver + flow board; antenna
@@ -104,7 +105,7 @@ def rear_only(spec: Spec) -> bool:
     holder, the spacer's thickness longer (whole millimetres: the standoffs' steps; else the X
     under all four)."""
     c = spec.core
-    return c.link == "pegs" and float(c.spacer_thickness).is_integer()
+    return not core_link(spec).plate_bolts(spec) and float(c.spacer_thickness).is_integer()
 
 
 def _sensor_mount(spec: Spec, frame: Frame) -> PartSpec:

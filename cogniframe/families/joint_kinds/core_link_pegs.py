@@ -14,7 +14,7 @@ import numpy as np
 
 from ...frame import PEG_ARCH_LEN, PEG_COLUMN_WALL, PEG_D, PEG_GAP, PEG_TUBE_WALL
 from ...parts.joint_plan import PARALLEL_TOL, PSocket, transform
-from ...parts.peg_plan import pegged_plan, sleeve_in_arch
+from ...parts.peg_plan import peg_axes, pegged_plan, sleeve_in_arch
 from ...parts.record import Estimate, PartSpec
 from .kind import JointKind
 
@@ -75,6 +75,9 @@ class CoreLinkPegs(JointKind):
 
     def estimate(self, spec, sockets, params: dict) -> Estimate:
         return _pegged_link_estimate(spec, sockets, params)
+
+    def peg_axes(self, part: PartSpec) -> tuple:
+        return peg_axes(part.sockets, dict(part.params))
 
     def fixing_words(self, which: str, spacer: str | None) -> str:
         return (f"Press a TPU core link onto each corner of the core plate{which}: push its two pegs all the way into the "

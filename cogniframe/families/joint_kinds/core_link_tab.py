@@ -63,6 +63,11 @@ class CoreLinkTab(JointKind):
                 ("esc_keepout", rounded(np.array([0.0, 0.0, float(frame.core.stack.lo[2]) + STACK_BOTTOM - 0.5]) - origin)),
                 ("esc_half", STACK_PATTERNS[spec.core.stack_pattern][1] / 2 + 0.5)]
 
+    def plate_bolts(self, spec) -> list[tuple[float, float]]:
+        """One bolt at each plate corner (`link_hole`)."""
+        hole = link_hole(spec)
+        return [(sx * hole, sy * hole) for sx in (-1, 1) for sy in (-1, 1)]
+
     def hardware(self, spec, frame) -> tuple[HardwareLine, ...]:
         """One screw and nut through tab + plate + spacer (the nut in the spacer's nut trap; a
         hanging plate: under the plate), rounded up to a stock length."""

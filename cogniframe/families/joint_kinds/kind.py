@@ -17,6 +17,8 @@ pegs). The joint family (families/joint.py) places a part per node kind and asks
   closed form for it), `support_faces(part, m, tol)` (the FE's support tie: which mesh faces the
   support body holds), `surrogate_family` and `surrogate_features(part)` (which fit of the joint
   surrogate it belongs to, and its own shape features);
+- the core's side (core links): `plate_bolts(spec)` (the plate's link holes) and
+  `peg_axes(part)` (the pegs the plate's tubes hold);
 - assembly words (the core links): `fitted` (how the link goes on: "bolted", "pressed in"),
   `fixing_words` (how to fix it to the plate) and `stacking_words` (how the plate, spacer and
   holder stack where the link changes that).
@@ -103,6 +105,18 @@ class JointKind:
     def surrogate_features(self, part: PartSpec) -> tuple[list[str], list[float]]:
         """Shape features of its own the surrogate fits on, after the sockets'."""
         return [], []
+
+    # -- the core's side (core links) --------------------------------------------------------------
+
+    def plate_bolts(self, spec) -> list[tuple[float, float]]:
+        """The bolts that fix it to the core plate, (x, y) from the plate's centre: the plate's
+        link holes, the spacer's nut traps."""
+        return []
+
+    def peg_axes(self, part: PartSpec) -> tuple:
+        """The axes of the pegs it presses into the core (parts/peg_plan.py `PegAxis`), in its own
+        frame: the core plate's tubes follow them."""
+        return ()
 
     # -- assembly words ----------------------------------------------------------------------------
 
