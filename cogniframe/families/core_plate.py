@@ -204,7 +204,7 @@ def _with_tubes(params: dict) -> Estimate:
     seg(h) = r_o^2 acos(h / r_o) - h sqrt(r_o^2 - h^2) (the circle below a chord h from its
     centre). Each rib (length L_r, width w, depth d) stands on the slab: w d L_r more, its two
     sides and two ends vertical, its top where the slab's top was. Exact but for faceting wherever
-    the tubes keep clear of each other (families/joint.py `PEG_WEB`) and of the stack holes: the
+    the tubes keep clear of each other (families/joint_kinds/core_link_pegs.py `PEG_WEB`) and of the stack holes: the
     bars lie under every tube, the bore inside the two."""
     t = float(params["thickness"])
     r_b = float(params["tube_bore"]) / 2

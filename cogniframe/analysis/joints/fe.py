@@ -1,15 +1,15 @@
 """The solid-FE joint super-element (``method="fe"``, the default): the part's own CAD solid,
 meshed and condensed onto its rods and support.
 
-The solid is exactly what is printed (`parts/joint_solid.py`: D-section sleeves, hub, foot pad, the
-knee's slotted living hinge); `meshing` turns it into gmsh tetrahedra and `solid_fe` condenses
-scikit-fem quadratic elasticity onto rigid bodies. This module picks those bodies' surfaces:
-each rod is tied to its bore wall and socket bottom through the elastic interface layer
-(`model.interface`); the support body is tied stiffly to the pad (floor), to the bolt hole and
-the tab's underside where it lies on the plate (the tab core link; `contact.py` measures what tying
-it both ways overstates under thrust), or to the pegs' sides and inner ends (the pegged core link,
-whose pegs the core's ABS bores hold). It also holds the mesh settings, which are part of the joint
-cache key.
+The solid is exactly what is printed (its kind's `solid`, families/joint_kinds/: D-section
+sleeves, hub, foot pad, the knee's slotted living hinge); `meshing` turns it into gmsh tetrahedra
+and `solid_fe` condenses scikit-fem quadratic elasticity onto rigid bodies. This module picks those
+bodies' surfaces: each rod is tied to its bore wall and socket bottom through the elastic
+interface layer (`model.interface`); the support body is tied stiffly to the faces its kind's
+`support_faces` picks: the pad (floor), the bolt hole and the tab's underside where it lies on
+the plate (the tab core link; `contact.py` measures what tying it both ways overstates under
+thrust), or the pegs' sides and inner ends (the pegged core link, whose pegs the core's ABS bores
+hold). It also holds the mesh settings, which are part of the joint cache key.
 """
 
 from __future__ import annotations

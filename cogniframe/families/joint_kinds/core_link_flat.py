@@ -44,7 +44,7 @@ class CoreLinkFlat(CoreLinkTab):
 
 
 def _flat_link_estimate(spec, params: dict, sockets, r: float) -> Estimate:
-    """Closed form of the flat core link (parts/joint_solid.py `_core_link_flat`): the sleeves (arms:
+    """Closed form of the flat core link (`_core_link_flat`): the sleeves (arms:
     a teardrop on a web, or a D section, from the bed up; the strut: half a cylinder on a 0.9 x OD
     web), the bands `T` deep (the bed down to the plate top), the seat (the bands outside the
     plate, on down to the plate's bottom), less the bores and the screw hole."""
@@ -80,7 +80,7 @@ def _flat_link_estimate(spec, params: dict, sockets, r: float) -> Estimate:
             run = n * cos_a
             t0, t1 = s.seat - j.wall, s.seat + s.depth
             h_mean = h + sin_a * (t0 + t1) / 2
-            # its run inside the band (parts/joint_solid.py: the band reaches BAND_PAST past the socket's
+            # its run inside the band (`_core_link_flat`: the band reaches BAND_PAST past the socket's
             # bottom and past where the web begins)
             t_in = min(t1, s.seat + BAND_PAST + r * sin_a / cos_a) - t0
             h_in = h + sin_a * (t0 + t_in / 2)  # the axis's mean height there

@@ -185,7 +185,7 @@ def _disc_band(r: float, lo: float, hi: float) -> float:
 
 
 def _pegged_link_estimate(spec, sockets, params: dict) -> Estimate:
-    """Closed form of the pegged core link (parts/joint_solid.py `_core_link_pegged`), in print
+    """Closed form of the pegged core link (`_core_link_pegged`), in print
     orientation (the arms' direction up, the pegs' ends on the bed): per peg a peg and a column
     (cylinders: one cylinder where their diameters are within frame.PEG_SNAP), the arch (a box from
     axis to axis, less the half columns inside it and its opening; the crown's block), the strut's

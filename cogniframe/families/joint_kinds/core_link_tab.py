@@ -1,8 +1,10 @@
 """The core link with a tab (core.link: tab): an arm pair's sockets stacked in one block, the
 strut's sleeve, a hub between their back faces, and the tab that bolts onto the core plate's
-corner with one screw; the seat fills the gap between the block and the plate's edges. Printed on
-its side (every socket level, the arm pair stacked). On level arms its sockets lie flat and it is
-the flat link instead (core_link_flat.py), whose params and screw are these."""
+corner with one screw; the seat fills the gap between the block and the plate's edges. Printed
+lying on its side, as the knee is (every socket direction in the frame's diagonal side plane, the
+arm rods offset across it: parts/joint_plan.py `side_print`), the tab a wall standing on the bed.
+On level arms its sockets lie flat and it is the flat link instead (core_link_flat.py), whose
+params and screw are these."""
 
 from __future__ import annotations
 
@@ -184,7 +186,7 @@ def _link_pieces(spec, params: dict, sockets: list[Socket], dirs: np.ndarray, po
 
 def _seat_area(params: dict, ports: np.ndarray, heights: np.ndarray, d: np.ndarray, s_back: float, r: float,
                height: float) -> float:
-    """Plan area (mm^2) of a core link's seat as parts/joint_solid.py builds it (`seat_plan`, less the
+    """Plan area (mm^2) of a core link's seat as `_seat` builds it (`seat_plan`, less the
     plate's corner quadrant), from the bed up to `height` in print (the arm pair's two `ports`
     print at `heights`: print height runs across the pair)."""
     corner, sign = link_plate_corner(params)

@@ -1,11 +1,23 @@
-"""The knee: it joins an arm pair to the upper and lower legs, and the sides fold at it. Printed
-on its side (every socket level, the arm pair stacked): the arm pair as a U (a bridge of the block's
-section over one sleeve OD at their back, past it the lower sleeve on the bed and the upper one a
-teardrop on a web one wall thick), its legs halfway up, teardrops on such webs too. The upper
-leg, which makes the larger angle with the arms and carries the fold, hangs on a living hinge: a
-vertical TPU web `hinge_thickness` thick from its sleeve to the arm bridge, a `HINGE_GAP` slot on
-both sides freeing it everywhere else; the lower leg stays solid with the bridge (where a large
-seat keeps their sleeves apart, a hub between their back faces joins them). Its plan in print
+"""The knee: it joins an arm pair to the upper and lower legs, and the sides fold at it
+("fold as you assemble"; on impact the hourglass closes).
+
+Printed lying on its side: every socket direction lies in the frame's diagonal side plane and the
+two arm rods are offset across it, so with the lateral axis vertical every socket is parallel to
+the bed and the arm sockets stack (parts/joint_plan.py `side_print`). The arm pair is a U: a bridge
+of the block's section over one sleeve OD at their back, past it the lower sleeve on the bed and
+the upper one a teardrop (round top, 45 deg flanks) on a vertical web one wall thick; the legs,
+halfway up, are teardrops on such webs too. A web is print support that also ties what it holds:
+a D-section pillar from the bed to a sleeve 15 mm up weighs 2.5 times as much.
+
+Living hinge. The legs rotate relative to the arms about the lateral axis, vertical in print, so
+the hinge is a vertical TPU web `hinge_thickness` thick (across the bend) from the upper-leg
+sleeve to the arm bridge, with a `HINGE_GAP` slot on both sides that frees the upper leg
+everywhere else: layer lines run along the bend, the way printed living hinges survive. The lower
+leg leaves almost at right angles to the arms and its socket shares a wall with the arm sockets
+(the seat is only `joints.seat` from the knee centre), so it stays solid with the arm bridge
+(where a large seat keeps their sleeves apart, a hub between their back faces joins them); the
+upper leg, which makes the larger angle with the arms and carries the fold, is the one hinged.
+frame.py raises the knee's seat until the slot leaves that leg's back end whole. Its plan in print
 (the rigid leg's start, the hub, the bridge, the hinge web) is parts/joint_plan.py's."""
 
 from __future__ import annotations
@@ -60,7 +72,7 @@ class Knee(JointKind):
 
 def _knee_sleeves(r: float, wall: float, z: np.ndarray, sleeve_l: list[float], par: list[int], rest: list[int],
                   vol: float, a_h: float, a_v: float) -> tuple[float, float, float]:
-    """A knee's sleeves added to the running volume and areas, as parts/joint_solid.py builds them
+    """A knee's sleeves added to the running volume and areas, as `_knee` builds them
     (axis heights `z`): the arm pair's bridge (`knee_bridge`: the top arm's D-section, bed up, over
     one sleeve OD from the back; to the mouths where less than a millimetre would be left), the
     lowest arm's D-section sleeve past it, the higher arms' and the legs' teardrops on a `wall`
@@ -100,7 +112,7 @@ def _knee_hub_area(sockets: list[Socket], dirs: np.ndarray, ports: np.ndarray, w
     a_i = par[0]
     x = dirs[a_i] - w * (dirs[a_i] @ w)
     x /= np.linalg.norm(x)
-    rot = np.vstack([x, np.cross(w, x), w])  # print-like axes: the side plane on the bed, as parts/joint_solid.py prints it
+    rot = np.vstack([x, np.cross(w, x), w])  # print-like axes: the side plane on the bed, as `_knee` prints it
 
     def psock(i: int) -> PSocket:
         return PSocket(rot @ ports[i] + np.array([0.0, 0.0, z[i] - float(w @ ports[i])]), rot @ dirs[i], float(sockets[i].seat),
