@@ -159,3 +159,18 @@ def test_a_new_joint_kind_is_one_module_and_one_registry_line(monkeypatch):
     assert kinds.print_from_local(part)[2, 3] == pytest.approx(part.wall + part.sockets[0].bore / 2 + 5.0)
     assert "corner_top_toy" in kinds.labels()
     _check_kind(spec, toy, part)
+
+
+def test_no_module_but_the_kinds_dispatches_on_a_joint_kind_string():
+    """Outside families/joint_kinds/ nothing compares a core link's style (`"pegs"`, `"tab"`), a
+    part's kind string or a tuple of kind names: it asks the kind. spec.py and frame.py sit below
+    the families (the params' checks, the frame's geometry) and read core.link themselves."""
+    import re
+
+    pattern = re.compile(r'[!=]=\s*"(pegs|tab|flat)"|kind\w*\([^)]*\)\s*[!=]=\s*"|in \(\s*"(corner_top|corner_bottom|knee|core_link)"')
+    allowed = {"spec.py", "frame.py"}
+    pkg = ROOT / "cogniframe"
+    found = [f"{f.relative_to(pkg)}:{i}" for f in sorted(pkg.rglob("*.py"))
+             if "joint_kinds" not in f.parts and f.relative_to(pkg).as_posix() not in allowed
+             for i, line in enumerate(f.read_text().splitlines(), 1) if pattern.search(line)]
+    assert found == []
