@@ -14,9 +14,10 @@ pegs). The joint family (families/joint.py) places a part per node kind and asks
   imported only when asked for; built in print orientation from parts/joint_solid.py's pieces);
 - stiffness: `has_body` (its super-element holds a support body at the joint centre), `hinged`
   (one socket hangs on a living hinge), `closed_form_stiffness` (the analytic joint model has a
-  closed form for it), `support_faces(part, m, tol)` (the FE's support tie: which mesh faces the
-  support body holds), `surrogate_family` and `surrogate_features(part)` (which fit of the joint
-  surrogate it belongs to, and its own shape features);
+  closed form for it), `support_faces(part, m, tol, curvature)` (the FE's support tie: which mesh
+  faces the support body holds), `surrogate_family`, `surrogate_features(part)`,
+  `surrogate_reads(param)` and `surrogate_reads_wall` (which fit of the joint surrogate it belongs
+  to, and what of it the fit's features read);
 - the core's side (core links): `plate_bolts(spec)` (the plate's link holes) and
   `peg_axes(part)` (the pegs the plate's tubes hold);
 - assembly words (the core links): `fitted` (how the link goes on: "bolted", "pressed in"),
@@ -42,7 +43,7 @@ class JointKind:
     hinged = False
     closed_form_stiffness = True
     chiral = False  # always a part for fl/rr and its mirror image for fr/rl, whatever the box
-    fitted = "glued"
+    fitted = "glued"  # how it goes on (the assembly steps' words for the core links)
 
     @property
     def label(self) -> str:
