@@ -126,9 +126,7 @@ def mouth(rod, tag: str) -> np.ndarray:
 def masses_g(spec, frame, parts, total_mass_g: float | None) -> dict:
     """Mass split used by the dynamic cases, g: rods (distributed), joints, motors (+props, mounts),
     and the payload (everything else: core, battery, electronics) at the core-plate centre."""
-    rod_mat = spec.material(spec.rods.material)
-    a = math.pi * spec.rods.diameter**2 / 4
-    rods = sum(r.length * a * rod_mat.density_g_mm3 for r in frame.rods.values())
+    rods = sum(r.length * (math.pi * r.diameter**2 / 4) * spec.material(r.material).density_g_mm3 for r in frame.rods.values())
     tpu = spec.material(spec.joints.material)
     joints = {p.name: p.estimate.volume * tpu.density_g_mm3 for p in joint_parts(parts)}
     mount = next((p for p in parts if p.family == "motor_mount"), None)
@@ -149,8 +147,6 @@ def build_model(spec, frame, parts, joints: dict, *, feet: str = "sliding", rod_
     fe = ff.Frame3D()
     mdl = Model(fe, "payload", joints=joints)
     rods = {n: r for n, r in frame.rods.items() if only_roles is None or r.role in only_roles}
-    rod_mat = spec.material(spec.rods.material)
-    rho_rod = rod_mat.density_g_mm3 * 1e-6  # t/mm^3
 
     mouths = {rn: (mouth(r, "a"), mouth(r, "b")) for rn, r in frame.rods.items()}
 
@@ -179,6 +175,8 @@ def build_model(spec, frame, parts, joints: dict, *, feet: str = "sliding", rod_
             name = f"{rn}:motor" if rn in stations and abs(t - stations[rn]) < 1e-12 else f"{rn}:{i + 1}"
             chain.append(fe.add_node(name, pa + (pb - pa) * t))
         chain.append(nb)
+        rod_mat = spec.material(r.material)
+        rho_rod = rod_mat.density_g_mm3 * 1e-6  # t/mm^3
         for i in range(len(chain) - 1):
             fe.add_beam(f"{rn}" if len(chain) == 2 else f"{rn}#{i}", chain[i], chain[i + 1], rod_mat.e_mpa, rod_mat.g_mpa,
                         r.diameter, rho=rho_rod, group=rn)
