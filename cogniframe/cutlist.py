@@ -51,10 +51,6 @@ class StockPlan:
     def count(self) -> int:
         return len(self.rods)
 
-    @property
-    def waste_mm(self) -> float:
-        return sum(r.offcut_mm for r in self.rods)
-
 
 @dataclass(frozen=True)
 class CutList:

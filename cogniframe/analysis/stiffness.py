@@ -540,17 +540,6 @@ def predict_stiffness(spec, frame, parts=None, *, joint_model: str = "fe", facto
         rod_axial_per_n=tuple((k, float(min(v))) for k, v in sorted(per_rod.items())))
 
 
-def design_force(spec, frame, total_mass_g: float, k: float) -> float:
-    """Spring force k x_max at the design drop (x_max capped at the clearance), N."""
-    from . import impact
-
-    m = total_mass_g / 1000.0
-    c = spec.model.c_n_s_per_m if spec.model.c_n_s_per_m is not None else impact.damping_from_ratio(spec.model.damping_ratio, k, m)
-    clearance = spec.requirements.clearance if spec.requirements.clearance is not None else frame.clearance_mm
-    r = impact.simulate_height(m, c, k, spec.requirements.design_drop_height_cm, clearance)
-    return k * min(r.x_max_mm, clearance) / 1000.0
-
-
 def secant_k(spec, frame, parts, joints) -> float:
     """k with the fit's play, as the secant at PLAY_REFERENCE_N (N/m)."""
     return secant_k_and_play(spec, frame, parts, joints)[0]
