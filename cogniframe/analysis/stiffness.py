@@ -125,12 +125,13 @@ def mouth(rod, tag: str) -> np.ndarray:
 
 def masses_g(spec, frame, parts, total_mass_g: float | None) -> dict:
     """Mass split used by the dynamic cases, g: rods (distributed), joints, motors (+props, mounts),
-    and the payload (everything else: core, battery, electronics) at the core-plate centre."""
+    and the payload (everything else: core, battery, electronics) at the core-plate centre. Each
+    rod and part weighs its own material (`frame.Rod`, `PartSpec`); the spec gives the densities."""
     rods = sum(r.length * (math.pi * r.diameter**2 / 4) * spec.material(r.material).density_g_mm3 for r in frame.rods.values())
-    tpu = spec.material(spec.joints.material)
-    joints = {p.name: p.estimate.volume * tpu.density_g_mm3 for p in joint_parts(parts)}
+    joints = {p.name: p.estimate.volume * spec.material(p.material).density_g_mm3 for p in joint_parts(parts)}
     mount = next((p for p in parts if p.family == "motor_mount"), None)
-    motor_each = spec.motor.mass_g + spec.motors.prop_mass + (mount.estimate.volume * tpu.density_g_mm3 if mount else 0.0)
+    motor_each = (spec.motor.mass_g + spec.motors.prop_mass
+                  + (mount.estimate.volume * spec.material(mount.material).density_g_mm3 if mount else 0.0))
     fixed = rods + sum(p.qty * joints[p.name] for p in joint_parts(parts)) + 4 * motor_each
     total = total_mass_g if total_mass_g is not None else fixed + 150.0
     return {"rods": rods, "joints": joints, "motor_each": motor_each, "payload": max(total - fixed, 1.0), "total": total}
