@@ -86,3 +86,35 @@ def distance(s1, s2) -> float:
 
     d = BRepExtrema_DistShapeShape(s1.wrapped, s2.wrapped)
     return float(d.Value()) if d.IsDone() else float("inf")
+
+
+def face_boxes(solid) -> tuple[list, np.ndarray, np.ndarray]:
+    """(faces, their boxes' lower corners (n, 3), upper corners (n, 3))."""
+    from OCP.Bnd import Bnd_Box
+    from OCP.BRepBndLib import BRepBndLib
+
+    faces, lo, hi = [], [], []
+    for f in solid.Faces():
+        b = Bnd_Box()
+        BRepBndLib.Add_s(f.wrapped, b, False)
+        x0, y0, z0, x1, y1, z1 = b.Get()
+        faces.append(f)
+        lo.append((x0, y0, z0))
+        hi.append((x1, y1, z1))
+    return faces, np.array(lo, float).reshape(-1, 3), np.array(hi, float).reshape(-1, 3)
+
+
+def touching(fa, fb, tol: float) -> float | None:
+    """The distance (<= tol) of two solids given as `face_boxes`, or None when they are farther
+    apart. Face pairs whose boxes are within tol only: a whole-solid distance of two B-spline parts
+    took seconds; this stops at the first pair that touches."""
+    from OCP.BRepExtrema import BRepExtrema_DistShapeShape
+
+    faces_b, lo_b, hi_b = fb
+    for f, l, h in zip(*fa):
+        near = np.all(lo_b <= h + tol, axis=1) & np.all(l <= hi_b + tol, axis=1)
+        for j in np.nonzero(near)[0]:
+            d = BRepExtrema_DistShapeShape(f.wrapped, faces_b[j].wrapped)
+            if d.IsDone() and d.Value() <= tol:
+                return float(d.Value())
+    return None

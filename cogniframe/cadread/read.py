@@ -10,12 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .geometry import bbox, distance
+from .geometry import bbox, face_boxes, touching
 from .load import NamedSolid, load_solids
 from .materials import MaterialMap
 from .model import Contact, Exoskeleton, Joint
 from .rods import find_rods
-from .sockets import find_sockets
+from .sockets import find_sockets, nearest_hole
 
 CONTACT_TOL = 0.05  # mm
 
@@ -35,11 +35,15 @@ def exoskeleton_of(solids: list[NamedSolid], source: str = "", materials: Materi
     sockets = find_sockets(rods, others)
     boxes = {ns.name: bbox(ns.solid) for ns in others}
     contacts = []
+    fboxes: dict[str, tuple] = {}
     for i, s1 in enumerate(others):
         for s2 in others[i + 1:]:
             if _boxes_near(boxes[s1.name], boxes[s2.name], CONTACT_TOL):
-                d = distance(s1.solid, s2.solid)
-                if d <= CONTACT_TOL:
+                for ns in (s1, s2):
+                    if ns.name not in fboxes:
+                        fboxes[ns.name] = face_boxes(ns.solid)
+                d = touching(fboxes[s1.name], fboxes[s2.name], CONTACT_TOL)
+                if d is not None:
                     contacts.append(Contact(s1.name, s2.name, d))
     # parts connected to the rods: through sockets, then through contacts
     placed = {s.joint for s in sockets}
@@ -70,6 +74,13 @@ def exoskeleton_of(solids: list[NamedSolid], source: str = "", materials: Materi
         warnings.append(f"{len(unplaced)} part(s) neither a rod nor connected to one, left out: {', '.join(unplaced)}")
     if loose:
         warnings.append(f"{len(loose)} rod end(s) in no joint's socket: {', '.join(loose)}")
+        by_name = {r.name: r for r in rods}
+        for le in loose:
+            rn, e = le.rsplit(":", 1)
+            hole = nearest_hole(by_name[rn], e, others)
+            if hole is not None:
+                warnings.append(f"  {le}: the nearest hole is in {hole[0]} (bore {hole[1]:.2f} mm), its axis "
+                                f"{hole[2]:.2f} mm from the rod's end and {hole[3]:.1f} deg off the rod's")
     multi = {}
     for s in sockets:
         if s.end is not None:

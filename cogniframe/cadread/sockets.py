@@ -135,3 +135,27 @@ def find_sockets(rods: list[Rod], others) -> list[Socket]:
                 cyl_cache[ns.name] = cylinders(ns.solid)
             out.extend(sockets_of(rod, ns.name, ns.solid, cyl_cache[ns.name]))
     return out
+
+
+def nearest_hole(rod: Rod, end: str, others, reach: float = 15.0) -> tuple[str, float, float, float] | None:
+    """For a loose rod end: the closest hole of a rod's size in any solid within `reach` mm, as
+    (solid, bore, axis offset at the rod end mm, tilt deg): what the CAD may have meant."""
+    p, d = np.asarray(rod.end(end)), np.asarray(rod.direction_from(end))
+    r = rod.diameter / 2
+    best = None
+    for ns in others:
+        lo, hi = bbox(ns.solid)
+        if np.any(p < lo - reach) or np.any(p > hi + reach):
+            continue
+        for c in cylinders(ns.solid):
+            if not c.hole or not (BORE_MIN * r <= c.radius <= BORE_MAX * r):
+                continue
+            mid = c.at((c.v0 + c.v1) / 2)
+            if np.linalg.norm(mid - p) > reach:
+                continue
+            tilt = math.degrees(math.acos(min(1.0, abs(float(np.dot(c.direction, d))))))
+            off = line_distance(p, c.origin, c.direction)
+            score = off + tilt / 10
+            if best is None or score < best[0]:
+                best = (score, ns.name, 2 * c.radius, off, tilt)
+    return None if best is None else best[1:]
