@@ -27,33 +27,123 @@ class Cyl:
 
 
 def cylinders(solid) -> list[Cyl]:
-    """Every cylindrical face of `solid` (a cadquery Shape) as a `Cyl`."""
+    """Every cylindrical face of `solid` (a cadquery Shape) as a `Cyl`, B-spline faces that are
+    cylinders within `SPLINE_TOL` included (a CAD program's mirror or export can turn a hole into a
+    B-spline surface: one socket of each mirrored pair in the authors' FreeCAD document)."""
     from OCP.BRepAdaptor import BRepAdaptor_Surface
-    from OCP.BRepLProp import BRepLProp_SLProps
-    from OCP.BRepTools import BRepTools
-    from OCP.GeomAbs import GeomAbs_Cylinder
-    from OCP.TopAbs import TopAbs_REVERSED
+    from OCP.GeomAbs import GeomAbs_BSplineSurface, GeomAbs_BezierSurface, GeomAbs_Cylinder
 
     out = []
     for f in solid.Faces():
         ad = BRepAdaptor_Surface(f.wrapped, True)
-        if ad.GetType() != GeomAbs_Cylinder:
-            continue
-        c = ad.Cylinder()
-        ax = c.Axis()
-        o = np.array([ax.Location().X(), ax.Location().Y(), ax.Location().Z()])
-        d = np.array([ax.Direction().X(), ax.Direction().Y(), ax.Direction().Z()])
-        u0, u1, v0, v1 = BRepTools.UVBounds_s(f.wrapped)
-        um, vm = (u0 + u1) / 2, (v0 + v1) / 2
-        props = BRepLProp_SLProps(ad, um, vm, 1, 1e-7)
-        p, n = props.Value(), props.Normal()
-        nrm = np.array([n.X(), n.Y(), n.Z()])
-        if f.wrapped.Orientation() == TopAbs_REVERSED:
-            nrm = -nrm
-        pt = np.array([p.X(), p.Y(), p.Z()])
-        radial = pt - o - d * np.dot(pt - o, d)
-        out.append(Cyl(o, d, float(c.Radius()), float(v0), float(v1), float(u1 - u0), bool(np.dot(nrm, radial) < 0)))
+        kind = ad.GetType()
+        if kind == GeomAbs_Cylinder:
+            c = ad.Cylinder()
+            out.append(_cyl(f, ad, c.Axis(), c.Radius(), analytic=True))
+        elif kind in (GeomAbs_BSplineSurface, GeomAbs_BezierSurface):
+            c = _spline_cylinder(f, ad)
+            if c is not None:
+                out.append(_cyl(f, ad, _Ax(*c[:2]), c[2], analytic=False))
     return out
+
+
+SPLINE_TOL = 5e-3  # mm from the fitted cylinder; also the normals' component along its axis
+
+
+def _spline_cylinder(f, ad):
+    """(origin, unit axis, radius) of the cylinder a B-spline face is (within SPLINE_TOL), or None:
+    its normals on a 9 x 9 grid are all square to one direction (the axis, their least singular
+    vector) and its points lie on a circle about it (a least-squares circle in the plane across it)."""
+    from OCP.BRepLProp import BRepLProp_SLProps
+    from OCP.BRepTools import BRepTools
+
+    u0, u1, v0, v1 = BRepTools.UVBounds_s(f.wrapped)
+    pts, nrm = [], []
+    for u in np.linspace(u0, u1, 9):
+        for v in np.linspace(v0, v1, 9):
+            pr = BRepLProp_SLProps(ad, u, v, 1, 1e-7)
+            if not pr.IsNormalDefined():
+                return None
+            p, n = pr.Value(), pr.Normal()
+            pts.append((p.X(), p.Y(), p.Z()))
+            nrm.append((n.X(), n.Y(), n.Z()))
+    pts, nrm = np.array(pts), np.array(nrm)
+    d = np.linalg.svd(nrm)[2][-1]
+    if np.abs(nrm @ d).max() > SPLINE_TOL * 10:
+        return None
+    x, y = _perp(d)
+    q = np.column_stack([pts @ x, pts @ y])
+    A = np.column_stack([2 * q, np.ones(len(q))])
+    sol, *_ = np.linalg.lstsq(A, (q * q).sum(axis=1), rcond=None)
+    cx, cy = sol[0], sol[1]
+    r = float(np.sqrt(max(sol[2] + cx * cx + cy * cy, 0.0)))
+    if r <= 0 or np.abs(np.hypot(q[:, 0] - cx, q[:, 1] - cy) - r).max() > SPLINE_TOL:
+        return None
+    if np.ptp(np.arctan2(q[:, 1] - cy, q[:, 0] - cx)) < 0.2:  # a sliver: not enough arc to call it a cylinder
+        return None
+    return cx * x + cy * y, d, r
+
+
+class _Ax:
+    """A gp_Ax1-like axis from numpy (what `_cyl` reads)."""
+
+    class _P:
+        def __init__(self, v):
+            self.v = v
+
+        def X(self):  # noqa: N802 - gp's names
+            return float(self.v[0])
+
+        def Y(self):  # noqa: N802
+            return float(self.v[1])
+
+        def Z(self):  # noqa: N802
+            return float(self.v[2])
+
+    def __init__(self, o, d):
+        self.o, self.d = self._P(o), self._P(d)
+
+    def Location(self):  # noqa: N802
+        return self.o
+
+    def Direction(self):  # noqa: N802
+        return self.d
+
+
+def _cyl(f, ad, ax, radius: float, analytic: bool) -> Cyl:
+    from OCP.BRepLProp import BRepLProp_SLProps
+    from OCP.BRepTools import BRepTools
+    from OCP.TopAbs import TopAbs_REVERSED
+
+    o = np.array([ax.Location().X(), ax.Location().Y(), ax.Location().Z()])
+    d = np.array([ax.Direction().X(), ax.Direction().Y(), ax.Direction().Z()])
+    u0, u1, v0, v1 = BRepTools.UVBounds_s(f.wrapped)
+    um, vm = (u0 + u1) / 2, (v0 + v1) / 2
+    props = BRepLProp_SLProps(ad, um, vm, 1, 1e-7)
+    p, n = props.Value(), props.Normal()
+    nrm = np.array([n.X(), n.Y(), n.Z()])
+    if f.wrapped.Orientation() == TopAbs_REVERSED:
+        nrm = -nrm
+    pt = np.array([p.X(), p.Y(), p.Z()])
+    radial = pt - o - d * np.dot(pt - o, d)
+    span = float(u1 - u0)
+    if not analytic:  # the extent along the axis from points of the face; the span from them too
+        pts = np.array([[*(lambda q: (q.X(), q.Y(), q.Z()))(ad.Value(u, v))]
+                        for u in np.linspace(u0, u1, 9) for v in np.linspace(v0, v1, 9)])
+        t = (pts - o) @ d
+        v0, v1 = float(t.min()), float(t.max())
+        rad = pts - o - np.outer((pts - o) @ d, d)
+        ang = np.unwrap(np.sort(np.arctan2(rad @ _perp(d)[1], rad @ _perp(d)[0])))
+        gaps = np.diff(np.concatenate([ang, ang[:1] + 2 * np.pi]))
+        span = float(2 * np.pi - gaps.max())
+    return Cyl(o, d, float(radius), float(v0), float(v1), span, bool(np.dot(nrm, radial) < 0))
+
+
+def _perp(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    a = np.array([1.0, 0, 0]) if abs(d[0]) < 0.9 else np.array([0, 1.0, 0])
+    x = np.cross(d, a)
+    x /= np.linalg.norm(x)
+    return x, np.cross(d, x)
 
 
 def vertices(solid) -> np.ndarray:

@@ -2,8 +2,9 @@
 
 - STEP: `cq.Assembly.importStep` keeps the product names and the placements of the assembly tree;
   each leaf's shape is moved by the product of the locations from the root. A leaf holding several
-  solids gives `name#1`, `name#2`, ... A STEP without an assembly structure (one compound) reads the
-  same way: its solids are named after the file's root (`name#k`).
+  solids gives `name#1`, `name#2`, ... A STEP without an assembly structure (one part, one compound) reads the
+  without its names: cadquery reads it as one shape, whose solids are named after the file
+  (`stem#k`).
 - FreeCAD: the `.FCStd` is a zip of `Document.xml` (each object's properties: its `Label`, its
   `Placement` as position + quaternion, its `Shape` as the name of a `.brp` (text BRep) or `.bin`
   (binary BRep) file in the zip) and the shape files. Only the visible objects are read when any
@@ -85,6 +86,13 @@ def _load_step(p: Path) -> list[NamedSolid]:
     try:
         assy = cq.Assembly.importStep(str(p))
     except Exception as exc:  # OCC's reader reports a broken file as a generic error
+        if "does not contain an assembly" in str(exc):  # one part or one compound: its solids
+            try:
+                shape = cq.importers.importStep(str(p))
+            except Exception as exc2:
+                raise UserError(f"{p}: the STEP file could not be read ({type(exc2).__name__}: {exc2}); "
+                                f"export it again from the CAD program as STEP AP214/AP242") from None
+            return _solids_named(p.stem, cq.Compound.makeCompound(shape.vals()))
         raise UserError(f"{p}: the STEP file could not be read ({type(exc).__name__}: {exc}); "
                         f"export it again from the CAD program as STEP AP214/AP242") from None
     out: list[NamedSolid] = []
