@@ -208,3 +208,33 @@ def touching(fa, fb, tol: float) -> float | None:
             if d.IsDone() and d.Value() <= tol:
                 return float(d.Value())
     return None
+
+
+@dataclass(frozen=True)
+class Cone:
+    """A conical face (a chamfer, a countersink): its axis and its extent [v0, v1] along it."""
+
+    origin: np.ndarray
+    direction: np.ndarray
+    v0: float
+    v1: float
+
+
+def cones(solid) -> list[Cone]:
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+    from OCP.BRepTools import BRepTools
+    from OCP.GeomAbs import GeomAbs_Cone
+
+    out = []
+    for f in solid.Faces():
+        ad = BRepAdaptor_Surface(f.wrapped, True)
+        if ad.GetType() != GeomAbs_Cone:
+            continue
+        ax = ad.Cone().Axis()
+        o = np.array([ax.Location().X(), ax.Location().Y(), ax.Location().Z()])
+        d = np.array([ax.Direction().X(), ax.Direction().Y(), ax.Direction().Z()])
+        u0, u1, v0, v1 = BRepTools.UVBounds_s(f.wrapped)
+        pts = np.array([[(q := ad.Value(u, v)).X(), q.Y(), q.Z()] for u in np.linspace(u0, u1, 5) for v in (v0, v1)])
+        t = (pts - o) @ d
+        out.append(Cone(o, d, float(t.min()), float(t.max())))
+    return out

@@ -57,8 +57,8 @@ class Socket:
     """A rod end in a joint (or, with ``end=None``, a rod passing through a sleeve of a joint).
 
     `bore`: the hole's diameter (its cylindrical face's radius x 2, measured across the hole's own
-    axis); `depth`: how far the rod sits inside the joint, mouth to rod end (for a sleeve: the
-    sleeve's length); `blind`: the hole has a bottom (material on the axis just beyond it);
+    axis); `depth`: how far the rod sits inside the joint, mouth to rod end, a coaxial mouth
+    chamfer included (for a sleeve: the sleeve's length); `blind`: the hole has a bottom (material on the axis just beyond it);
     `gap`: rod end -> bottom of a blind hole (0 when the rod is home; negative = the CAD puts the rod
     deeper than the hole); `offset`: the hole axis' distance from the rod axis at the rod end;
     `tilt_deg`: the angle between the two axes."""

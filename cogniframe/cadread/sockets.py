@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from .geometry import Cyl, bbox, cylinders, inside, line_distance
+from .geometry import Cone, Cyl, bbox, cones, cylinders, inside, line_distance
 from .model import Rod, Socket
 
 NEAR = 1.0  # mm between a rod's and a solid's bounding boxes
@@ -97,8 +97,33 @@ def _measure(joint: str, solid, rod: Rod, end: str | None, t_bottom: float, t_mo
     return Socket(joint, rod.name, end, _t(bottom), _t(d), 2 * c.radius, depth, blind, gap, offset, tilt)
 
 
+def _chamfers(solid, rod: Rod, a: np.ndarray, ax: np.ndarray) -> list[tuple[float, float]]:
+    """The extents along the rod of the solid's conical faces coaxial with it (mouth chamfers)."""
+    out = []
+    for k in cones(solid):
+        if abs(float(np.dot(k.direction, ax))) < math.cos(math.radians(TILT_DEG)):
+            continue
+        if line_distance(k.origin, a, ax) > OFFSET_TOL * rod.diameter / 2:
+            continue
+        out.append(tuple(sorted((float(np.dot(k.origin + k.direction * v - a, ax)) for v in (k.v0, k.v1)))))
+    return out
+
+
+def _through_chamfer(t_mouth: float, outward: float, chamfers: list[tuple[float, float]]) -> float:
+    """The mouth moved out over a chamfer that starts where the bore ends (outward = +1: towards
+    larger t)."""
+    for c0, c1 in chamfers:
+        if outward > 0 and abs(c0 - t_mouth) <= JOIN_TOL:
+            return c1
+        if outward < 0 and abs(c1 - t_mouth) <= JOIN_TOL:
+            return c0
+    return t_mouth
+
+
 def sockets_of(rod: Rod, joint: str, solid, cyls: list[Cyl] | None = None) -> list[Socket]:
-    """The sockets (rod ends) and sleeves of `rod` in one solid."""
+    """The sockets (rod ends) and sleeves of `rod` in one solid. A socket's depth runs to the outer
+    end of a coaxial chamfer at its mouth (cogniframe's own sockets have a 0.5 mm one: their depth
+    is bottom -> chamfer's outer edge)."""
     a, ax, L = np.asarray(rod.a), np.asarray(rod.axis), rod.length
     faces = []
     for c in cyls if cyls is not None else cylinders(solid):
@@ -106,11 +131,12 @@ def sockets_of(rod: Rod, joint: str, solid, cyls: list[Cyl] | None = None) -> li
         if ext is not None:
             faces.append((*ext, c))
     out = []
+    cham = _chamfers(solid, rod, a, ax) if faces else []
     for t0, t1, c in _bores(faces):
         if t0 <= END_TOL and t1 > END_TOL:  # over end a: the bottom at t0
-            out.append(_measure(joint, solid, rod, "a", t0, t1, 0.0, c, a, ax))
+            out.append(_measure(joint, solid, rod, "a", t0, _through_chamfer(t1, 1, cham), 0.0, c, a, ax))
         elif t1 >= L - END_TOL and t0 < L - END_TOL:  # over end b: the bottom at t1
-            out.append(_measure(joint, solid, rod, "b", t1, t0, L, c, a, ax))
+            out.append(_measure(joint, solid, rod, "b", t1, _through_chamfer(t0, -1, cham), L, c, a, ax))
         elif t0 > END_TOL and t1 < L - END_TOL:
             out.append(_measure(joint, solid, rod, None, t0, t1, t0, c, a, ax))
     return out
