@@ -64,23 +64,26 @@ def report(doc: Path, refs: Path | None, rod_diameter: float | None = None) -> s
            f"{len(exo.sockets)} sockets/sleeves, {len(exo.attached)} attached parts, {len(exo.unplaced)} unplaced", ""]
     out.append("Rods (length from the end faces, diameter from the cylindrical face):")
     groups = Counter((round(r.length, 1), round(r.diameter, 2)) for r in exo.rods)
-    out.append("  count  length mm  diameter mm")
+    nominal = rod_diameter or 3.0
+    out.append(f"  count  length mm  diameter mm  volume / (pi {nominal / 2:g}^2) mm")
     for (length, d), n in sorted(groups.items(), key=lambda x: -x[0][0]):
-        out.append(f"  {n:5d}  {length:9.1f}  {d:11.2f}")
+        out.append(f"  {n:5d}  {length:9.1f}  {d:11.2f}  {length * (d / nominal) ** 2:9.1f}")
     out.append("")
     out.append("Joints (by part; sockets per copy: kind bore x depth mm, gap = rod end to the socket's bottom):")
     per = defaultdict(list)
-    for j in exo.joints:
-        per[base(j.name)].append(j)
-    for b, js in sorted(per.items()):
+    for j in exo.joints:  # an identified part by its name, an unnamed one by its shape
+        key = base(j.name) if (not references or base(j.name) in references) else f"~{j.volume:.0f}"
+        per[key].append(j)
+    for key, js in sorted(per.items()):
+        b = key if not key.startswith("~") else "unnamed " + " ".join("#" + j.name.rsplit("#", 1)[-1] for j in js)
         socks = Counter()
         for j in js:
             for s in exo.sockets_of(j.name):
                 socks[(s.kind, round(s.bore, 2), round(s.depth, 1), round(s.gap, 1))] += 1
         named = b
-        if references and b not in references:
+        if references and key.startswith("~"):
             m = best_match(by_name[js[0].name], references)
-            named = f"{b} (no part file matches; nearest {m[0]}, {100 * m[1]:.0f} % off)" if m else b
+            named = f"{b} (no part file within 2 %; nearest {m[0]}, {100 * m[1]:.0f} % off)" if m else b
         out.append(f"  {len(js)} x {named}: {js[0].material}, {js[0].volume / 1000:.2f} cm^3 each")
         for (kind, bore, depth, gap), n in sorted(socks.items()):
             each = n / len(js)
