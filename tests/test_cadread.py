@@ -249,3 +249,43 @@ def test_materials_file_overrides_patterns(tmp_path):
     f.write_text("parts:\n  Foot: unobtainium\n")
     with pytest.raises(UserError, match="unknown material 'unobtainium'"):
         load_material_map(f)
+
+
+def test_a_bspline_socket_reads_like_a_cylindrical_one(tmp_path):
+    """A CAD program's mirror or export can store a hole as a B-spline surface (one socket of each
+    mirrored pair in the authors' FreeCAD document): it is still a socket, with its bore and depth."""
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_NurbsConvert
+
+    block = cq.Shape.cast(BRepBuilderAPI_NurbsConvert(blind_block(BOTTOM, AXIS).wrapped, True).Shape())
+    assert "CYLINDER" not in {f.geomType() for f in block.Faces()}
+    exo = read_exoskeleton(write_step(tmp_path, {"Flex_Mirrored": block, "rod_1": rod(BOTTOM, BOTTOM + AXIS * 40)}))
+    (s,) = exo.sockets
+    assert s.kind == "blind" and s.bore == pytest.approx(BORE, abs=1e-3) and s.depth == pytest.approx(DEPTH, abs=1e-3)
+    assert np.allclose(s.direction, AXIS, atol=1e-4) and s.offset < 1e-3
+
+
+def test_unnamed_solids_are_named_after_matching_part_files(tmp_path):
+    from cogniframe.cadread.identify import file_signature, identify
+    from cogniframe.cadread.load import NamedSolid
+
+    part = blind_block((0, 0, 0), (0, 0, 1))
+    cq.exporters.export(cq.Workplane().add(part), str(tmp_path / "Flex_Corner.stl"), tolerance=0.01, angularTolerance=0.1)
+    other = cq.Solid.makeBox(4, 5, 30)
+    cq.exporters.export(cq.Workplane().add(other), str(tmp_path / "Strut.stl"))
+    refs = {p.stem: file_signature(p) for p in tmp_path.glob("*.stl")}
+    turned = blind_block(BOTTOM, AXIS)  # the same part, placed and turned
+    solids = [NamedSolid("body#1", turned), NamedSolid("body#2", blind_block((50, 0, 0), (1, 0, 0))),
+              NamedSolid("body#3", cq.Solid.makeSphere(3))]
+    named, renamed = identify(solids, refs)
+    assert [s.name for s in named] == ["Flex_Corner_1", "Flex_Corner_2", "body#3"]
+    assert renamed == {"Flex_Corner_1": "body#1", "Flex_Corner_2": "body#2"}
+
+
+def test_json_ready(socket_assembly):
+    import json
+
+    from cogniframe.cadread import as_dict
+
+    d = json.loads(json.dumps(as_dict(socket_assembly)))
+    assert d["rods"][0]["length"] == pytest.approx(LENGTH)
+    assert {s["kind"] for s in d["sockets"]} == {"blind", "through", "sleeve"}

@@ -10,7 +10,7 @@ finder), `sockets` (rod ends and sleeves in the joints), `materials` (part name 
 (the whole pipeline), `model` (the frozen result), `toframe` (the mapping onto cogniframe's frame).
 """
 
-from .model import Contact, Exoskeleton, Joint, Rod, Socket
+from .model import Contact, Exoskeleton, Joint, Rod, Socket, as_dict
 from .read import exoskeleton_of, read_exoskeleton
 
-__all__ = ["Contact", "Exoskeleton", "Joint", "Rod", "Socket", "exoskeleton_of", "read_exoskeleton"]
+__all__ = ["Contact", "Exoskeleton", "Joint", "Rod", "Socket", "as_dict", "exoskeleton_of", "read_exoskeleton"]

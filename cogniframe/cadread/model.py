@@ -141,3 +141,16 @@ class Exoskeleton:
 
     def socket_at(self, rod: str, end: str) -> Socket | None:
         return next((s for s in self.sockets if s.rod == rod and s.end == end), None)
+
+
+def as_dict(exo: Exoskeleton) -> dict:
+    """Plain data for `--json`: the fields, plus each rod's length and axis and each socket's kind,
+    rod end and mouth (mm)."""
+    from dataclasses import asdict
+
+    d = asdict(exo)
+    for r, rd in zip(exo.rods, d["rods"]):
+        rd.update(length=r.length, axis=r.axis)
+    for s, sd in zip(exo.sockets, d["sockets"]):
+        sd.update(kind=s.kind, rod_end=s.rod_end, mouth=s.mouth)
+    return d

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from .geometry import Cone, Cyl, bbox, cones, cylinders, inside, line_distance
+from .geometry import Cyl, bbox, cones, cylinders, inside, line_distance
 from .model import Rod, Socket
 
 NEAR = 1.0  # mm between a rod's and a solid's bounding boxes
