@@ -166,9 +166,35 @@ def inside(solid, point, tol: float = 1e-4) -> bool:
     return c.State() == TopAbs_IN
 
 
+MESH_TOL = 0.05  # mm
+
+
 def bbox(solid) -> tuple[np.ndarray, np.ndarray]:
-    b = solid.BoundingBox()
-    return np.array([b.xmin, b.ymin, b.zmin]), np.array([b.xmax, b.ymax, b.zmax])
+    """A box around the solid from a coarse mesh of it (made here if it has none; within about
+    `MESH_TOL` of the solid: every use here adds a margin). cadquery's exact `BoundingBox` took 9 s
+    for the authors' 54 parts, the geometry's own box (a B-spline's control points) is loose
+    enough to double the contact checks."""
+    from OCP.Bnd import Bnd_Box
+    from OCP.BRepBndLib import BRepBndLib
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+
+    BRepMesh_IncrementalMesh(solid.wrapped, MESH_TOL, False, 0.3, True)
+
+    b = Bnd_Box()
+    BRepBndLib.Add_s(solid.wrapped, b, True)
+    x0, y0, z0, x1, y1, z1 = b.Get()
+    return np.array([x0, y0, z0]), np.array([x1, y1, z1])
+
+
+def mass_props(solid) -> tuple[float, tuple[float, float, float]]:
+    """(volume mm^3, centroid) in one pass."""
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
+
+    g = GProp_GProps()
+    BRepGProp.VolumeProperties_s(solid.wrapped, g)
+    c = g.CentreOfMass()
+    return float(g.Mass()), (c.X(), c.Y(), c.Z())
 
 
 def distance(s1, s2) -> float:
@@ -186,7 +212,8 @@ def face_boxes(solid) -> tuple[list, np.ndarray, np.ndarray]:
     faces, lo, hi = [], [], []
     for f in solid.Faces():
         b = Bnd_Box()
-        BRepBndLib.Add_s(f.wrapped, b, False)
+        BRepBndLib.Add_s(f.wrapped, b, True)  # from the mesh `bbox` made: within MESH_TOL
+        b.Enlarge(MESH_TOL)
         x0, y0, z0, x1, y1, z1 = b.Get()
         faces.append(f)
         lo.append((x0, y0, z0))

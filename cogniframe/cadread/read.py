@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .geometry import bbox, face_boxes, touching
+from .geometry import MESH_TOL, bbox, face_boxes, mass_props, touching
 from .load import NamedSolid, load_solids
 from .materials import MaterialMap
 from .model import Contact, Exoskeleton, Joint
@@ -32,13 +32,13 @@ def exoskeleton_of(solids: list[NamedSolid], source: str = "", materials: Materi
                    rod_diameter: float | None = None) -> Exoskeleton:
     materials = materials or MaterialMap()
     rods, others = find_rods(solids, rod_diameter)
-    sockets = find_sockets(rods, others)
     boxes = {ns.name: bbox(ns.solid) for ns in others}
+    sockets = find_sockets(rods, others, boxes)
     contacts = []
     fboxes: dict[str, tuple] = {}
     for i, s1 in enumerate(others):
         for s2 in others[i + 1:]:
-            if _boxes_near(boxes[s1.name], boxes[s2.name], CONTACT_TOL):
+            if _boxes_near(boxes[s1.name], boxes[s2.name], CONTACT_TOL + 2 * MESH_TOL):
                 for ns in (s1, s2):
                     if ns.name not in fboxes:
                         fboxes[ns.name] = face_boxes(ns.solid)
@@ -62,10 +62,9 @@ def exoskeleton_of(solids: list[NamedSolid], source: str = "", materials: Materi
             if src == "default" and ns.name not in holders:
                 mat = ""  # a payload part or vitamin the patterns do not name
             lo, hi = boxes[ns.name]
-            cm = ns.solid.Center()
+            vol, cm = mass_props(ns.solid)
             (joints if ns.name in holders else attached).append(
-                Joint(ns.name, mat, (cm.x, cm.y, cm.z), float(ns.solid.Volume()),
-                      (tuple(map(float, lo)), tuple(map(float, hi))), src))
+                Joint(ns.name, mat, cm, vol, (tuple(map(float, lo)), tuple(map(float, hi))), src))
     unplaced = tuple(ns.name for ns in others if ns.name not in placed)
     held = {(s.rod, s.end) for s in sockets if s.end is not None}
     loose = tuple(f"{r.name}:{e}" for r in rods for e in ("a", "b") if (r.name, e) not in held)

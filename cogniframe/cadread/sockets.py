@@ -148,9 +148,10 @@ def near(rod: Rod, box: tuple[np.ndarray, np.ndarray], margin: float = NEAR) -> 
     return bool(np.all(box[0] <= hi) and np.all(box[1] >= lo))
 
 
-def find_sockets(rods: list[Rod], others) -> list[Socket]:
-    """Every socket and sleeve of every rod in the other solids (NamedSolids)."""
-    boxes = {ns.name: bbox(ns.solid) for ns in others}
+def find_sockets(rods: list[Rod], others, boxes: dict | None = None) -> list[Socket]:
+    """Every socket and sleeve of every rod in the other solids (NamedSolids; `boxes`: their
+    `geometry.bbox` by name, when known)."""
+    boxes = boxes if boxes is not None else {ns.name: bbox(ns.solid) for ns in others}
     cyl_cache: dict[str, list[Cyl]] = {}
     out = []
     for rod in rods:
