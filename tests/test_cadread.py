@@ -289,3 +289,15 @@ def test_json_ready(socket_assembly):
     d = json.loads(json.dumps(as_dict(socket_assembly)))
     assert d["rods"][0]["length"] == pytest.approx(LENGTH)
     assert {s["kind"] for s in d["sockets"]} == {"blind", "through", "sleeve"}
+
+
+def test_module_entry_point(tmp_path, capsys):
+    from cogniframe.cadread.__main__ import main
+
+    path = write_step(tmp_path, {"Flex_Corner": blind_block(BOTTOM, AXIS), "rod_1": rod(BOTTOM, BOTTOM + AXIS * 40)})
+    assert main([str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "1 rods, 1 joints" in out and "rod_1:a blind 2.70 x 7.50" in out and "warning: 1 rod end(s)" in out
+    bad = tmp_path / "x.step"
+    bad.write_text("nope")
+    assert main([str(bad)]) == 2 and "not a STEP file" in capsys.readouterr().err

@@ -89,6 +89,15 @@ def report(doc: Path, refs: Path | None, rod_diameter: float | None = None) -> s
             each = n / len(js)
             out.append(f"      {each:4.2g} x {kind:7s} {bore:5.2f} x {depth:4.1f}" + (f"  gap {gap:+.1f}" if kind == "blind" else ""))
     out.append("")
+    label = {j.name: (base(j.name) if (not references or base(j.name) in references) else f"unnamed {j.volume / 1000:.2f} cm^3")
+             for j in (*exo.joints, *exo.attached)}
+    pairs = Counter(tuple(sorted((label[c.a], label[c.b]))) + (round(c.distance, 3),) for c in exo.contacts
+                    if c.a in label and c.b in label)
+    if pairs:
+        out.append("Contacts (parts touching, closest distance mm):")
+        for (p, q, d), n in sorted(pairs.items()):
+            out.append(f"  {n} x {p} - {q} ({d:g})")
+        out.append("")
     if exo.attached:
         out.append("Attached (touching a joint, no rod): " + ", ".join(sorted(Counter(base(a.name) for a in exo.attached))))
     if exo.unplaced:
