@@ -94,7 +94,7 @@ def report(doc: Path, refs: Path | None, rod_diameter: float | None = None) -> s
     pairs = Counter(tuple(sorted((label[c.a], label[c.b]))) + (round(c.distance, 3),) for c in exo.contacts
                     if c.a in label and c.b in label)
     if pairs:
-        out.append("Contacts (parts touching, closest distance mm):")
+        out.append("Contacts (parts within 0.1 mm of each other; the first gap found, mm):")
         for (p, q, d), n in sorted(pairs.items()):
             out.append(f"  {n} x {p} - {q} ({d:g})")
         out.append("")

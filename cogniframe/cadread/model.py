@@ -107,7 +107,7 @@ class Contact:
 
     a: str
     b: str
-    distance: float  # their closest distance, mm (0 = touching or overlapping)
+    distance: float  # a gap found between them within the tolerance, mm (the first, not always the least; 0 = touching)
 
 
 @dataclass(frozen=True)
