@@ -51,10 +51,6 @@ class StockPlan:
     def count(self) -> int:
         return len(self.rods)
 
-    @property
-    def waste_mm(self) -> float:
-        return sum(r.offcut_mm for r in self.rods)
-
 
 @dataclass(frozen=True)
 class CutList:
@@ -78,15 +74,16 @@ ROLE_ORDER = {"cage": 0, "leg": 1, "arm": 2, "strut": 3}
 
 
 def cut_list(spec: Spec, frame: Frame) -> CutList:
-    """Group the frame's rods by (role, cut length) and plan the stock."""
-    mat = spec.material(spec.rods.material)
-    groups: dict[tuple[str, float], list[str]] = {}
+    """Group the frame's rods by (role, cut length) and plan the stock. Each row's diameter and
+    material are its rods' own (`frame.Rod`); the spec gives only what the frame does not carry:
+    the materials' densities and the stock (`rods.stock_length`, `rods.kerf`)."""
+    groups: dict[tuple[str, float, float, str], list[str]] = {}
     for rod in frame.rods.values():
-        groups.setdefault((rod.role, rod.cut_length), []).append(rod.name)
-    area = math.pi / 4 * spec.rods.diameter**2
+        groups.setdefault((rod.role, rod.cut_length, rod.diameter, rod.material), []).append(rod.name)
     rows = tuple(
-        CutRow(role, length, len(names), spec.rods.diameter, spec.rods.material, tuple(names), area * length * mat.density_g_mm3)
-        for (role, length), names in sorted(groups.items(), key=lambda kv: (ROLE_ORDER[kv[0][0]], -kv[0][1]))
+        CutRow(role, length, len(names), d, material, tuple(names),
+               math.pi / 4 * d**2 * length * spec.material(material).density_g_mm3)
+        for (role, length, d, material), names in sorted(groups.items(), key=lambda kv: (ROLE_ORDER[kv[0][0]], -kv[0][1]))
     )
     return CutList(rows, plan_stock(rows, spec.rods.stock_length, spec.rods.kerf))
 

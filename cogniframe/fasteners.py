@@ -161,6 +161,3 @@ def fasteners(spec, frame, parts) -> tuple[Fastener, ...]:
     """Every screw and nut of the design, in a stable order."""
     return tuple(motor_screws(spec, parts) + camera_screws(spec, frame, parts) + computer_screws(spec, frame, parts))
 
-
-def screw_of(f: Fastener):
-    return SCREWS[f.size]

@@ -156,11 +156,6 @@ INSERTS: dict[str, Insert] = {i.name: i for i in (
 )}
 
 
-def screw_length(size: str, at_least: float) -> float | None:
-    """The shortest stock length of `size` that is at least `at_least` mm, or None (none is)."""
-    return next((float(n) for n in SCREWS[size].lengths if n >= at_least - 1e-9), None)
-
-
 # Flight-controller stack hole spacing and the board outline it implies (mm). Stacks are quoted
 # as a SQUARE: "20x20" is four holes on the corners of a 20 mm square (28.3 mm across the
 # diagonal), unlike a motor's pattern (MotorPreset.holes).

@@ -305,11 +305,6 @@ def vitamins(spec: Spec, frame: Frame, parts=None) -> tuple[Vitamin, ...]:
 
 # -- meshes and CAD ----------------------------------------------------------------------------
 
-def to_manifold(v: Vitamin, segments: int = 48):
-    """The vitamin as one manifold3d solid (union of its primitives)."""
-    return _prims_manifold(v.prims, segments)
-
-
 def _prims_manifold(prims: tuple[Prim, ...], segments: int):
     import manifold3d as m3
 

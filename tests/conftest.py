@@ -1,11 +1,16 @@
-"""Shared fixtures: the presets, and a runner for the CLI entry point (exit codes included)."""
+"""Shared fixtures: the presets, a runner for the CLI entry point (exit codes included), the run's
+shared cache and builds, and the tiers (tests/tiers.py: markers, the fast tier's guard)."""
 
 from __future__ import annotations
 
+import contextlib
+import json
+import os
 from pathlib import Path
 
 import pytest
 
+import tiers
 from cogniframe import spec as spec_mod
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -43,12 +48,64 @@ def run_cli(capsys, monkeypatch):
     return run
 
 
+def pytest_configure(config):
+    for kind, what in tiers.NEEDS.items():
+        config.addinivalue_line("markers", f"{kind}: {what} (heavy: left out of the fast tier)")
+    config.addinivalue_line("markers", f"{tiers.HEAVY}: needs one of {', '.join(tiers.NEEDS)}; added automatically")
+
+
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the groups
+def pytest_collection_modifyitems(config, items):
+    tiers.mark_from_fixtures(items)
+
+
+@pytest.fixture(autouse=True)
+def _tier_guard(request, monkeypatch):
+    """A test that does heavy work without its marker fails, naming the marker (tests/tiers.py)."""
+    if tiers.item_needs(request.node) >= set(tiers.NEEDS):
+        yield
+        return
+    guard = tiers.Guard(request.node, monkeypatch)
+    yield
+    failures = guard.failures()
+    record = os.environ.get("COGNIFRAME_TIERS_RECORD")  # a survey of the suite: write what each test needed, fail none
+    if record and guard.found:
+        with open(record, "a") as fh:
+            fh.write(json.dumps({"test": request.node.nodeid, "needs": sorted(guard.found)}) + "\n")
+    elif failures:
+        pytest.fail("\n".join(failures), pytrace=False)
+
+
+def shared_dir(tmp_path_factory) -> Path:
+    """A folder every worker of this run sees (pytest-xdist's workers share their base's parent)."""
+    base = tmp_path_factory.getbasetemp()
+    return base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+
+
+@contextlib.contextmanager
+def once(path: Path):
+    """Hold an exclusive lock on `path` (a file beside what it guards): one worker of the run makes a
+    shared thing while the others wait, then they read it."""
+    import fcntl
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "a") as fh:
+        fcntl.flock(fh, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)
+
+
 @pytest.fixture(autouse=True, scope="session")
 def _private_cache(tmp_path_factory):
-    """Tests never read or write the user's ~/.cache/cogniframe."""
-    import os
-
-    os.environ["COGNIFRAME_CACHE"] = str(tmp_path_factory.mktemp("cache"))
+    """Tests never read or write the user's ~/.cache/cogniframe. The run's workers share one cache
+    (its writes are atomic, its keys the content), so a joint's FE is solved once a run, not once a
+    worker. COGNIFRAME_TEST_CACHE=DIR keeps it across runs: a second run of the suite reads the FE
+    and CAD it made before (entries are keyed by their inputs and cogniframe's code, so a stale one
+    is never read)."""
+    keep = os.environ.get("COGNIFRAME_TEST_CACHE")
+    os.environ["COGNIFRAME_CACHE"] = str(Path(keep).expanduser().resolve() if keep else shared_dir(tmp_path_factory) / "cache")
     # builds run by the tests use their own process pools; tests/test_cad_server.py starts and
     # stops CAD servers itself (a server per test cache would outlive the run by 10 minutes)
     os.environ["COGNIFRAME_CAD_SERVER"] = "0"

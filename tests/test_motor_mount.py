@@ -188,7 +188,7 @@ def test_level_arms_build_d_sleeves_that_print_flat(spacing):
     rods = tuple((p, tuple(np.round(np.array([d[0], d[1], 0.0]) / math.hypot(d[0], d[1]), 6)))
                  for p, d in m.param("arm_rods"))
     seat_z, holes = m.param("seat_z"), m.param("holes")
-    lay = mm.layout(spec, rods, holes, seat_z, m.param("counterbore_d"), m.param("shaft_hole"))
+    lay = mm.layout(spec, rods, holes, seat_z, m.param("counterbore_d"), m.param("shaft_hole"), spec.rods.diameter)
     est = mm._estimate(spec, rods, lay, seat_z, min(m.wall + 1.5, seat_z), holes, m.param("grip"),
                        m.param("counterbore_d"), m.param("shaft_hole"))
     params = dict(m.params)

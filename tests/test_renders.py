@@ -6,7 +6,6 @@ placements, so the test does not depend on the CAD layer.
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import numpy as np
@@ -55,10 +54,8 @@ def test_world_meshes_follow_the_placements(scene):
 
 def test_assembly_renders_show_the_frame(scene, tmp_path):
     d, meshes = scene
-    t0 = time.perf_counter()
     out = renders.render_assembly(renders.world_meshes(d.parts, meshes), renders.rod_segments(d.frame), tmp_path,
                                   title="carbon")
-    elapsed = time.perf_counter() - t0
     assert set(out) == {"iso", "top", "front"}
     stats = {v: renders.image_stats(p) for v, p in out.items()}
     for v, s in stats.items():
@@ -70,7 +67,6 @@ def test_assembly_renders_show_the_frame(scene, tmp_path):
     # the three views differ
     data = {v: p.read_bytes() for v, p in out.items()}
     assert len(set(data.values())) == 3
-    assert elapsed < 60
 
 
 def test_frame_is_centred_and_fills_the_top_view(scene, tmp_path):

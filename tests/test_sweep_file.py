@@ -185,16 +185,14 @@ def test_a_stage_error_names_the_key_by_its_line_in_the_base():
 
 
 def test_timeout_cuts_a_running_design_off():
-    def spin():
+    def spin():  # a design that would run for a minute: only the watchdog's exception ends it sooner
         t = time.perf_counter()
-        while time.perf_counter() - t < 5:
+        while time.perf_counter() - t < 60:
             pass
         return "finished"
 
-    t0 = time.perf_counter()
     with pytest.raises(ev.DesignTimeout):
         ev.run_with_timeout(spin, 0.2)
-    assert time.perf_counter() - t0 < 1.5
     assert ev.run_with_timeout(lambda: 42, 5.0) == 42
     time.sleep(0.05)  # a cancelled watchdog never fires later
     assert threading.active_count() >= 1

@@ -104,21 +104,6 @@ def beam_local_kg_batch(length, axial_n) -> np.ndarray:
     return kg
 
 
-def beam_local_k(length: float, e: float, g: float, a: float, iy: float, iz: float, j: float) -> np.ndarray:
-    """12x12 local stiffness of a 3D Euler-Bernoulli beam (DOF order u1 v1 w1 rx1 ry1 rz1, u2 ...)."""
-    return beam_local_k_batch(length, e, g, a, iy, iz, j)[0]
-
-
-def beam_local_m(length: float, rho_a: float, polar_r2: float) -> np.ndarray:
-    """12x12 consistent mass (rho_a = mass per length, polar_r2 = J/A for the torsional inertia)."""
-    return beam_local_m_batch(length, rho_a, polar_r2)[0]
-
-
-def beam_local_kg(length: float, axial_n: float) -> np.ndarray:
-    """12x12 geometric stiffness for an axial force (tension positive), bending terms only."""
-    return beam_local_kg_batch(length, axial_n)[0]
-
-
 @dataclass
 class Beam:
     name: str
@@ -260,16 +245,6 @@ class Frame3D:
         f = np.einsum("nij,nj->ni", beam_local_k_batch(L, e, g, a, i, i, j), ul)
         return {b.name: f[k] for k, b in enumerate(self.beams)}
 
-    def geometric_stiffness(self, forces: dict[str, float], sparse: bool = False):
-        idx = self.index()
-        p = np.array([forces.get(b.name, 0.0) for b in self.beams], float)
-        loaded = p != 0.0
-        if not loaded.any():
-            return _assemble(6 * len(idx), [], sparse)
-        beams = [b for b, on in zip(self.beams, loaded) if on]
-        L, T, dofs = self._beam_arrays(idx, beams)
-        return _assemble(6 * len(idx), [_block_coo(dofs, _rotate(T, beam_local_kg_batch(L, p[loaded])))], sparse)
-
 
 _EMPTY = (np.zeros(0, int), np.zeros(0, int), np.zeros(0))
 
@@ -321,10 +296,6 @@ def _assemble(n: int, parts, sparse: bool):
 
         return coo_matrix((vals, (rows, cols)), shape=(n, n)).tocsc()
     return np.bincount(rows * n + cols, weights=vals, minlength=n * n).reshape(n, n)
-
-
-def _dofs(idx: dict[str, int], nodes) -> np.ndarray:
-    return np.concatenate([np.arange(6 * idx[n], 6 * idx[n] + 6) for n in nodes])
 
 
 def solve(K, f: np.ndarray, fixed: np.ndarray) -> np.ndarray:
@@ -402,7 +373,7 @@ def euler_loads(lengths, ei, k_rot_a, k_rot_b, n_el: int = 8) -> np.ndarray:
 
     A round rod bends alike in both planes, so one plane is solved: DOFs (v, theta) per node,
     the ends' v held, the rotational springs on the end thetas; the textbook cubic element's K
-    and geometric stiffness G for a unit compression (`framefe.beam_local_k` / `beam_local_kg`,
+    and geometric stiffness G for a unit compression (`beam_local_k_batch` / `beam_local_kg_batch`,
     their x-y bending terms). K x = P G x for all rods together: G = C C^T, then the ordinary
     symmetric eigenproblem of C^-1 K C^-T (numpy's batched eigvalsh); the smallest positive P."""
     L = np.atleast_1d(np.asarray(lengths, float))

@@ -146,9 +146,8 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
     for b in fe.beams:
         if b.group:
             by_rod.setdefault(b.group, []).append(axial[b.name])
-    rod_mat = spec.material(spec.rods.material)
-    ei = rod_mat.e_mpa * math.pi * spec.rods.diameter**4 / 64
     names = list(frame.rods)
+    ei = [spec.material(frame.rods[rn].material).e_mpa * math.pi * frame.rods[rn].diameter**4 / 64 for rn in names]
     lengths = [float(np.linalg.norm(mouth(frame.rods[rn], "b") - mouth(frame.rods[rn], "a"))) for rn in names]
     p_crs = euler_loads(lengths, ei, [_end_rot(mdl, frame, rn, "a") for rn in names],
                         [_end_rot(mdl, frame, rn, "b") for rn in names])
@@ -166,7 +165,7 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
                 "rods": sorted(rods_out, key=lambda x: (x["margin"] is None, x["margin"] or 0.0))}
 
     # 6. TPU strain at the design drop
-    strain = _strain(spec, frame, parts, joints, mdl, u * scale, TPU_ELONGATION_AT_BREAK, interface(spec), hinged_socket, hinge_geometry)
+    strain = _strain(frame, parts, mdl, u * scale, TPU_ELONGATION_AT_BREAK, interface(spec), hinged_socket, hinge_geometry)
 
     # 7. what each part carries per newton of payload force: the survival sweep scales it
     per_n = survival_influence(spec, frame, parts, mdl, u / DEFAULT_LOAD_N, {x["rod"]: x["euler_n"] for x in rods_out},
@@ -397,7 +396,7 @@ def _no_mode_near_rotor(spec, frame, parts, joints, masses, rotor_hz: float, n: 
     return below >= 6 + n
 
 
-def _joint_strains(spec, frame, parts, mdl: Model, u: np.ndarray, itf, hinged_socket, hinge_geometry):
+def _joint_strains(frame, parts, mdl: Model, u: np.ndarray, itf, hinged_socket, hinge_geometry):
     """TPU strains for displacements u: ({knee instance: hinge strain}, [(joint instance, rod
     socket label, socket strain)]). The hinge: all the relative rotation of the hinged leg against
     the arms in the web (an upper bound); the sockets: the super-element's force on each rod body
@@ -421,14 +420,14 @@ def _joint_strains(spec, frame, parts, mdl: Model, u: np.ndarray, itf, hinged_so
     L = np.array([e.depth for e in sl.ends])
     # rigid rod on a linear (Winkler) bearing over L, loads at the mouth: peak line load
     q = v / L + 6 * (mm + v * L / 2) / L**2
-    eps = q / spec.rods.diameter / itf.e
+    eps = q / np.array([frame.rods[rn].diameter for rn in sl.rods]) / itf.e
     return hinge, [(e.node, rn, float(x)) for e, rn, x in zip(sl.ends, sl.rods, eps)]
 
 
-def _strain(spec, frame, parts, joints, mdl: Model, u: np.ndarray, eps_break: float, itf, hinged_socket, hinge_geometry) -> dict:
+def _strain(frame, parts, mdl: Model, u: np.ndarray, eps_break: float, itf, hinged_socket, hinge_geometry) -> dict:
     """Peak TPU strain at the design drop: the knee hinge (all the relative rotation of the hinged
     leg against the arms in the web, an upper bound) and the sockets (interface bearing)."""
-    hinge, socks = _joint_strains(spec, frame, parts, mdl, u, itf, hinged_socket, hinge_geometry)
+    hinge, socks = _joint_strains(frame, parts, mdl, u, itf, hinged_socket, hinge_geometry)
     eps_h = max(hinge.values(), default=0.0)
     eps_s = max((x for _, _, x in socks), default=0.0)
     # symmetric sockets tie (to round-off): the first by name
@@ -462,20 +461,20 @@ def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: d
 
     fe = mdl.fe
     idx = fe.index()
-    d = spec.rods.diameter
-    a, i_sec = math.pi * d * d / 4, math.pi * d**4 / 64
     ends = fe.end_forces(u)
     rods: dict[str, dict] = {}
     for b in fe.beams:
         if not b.group:
             continue
+        d = frame.rods[b.group].diameter
+        a, i_sec = math.pi * d * d / 4, math.pi * d**4 / 64
         f = ends[b.name]
         sig = max(abs(f[0]) / a + math.hypot(f[4], f[5]) * d / 2 / i_sec, abs(f[6]) / a + math.hypot(f[10], f[11]) * d / 2 / i_sec)
         r = rods.setdefault(b.group, {"role": frame.rods[b.group].role, "stress_mpa_per_n": 0.0, "axial_n_per_n": math.inf,
                                       "euler_n": euler_n.get(b.group)})
         r["stress_mpa_per_n"] = max(r["stress_mpa_per_n"], sig)
         r["axial_n_per_n"] = min(r["axial_n_per_n"], float(-f[0]))  # tension positive (end 1's force is -N)
-    hinge, socks = _joint_strains(spec, frame, parts, mdl, u, itf, hinged_socket, hinge_geometry)
+    hinge, socks = _joint_strains(frame, parts, mdl, u, itf, hinged_socket, hinge_geometry)
     joints: dict[str, dict] = {}
     for inst, x in sorted(hinge.items()):
         part = mdl.instance_part[inst]

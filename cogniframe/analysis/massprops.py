@@ -211,7 +211,7 @@ def _prim_body(name: str, mass_g: float, p) -> Body:
     return cylinder(name, mass_g, p.centre, p.axis, p.radius, p.length)
 
 
-def _rod_bodies(spec, frame, budget) -> list:
+def _rod_bodies(frame, budget) -> list:
     """The frame's rods as solid cylinders between their cut ends; their total is the budget's
     rod lines (the cut list)."""
     rods = list(frame.rods.values())
@@ -221,7 +221,7 @@ def _rod_bodies(spec, frame, budget) -> list:
     return [rod(r.name, scale * L, r.start, r.end, r.diameter) for r, L in zip(rods, lengths)]
 
 
-def _rest_bodies(spec, frame, budget, used: set[str], printed: set[str]) -> list:
+def _rest_bodies(frame, budget, used: set[str], printed: set[str]) -> list:
     """Budget lines with no solid of their own (screws, a receiver, wiring): points at the
     core-plate centre, where the stack and its leads sit."""
     at = frame.core.plate.centre
@@ -260,11 +260,11 @@ def _combined(spec, design, budget, copies, source: str) -> MassProps:
     budget's remaining lines, combined: the two sources differ only in how a printed part's copies
     are modelled."""
     frame = design.frame
-    bodies = _rod_bodies(spec, frame, budget)
+    bodies = _rod_bodies(frame, budget)
     vit, used = _vitamin_bodies(spec, frame, budget)
     bodies += vit
     items = {i.name: i for i in budget.items}
     for p in design.parts:
         bodies += copies(p, items[p.name].mass_g_each)
-    bodies += _rest_bodies(spec, frame, budget, used, {p.name for p in design.parts})
+    bodies += _rest_bodies(frame, budget, used, {p.name for p in design.parts})
     return combine(bodies, source)

@@ -125,14 +125,13 @@ def mouth(rod, tag: str) -> np.ndarray:
 
 def masses_g(spec, frame, parts, total_mass_g: float | None) -> dict:
     """Mass split used by the dynamic cases, g: rods (distributed), joints, motors (+props, mounts),
-    and the payload (everything else: core, battery, electronics) at the core-plate centre."""
-    rod_mat = spec.material(spec.rods.material)
-    a = math.pi * spec.rods.diameter**2 / 4
-    rods = sum(r.length * a * rod_mat.density_g_mm3 for r in frame.rods.values())
-    tpu = spec.material(spec.joints.material)
-    joints = {p.name: p.estimate.volume * tpu.density_g_mm3 for p in joint_parts(parts)}
+    and the payload (everything else: core, battery, electronics) at the core-plate centre. Each
+    rod and part weighs its own material (`frame.Rod`, `PartSpec`); the spec gives the densities."""
+    rods = sum(r.length * (math.pi * r.diameter**2 / 4) * spec.material(r.material).density_g_mm3 for r in frame.rods.values())
+    joints = {p.name: p.estimate.volume * spec.material(p.material).density_g_mm3 for p in joint_parts(parts)}
     mount = next((p for p in parts if p.family == "motor_mount"), None)
-    motor_each = spec.motor.mass_g + spec.motors.prop_mass + (mount.estimate.volume * tpu.density_g_mm3 if mount else 0.0)
+    motor_each = (spec.motor.mass_g + spec.motors.prop_mass
+                  + (mount.estimate.volume * spec.material(mount.material).density_g_mm3 if mount else 0.0))
     fixed = rods + sum(p.qty * joints[p.name] for p in joint_parts(parts)) + 4 * motor_each
     total = total_mass_g if total_mass_g is not None else fixed + 150.0
     return {"rods": rods, "joints": joints, "motor_each": motor_each, "payload": max(total - fixed, 1.0), "total": total}
@@ -149,8 +148,6 @@ def build_model(spec, frame, parts, joints: dict, *, feet: str = "sliding", rod_
     fe = ff.Frame3D()
     mdl = Model(fe, "payload", joints=joints)
     rods = {n: r for n, r in frame.rods.items() if only_roles is None or r.role in only_roles}
-    rod_mat = spec.material(spec.rods.material)
-    rho_rod = rod_mat.density_g_mm3 * 1e-6  # t/mm^3
 
     mouths = {rn: (mouth(r, "a"), mouth(r, "b")) for rn, r in frame.rods.items()}
 
@@ -179,6 +176,8 @@ def build_model(spec, frame, parts, joints: dict, *, feet: str = "sliding", rod_
             name = f"{rn}:motor" if rn in stations and abs(t - stations[rn]) < 1e-12 else f"{rn}:{i + 1}"
             chain.append(fe.add_node(name, pa + (pb - pa) * t))
         chain.append(nb)
+        rod_mat = spec.material(r.material)
+        rho_rod = rod_mat.density_g_mm3 * 1e-6  # t/mm^3
         for i in range(len(chain) - 1):
             fe.add_beam(f"{rn}" if len(chain) == 2 else f"{rn}#{i}", chain[i], chain[i + 1], rod_mat.e_mpa, rod_mat.g_mpa,
                         r.diameter, rho=rho_rod, group=rn)
@@ -540,17 +539,6 @@ def predict_stiffness(spec, frame, parts=None, *, joint_model: str = "fe", facto
         tpu_factor=float(TPU_PRINTED_MODULUS_FACTOR if factor is None else factor), n_nodes=len(fe.nodes),
         n_dofs=6 * len(fe.nodes), max_joint_rotation_deg=math.degrees(rot), solve_s=time.perf_counter() - t0,
         rod_axial_per_n=tuple((k, float(min(v))) for k, v in sorted(per_rod.items())))
-
-
-def design_force(spec, frame, total_mass_g: float, k: float) -> float:
-    """Spring force k x_max at the design drop (x_max capped at the clearance), N."""
-    from . import impact
-
-    m = total_mass_g / 1000.0
-    c = spec.model.c_n_s_per_m if spec.model.c_n_s_per_m is not None else impact.damping_from_ratio(spec.model.damping_ratio, k, m)
-    clearance = spec.requirements.clearance if spec.requirements.clearance is not None else frame.clearance_mm
-    r = impact.simulate_height(m, c, k, spec.requirements.design_drop_height_cm, clearance)
-    return k * min(r.x_max_mm, clearance) / 1000.0
 
 
 def secant_k(spec, frame, parts, joints) -> float:

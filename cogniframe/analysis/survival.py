@@ -90,8 +90,9 @@ def payload_peaks(spec, drop, exo_mass_g: float, heights_cm=SWEEP_CM) -> list[di
     return out["heights"]
 
 
-def evaluate(spec, drop, stiffness: dict, peaks: list[dict] | None = None, heights_cm=SWEEP_CM) -> Survival:
-    """The survival sweep for a design: ``drop`` its `impact.DropResult` (m, c, k, clearance),
+def evaluate(spec, frame, drop, stiffness: dict, peaks: list[dict] | None = None, heights_cm=SWEEP_CM) -> Survival:
+    """The survival sweep for a design: ``frame`` its frame (each rod's strength is its own
+    material's), ``drop`` its `impact.DropResult` (m, c, k, clearance),
     ``stiffness`` its load cases (`check --json`'s stiffness section, with ``survival_per_n``),
     ``peaks`` the peak model's entries for ``heights_cm`` (None: payload G not assessed)."""
     from ..materials import strength
@@ -119,13 +120,14 @@ def evaluate(spec, drop, stiffness: dict, peaks: list[dict] | None = None, heigh
     if tpu is not None:
         for part, j in sorted(per_n["joints"].items()):
             add(f"joint {part} ({j['at']})", "TPU strain", tpu.value, "strain", [j["strain_per_n"] * f for f in springs])
-    rod = strength(spec.rods.material)
     by_role: dict[str, list[tuple[str, dict]]] = {}
     for name, r in sorted(per_n["rods"].items()):
         by_role.setdefault(r["role"], []).append((name, r))
     for role, rods in sorted(by_role.items()):
-        if rod is not None:  # the role's most stressed rod (symmetric rods tie: the first by name)
-            name, r = max(rods, key=lambda x: x[1]["stress_mpa_per_n"])
+        # the role's most stressed rod (symmetric rods tie: the first by name)
+        name, r = max(rods, key=lambda x: x[1]["stress_mpa_per_n"])
+        rod = strength(frame.rods[name].material)
+        if rod is not None:
             add(f"rod {name}", "bending", rod.value, "MPa", [r["stress_mpa_per_n"] * f for f in forces])
         buck = [(n, r) for n, r in rods if r["euler_n"] and r["axial_n_per_n"] < 0]
         if buck:

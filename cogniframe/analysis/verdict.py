@@ -75,7 +75,7 @@ def complete(spec: Spec, d: Derived, budget: mass_mod.MassBudget, drop, session=
     from . import flight as flight_mod
 
     flight = flight_mod.evaluate(spec, budget.total_g)
-    surv = _survival(spec, budget, drop, stiffness, survival_margins)
+    surv = _survival(spec, d.frame, budget, drop, stiffness, survival_margins)
     fit = fit_of(spec, d)
     # the survival sweep informs (the report warns when a part fails below the design drop); the
     # PASS/FAIL stays with the requirements' own checks
@@ -140,7 +140,7 @@ def _notes(spec: Spec, d: Derived) -> list[str]:
 _SURVIVAL_FIRST_CM = 400.0
 
 
-def _survival(spec: Spec, budget: mass_mod.MassBudget, drop, stiffness: dict | None, margins: bool = True):
+def _survival(spec: Spec, frame, budget: mass_mod.MassBudget, drop, stiffness: dict | None, margins: bool = True):
     """The survival sweep (analysis/survival.py) when the load cases carry their loads per newton;
     the payload's peak G over the sweep only when `requirements.max_peak_g` asks for it.
 
@@ -157,10 +157,10 @@ def _survival(spec: Spec, budget: mass_mod.MassBudget, drop, stiffness: dict | N
     if not margins and peaks is None:
         first = tuple(h for h in survival.SWEEP_CM if h <= _SURVIVAL_FIRST_CM)
         if len(first) >= 2:
-            short = survival.evaluate(spec, drop, stiffness, None, first)
+            short = survival.evaluate(spec, frame, drop, stiffness, None, first)
             if short.first_failure is not None:
                 return short
-    return survival.evaluate(spec, drop, stiffness, peaks)
+    return survival.evaluate(spec, frame, drop, stiffness, peaks)
 
 
 def with_clash(result: Findings, clash) -> Findings:

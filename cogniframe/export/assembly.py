@@ -234,12 +234,11 @@ def not_clashes(spec: Spec, frame, parts: Sequence[PartSpec]) -> frozenset:
 def press_fits(spec: Spec, frame) -> dict[frozenset, float]:
     """The rod ends pressed into a narrower blind socket (joints.fit_clearance < 0), as (joint, rod)
     name pairs, each with its designed interference volume: the ring between the rod and the hole
-    along the socket's depth, mm^3. The clash check lets those pairs overlap by that much."""
-    d, bore = spec.rods.diameter, spec.bore
-    if bore >= d:
-        return {}
-    ring = math.pi / 4 * (d * d - bore * bore)
-    return {frozenset((end.node, rod.name)): ring * end.depth for rod in frame.rods.values() for end in (rod.a, rod.b)}
+    along the socket's depth, mm^3. The clash check lets those pairs overlap by that much. Each
+    rod's diameter is its own (`frame.Rod`); the spec gives the hole (`Spec.bore`)."""
+    bore = spec.bore
+    return {frozenset((end.node, rod.name)): math.pi / 4 * (rod.diameter * rod.diameter - bore * bore) * end.depth
+            for rod in frame.rods.values() if bore < rod.diameter for end in (rod.a, rod.b)}
 
 
 def check_clashes(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path,

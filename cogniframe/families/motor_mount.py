@@ -206,11 +206,11 @@ def sleeve_bore(spec: Spec) -> float:
 SLEEVE_DIAMETERS = 2.1
 
 
-def sleeve_length(spec: Spec) -> float:
-    """How long each clip sleeve holds its rod, mm: the authors' 2.1 rod diameters. A through-sleeve
-    the rod slides in only has to keep the seat square to the arm; a blind socket's depth is
-    grip, which this is not."""
-    return round(SLEEVE_DIAMETERS * spec.rods.diameter, 3)
+def sleeve_length(rod_d: float) -> float:
+    """How long each clip sleeve holds its rod of diameter `rod_d` (the arm rod's, `frame.Rod`), mm:
+    the authors' 2.1 rod diameters. A through-sleeve the rod slides in only has to keep the seat
+    square to the arm; a blind socket's depth is grip, which this is not."""
+    return round(SLEEVE_DIAMETERS * rod_d, 3)
 
 
 def shaft_hole(spec: Spec, holes, counterbore_d: float) -> float:
@@ -281,8 +281,8 @@ def _span(rods, start: float, length: float) -> tuple[float, float]:
     return base + start * cos_a, base + (start + length) * cos_a
 
 
-def layout(spec: Spec, rods, holes, seat_z: float, counterbore_d: float, centre_d: float) -> Layout:
-    """The mount's seat and sleeves for `holes` on `rods` (local frame). The seat and the sleeves
+def layout(spec: Spec, rods, holes, seat_z: float, counterbore_d: float, centre_d: float, rod_d: float) -> Layout:
+    """The mount's seat and sleeves for `holes` on `rods` (local frame; `rod_d` their diameter). The seat and the sleeves
     start at their least sizes (`seat_diameter`, `sleeve_length`) and grow by 0.1 mm steps until no
     face of one stands within HOLE_CLEAR of touching another flat (OCC's boolean breaks on a
     cylinder tangent to a plane): the seat's rim and the bridge's ends, the sleeves' sides and the
@@ -302,7 +302,7 @@ def layout(spec: Spec, rods, holes, seat_z: float, counterbore_d: float, centre_
     # the up-slope limit: where the seat still leaves a full wall above the bore
     rb = bore / 2 / max(cos_a, 1e-6)
     limit = None if flat else (seat_z - wall - rb - float(rods[0][0][2])) / dz
-    d0, l0 = seat_diameter(spec, holes, counterbore_d), sleeve_length(spec)
+    d0, l0 = seat_diameter(spec, holes, counterbore_d), sleeve_length(rod_d)
 
     def place(length: float) -> float:
         start = -length / 2
@@ -402,7 +402,7 @@ def _motor_mount(spec: Spec, frame: Frame) -> PartSpec:
     counterbore_d = round(screw.head_d + 2 * HEAD_CLEAR, 4)
     centre = shaft_hole(spec, holes, counterbore_d)
     _centre_clears_rods(spec, rods_local, bore, centre)
-    lay = layout(spec, rods_local, holes, seat_z, counterbore_d, centre)
+    lay = layout(spec, rods_local, holes, seat_z, counterbore_d, centre, frame.rods[m0.arm[0]].diameter)
     est = _estimate(spec, rods_local, lay, seat_z, plate_t, holes, grip, counterbore_d, centre)
     placements = tuple(Placement(m.name, _mount_rotation(frame, m0, m), rounded(m.axis)) for m in frame.motors)
     params = (("holes", holes), ("pattern", motor.holes), ("pattern_turn", turn), ("screw", screw.name),

@@ -20,12 +20,6 @@ import math
 
 from .vehicle import AP_ORDER, Vehicle, frd, inertia_in
 
-# The floats of SIM_Frame.cpp's frame model that this file sets, and the vectors.
-FLOAT_KEYS = ("mass", "diagonal_size", "refVoltage", "refCurrent", "refAlt", "refTempC", "maxVoltage", "battCapacityAh",
-              "propExpo", "hoverThrOut", "pwmMin", "pwmMax", "disc_area", "num_motors")
-VECTOR_KEYS = ("moment_inertia",)
-MOTOR_KEYS = {"position": "vector3", "vector": "vector3", "yaw": "float"}
-
 LIPO_FULL_V, LIPO_EMPTY_V = 4.2, 3.3  # per cell: charged, and where MOT_BAT_VOLT_MIN stops compensating
 
 

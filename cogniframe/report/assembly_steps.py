@@ -27,7 +27,6 @@ if TYPE_CHECKING:
     from ..partlist import PartSpec
     from ..design import Derived
 
-CORNER_WORDS = {"fl": "front-left", "fr": "front-right", "rr": "rear-right", "rl": "rear-left"}
 GLUE_CA = "one drop of thin CA glue at each socket mouth once the rod is fully seated"
 
 

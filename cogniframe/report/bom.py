@@ -92,7 +92,7 @@ def build_bom(spec: "Spec", design: "Derived", budget: "MassBudget",
         if it is None:
             continue
         lines.append(BomLine("rod", f"{row.role} rod", it.qty, f"{row.length_mm:g} mm x {row.diameter_mm:g} mm", row.material,
-                             it.mass_g_each, it.mass_g, notes=f"cut from {spec.rods.stock_length:g} mm stock; "
+                             it.mass_g_each, it.mass_g, notes=f"cut from {design.cut.stock.stock_length_mm:g} mm stock; "
                              + ", ".join(row.rods)))
 
     hardware: dict[str, list[str]] = {}

@@ -21,8 +21,6 @@ import threading
 import time
 from types import MappingProxyType
 
-VERDICTS = ("PASS", "FAIL", "INVALID", "TIMEOUT", "ERROR")
-
 # check --json sections read into fixed columns below; every other section's scalars flow through.
 _KNOWN = {"name", "verdict", "problems", "mass", "cutlist", "stock", "frame", "parts", "drop", "notes"}
 OUTPUTS = ("mass_g", "mass_margin_g", "k_n_per_m", "c_n_s_per_m", "max_safe_drop_cm", "prop_margin_mm", "clearance_mm",
