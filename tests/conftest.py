@@ -97,6 +97,27 @@ def once(path: Path):
             fcntl.flock(fh, fcntl.LOCK_UN)
 
 
+@pytest.fixture(scope="session")
+@tiers.needs("cad", "fe", "slicer")
+def preset_build(tmp_path_factory):
+    """`build(name)`: the folder of `cogniframe build params/<name>.yaml`, made once a run (the first
+    worker that asks builds it, the others wait for it) and read by every test that needs a
+    preset's whole build. Read it, never write into it: copy it to change it."""
+    from cogniframe.pipeline import run_build
+
+    shared = shared_dir(tmp_path_factory) / "preset-builds"
+
+    def build(name: str) -> Path:
+        out = shared / name
+        with once(shared / f".{name}.lock"):
+            if not (out / "manifest.json").is_file():
+                params = PARAMS / f"{name}.yaml"
+                run_build(spec_mod.load(params), params, out, jobs=2)
+        return out
+
+    return build
+
+
 @pytest.fixture(autouse=True, scope="session")
 def _private_cache(tmp_path_factory):
     """Tests never read or write the user's ~/.cache/cogniframe. The run's workers share one cache

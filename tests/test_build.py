@@ -1,6 +1,7 @@
 """`cogniframe build` end to end: folder appears whole, manifest, determinism, bad input untouched.
 
-One build per preset is shared by the tests of this module (CAD is the slow part).
+One build per preset, made once a run and shared with the other modules that read a whole build
+(conftest's `preset_build`; CAD is the slow part). A test that changes a build works on a copy.
 """
 
 from __future__ import annotations
@@ -18,12 +19,9 @@ from cogniframe.pipeline import run_build
 ROOT = Path(__file__).resolve().parents[1]
 
 
-@pytest.fixture(scope="module", params=("carbon", "bamboo"))
-def built(request, tmp_path_factory):
-    params = ROOT / "params" / f"{request.param}.yaml"
-    out = tmp_path_factory.mktemp("build") / request.param
-    result = run_build(spec_mod.load(params), params, out, jobs=2)
-    return request.param, out, result
+@pytest.fixture(params=("carbon", "bamboo"))
+def built(request, preset_build):
+    return request.param, preset_build(request.param)
 
 
 def _sha(p: Path) -> str:
@@ -31,8 +29,8 @@ def _sha(p: Path) -> str:
 
 
 def test_outputs_present(built):
-    name, out, result = built
-    assert result.out_dir == out and out.is_dir()
+    name, out = built
+    assert out.is_dir()
     for rel in ("cutlist.csv", "cutlist.md", "mass.md", "check.json", "manifest.json", "assembly.step", "assembly.glb",
                 "plots/drop_response.png", "plots/energy_split.png"):
         assert (out / rel).is_file() and (out / rel).stat().st_size > 0, rel
@@ -42,7 +40,7 @@ def test_outputs_present(built):
 
 
 def test_manifest_lists_every_file_with_hash(built):
-    _, out, result = built
+    _, out = built
     m = json.loads((out / "manifest.json").read_text())
     files = {f["path"]: f for f in m["files"]}
     on_disk = {p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()} - {"manifest.json"}
@@ -54,17 +52,20 @@ def test_manifest_lists_every_file_with_hash(built):
 
 
 def test_manifest_part_quantities_match_the_frame_graph(built):
-    name, out, result = built
+    from cogniframe.design import design
+
+    name, out = built
     check = json.loads((out / "check.json").read_text())
-    d = result.check.design
+    d = design(spec_mod.load(ROOT / "params" / f"{name}.yaml"))
     assert {p["name"]: p["qty"] for p in check["parts"]} == {p.name: p.qty for p in d.parts}
-    assert {b.name: b.qty for b in result.built} == {p.name: p.qty for p in d.parts}
+    listed = {f["path"] for f in json.loads((out / "manifest.json").read_text())["files"]}
+    assert {f"stl/{p.material}/{p.name}.stl" for p in d.parts} <= listed  # every planned part was built
     tpu = sum(p.qty for p in d.parts if p.material == "tpu_95a")
     assert tpu == 20  # 4 top corners, 4 feet, 4 knees, 4 core links, 4 motor mounts
 
 
 def test_build_mass_uses_cad_volumes(built):
-    _, out, result = built
+    _, out = built
     check = json.loads((out / "check.json").read_text())
     sources = {i["name"]: i["source"] for i in check["mass"]["items"]}
     assert sources["knee"] == "cad" and sources["core_plate"] == "cad"
@@ -72,7 +73,7 @@ def test_build_mass_uses_cad_volumes(built):
 
 
 def test_rebuild_is_byte_identical(built, tmp_path):
-    name, out, _ = built
+    name, out = built
     params = ROOT / "params" / f"{name}.yaml"
     again = run_build(spec_mod.load(params), params, tmp_path / name, jobs=1).out_dir
     a = json.loads((out / "manifest.json").read_text())["files"]
@@ -109,12 +110,17 @@ def test_failure_mid_build_leaves_no_partial_folder(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_unchanged_rebuild_skips_work_and_tampering_rebuilds(built):
-    name, out, first = built
+def test_unchanged_rebuild_skips_work_and_tampering_rebuilds(built, tmp_path):
+    import shutil
+
+    name, shared = built
+    out = tmp_path / name
+    shutil.copytree(shared, out)  # the build is shared: this test tampers with its own copy
     params = ROOT / "params" / f"{name}.yaml"
     before = (out / "manifest.json").read_bytes()
     again = run_build(spec_mod.load(params), params, out, jobs=1)
-    assert again.built == () and again.check is None and again.verdict == first.verdict  # nothing rebuilt
+    verdict = json.loads((out / "check.json").read_text())["verdict"]
+    assert again.built == () and again.check is None and again.verdict == verdict  # nothing rebuilt
     assert (out / "manifest.json").read_bytes() == before
     original = (out / "cutlist.md").read_bytes()
     (out / "cutlist.md").write_text("edited by hand\n")
@@ -124,7 +130,7 @@ def test_unchanged_rebuild_skips_work_and_tampering_rebuilds(built):
 
 
 def test_cad_masses_match_the_papers_table(built):
-    name, out, _ = built
+    name, out = built
     m = json.loads((out / "check.json").read_text())["mass"]
     if name == "carbon":
         assert m["groups"]["exoskeleton"] == pytest.approx(62, rel=0.10)  # rods + TPU joints
@@ -143,7 +149,7 @@ def test_cad_masses_match_the_papers_table(built):
 def test_build_runs_the_clash_check_and_reports_flight(built):
     """Issue 13: every build checks the assembly for clashes (clash.json, check.json) and the
     check carries the flight numbers."""
-    name, out, result = built
+    name, out = built
     clash = json.loads((out / "clash.json").read_text())
     check = json.loads((out / "check.json").read_text())
     assert clash["ok"] and check["clash"] == clash and check["verdict"] == "PASS"
@@ -165,7 +171,7 @@ def test_plates_are_prusaslicer_3mf_that_lib3mf_loads(built):
 
     from threemf import check_3mf
 
-    _, out, _ = built
+    _, out = built
     plates = sorted((out / "plates").glob("*.3mf"))
     assert plates
     for p in plates:

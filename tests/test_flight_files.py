@@ -363,15 +363,9 @@ def test_fly_never_overwrites_a_folder_it_did_not_make(tmp_path, run_cli):
 
 # -- the build's flight/ folder: the CAD solids ----------------------------------------------------
 
-@pytest.fixture(scope="module")
-def built_carbon(tmp_path_factory):
-    from cogniframe import spec as spec_mod
-    from cogniframe.pipeline import run_build
-
-    params = _params("carbon")
-    out = tmp_path_factory.mktemp("build") / "carbon"
-    run_build(spec_mod.load(params), params, out, jobs=2)
-    return out
+@pytest.fixture
+def built_carbon(preset_build):
+    return preset_build("carbon")
 
 
 @pytest.mark.slow

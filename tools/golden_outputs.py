@@ -54,6 +54,11 @@ def build_sha256(root: Path, params: str, out: Path) -> dict[str, str]:
                        env=_env(root), capture_output=True, timeout=1800)
     if r.returncode not in (0, 1):
         raise RuntimeError(f"build {params} exited {r.returncode}: {r.stderr.decode()[-2000:]}")
+    return manifest_sha256(out)
+
+
+def manifest_sha256(out: Path) -> dict[str, str]:
+    """sha256 of every file the build in `out` lists in its manifest, by path, except EXCLUDED."""
     manifest = json.loads((out / "manifest.json").read_text())
     return {f["path"]: hashlib.sha256((out / f["path"]).read_bytes()).hexdigest()
             for f in manifest["files"] if f["path"] not in EXCLUDED}
