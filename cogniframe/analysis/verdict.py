@@ -11,6 +11,7 @@ from dataclasses import dataclass, replace
 from ..design import Derived, design
 from ..spec import Spec
 from . import mass as mass_mod
+from .. import numfmt
 from .numerics import one_blas_thread
 
 
@@ -239,7 +240,7 @@ def _problems(spec: Spec, budget: mass_mod.MassBudget, drop) -> list[str]:
 
 
 def check_dict(result: Findings) -> dict:
-    """The stable JSON of `cogniframe check --json`."""
+    """The stable JSON of `cogniframe check --json` (its numbers at numfmt's stated precision)."""
     d = result.design
     out = {
         "name": d.spec.name,
@@ -273,4 +274,4 @@ def check_dict(result: Findings) -> dict:
         out["notes"] = list(result.notes)
     if result.warnings:
         out["warnings"] = list(result.warnings)
-    return out
+    return numfmt.check_figures(out)  # the model figures at their stated precision (numfmt.py)
