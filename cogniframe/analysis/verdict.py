@@ -241,6 +241,12 @@ def _problems(spec: Spec, budget: mass_mod.MassBudget, drop) -> list[str]:
 
 def check_dict(result: Findings) -> dict:
     """The stable JSON of `cogniframe check --json` (its numbers at numfmt's stated precision)."""
+    return numfmt.check_figures(check_values(result))
+
+
+def check_values(result: Findings) -> dict:
+    """`check_dict`'s tree at the model's full precision: what the model computed, before the
+    output rounds it (tests of the model's own identities read this)."""
     d = result.design
     out = {
         "name": d.spec.name,
@@ -274,4 +280,4 @@ def check_dict(result: Findings) -> dict:
         out["notes"] = list(result.notes)
     if result.warnings:
         out["warnings"] = list(result.warnings)
-    return numfmt.check_figures(out)  # the model figures at their stated precision (numfmt.py)
+    return out
