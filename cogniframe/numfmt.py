@@ -10,8 +10,9 @@ one that wrote them. So every output writes its numbers at a stated precision, t
   check.json: the sections CHECK_MODEL_SECTIONS (drop model, stiffness and load cases, peak
   deceleration, survival sweep). The models behind them are good to a few percent; 4 digits (0.1 %)
   keep every input's effect visible and drop what moves between environments: measured between
-  numpy 1.26/scipy 1.11/OCP 7.7/trimesh 4.0 and numpy 2.4/scipy 1.17/OCP 7.9/trimesh 5.2 (same
-  gmsh), up to 1e-7 relative on forces that vanish by symmetry and 1e-9..1e-8 elsewhere. The
+  numpy 1.26/scipy 1.11/trimesh 4.0/manifold3d 2.5/scikit-fem 10 and numpy 2.4/scipy 1.17/
+  trimesh 5.2/manifold3d 3.5/scikit-fem 12 (OCP 7.9, gmsh 4.15 in both), up to 1e-7 relative on
+  forces that vanish by symmetry and 1e-10..1e-8 elsewhere. The
   other sections (mass budget, cut list, stock, frame, parts, flight) are arithmetic on the params
   and CAD volumes, written at their producers' stated decimals (0.01 g, 0.001 g each, 0.01 mm,
   6 significant digits of inertia), which no environment moved.
@@ -26,8 +27,10 @@ Rounding to a grid is not a proof of byte identity: a value within its noise of 
 boundary can still fall either way. The noise is at most ~1e-3 of the quantum here (1e-7 against
 1e-4), so that is rare; the golden test names the file when it happens. What rounding cannot
 absorb is a different model: another gmsh release meshes the joints' solids differently (4.12 vs
-4.15 moved joint strains by 4e-6 and near-zero rod forces by 5e-3), so the lock file
-(constraints.txt) pins the environment CI and the golden hashes are made in.
+4.15 moved joint strains by 4e-6 and near-zero rod forces by 5e-3), and OCP 7.7 builds a joint's
+solid otherwise than 7.9 (31698 vs 31674 DOF, figures 8e-4 off): pyproject.toml asks for gmsh>=4.15
+and cadquery>=2.8 (OCP 7.9), and the lock file (constraints.txt) pins the environment CI and the
+golden hashes are made in.
 """
 
 from __future__ import annotations
