@@ -22,6 +22,9 @@ one that wrote them. So every output writes its numbers at a stated precision, t
   merges are merged once (and a face they collapse is dropped) before the mesh is checked closed.
 - NORMAL_DIGITS = 6 decimals for the unit facet normals an STL carries (slicers recompute them).
 - PLACEMENT_DECIMALS = 9 decimals for the entries of the 4x4 placements of the GLB's nodes.
+- PLOT_DECIMALS = 6 decimals for the curves a PNG plot draws (ms, mm, G: a millionth of a unit is
+  ~1e-5 of a pixel), from the model's stated figures: numpy's exp and sin differ in their last
+  bits between releases, and an antialiased pixel followed them.
 
 Rounding to a grid is not a proof of byte identity: a value within its noise of a rounding
 boundary can still fall either way. The noise is at most ~1e-3 of the quantum here (1e-7 against
@@ -45,6 +48,7 @@ GRID_MM = 1e-4
 GRID_DECIMALS = 4  # GRID_MM as decimals for np.round
 NORMAL_DIGITS = 6
 PLACEMENT_DECIMALS = 9
+PLOT_DECIMALS = 6
 
 
 def sig(x: float, digits: int = CHECK_FIGURES) -> float:
@@ -90,3 +94,20 @@ def placement(matrix) -> np.ndarray:
     """A 4x4 placement (rotation and mm) rounded to PLACEMENT_DECIMALS decimals, float64: a
     rotation entry's 1e-9 moves a point 200 mm out by 2e-7 mm, below GRID_MM."""
     return np.round(np.asarray(matrix, dtype=np.float64), PLACEMENT_DECIMALS) + 0.0
+
+
+def canonical_faces(faces) -> np.ndarray:
+    """Triangles in one stated order: each turned (winding kept) to start at its lowest vertex, then
+    sorted. The same set of triangles in any order (trimesh's and scipy's releases order a convex
+    hull's or a primitive's faces differently) gives the same array."""
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    if not len(f):
+        return f
+    turn = np.argmin(f, axis=1)
+    f = np.stack([f[np.arange(len(f)), (turn + k) % 3] for k in range(3)], axis=1)
+    return f[np.lexsort((f[:, 2], f[:, 1], f[:, 0]))]
+
+
+def plotted(values) -> np.ndarray:
+    """A plotted curve's values at PLOT_DECIMALS decimals, float64."""
+    return np.round(np.asarray(values, dtype=np.float64), PLOT_DECIMALS) + 0.0

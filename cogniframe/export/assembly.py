@@ -165,7 +165,7 @@ def glb_bytes(shapes: dict, nodes: Sequence[tuple[str, str, np.ndarray]]) -> byt
     meshes, index = [], {}
     for name, (verts, faces, rgba) in shapes.items():
         v = np.ascontiguousarray(numfmt.on_grid(np.asarray(verts, float).reshape(-1, 3)), np.float32)  # stated precision
-        f = np.ascontiguousarray(faces, np.uint32).reshape(-1)
+        f = np.ascontiguousarray(numfmt.canonical_faces(faces), np.uint32).reshape(-1)  # one order (numfmt)
         c = np.tile(np.asarray(rgba, np.uint8), (len(v), 1))
         ind = put(f, componentType=5125, count=int(f.size), type="SCALAR",
                   max=[int(f.max()) if f.size else 0], min=[int(f.min()) if f.size else 0])
