@@ -31,9 +31,10 @@ boundary can still fall either way. The noise is at most ~1e-3 of the quantum he
 1e-4), so that is rare; the golden test names the file when it happens. What rounding cannot
 absorb is a different model: another gmsh release meshes the joints' solids differently (4.12 vs
 4.15 moved joint strains by 4e-6 and near-zero rod forces by 5e-3), and OCP 7.7 builds a joint's
-solid otherwise than 7.9 (31698 vs 31674 DOF, figures 8e-4 off): pyproject.toml asks for gmsh>=4.15
-and cadquery>=2.8 (OCP 7.9), and the lock file (constraints.txt) pins the environment CI and the
-golden hashes are made in.
+solid otherwise than 7.9 (31698 vs 31674 DOF, figures 8e-4 off), manifold3d 2.x computes in
+float32 and 3.0.1 triangulates a vitamin's union otherwise than 3.5.4: pyproject.toml asks for
+gmsh>=4.15, cadquery>=2.8 (OCP 7.9) and manifold3d>=3.5, and the lock file (constraints.txt)
+pins the environment CI and the golden hashes are made in.
 """
 
 from __future__ import annotations
