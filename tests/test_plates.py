@@ -56,7 +56,8 @@ def test_every_copy_once_inside_the_bed_and_apart():
         _rects_apart(p, MARGIN)
     # the copies keep their volume (no scaling or mirroring by the layout)
     knee = next(c for p in plates for c in p.copies if c.part == "knee")
-    assert knee.mesh.volume == pytest.approx(_cyl(8, 12).volume)
+    # (to 1e-4: its vertices move to the 1e-4 mm grid the 3MF states, cogniframe/numfmt.py; a scale is % off)
+    assert knee.mesh.volume == pytest.approx(_cyl(8, 12).volume, rel=1e-4)
 
 
 def test_as_many_plates_as_needed():
@@ -198,7 +199,8 @@ def test_preview_silhouette_is_the_union_of_upward_faces_counter_clockwise():
         areas = 0.5 * ((b[:, 0] - a[:, 0]) * (d[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (d[:, 0] - a[:, 0]))
         assert (areas > 0).all()
         expected = 20 * 18 if c.part == "box" else 0.5 * 32 * 8 ** 2 * np.sin(2 * np.pi / 32)
-        assert areas.sum() == pytest.approx(expected, rel=1e-9)
+        # once, not twice (to 1e-4: the vertices sit on the 1e-4 mm grid the 3MF states, cogniframe/numfmt.py)
+        assert areas.sum() == pytest.approx(expected, rel=1e-4)
 
 
 def test_rewriting_removes_stale_plates(tmp_path):

@@ -70,9 +70,16 @@ def test_refreshing_the_held_out_designs_with_the_shipped_fit_reproduces_them():
     tool.refresh_main(new, sg.families(), {"knee"})
     assert [d["design"] for d in new["designs"]] == [d["design"] for d in hd["designs"]]
     for a, b in zip(new["designs"], hd["designs"]):
-        assert a["k_surrogate"] == pytest.approx(b["k_surrogate"], rel=1e-9)
-        assert a["error"] == pytest.approx(b["error"], rel=1e-6, abs=1e-12)
-        assert a["joints"] == b["joints"] and a["k_fe"] == b["k_fe"]
+        # both frame k's (N/m: from the FE matrices, from the surrogate) solved again from the same
+        # stored matrices and coefficients: another CPU, BLAS or numpy/scipy release moves their last
+        # bits (1.5e-9 relative measured), nothing more. 1e-6 is 100x below the 4 significant digits
+        # check.json states for k (cogniframe/numfmt.py) and 1e4x below the surrogate's own error
+        # against the FE, so a changed coefficient, joint or refresh step still fails here;
+        # `error` = k_surrogate / k_fe - 1 carries that same relative wobble as an absolute one.
+        assert a["k_surrogate"] == pytest.approx(b["k_surrogate"], rel=1e-6)
+        assert a["k_fe"] == pytest.approx(b["k_fe"], rel=1e-6)
+        assert a["error"] == pytest.approx(b["error"], abs=1e-6)
+        assert a["joints"] == b["joints"]  # the stored FE matrices: read, not computed
     knees = 0
     for a, b in zip(new["joint_errors"], hd["joint_errors"]):
         if a["part"] != "knee":

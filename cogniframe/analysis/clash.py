@@ -221,16 +221,18 @@ def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_mar
                     gap = 0.0 if vol > 0 else float(mans[i].min_gap(mans[k], prop_margin + 20.0))
                 if pk is not None:
                     memo[pk] = [vol, gap]
-            if vol > worst[2]:
+            # compared at the precision clash.json states (0.001 mm3, 0.01 mm), ties by name: mirror-image
+            # pairs overlap by the same volume up to the last bits, which differ between machines
+            if vol > 0 and (-round(vol, 3), a.name, b.name) < (-round(worst[2], 3), worst[0], worst[1]):
                 worst = (a.name, b.name, vol)
             if disc is not None:
                 other = b if disc is a else a
-                if disc.name not in gaps or gap < gaps[disc.name][1]:
+                if disc.name not in gaps or (round(gap, 2), other.name) < (round(gaps[disc.name][1], 2), gaps[disc.name][0]):
                     gaps[disc.name] = (other.name, gap)
                 if gap < prop_margin:
                     clashes.append(Clash(disc.name, other.name, "prop_margin", vol, gap))
             elif vol >= tolerance_mm3 + (allowed or {}).get(frozenset((a.name, b.name)), 0.0):
                 clashes.append(Clash(a.name, b.name, "overlap", vol))
-    clashes.sort(key=lambda c: (-c.volume_mm3, c.a, c.b))
+    clashes.sort(key=lambda c: (-round(c.volume_mm3, 3), c.a, c.b))
     return ClashResult(tuple(clashes), n, n * (n - 1) // 2, tested, tolerance_mm3, prop_margin, worst,
                        tuple((p, o, g) for p, (o, g) in sorted(gaps.items())))

@@ -11,6 +11,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .. import numfmt
 from . import framefe as ff
 from .constants import G, RHO_AIR
 from .framefe import euler_loads, lowest_eigenvalues
@@ -159,10 +160,13 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
         rods_out.append({"rod": rn, "length_mm": round(length, 2), "axial_n": round(n_ax, 3), "euler_n": round(p_cr, 2),
                          "margin": round(margin, 3) if math.isfinite(margin) else None})
     finite = [x for x in rods_out if x["margin"] is not None]
-    worst = min(finite, key=lambda x: x["margin"]) if finite else None
+    # ordered by the margin as check.json states it (numfmt), then by name: mirror-image rods' margins
+    # differ only in their noise, which must not decide which one is named critical or listed first
+    worst = min(finite, key=lambda x: (numfmt.sig(x["margin"], numfmt.CHECK_FIGURES), x["rod"])) if finite else None
     buckling = {"design_force_n": round(f_design, 2), "min_margin": worst["margin"] if worst else None,
                 "critical_rod": worst["rod"] if worst else None,
-                "rods": sorted(rods_out, key=lambda x: (x["margin"] is None, x["margin"] or 0.0))}
+                "rods": sorted(rods_out, key=lambda x: (True, 0.0, "") if x["margin"] is None else
+                               (False, numfmt.sig(x["margin"], numfmt.CHECK_FIGURES), x["rod"]))}
 
     # 6. TPU strain at the design drop
     strain = _strain(frame, parts, mdl, u * scale, TPU_ELONGATION_AT_BREAK, interface(spec), hinged_socket, hinge_geometry)

@@ -34,6 +34,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from .. import numfmt
+
 SWEEP_CM = tuple(float(h) for h in range(10, 610, 10))  # 10 cm to 6 m (11 m/s at touch-down)
 
 
@@ -124,14 +126,16 @@ def evaluate(spec, frame, drop, stiffness: dict, peaks: list[dict] | None = None
     for name, r in sorted(per_n["rods"].items()):
         by_role.setdefault(r["role"], []).append((name, r))
     for role, rods in sorted(by_role.items()):
-        # the role's most stressed rod (symmetric rods tie: the first by name)
-        name, r = max(rods, key=lambda x: x[1]["stress_mpa_per_n"])
+        # the role's most stressed rod; ties (symmetric rods) go to the first by name: compared at the
+        # precision check.json states (numfmt), so the last bits of the solve, which differ between
+        # mirror images, do not choose
+        name, r = min(rods, key=lambda x: (-numfmt.sig(x[1]["stress_mpa_per_n"]), x[0]))
         rod = strength(frame.rods[name].material)
         if rod is not None:
             add(f"rod {name}", "bending", rod.value, "MPa", [r["stress_mpa_per_n"] * f for f in forces])
         buck = [(n, r) for n, r in rods if r["euler_n"] and r["axial_n_per_n"] < 0]
         if buck:
-            name, r = max(buck, key=lambda x: -x[1]["axial_n_per_n"] / x[1]["euler_n"])
+            name, r = min(buck, key=lambda x: (-numfmt.sig(-x[1]["axial_n_per_n"] / x[1]["euler_n"]), x[0]))
             add(f"rod {name}", "buckling", r["euler_n"], "N", [-r["axial_n_per_n"] * f for f in forces])
     core_mat = spec.material(spec.core.material)
     core = strength(spec.core.material)
@@ -146,7 +150,7 @@ def evaluate(spec, frame, drop, stiffness: dict, peaks: list[dict] | None = None
     fails = [(crossing(heights_cm, s["margin"]), s) for s in series]
     failing = [(h, s) for h, s in fails if h is not None]
     if failing:
-        h, s = min(failing, key=lambda x: x[0])
+        h, s = min(failing, key=lambda x: (round(x[0], 1), x[1]["part"]))  # at the stated 0.1 cm, then by name
         first = {"part": s["part"], "mode": s["mode"], "at_drop_cm": round(h, 1)}
         top = round(h, 1)
     else:
@@ -154,7 +158,8 @@ def evaluate(spec, frame, drop, stiffness: dict, peaks: list[dict] | None = None
     for (h, s) in fails:
         s["fails_at_drop_cm"] = round(h, 1) if h is not None else None
     worst = sorted(series, key=lambda s: (s["fails_at_drop_cm"] is None, s["fails_at_drop_cm"] or 0.0,
-                                          min((x for x in s["margin"] if x is not None), default=math.inf), s["part"]))
+                                          numfmt.sig(min((x for x in s["margin"] if x is not None), default=math.inf)),
+                                          s["part"]))
     note = ("flat drops; joints strained by the drop model's spring force (capped where the battery holder reaches the "
             "floor), rods and core loaded by its whole force (spring and damper), both quasi-static in the payload "
             "case's pattern; the holder strike as a plane-wave bound; no fatigue, no tumbling, no edge landings")

@@ -11,6 +11,7 @@ from dataclasses import dataclass, replace
 from ..design import Derived, design
 from ..spec import Spec
 from . import mass as mass_mod
+from .. import numfmt
 from .numerics import one_blas_thread
 
 
@@ -239,7 +240,13 @@ def _problems(spec: Spec, budget: mass_mod.MassBudget, drop) -> list[str]:
 
 
 def check_dict(result: Findings) -> dict:
-    """The stable JSON of `cogniframe check --json`."""
+    """The stable JSON of `cogniframe check --json` (its numbers at numfmt's stated precision)."""
+    return numfmt.check_figures(check_values(result))
+
+
+def check_values(result: Findings) -> dict:
+    """`check_dict`'s tree at the model's full precision: what the model computed, before the
+    output rounds it (tests of the model's own identities read this)."""
     d = result.design
     out = {
         "name": d.spec.name,

@@ -21,6 +21,7 @@ from typing import Sequence
 
 import numpy as np
 
+from .. import numfmt
 from ..partlist import PartSpec
 from ..spec import Spec
 
@@ -163,8 +164,8 @@ def glb_bytes(shapes: dict, nodes: Sequence[tuple[str, str, np.ndarray]]) -> byt
 
     meshes, index = [], {}
     for name, (verts, faces, rgba) in shapes.items():
-        v = np.ascontiguousarray(verts, np.float32).reshape(-1, 3)
-        f = np.ascontiguousarray(faces, np.uint32).reshape(-1)
+        v = np.ascontiguousarray(numfmt.on_grid(np.asarray(verts, float).reshape(-1, 3)), np.float32)  # stated precision
+        f = np.ascontiguousarray(numfmt.canonical_faces(faces), np.uint32).reshape(-1)  # one order (numfmt)
         c = np.tile(np.asarray(rgba, np.uint8), (len(v), 1))
         ind = put(f, componentType=5125, count=int(f.size), type="SCALAR",
                   max=[int(f.max()) if f.size else 0], min=[int(f.min()) if f.size else 0])
@@ -177,7 +178,7 @@ def glb_bytes(shapes: dict, nodes: Sequence[tuple[str, str, np.ndarray]]) -> byt
     gltf = {"asset": {"version": "2.0", "generator": "cogniframe"}, "scene": 0,
             "scenes": [{"nodes": list(range(len(nodes)))}],
             "nodes": [{"name": name, "mesh": index[geom],
-                       "matrix": [float(x) for x in np.asarray(m, float).T.ravel()]} for name, geom, m in nodes],
+                       "matrix": numfmt.placement(m).T.ravel().tolist()} for name, geom, m in nodes],
             "meshes": meshes, "accessors": accessors, "bufferViews": views,
             "buffers": [{"byteLength": len(blob)}]}
     while len(blob) % 4:

@@ -21,6 +21,8 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from .. import numfmt
+
 # Linear deflection (mm, absolute) and angular deflection (rad) of the tessellation. 0.02 mm /
 # 0.15 rad keeps a 3.1 mm socket bore within ~0.01 mm of its diameter (the fit coupon steps by
 # 0.05 mm) at a few thousand facets per joint.
@@ -75,7 +77,9 @@ def tessellate(shape, tol: float = LINEAR_TOL, angular: float = ANGULAR_TOL) -> 
         exp.Next()
     if not faces:
         raise MeshError("the shape has no faces to mesh")
-    mesh = trimesh.Trimesh(np.vstack(verts), np.vstack(faces), process=True)
+    # on the stated grid (numfmt.GRID_MM) BEFORE welding: the last bits of OCP's nodes move with the
+    # CPU and the releases; a vertex pair the grid merges is welded here and its collapsed faces dropped
+    mesh = trimesh.Trimesh(numfmt.on_grid(np.vstack(verts)), np.vstack(faces), process=True)
     return clean(mesh)
 
 
@@ -91,9 +95,11 @@ def clean(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
 
 
 def stl_bytes(mesh: trimesh.Trimesh) -> bytes:
-    """Binary STL with a fixed header: identical meshes give identical bytes."""
-    tris = np.asarray(mesh.triangles, dtype=np.float64)
-    normals = np.asarray(mesh.face_normals, dtype=np.float64)
+    """Binary STL with a fixed header: identical meshes give identical bytes, and vertices and
+    normals at the stated precision (numfmt.GRID_MM, numfmt.NORMAL_DIGITS), so meshes that differ
+    only in last bits do too."""
+    tris = numfmt.on_grid(mesh.triangles)  # at the stated precision (numfmt): mm on a 1e-4 grid
+    normals = numfmt.unit_normals(mesh.face_normals)
     rec = np.zeros(len(tris), dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])
     rec["n"] = normals
     rec["v"] = tris

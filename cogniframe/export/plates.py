@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Mapping, Sequence
 
 import numpy as np
 
+from .. import numfmt
 from ..errors import UserError
 
 if TYPE_CHECKING:  # trimesh is imported where it is used: reading a plate's names needs none of it
@@ -140,11 +141,13 @@ def _footprint_turn(mesh: trimesh.Trimesh) -> float:
 
 
 def _normalised(mesh: trimesh.Trimesh, deg: float) -> trimesh.Trimesh:
-    """Copy of `mesh` turned `deg` about z and moved so its bounding box starts at the origin."""
+    """Copy of `mesh` turned `deg` about z and moved so its bounding box starts at the origin, its
+    vertices on the grid the 3MF states them on (numfmt.GRID_MM): the layout measures what is written."""
     m = mesh.copy()
     if deg:
         m.apply_transform(_rot_z(deg))
     m.apply_translation(-m.bounds[0])
+    m.vertices = numfmt.on_grid(m.vertices)
     return m
 
 
@@ -271,7 +274,7 @@ def _instances(plate: Plate) -> list[tuple[np.ndarray, np.ndarray, list[PlacedCo
 
     groups: dict[str, tuple[np.ndarray, np.ndarray, list[PlacedCopy]]] = {}
     for c in plate.copies:
-        verts = np.asarray(c.mesh.vertices, float) - [c.x, c.y, 0.0]
+        verts = numfmt.on_grid(np.asarray(c.mesh.vertices, float) - [c.x, c.y, 0.0])  # the stated precision
         faces = np.asarray(c.mesh.faces, np.int64)
         key = hashlib.sha256(c.part.encode() + np.round(verts, 6).tobytes() + faces.tobytes()).hexdigest()
         groups.setdefault(key, (verts, faces, []))[2].append(c)

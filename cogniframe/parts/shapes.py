@@ -18,7 +18,8 @@ from .record import PartSpec
 CAD_VERSION = "cad-2025.3"
 
 # Everything the part CAD and its files are made by: editing any of these invalidates the part cache.
-PART_CODE = ("parts/*.py", "families/*.py", "families/joint_kinds/*.py", "export/part_files.py", "export/mesh.py", "export/step.py", "partlist.py")
+PART_CODE = ("parts/*.py", "families/*.py", "families/joint_kinds/*.py", "export/part_files.py", "export/mesh.py",
+             "export/step.py", "partlist.py", "numfmt.py")
 
 
 # PartSpec fields the CAD does not read (where copies go, the mass model's inputs, the BOM): a change

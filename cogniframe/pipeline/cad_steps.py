@@ -99,7 +99,8 @@ def make_clash(ctx) -> Made:
     (ctx.out / "clash.json").write_text(json.dumps(result.to_dict(), indent=2) + "\n", encoding="utf-8")
     return Made(("clash.json",), result.to_dict())
 
-CLASH_CODE = ("analysis/clash.py", "export/assembly.py", "export/mesh.py", "vitamins.py", "fasteners.py", "materials.py", "partlist.py", "families/*.py", "families/joint_kinds/*.py")
+CLASH_CODE = ("analysis/clash.py", "export/assembly.py", "export/mesh.py", "vitamins.py", "fasteners.py", "materials.py",
+              "partlist.py", "families/*.py", "families/joint_kinds/*.py", "numfmt.py")
 
 
 PART = Step("part:{material}/{part}", (), make_part, part_key, PART_CODE, "wait",
@@ -109,5 +110,5 @@ CLASH = Step("clash", ("part:*",), make_clash, clash_key, CLASH_CODE, "wait",
              reads="STL hashes, copies and placements, rods, vitamins, prop margin")
 ASSEMBLY = Step("assembly", ("part:*",), make_assembly, assembly_key, ("export/assembly.py", "export/step.py", "vitamins.py", "fasteners.py"),
                 "wait", after=("plates:*",), reads="STEP hashes, copies and placements, rods, vitamins")
-GLB = Step("glb", ("part:*",), make_glb, glb_key, ("export/assembly.py", "vitamins.py", "fasteners.py"),
+GLB = Step("glb", ("part:*",), make_glb, glb_key, ("export/assembly.py", "vitamins.py", "fasteners.py", "numfmt.py"),
            reads="STL hashes, copies and placements, rods, vitamins")

@@ -133,10 +133,10 @@ def make_slice(ctx, material: str) -> Made:
 
 
 PLATES = Step("plates:{material}", ("part:{material}/*",), make_plates, plates_key,
-              ("export/plates.py", "export/bambu3mf.py", "export/slicer.py", "partlist.py", "printers.py"),
+              ("export/plates.py", "export/bambu3mf.py", "export/slicer.py", "partlist.py", "printers.py", "numfmt.py"),
               reads="each part's STL hash and qty, bed, margin, print settings")
 SLICE = Step("slice:{material}", ("plates:{material}",), make_slice, slice_key,
              ("export/slicer.py", "partlist.py", "printers.py"), "wait",
              reads="plate files, profile, PrusaSlicer version (each plate on its own key)")
-PREVIEWS = Step("previews:{material}", ("plates:{material}",), make_previews, previews_key, ("export/plates.py",),
+PREVIEWS = Step("previews:{material}", ("plates:{material}",), make_previews, previews_key, ("export/plates.py", "numfmt.py"),
                 reads="plate layouts")

@@ -61,18 +61,22 @@ def plot_drop_response(result: "DropResult", path: Path | str) -> Path:
     unconstrained model, which the dashed clearance line marks as no longer valid.
     Image: 800 x 700 px.
     """
+    from cogniframe import numfmt
     from cogniframe.analysis.impact import trajectory
 
     fig, axes = _figure(8.0, 7.0, 2, 1, title_lines=2)
     ax_x, ax_a = axes[0, 0], axes[1, 0]
     finite = [h.t_max_s for h in result.heights if np.isfinite(h.t_max_s)]
-    t_end = 1.2 * max(finite) if finite else None
+    t_end = numfmt.sig(1.2 * max(finite)) if finite else None
+    # the curves of the model as check.json states it (numfmt): its last bits, which move between
+    # machines, moved antialiased pixels too
+    m, c, k = (numfmt.sig(v) for v in (result.mass_kg, result.c_n_s_per_m, result.k_n_per_m))
     for h in result.heights:
-        t, x, _, a_g = trajectory(result.mass_kg, result.c_n_s_per_m, result.k_n_per_m,
-                                  h.height_cm, t_end_s=t_end, n=1000)
+        t, x, _, a_g = trajectory(m, c, k, h.height_cm, t_end_s=t_end, n=1000)
         label = f"{h.height_cm:g} cm" + (" (strikes)" if h.strikes else "")
-        (line,) = ax_x.plot(t * 1e3, x * 1e3, label=label)
-        ax_a.plot(t * 1e3, a_g, color=line.get_color(), label=label)
+        t, x, a_g = (numfmt.plotted(v) for v in (t * 1e3, x * 1e3, a_g))  # ms, mm, G
+        (line,) = ax_x.plot(t, x, label=label)
+        ax_a.plot(t, a_g, color=line.get_color(), label=label)
     ax_x.axhline(result.clearance_mm, color="k", linestyle="--", linewidth=1,
                  label=f"clearance {result.clearance_mm:g} mm")
     ax_x.set_ylabel("payload displacement x (mm)")
