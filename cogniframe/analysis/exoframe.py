@@ -73,6 +73,7 @@ class Layout:
     rods: tuple[str, ...]  # rods with both ends in a socket
     arms: tuple[str, ...]  # rods through a motor mount's sleeve
     notes: tuple[str, ...] = ()
+    feet_low: tuple[float, ...] = ()  # each foot's lowest point along `down` (its floor level)
 
     def rod_d(self, rod) -> float:
         return float(self.rod_diameter if self.rod_diameter is not None else rod.diameter)
@@ -93,6 +94,7 @@ def layout(exo, down: str = "-z", rod_diameter: float | None = None, rod_materia
         low = {n: float(max(np.asarray(c) @ dvec for c in exo.joint(n).bbox)) for n in fe_joints}
     floor = max(low.values()) if low else 0.0
     feet = tuple(n for n in fe_joints if low[n] >= floor - FLOOR_TOL)
+    feet_low = tuple(low[n] for n in feet)
     att = {a.name: a for a in exo.attached}
     core_parts = set()
     links, glue = [], []
@@ -110,7 +112,7 @@ def layout(exo, down: str = "-z", rod_diameter: float | None = None, rod_materia
     if not core_parts:
         notes.append("no rigid core part (ABS/PLA/PETG by its name) touches a joint: the payload has nothing to sit on")
     return Layout(exo, tuple(dvec), rod_diameter, rod_material, fe_joints, mounts, feet, tuple(sorted(core_parts)),
-                  tuple(sorted(links)), tuple(sorted(set(glue))), rods, arms, tuple(notes))
+                  tuple(sorted(links)), tuple(sorted(set(glue))), rods, arms, tuple(notes), feet_low)
 
 
 # -- the joints' super-elements ------------------------------------------------------------------
@@ -140,15 +142,9 @@ def body_refs(lay: Layout) -> dict[str, tuple[str, np.ndarray]]:
     exo = lay.exo
     d = np.asarray(lay.down)
     out = {}
-    if lay.feet:
-        floor = None
-        for n in lay.feet:
-            bb = exo.joint(n).bbox
-            v = max(float(np.asarray(c) @ d) for c in bb)
-            floor = v if floor is None else max(floor, v)
-        for n in lay.feet:
-            c = _centroid(exo, n)
-            out[f"floor:{n}"] = (f"floor:{n}", c + d * (floor - c @ d))
+    for n, level in zip(lay.feet, lay.feet_low):
+        c = _centroid(exo, n)
+        out[f"floor:{n}"] = (f"floor:{n}", c + d * (level - c @ d))
     for n in lay.links:
         out[f"body:{n}"] = (f"body:{n}", _centroid(exo, n))
     for a, b in lay.glue:
@@ -205,7 +201,10 @@ def joint_ties(lay: Layout, name: str, solids: dict, e: float, g: float, layer_h
         level = float(refs[lab][1] @ d)
 
         def sel_floor(c, n, level=level):
-            return (np.abs(d @ c - level) < 1e-3 + 0.05) & ((d @ n) > 0.99)
+            # the faces on the floor: flat faces at the foot's lowest level; a rounded foot
+            # (no flat face there) stands on what lies within FLOOR_TOL of it, facing down
+            flat = (np.abs(d @ c - level) < 0.05) & ((d @ n) > 0.99)
+            return flat if flat.any() else (d @ c > level - FLOOR_TOL) & ((d @ n) > 0.5)
 
         ties.append(solid_fe.Tie(lab, sel_floor, tuple(map(float, refs[lab][1])), stiff, stiff))
         desc.append((lab, level))
