@@ -119,13 +119,12 @@ def test_a_small_frame_is_modelled_and_a_part_it_cannot_place_is_named(run_cli, 
 
 # -- the round trip: cogniframe's carbon frame, written as STEP and analysed ------------------------
 
-# What the round trip can hold (measured, docs/stiffness-model.md "cogniframe analyse"): the read
-# frame's joints are the same B-reps meshed in the world's axes instead of the print's (the mesh
-# differs), the feet stand on their pads' centre instead of the corner node, and a core link is
-# held by the faces that touch the plate (the pegs' sides and ends in the plate's bores and one
-# shoulder: 390 mm^2) instead of the plan's pegs (453 mm^2): k +4.4 %, the full frame's thrust
-# deflection -2.5 %, the bare arms' -14 % (the link's arm-pair hinge is 617 N mm/rad read vs 534
-# planned), the safe drop +2.2 %.
+# What the round trip can hold (measured, docs/stiffness-model.md "cogniframe analyse on cogniframe's
+# own frame"): the read joints are the same B-reps meshed in the world's axes instead of the
+# print's (the corners agree within 0.6 %, the knee's softest mode is 6 % softer) and a core link
+# is held by the faces that touch the plate instead of the plan's pegs (its soft modes 1-9 %
+# stiffer, its arm-pair hinge +16 %): k +4.4 %, the full frame's thrust deflection -2.5 %, the bare
+# arms' -14 %, the safe drop +2.2 %.
 K_TOL = 0.06
 THRUST_FULL_TOL = 0.05
 THRUST_ARMS_TOL = 0.20
