@@ -166,3 +166,70 @@ def test_round_trip_reproduces_check(carbon_step):
     assert a.drop["max_safe_height_cm"] == pytest.approx(drop["max_safe_height_cm"], rel=SAFE_DROP_TOL)
     assert sorted(a.model["feet"]) == [f"corner_bottom_{c}" for c in ("fl", "fr", "rl", "rr")]
     assert a.model["core"] == ["core_plate"] and len(a.model["arms"]) == 8
+
+
+# -- the frame model on its own (no CAD, no FE): joints as condensed beam stars ---------------------
+
+def _star_unit(name: str, centre, labels, refs, e_mpa: float = 26.0):
+    """A joint's super-element without FE: a TPU beam from its centre to each body, the centre
+    condensed out (rigid-body invariant, as the FE's)."""
+    from cogniframe.analysis import exoframe as X
+    from cogniframe.analysis import framefe as ff
+
+    fe = ff.Frame3D()
+    fe.add_node("c", centre)
+    for lab, r in zip(labels, refs):
+        fe.add_node(lab, r)
+        fe.add_beam(f"b:{lab}", "c", lab, e_mpa, e_mpa / 2.96, 4.0)
+    K = fe.stiffness()
+    keep = np.arange(6, K.shape[0])
+    Kc = K[np.ix_(keep, keep)] - K[np.ix_(keep, range(6))] @ np.linalg.solve(K[:6, :6], K[np.ix_(range(6), keep)])
+    return X.Unit(name, tuple(labels), tuple(map(tuple, refs)), 0.5 * (Kc + Kc.T), "tpu_95a", Kc.shape[0])
+
+
+def _synthetic_frame():
+    """The small frame of `_frame_parts` as cadread's dataclasses (no CAD)."""
+    from cogniframe.analysis import exoframe as X
+    from cogniframe.cadread.model import Contact, Exoskeleton, Joint, Rod, Socket
+
+    rods, joints, sockets, contacts = [], [], [], []
+    for i, ang in enumerate((0, 90, 180, 270)):
+        c, s = math.cos(math.radians(ang)), math.sin(math.radians(ang))
+        link, foot = np.array([25 * c, 25 * s, 23.0]), np.array([60 * c, 60 * s, 5.0])
+        axis = (foot - link) / np.linalg.norm(foot - link)
+        rods.append(Rod(f"rod_{i}", tuple(link), tuple(foot), ROD_D))
+        for jn, p, d, end in ((f"Flex_link_{i}", link, axis, "a"), (f"Flex_foot_{i}", foot, -axis, "b")):
+            joints.append(Joint(jn, "tpu_95a", tuple(p), 1000.0, (tuple(p - 5), tuple(p + 5))))
+            sockets.append(Socket(jn, f"rod_{i}", end, tuple(p), tuple(d), BORE, DEPTH, True))
+        contacts.append(Contact(f"Flex_link_{i}", "core_plate", 0.0))
+    plate = Joint("core_plate", "abs", (0.0, 0.0, 23.0), 9600.0, ((-20, -20, 20), (20, 20, 26)))
+    exo = Exoskeleton("synthetic", tuple(rods), tuple(joints), tuple(sockets), (plate,), tuple(contacts))
+    lay = X.layout(exo, "-z")
+    refs = X.body_refs(lay)
+    units = {}
+    for j in joints:
+        labs, pts = [], []
+        for s in exo.sockets_of(j.name):
+            labs.append(f"{s.rod}:{s.end}")
+            pts.append(np.asarray(s.mouth))
+        for lab, (_, p) in refs.items():
+            if lab.split(":", 1)[1] == j.name:
+                labs.append(lab)
+                pts.append(p)
+        units[j.name] = _star_unit(j.name, np.asarray(j.centroid) + (0.0, 0.0, -2.0), labs, pts)  # off the body refs
+    return lay, units
+
+
+def test_the_frame_model_finds_feet_core_and_links_and_calibrates():
+    from cogniframe.analysis import exoframe as X
+
+    lay, units = _synthetic_frame()
+    assert sorted(lay.feet) == [f"Flex_foot_{i}" for i in range(4)] and lay.core == ("core_plate",)
+    assert sorted(lay.links) == [f"Flex_link_{i}" for i in range(4)] and lay.mounts == () and lay.arms == ()
+    k = X.k_at(lay, units, 0.5)
+    assert k > 0
+    # the joints are nearly all the compliance: k nearly proportional to the factor, and the root
+    # find gives back the factor a k was made with
+    assert 1.95 < X.k_at(lay, units, 1.0) / k <= 2.0
+    assert X.calibrate(lay, units, k) == pytest.approx(0.5, rel=1e-6)
+    assert "no motor mount" in X.thrust_case(lay, units, 0.5, 175.0, 241.0)["note"]
