@@ -286,7 +286,7 @@ class Model:
     motors: list[str]
 
 
-def build(lay: Layout, units: dict[str, Unit], factor: float, only: tuple[str, ...] | None = None) -> Model:
+def model_of(lay: Layout, units: dict[str, Unit], factor: float, only: tuple[str, ...] | None = None) -> Model:
     """The beam-and-super-element model at TPU factor `factor`; ``only``: keep only these rods
     (and the joints holding one of them; a removed rod's socket body is left free)."""
     from ..materials import MATERIALS
@@ -444,7 +444,7 @@ def thrust_case(lay: Layout, units: dict, factor: float, max_thrust_g: float, to
     per_hover = hover_g * G / 1000.0
     out = {"max_thrust_g": max_thrust_g, "hover_thrust_g": hover_g}
     for label, only in (("full", None), ("arms_only", lay.arms)):
-        mdl = full if (label == "full" and full is not None) else build(lay, units, factor, only)
+        mdl = full if (label == "full" and full is not None) else model_of(lay, units, factor, only)
         dz, tilt = motors_under_thrust(lay, mdl, 1.0)
         pre = "" if label == "full" else "arms_only_"
         out[f"{pre}motor_deflection_mm_per_n"] = dz
@@ -458,7 +458,7 @@ def thrust_case(lay: Layout, units: dict, factor: float, max_thrust_g: float, to
 
 
 def k_at(lay: Layout, units: dict, factor: float) -> float:
-    return payload_k(lay, build(lay, units, factor))
+    return payload_k(lay, model_of(lay, units, factor))
 
 
 def calibrate(lay: Layout, units: dict, target_n_per_m: float, lo: float = 0.01, hi: float = 10.0) -> float:

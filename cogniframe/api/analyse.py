@@ -121,7 +121,7 @@ def analyse(path=None, *, solids=None, source: str = "", materials=None, down: s
                               rod_diameter=rod_diameter, layer_height=layer_height, progress=progress)
     lay, units, exo = fm.layout, fm.units, fm.exo
     f = TPU_PRINTED_MODULUS_FACTOR if factor is None else float(factor)
-    full = exoframe.build(lay, units, f)
+    full = exoframe.model_of(lay, units, f)
     k = exoframe.payload_k(lay, full)
     thrust = exoframe.thrust_case(lay, units, f, max_thrust_g, mass_kg * 1000.0, full=full)
     safe = impact.max_safe_height_cm(mass_kg, c_n_s_per_m, k, clearance_mm)
