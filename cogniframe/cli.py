@@ -127,8 +127,9 @@ def schema() -> None:
 
 
 def _register_commands() -> None:
-    from .commands import drop_fit, explore, fab, maker, server_control, studio
+    from .commands import drop_fit, exoskeleton, explore, fab, maker, server_control, studio
 
+    exoskeleton.register(app)
     drop_fit.register(app)
     fab.register(app)
     maker.register(app)

@@ -3,6 +3,12 @@ what it finds: rods by length, joints by name with their sockets, what it could 
 
     python tools/authors_frame.py /work/.mirror/thecognifly+CogniFly-STL/repo   # a clone or bare git dir
     python tools/authors_frame.py CogniFly-Flex.FCStd --refs DIR                 # the document + part files
+    python tools/authors_frame.py /work/.mirror/thecognifly+CogniFly-STL/repo --analyse   # + the physics
+
+`--analyse` runs `cogniframe analyse`'s model on it (api.analyse: +z down, the rods' real 3.0 mm
+carbon for the beams and the fits): k at the datasheet TPU modulus (factor 1) and at the package's
+calibration, the thrust case and the drop model, and the TPU factor at which the frame's k is the
+paper's measured 7040 N/m (a 1-D root find), with the carbon preset's k at that factor.
 
 From a git directory it reads `CogniFly_v8_Crash_Tests/STEP_and_SAT/For_Visualization_Dimensions/
 CogniFly-Flex.FCStd` and the v8 part STLs (`git show`, into a temporary folder: nothing of
@@ -110,15 +116,60 @@ def report(doc: Path, refs: Path | None, rod_diameter: float | None = None) -> s
     return "\n".join(out)
 
 
+def analyse_report(doc: Path, refs: Path | None, rod_diameter: float = 3.0, preset: str = "params/carbon.yaml") -> str:
+    """The physics of the authors' frame (see the module docstring), as text."""
+    from cogniframe.analysis.exoframe import k_at
+    from cogniframe.analysis.joints import TPU_PRINTED_MODULUS_FACTOR
+    from cogniframe.analysis.stiffness import PAPER_K_N_PER_M
+    from cogniframe.api.analyse import analyse, calibrate, frame_model, summary
+    from cogniframe.cadread.identify import file_signature, identify
+    from cogniframe.cadread.load import load_solids
+
+    solids = load_solids(doc)
+    if refs is not None:
+        references = {f.stem: file_signature(f) for f in sorted(refs.iterdir()) if f.suffix.lower() in (".stl", ".step", ".stp")}
+        solids, _ = identify(solids, references)
+    fm = frame_model(solids=solids, source=doc.name, down="+z", rod_diameter=rod_diameter,
+                     progress=lambda m: print(m, file=sys.stderr, flush=True))
+    out = []
+    for f in (1.0, TPU_PRINTED_MODULUS_FACTOR):
+        a = analyse(model=fm, source=doc.name, down="+z", rod_diameter=rod_diameter, factor=f)
+        out += [f"-- TPU factor {f:g}"] + summary(a) + [""]
+    f_cal = calibrate(fm, PAPER_K_N_PER_M)
+    out.append(f"-- calibration: the TPU factor at which the authors' frame gives the paper's {PAPER_K_N_PER_M:.0f} N/m: "
+               f"f = {f_cal:.4f} (k(f) = {k_at(fm.layout, fm.units, f_cal):.1f} N/m; k(1) / 7040 = "
+               f"{k_at(fm.layout, fm.units, 1.0) / PAPER_K_N_PER_M:.4f}: k is not quite proportional to f, the rods bend too)")
+    a = analyse(model=fm, source=doc.name, down="+z", rod_diameter=rod_diameter, factor=f_cal)
+    out += summary(a)
+    k_preset = preset_k(preset, f_cal)
+    out.append(f"-- {preset} at f = {f_cal:.4f}: k = {k_preset:.0f} N/m (the check's frame model; the paper's 7040), "
+               f"at f = {TPU_PRINTED_MODULUS_FACTOR:g}: {preset_k(preset, TPU_PRINTED_MODULUS_FACTOR):.0f} N/m")
+    return "\n".join(out)
+
+
+def preset_k(preset: str, factor: float) -> float:
+    """A preset's k (the check's secant k, its joints' FE from the cache) at TPU factor `factor`."""
+    import cogniframe as cf
+    from cogniframe.analysis.stiffness import joint_models, secant_k
+
+    d = cf.load(preset)
+    spec, der = d.spec, d.derived
+    return secant_k(spec, der.frame, der.parts, joint_models(spec, der.parts, "fe", factor))
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("source", type=Path, help="the authors' repository (a clone or bare git dir) or the .FCStd")
     ap.add_argument("--refs", type=Path, help="folder of part files (STL/STEP) to name the solids by")
     ap.add_argument("--rod-diameter", type=float, default=None)
+    ap.add_argument("--analyse", action="store_true", help="the physics: k, thrust case, safe drop, the calibration")
     a = ap.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
         doc, refs = (from_git(a.source, Path(tmp)) if a.source.is_dir() else (a.source, a.refs))
-        print(report(doc, refs, a.rod_diameter))
+        if a.analyse:
+            print(analyse_report(doc, refs, a.rod_diameter or 3.0))
+        else:
+            print(report(doc, refs, a.rod_diameter))
     return 0
 
 

@@ -1,7 +1,7 @@
 """Which material each read part is: part-name patterns, overridable by a YAML file.
 
 Default patterns (case-insensitive regular expressions, first match wins): names with `flex` or
-`tpu` are TPU 95A (the authors' `Flex_*` parts), names with `base`, `abs`, `holder`, `core`,
+`tpu` (and cogniframe's `core_link`) are TPU 95A (the authors' `Flex_*` parts), names with `base`, `abs`, `holder`, `core`,
 `plate` are ABS, `pla` / `petg` those filaments; anything else is `default` (TPU 95A: the joints of
 a soft exoskeleton). A `--materials FILE` YAML replaces or adds patterns, checked first:
 
@@ -21,7 +21,7 @@ from pathlib import Path
 from ..errors import UserError
 
 DEFAULT_PATTERNS: tuple[tuple[str, str], ...] = (
-    (r"flex|tpu", "tpu_95a"),
+    (r"flex|tpu|core_link", "tpu_95a"),  # core_link: cogniframe's own printed TPU links (before `core`)
     (r"base|abs|holder|core|plate", "abs"),
     (r"petg", "petg"),
     (r"pla(?![a-z])|pla_", "pla"),
