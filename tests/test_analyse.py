@@ -190,7 +190,7 @@ def _star_unit(name: str, centre, labels, refs, e_mpa: float = 26.0):
 def _synthetic_frame():
     """The small frame of `_frame_parts` as cadread's dataclasses (no CAD)."""
     from cogniframe.analysis import exoframe as X
-    from cogniframe.cadread.model import Contact, Exoskeleton, Joint, Rod, Socket
+    from cogniframe.cadread.found import Contact, Exoskeleton, Joint, Rod, Socket
 
     rods, joints, sockets, contacts = [], [], [], []
     for i, ang in enumerate((0, 90, 180, 270)):

@@ -13,7 +13,7 @@ cq = pytest.importorskip("cadquery")
 
 from cogniframe.cadread import read_exoskeleton  # noqa: E402
 from cogniframe.cadread.load import load_solids  # noqa: E402
-from cogniframe.cadread.materials import MaterialMap, load_material_map  # noqa: E402
+from cogniframe.cadread.part_materials import MaterialMap, load_material_map  # noqa: E402
 from cogniframe.errors import UserError  # noqa: E402
 
 ROD_D, BORE, DEPTH = 3.0, 2.7, 7.5
@@ -292,7 +292,7 @@ def test_json_ready(socket_assembly):
 
 
 def test_module_entry_point(tmp_path, capsys):
-    from cogniframe.cadread.__main__ import main
+    from cogniframe.cadread.summary import main
 
     path = write_step(tmp_path, {"Flex_Corner": blind_block(BOTTOM, AXIS), "rod_1": rod(BOTTOM, BOTTOM + AXIS * 40)})
     assert main([str(path)]) == 0

@@ -66,7 +66,7 @@ def frame_model(path=None, *, solids=None, source: str = "", materials=None, dow
     every joint's FE (cached). Raises UserError when no frame can be modelled."""
     from ..analysis import exoframe
     from ..cadread.load import load_solids
-    from ..cadread.materials import MaterialMap, load_material_map
+    from ..cadread.part_materials import MaterialMap, load_material_map
     from ..cadread.read import exoskeleton_of
 
     if down not in exoframe.DOWN:

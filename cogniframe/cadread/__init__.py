@@ -9,7 +9,7 @@ finder), `sockets` (rod ends and sleeves in the joints), `materials` (part name 
 `--materials` YAML), `identify` (names for unnamed solids from reference part files), `read`
 (the whole pipeline), `model` (the frozen result, `as_dict` for JSON), `toframe` (the mapping onto
 cogniframe's frame: `frame.Rod`/`RodEnd`/`Node`, `parts.record.Socket`), `geometry` (B-rep facts:
-cylinders, B-spline cylinders included, cones, boxes, contacts). `python -m cogniframe.cadread
+cylinders, B-spline cylinders included, cones, boxes, contacts). `python -m cogniframe.cadread.summary
 ASSEMBLY [--materials FILE] [--json]` prints what it finds.
 
 Checked: cogniframe's own `assembly.step` (carbon and bamboo presets) reads back as the frame's 28
@@ -18,7 +18,7 @@ motor-mount sleeves (`tools/cadread_roundtrip.py`); the authors' `CogniFly-Flex.
 56 rod ends all in sockets, 8 sleeves (`tools/authors_frame.py`).
 """
 
-from .model import Contact, Exoskeleton, Joint, Rod, Socket, as_dict
+from .found import Contact, Exoskeleton, Joint, Rod, Socket, as_dict
 from .read import exoskeleton_of, read_exoskeleton
 
 __all__ = ["Contact", "Exoskeleton", "Joint", "Rod", "Socket", "as_dict", "exoskeleton_of", "read_exoskeleton"]

@@ -12,8 +12,8 @@ import numpy as np
 
 from .geometry import MESH_TOL, bbox, face_boxes, mass_props, touching
 from .load import NamedSolid, load_solids
-from .materials import MaterialMap
-from .model import Contact, Exoskeleton, Joint
+from .part_materials import MaterialMap
+from .found import Contact, Exoskeleton, Joint
 from .rods import find_rods
 from .sockets import find_sockets, nearest_hole
 

@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from .geometry import cylinders, line_distance, vertices
-from .model import Rod
+from .found import Rod
 
 MIN_ASPECT = 5.0
 VOLUME_TOL = 0.03

@@ -23,7 +23,7 @@ import math
 import numpy as np
 
 from .geometry import Cyl, bbox, cones, cylinders, inside, line_distance
-from .model import Rod, Socket
+from .found import Rod, Socket
 
 NEAR = 1.0  # mm between a rod's and a solid's bounding boxes
 TILT_DEG = 3.0

@@ -28,7 +28,7 @@ import numpy as np
 
 from ..frame import Node, Rod as FrameRod, RodEnd
 from ..parts.record import Socket as PartSocket
-from .model import Exoskeleton, Socket
+from .found import Exoskeleton, Socket
 
 
 def _port(exo: Exoskeleton, s: Socket) -> tuple[np.ndarray, float]:

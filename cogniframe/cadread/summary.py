@@ -1,4 +1,4 @@
-"""`python -m cogniframe.cadread ASSEMBLY [--materials FILE] [--rod-diameter D] [--json]`: what the
+"""`python -m cogniframe.cadread.summary ASSEMBLY [--materials FILE] [--rod-diameter D] [--json]`: what the
 reader finds in a STEP / FreeCAD assembly (the reading half of `cogniframe analyse`, issue 43).
 A UserError prints its message and exits 2, like the cogniframe CLI."""
 
@@ -10,8 +10,8 @@ import sys
 from collections import Counter
 
 from ..errors import UserError
-from .materials import load_material_map
-from .model import as_dict
+from .part_materials import load_material_map
+from .found import as_dict
 from .read import read_exoskeleton
 
 
@@ -28,7 +28,7 @@ def summary(exo) -> str:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m cogniframe.cadread", description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(prog="python -m cogniframe.cadread.summary", description=__doc__.split("\n\n")[0])
     ap.add_argument("assembly")
     ap.add_argument("--materials", help="YAML: parts: {name pattern: material}, default:, rods:")
     ap.add_argument("--rod-diameter", type=float, default=None, help="keep only rods of this diameter (+-10 %%), mm")
