@@ -88,6 +88,7 @@ def test_mirror_pairs_of_core_links_are_mirror_images(preset):
     assert d.parts["core_link"].qty == d.parts["core_link_mirrored"].qty == 2
 
 
+@pytest.mark.fe
 def test_moving_one_part_into_another_is_a_fail_naming_both(scenes):
     """Negative control: the battery holder raised 3 mm into the sensor mount and plate; a rod moved
     under a propeller. The check names both solids, the overlap and the gap; verdict.check FAILs."""
@@ -143,6 +144,7 @@ def test_screws_are_in_the_clash_check_and_one_off_its_hole_is_a_clash(scenes):
 # -- vitamins -------------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("preset", PRESETS)
+@pytest.mark.fe
 def test_every_vitamin_has_its_mass_in_exactly_one_budget_line(preset):
     from cogniframe.vitamins import vitamins
 
@@ -378,6 +380,7 @@ def test_bamboo_flight_matches_a_hand_calculation():
     assert f.hover_power_w == pytest.approx(i_total * 7.4, rel=1e-9)
 
 
+@pytest.mark.fe
 def test_bamboo_hover_time_is_near_the_reported_17_min():
     """The authors report about 17 min for the bamboo build (2S 2000 mAh). The preset's estimate
     is within 15 % (it cannot be exact: the table is representative, the real pack's usable
@@ -388,6 +391,7 @@ def test_bamboo_hover_time_is_near_the_reported_17_min():
 
 
 @pytest.mark.parametrize("preset", PRESETS)
+@pytest.mark.fe
 def test_hover_power_matches_momentum_theory_with_a_figure_of_merit(preset):
     """Table hover power against T^1.5 / sqrt(2 rho A) / (FM x eta) with FM x eta = 0.30: within 20 %."""
     f = verdict.check(spec_mod.load(ROOT / "params" / f"{preset}.yaml")).flight
@@ -417,6 +421,7 @@ def test_max_thrust_per_motor_and_voltage_scaling():
     assert max_thrust_g(spec_mod.from_dict(data)) == 215.0
 
 
+@pytest.mark.fe
 def test_thrust_to_weight_below_the_requirement_fails(run_cli, tmp_path):
     import json
 
@@ -436,6 +441,9 @@ def test_thrust_to_weight_below_the_requirement_fails(run_cli, tmp_path):
     assert any("thrust-to-weight" in x and "min_thrust_to_weight" in x for x in res["problems"])
 
 
+@pytest.mark.cad
+@pytest.mark.fe
+@pytest.mark.slicer
 def test_a_build_with_a_clash_exits_1_naming_both_solids(run_cli, tmp_path, monkeypatch):
     """Bamboo with its plate on the holder (level_arms false, the tab link) and without its 2 mm
     spacer: the core links sit on the battery holder's top edges again. The build runs the clash check, writes clash.json and FAILs (exit 1) with a
@@ -507,6 +515,7 @@ def test_vitamin_bom_rows_name_their_budget_lines():
 
 
 @pytest.mark.parametrize("tilt", [20.0, -15.0])
+@pytest.mark.cad
 def test_tilted_camera_mount_prints_without_support_and_carries_the_camera(tilt, tmp_path):
     """Tilted uprights still print as they sit (lean < 45 deg) and the camera board stays on the
     upright's front face: the board's back corners lie on the mount's surface (ray from behind)."""

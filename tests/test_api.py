@@ -17,6 +17,8 @@ from pathlib import Path
 
 import pytest
 
+import tiers
+
 from browser import CHROMIUM, FLAGS, browser_or_skip
 
 import cogniframe as cf
@@ -32,12 +34,14 @@ def carbon():
 
 
 @pytest.fixture(scope="module")
+@tiers.needs('fe')
 def carbon_check(carbon):
     return carbon.check()
 
 
 # -- importing ------------------------------------------------------------------------------
 
+@pytest.mark.process
 def test_import_is_light_and_exports_the_api():
     code = ("import sys, cogniframe as cf; heavy = [m for m in ('pydantic', 'numpy', 'cadquery', 'yaml', 'pandas') if m in sys.modules];"
             "print(heavy, callable(cf.sweep), cf.ParamsError.__mro__[1].__name__, sorted(n for n in cf.__all__))")
@@ -58,6 +62,7 @@ def test_sweep_is_the_package_and_the_call():
 
 # -- check ----------------------------------------------------------------------------------
 
+@pytest.mark.fe
 def test_check_equals_the_cli_json(carbon_check, run_cli):
     code, out, _ = run_cli("check", CARBON, "--json")
     cli = json.loads(out)
@@ -79,6 +84,7 @@ def test_to_dict_is_a_copy(carbon_check):
     assert carbon_check.to_dict()["mass"]["total_g"] == carbon_check.mass_g
 
 
+@pytest.mark.fe
 def test_with_values_changes_the_mass_and_not_the_original(carbon, carbon_check):
     heavier = carbon.with_values({"core.battery.mass": 70})
     assert carbon.get("core.battery.mass") == 58 and heavier.get("core.battery.mass") == 70
@@ -190,7 +196,8 @@ def test_save_writes_the_file_with_its_comments(tmp_path, carbon):
 
 # -- build ------------------------------------------------------------------------------------
 
-@pytest.mark.slow
+@pytest.mark.cad
+@pytest.mark.slicer
 def test_build_writes_the_cli_folder_under_its_rules(tmp_path, carbon):
     d = carbon.with_values({"core.battery.mass": 60})  # an edit that is not on disk: built from the design's text
     out = tmp_path / "out" / "carbon-60"
@@ -218,7 +225,8 @@ def test_build_writes_the_cli_folder_under_its_rules(tmp_path, carbon):
 
 
 
-@pytest.mark.slow
+@pytest.mark.browser
+@pytest.mark.cad
 def test_repr_html_draws_the_design_offline(carbon, tmp_path):
     fragment = carbon._repr_html_()
     assert fragment.count('class="cf-viewer"') == 1 and "three.js" in fragment
@@ -258,7 +266,7 @@ def test_repr_html_draws_the_design_offline(carbon, tmp_path):
 
 # -- sweep ------------------------------------------------------------------------------------
 
-@pytest.mark.slow
+@pytest.mark.cluster
 def test_sweep_from_a_dict_returns_a_dataframe(carbon):
     df = cf.sweep({"base": carbon, "samples": 3, "sampler": "lhs", "seed": 1,
                    "set": {"model.stiffness_model": "analytic", "core.link": "tab"}, "vary": {"rods.diameter": [2.4, 3.0]}},

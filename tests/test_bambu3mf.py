@@ -132,8 +132,8 @@ def test_a_broken_mesh_fails_the_lib3mf_check(a1_mini):
         check_3mf(_orca(plate, a1_mini, 1.0)[0])
 
 
-@pytest.mark.slow
 @pytest.mark.skipif(shutil.which("prusa-slicer") is None, reason="PrusaSlicer not installed")
+@pytest.mark.slicer
 def test_prusaslicer_measures_an_orca_plate_as_the_prusaslicer_plate(a1_mini, tmp_path):
     """What `build` reports for Bambu presets: PrusaSlicer slices the Orca / Bambu 3MF with cogniframe's
     profile; the geometry is the plate's, so the grams are the PrusaSlicer plate's."""
@@ -156,7 +156,8 @@ def test_prusaslicer_measures_an_orca_plate_as_the_prusaslicer_plate(a1_mini, tm
     assert out["orca"].grams == pytest.approx(solid_g, rel=0.08)
 
 
-@pytest.mark.slow
+@pytest.mark.cad
+@pytest.mark.slicer
 def test_build_for_the_a1_mini_writes_orca_bambu_plates(tmp_path):
     """The acceptance check: `printer: {preset: bambu_a1_mini}` builds plates that lib3mf loads, each
     object with its filament slot, the TPU objects at 100 % infill and the rigid ones at core.infill."""

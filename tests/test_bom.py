@@ -10,6 +10,8 @@ from pathlib import Path
 
 import pytest
 
+import tiers
+
 from cogniframe.analysis import verdict
 from cogniframe.analysis.mass import MassItem
 from cogniframe.export.slicer import MaterialCheck, PlateSlice, SliceReport
@@ -17,6 +19,7 @@ from cogniframe.report import bom as bom_mod
 
 
 @pytest.fixture(scope="module", params=("carbon", "bamboo"))
+@tiers.needs('fe')
 def checked(request):
     from cogniframe import spec as spec_mod
 

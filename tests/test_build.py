@@ -72,6 +72,8 @@ def test_build_mass_uses_cad_volumes(built):
     assert check["mass"]["total_g"] < 250
 
 
+@pytest.mark.cad
+@pytest.mark.slicer
 def test_rebuild_is_byte_identical(built, tmp_path):
     name, out = built
     params = ROOT / "params" / f"{name}.yaml"
@@ -97,6 +99,8 @@ def test_bad_params_leave_the_output_untouched(run_cli, tmp_path):
     assert [p.name for p in out.iterdir()] == ["keep.txt"]
 
 
+@pytest.mark.cad
+@pytest.mark.slicer
 def test_failure_mid_build_leaves_no_partial_folder(tmp_path, monkeypatch):
     from cogniframe.analysis import verdict
 
@@ -110,6 +114,8 @@ def test_failure_mid_build_leaves_no_partial_folder(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.cad
+@pytest.mark.slicer
 def test_unchanged_rebuild_skips_work_and_tampering_rebuilds(built, tmp_path):
     import shutil
 

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.cad, pytest.mark.process]  # builds in fresh cogniframe processes
 
 
 def _processes_with(tag: str) -> list[int]:
@@ -30,6 +30,7 @@ def _processes_with(tag: str) -> list[int]:
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+@pytest.mark.process
 def test_a_part_that_fails_in_a_worker_is_the_reported_cause_and_nothing_is_left(tmp_path):
     params = tmp_path / "small_bed.yaml"
     params.write_text("name: small_bed\nprinter:\n  bed: [45, 45, 45]\n")
@@ -57,6 +58,7 @@ def test_a_part_that_fails_in_a_worker_is_the_reported_cause_and_nothing_is_left
 
 
 @pytest.mark.parametrize("server", [False, True])
+@pytest.mark.process
 def test_cancel_drops_the_queued_cad_jobs_and_ends_the_running_one(server, tmp_path, monkeypatch):
     """What a failed build does to its CAD work (`CadPool.cancel`): the job under way ends at once
     instead of running to its end, the queued ones never start, and no new job is taken."""

@@ -31,6 +31,7 @@ def test_check_json_has_the_stable_keys(run_cli):
     assert {"x_max_mm", "peak_g", "energy_spring_pct", "energy_damper_pct", "energy_rigid_pct", "strikes"} <= set(drop["heights"][0])
 
 
+@pytest.mark.fe
 def test_check_table_shows_margin_and_verdict(run_cli):
     code, out, _ = run_cli("check", ROOT / "params/carbon.yaml")
     assert code == 0
@@ -50,6 +51,7 @@ def _variant(tmp_path: Path, base: str, **sections) -> Path:
     return p
 
 
+@pytest.mark.fe
 def test_over_the_mass_limit_fails_with_exit_1(run_cli, tmp_path):
     p = _variant(tmp_path, "carbon", requirements={"mass_limit": 200})
     code, out, _ = run_cli("check", p, "--json")
@@ -58,6 +60,7 @@ def test_over_the_mass_limit_fails_with_exit_1(run_cli, tmp_path):
     assert any("over the 200 g limit" in s for s in data["problems"])
 
 
+@pytest.mark.fe
 def test_design_drop_above_max_safe_fails(run_cli, tmp_path):
     p = _variant(tmp_path, "carbon", requirements={"design_drop_height_cm": 200})
     code, out, _ = run_cli("check", p, "--json")
@@ -65,6 +68,7 @@ def test_design_drop_above_max_safe_fails(run_cli, tmp_path):
     assert code == 1 and any("max safe drop height" in s for s in data["problems"])
 
 
+@pytest.mark.fe
 def test_measured_k_and_c_are_used_and_labelled(run_cli, tmp_path):
     p = _variant(tmp_path, "carbon", model={"k_n_per_m": 7040, "c_n_s_per_m": 46})
     _, out, _ = run_cli("check", p, "--json")
@@ -73,6 +77,7 @@ def test_measured_k_and_c_are_used_and_labelled(run_cli, tmp_path):
     assert drop["k_n_per_m"] == 7040 and drop["c_n_s_per_m"] == 46
 
 
+@pytest.mark.fe
 def test_check_plots(run_cli, tmp_path):
     code, _, _ = run_cli("check", ROOT / "params/carbon.yaml", "--plots", tmp_path / "plots")
     assert code == 0
@@ -88,6 +93,7 @@ def test_bad_key_is_exit_2_one_paragraph(run_cli, tmp_path):
     assert "Traceback" not in err
 
 
+@pytest.mark.process
 def test_errors_from_the_installed_command_have_no_traceback(tmp_path):
     p = _variant(tmp_path, "bamboo", rods={"diameter": -3})
     r = subprocess.run([sys.executable, "-m", "cogniframe", "check", str(p)], capture_output=True, text=True, cwd=tmp_path)
@@ -100,6 +106,7 @@ def test_missing_file_is_exit_2(run_cli, tmp_path):
 
 
 @pytest.mark.parametrize("preset", ["carbon", "bamboo"])
+@pytest.mark.fe
 def test_both_presets_pass_their_requirements(run_cli, preset):
     code, out, _ = run_cli("check", ROOT / "params" / f"{preset}.yaml", "--json")
     data = json.loads(out)
@@ -112,6 +119,7 @@ def test_usage_error_is_exit_2_without_traceback(run_cli):
     assert code == 2 and "Traceback" not in err and "no-such-option" in err
 
 
+@pytest.mark.process
 def test_cli_runs_without_a_top_level_click():
     # typer >= 0.29 vendors click: a fresh install has no `click` package, so nothing may import it
     code = ("import sys; sys.modules['click'] = None; from cogniframe.cli import main; "
@@ -128,6 +136,7 @@ def test_part_too_big_for_the_printer_is_exit_2(run_cli, tmp_path):
     assert "battery_holder" in err and "printer.bed" in err and "80 x 80 x 80" in err
 
 
+@pytest.mark.process
 def test_leaving_runs_exit_handlers_flushes_output_and_keeps_the_code():
     """`cli._leave` ends the process with os._exit (no interpreter teardown): exit handlers still
     run, buffered output is not lost, the exit code is the command's."""
@@ -138,6 +147,7 @@ def test_leaving_runs_exit_handlers_flushes_output_and_keeps_the_code():
     assert r.stdout == "x" * 100000 + "handler ran\n"
 
 
+@pytest.mark.process
 def test_leaving_skips_the_teardown_past_a_waiting_daemon_thread_but_waits_for_a_working_one(tmp_path):
     """A build that started a CAD server leaves a daemon thread waiting on it: `_leave` still ends
     with os._exit (no object is torn down: 0.5 s saved after a cold build). A thread that is not a
@@ -174,6 +184,7 @@ def test_check_leaves_the_progress_log_as_it_found_it(run_cli, tmp_path):
     assert (list(log.handlers), log.propagate, log.level) == before
 
 
+@pytest.mark.process
 def test_leaving_with_a_closed_output_is_quiet():
     """A reader that went away (`cogniframe ... | head`) or a closed stdout: no traceback, the code kept."""
     code = "import sys; from cogniframe.cli import _leave; sys.stdout.write('x'); sys.stdout.close(); _leave(1)"

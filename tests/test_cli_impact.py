@@ -255,6 +255,7 @@ def test_fit_bad_loss_and_missing_data_exit_2(csv_drops, tmp_path):
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "droptests"
 
 
+@pytest.mark.long
 def test_fit_kv_predict_gives_logger_peaks_and_keeps_the_fit():
     plain = run("fit", EXAMPLES / "SoftBottom_50cm", "--mass", 0.241, "--json")
     r = run("fit", EXAMPLES / "SoftBottom_50cm", "--mass", 0.241, "--predict", 100, "--predict", 150, "--json")
@@ -276,6 +277,7 @@ def test_fit_kv_predict_gives_logger_peaks_and_keeps_the_fit():
     assert d["single_drop"]["tilt_sigma_deg"] == 0.0 and d["single_drop"]["spin_sigma_deg_s"] > 0.0
 
 
+@pytest.mark.long
 def test_fit_nonlinear_predict_json():
     r = run("fit", EXAMPLES / "SoftBottom_50cm", "--mass", 0.241, "--model", "nonlinear", "--predict", 100, "--json")
     assert r.exit_code == 0, r
@@ -287,6 +289,7 @@ def test_fit_nonlinear_predict_json():
     assert p["peak_g_drop_median"] == pytest.approx(125.8, abs=1.5) and p["peak_g_drop_p90"] == pytest.approx(163.1, abs=2.0)
 
 
+@pytest.mark.long
 def test_fit_nonlinear_table_and_bad_model():
     r = run("fit", EXAMPLES / "SoftBottom_50cm", "--mass", 0.241, "--model", "nonlinear", "--predict", 100)
     assert r.exit_code == 0 and "two-mass" in r.stdout and "Predictions" in r.stdout
@@ -330,16 +333,19 @@ def test_check_json_has_the_stiffness_load_cases(run_cli):
     assert [h["height_cm"] for h in d["peak_g"]["heights"]] == [50, 100, 150, 262]
 
 
+@pytest.mark.fe
 def test_check_fails_below_the_paper_wall_speed(run_cli, tmp_path):
     code, d = _check(run_cli, tmp_path, requirements={"wall_impact_speed_m_s": 7.0})
     assert code == 1 and any("wall impact" in p and "7 m/s" in p for p in d["problems"])
 
 
+@pytest.mark.fe
 def test_check_fails_above_max_peak_g(run_cli, tmp_path):
     code, d = _check(run_cli, tmp_path, requirements={"max_peak_g": 30})
     assert code == 1 and any("peak deceleration" in p and "max_peak_g" in p for p in d["problems"])
 
 
+@pytest.mark.fe
 def test_check_fails_a_rod_that_buckles_naming_it(run_cli, tmp_path):
     # rods of a very soft wood: the struts buckle at the design drop
     code, d = _check(run_cli, tmp_path, materials={"balsa": {"density_g_cm3": 0.15, "e_mpa": 1500.0, "g_mpa": 100.0}},
@@ -348,6 +354,7 @@ def test_check_fails_a_rod_that_buckles_naming_it(run_cli, tmp_path):
     assert any("buckles" in p and "rod_strut_" in p for p in d["problems"]), d["problems"]
 
 
+@pytest.mark.process
 def test_check_json_is_the_same_bytes_fresh_and_cached(tmp_path, monkeypatch):
     # the physics caches store sorted JSON: a fresh answer must print in that order too
     import subprocess

@@ -292,7 +292,6 @@ def _zmax(shape) -> float:
     return box.CornerMax().Z()
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("preset", PRESETS)
 def test_plate_with_tubes_is_one_watertight_solid_printed_upside_down(preset, tmp_path):
     """The CAD: one watertight solid, its volume the closed form's within test_parts' 0.5 % (the
@@ -336,7 +335,7 @@ def test_plate_with_tubes_is_one_watertight_solid_printed_upside_down(preset, tm
         assert contains(mesh, probes_in).all()
 
 
-@pytest.mark.slow
+@pytest.mark.process
 def test_build_with_pegs_gives_a_watertight_plate_and_no_clash(tmp_path):
     """`cogniframe build` of carbon with core.link: pegs: the core plate's STL is one watertight
     volume with the eight tubes' mass in it, and the build's clash check (every part copy, rod
@@ -368,7 +367,7 @@ def test_build_with_pegs_gives_a_watertight_plate_and_no_clash(tmp_path):
     assert clash["pairs_tested"] > 0
 
 
-@pytest.mark.slow
+@pytest.mark.cad
 def test_bamboo_with_pegs_has_no_clash(tmp_path):
     """The clash check over bamboo's built parts with core.link: pegs (no analysis): 0 clashes,
     the pegs in their tubes included."""
@@ -411,7 +410,6 @@ def _random_pegged_parts(rnd):
         return None
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(3))
 def test_random_designs_with_pegs_give_one_watertight_plate(seed, tmp_path):
     """tests/design_space.py's random edits (other boxes, rectangles with the arms off the

@@ -91,6 +91,7 @@ _SETTINGS = dict(deadline=None, suppress_health_check=[HealthCheck.function_scop
 
 @settings(max_examples=400 if NIGHTLY else 6, **_SETTINGS)
 @given(doc=edited_designs())
+@pytest.mark.fe
 def test_check_of_an_edited_preset_exits_0_1_or_2_never_3(doc, tmp_path_factory):
     """The path `check` takes by default: the joints' solid FE (each new geometry solved once,
     then from the cache)."""
@@ -122,6 +123,7 @@ def _preset_with(name: str, **changes) -> dict:
     ("bamboo", {"rods__diameter": 2.3, "frame__height": 91.5}),
     ("carbon", {"rods__diameter": 2.3, "frame__height": 91.5}),
 ])
+@pytest.mark.fe
 def test_designs_that_crashed_check_now_pass_fail_or_name_a_key(preset, changes, tmp_path):
     doc = _preset_with(preset, **changes)
     code, out, err = _check(doc, tmp_path)
@@ -135,8 +137,9 @@ def _build(params: Path, out: Path, env: dict, *extra: str) -> subprocess.Comple
                           capture_output=True, text=True, timeout=900, env=env, cwd=ROOT)
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(12 if NIGHTLY else 2))
+@pytest.mark.fe
+@pytest.mark.process
 def test_a_random_design_builds_watertight_parts_and_a_clash_report(seed, tmp_path):
     """The FE's surrogate (model.stiffness_model: surrogate: the presets' pegged link has no closed
     form) keeps this mostly to the CAD: the FE of the same joint shapes is what the check tests
@@ -172,8 +175,8 @@ def _files(out: Path) -> dict:
     return {f["path"]: f["sha256"] for f in json.loads((out / "manifest.json").read_text())["files"]}
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("server", [True, False], ids=["server", "no-server"])
+@pytest.mark.process
 def test_the_edit_rebuild_loop_builds_every_time_and_matches_cold_builds(server, tmp_path):
     """A maker edits frame.height and rebuilds into the same folder, again and again, the CAD
     server warm after the first: every build ends with 0 or 1, and each output is the bytes of a

@@ -74,6 +74,7 @@ def test_same_input_same_bytes_different_input_different_bytes(tmp_path, drop_re
     assert b"Software\x00cogniframe" in a and b"Matplotlib" not in a
 
 
+@pytest.mark.process
 def test_importing_the_physics_modules_does_not_import_matplotlib():
     code = ("import sys; import cogniframe.analysis.impact, cogniframe.analysis.fit, "
             "cogniframe.report.drop_plots, cogniframe.commands.drop_fit; "

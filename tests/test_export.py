@@ -28,6 +28,7 @@ def _design(preset="carbon", **changes):
 
 
 @pytest.mark.parametrize("preset", PRESETS)
+@pytest.mark.cad
 def test_same_params_give_byte_identical_stl_and_step(preset, tmp_path):
     from cogniframe.export.part_files import build_parts
 
@@ -40,6 +41,7 @@ def test_same_params_give_byte_identical_stl_and_step(preset, tmp_path):
         assert _sha(tmp_path / b.step) == _sha(first.out / a.step), b.name
 
 
+@pytest.mark.cad
 def test_parallel_build_gives_the_same_bytes(tmp_path):
     from cogniframe.export.part_files import build_parts
 
@@ -80,6 +82,7 @@ def test_files_are_laid_out_by_material(tmp_path):
         assert (d.out / b.stl).is_file() and (d.out / b.step).is_file()
 
 
+@pytest.mark.cad
 def test_cache_hit_builds_no_solid_is_identical_and_reports_progress(tmp_path, monkeypatch):
     from cogniframe.export import part_files
     from cogniframe.families import registry
@@ -97,6 +100,7 @@ def test_cache_hit_builds_no_solid_is_identical_and_reports_progress(tmp_path, m
         assert _sha(tmp_path / "a" / b.step) == _sha(tmp_path / "b" / b.step)
 
 
+@pytest.mark.cad
 def test_only_changed_parts_are_rebuilt(tmp_path, monkeypatch):
     from cogniframe.export import part_files as build_mod
 

@@ -16,6 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import tiers
+
 from cogniframe import api
 from cogniframe.analysis.constants import G
 from cogniframe.analysis import massprops
@@ -30,6 +32,7 @@ def _params(name: str) -> Path:
 
 
 @pytest.fixture(scope="module")
+@tiers.needs('fe')
 def flown(tmp_path_factory):
     """{name: (flight folder, check result)} for both presets and the 240 x 180 example."""
     out = {}
@@ -301,6 +304,7 @@ def test_rectangular_frames_mix_follows_its_geometry(flown):
     assert {abs(r[1]) for r in rows} != {abs(r[2]) for r in rows}
 
 
+@pytest.mark.fe
 def test_props_out_reverses_every_spin(flown, tmp_path):
     text = _params("carbon").read_text().replace("  prop: \"3025\"", "  prop: \"3025\"\n  props_out: true")
     assert "props_out: true" in text
@@ -344,6 +348,7 @@ def test_check_warns_on_a_flagged_mode_and_does_not_fail(flown):
         (x["mode"], x["band"]) for x in json.loads((folder / "resonance.json").read_text())["flags"]}
 
 
+@pytest.mark.fe
 def test_flight_files_are_byte_identical_between_runs(flown, tmp_path):
     again = api.load(_params("carbon")).fly(tmp_path / "again")
     first = flown["carbon"][0]
@@ -353,6 +358,7 @@ def test_flight_files_are_byte_identical_between_runs(flown, tmp_path):
         assert (first / rel).read_bytes() == (again / rel).read_bytes(), rel
 
 
+@pytest.mark.fe
 def test_fly_never_overwrites_a_folder_it_did_not_make(tmp_path, run_cli):
     out = tmp_path / "mine"
     out.mkdir()
@@ -368,7 +374,6 @@ def built_carbon(preset_build):
     return preset_build("carbon")
 
 
-@pytest.mark.slow
 def test_build_writes_the_flight_folder_with_cad_inertia_within_3_percent_of_the_estimate(built_carbon, flown):
     """The build's mass properties come from the CAD solids (each part's STL carrying its budget
     mass); the part list's estimate (fly, check) agrees within 3 % on every principal moment, and
@@ -386,7 +391,6 @@ def test_build_writes_the_flight_folder_with_cad_inertia_within_3_percent_of_the
     assert 'href="flight/inav.txt"' in html and "Campbell diagram" in html
 
 
-@pytest.mark.slow
 def test_rotor_positions_are_the_motors_places_in_assembly_glb(built_carbon):
     """Each rotor (rotorpy.json, FLU from the centre of gravity) sits on its motor's axis and its
     propeller's disc as assembly.glb draws them (glTF y up: world (x, y, z) is (x, z, -y))."""
@@ -412,6 +416,7 @@ def test_rotor_positions_are_the_motors_places_in_assembly_glb(built_carbon):
         assert hub == pytest.approx(disc, abs=1e-5)
 
 
+@pytest.mark.fe
 def test_fly_without_a_thrust_table_is_exit_2_naming_motors_kv_and_writes_nothing(run_cli, tmp_path):
     p = tmp_path / "odd.yaml"
     p.write_text(_params("carbon").read_text().replace("  kv: 6000 ", "  kv: 5000 "))

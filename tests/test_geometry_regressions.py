@@ -109,7 +109,6 @@ def test_straight_sides_check_with_closed_form_joints(run_cli, tmp_path):
     assert code in (0, 1), err
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("base", ["carbon", "bamboo"])
 def test_straight_sides_build_every_joint_as_one_solid(base):
     from cogniframe.families import registry
@@ -121,7 +120,6 @@ def test_straight_sides_build_every_joint_as_one_solid(base):
 
 # -- thin rods, short frame ----------------------------------------------------------------------
 
-@pytest.mark.slow
 @pytest.mark.parametrize("base", ["carbon", "bamboo"])
 @pytest.mark.parametrize("height", [91, 92])
 def test_thin_rods_in_a_short_frame_keep_the_knee_in_one_piece(base, height):
@@ -132,7 +130,6 @@ def test_thin_rods_in_a_short_frame_keep_the_knee_in_one_piece(base, height):
     assert built.shape.isValid() and built.shape.Volume() > 100
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("base, height", [("carbon", 91), ("bamboo", 91.5)])
 def test_thin_rods_core_links_mesh_watertight(base, height):
     """With 2.3 mm rods the bore (2.4 mm) equals the M2 clearance, so the core link's tab top met the
@@ -186,7 +183,6 @@ def test_rigid_leg_reaches_into_the_arm_block():
 
 # -- rectangles ---------------------------------------------------------------------------------
 
-@pytest.mark.slow
 @pytest.mark.parametrize("box", [(212, 210), (240, 180)])
 def test_rectangle_joints_have_no_sliver_faces(box):
     """Every joint of a near-square and of a clearly rectangular box is one valid solid with no
@@ -240,7 +236,6 @@ def _in_polygon(p, poly) -> bool:
     return all(c >= -1e-9 for c in sides) or all(c <= 1e-9 for c in sides)
 
 
-@pytest.mark.slow
 def test_d22_knees_build_in_one_piece():
     """The reported case: `registry.solid` raised "joint geometry produced 2 solids instead of 1"
     for knee and knee_mirrored."""
@@ -271,7 +266,6 @@ def test_knee_seat_leaves_the_hinge_room(base, change):
         assert knee.sockets[0].seat == 3.0
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("base", ["carbon", "bamboo"])
 @pytest.mark.parametrize("change", [{"joints__seat": 0.0}, {"joints__wall": 2.88}, {"joints__wall": 6.0},
                                     {"joints__seat": 12.0}, {"rods__diameter": 1.0}])
@@ -280,7 +274,6 @@ def test_knees_build_across_seats_and_walls(base, change):
         _one_watertight_solid(knee)
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("change", [{"joints__fit_clearance__tpu_95a": v} for v in (0.12, 0.22, 0.38, 0.68, 0.76)]
                          + [{"joints__wall": 5.48}])
 def test_core_link_hub_top_clears_the_strut_sleeve(change):
@@ -301,7 +294,6 @@ def test_core_link_hub_top_clears_the_strut_sleeve(change):
                 assert abs(hub_top - level) >= TAB_CLEAR - 1e-6, (link.name, hub_top, level)
 
 
-@pytest.mark.slow
 def test_knee_web_top_clears_the_legs_top():
     """carbon in a 153 x 190.6 x 168.2 box: the web's top, level with the upper leg's round top,
     went missing from the knee's STL."""
@@ -318,7 +310,6 @@ def test_knee_web_top_clears_the_legs_top():
         assert all(abs(web.height - z) >= TAB_CLEAR - 1e-9 for s in socks for z in (s.port[2], s.port[2] + r))
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("base, change", [
     # a rectangle and thick walls: the clips overlap, their stored rods 2e-6 mm out of line
     ("carbon", {"frame__width": 242.8, "frame__depth": 188.5, "frame__height": 143.8, "joints__wall": 5.767,
@@ -371,7 +362,6 @@ def test_motor_mount_clips_are_built_on_one_line():
         assert np.linalg.norm(clips[1][0] - rods[1][0]) < 1e-5  # moved by the rounding only
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("thickness", [6.05, 8.0])
 def test_camera_mount_keeps_its_upright_on_a_thick_plate(thickness):
     """core.plate_thickness 6.05 on the 40 mm carbon plate: the base's corner cuts met on the centre
@@ -389,7 +379,6 @@ def test_camera_mount_keeps_its_upright_on_a_thick_plate(thickness):
     assert built.shape.intersect(probe).Volume() == pytest.approx(probe.Volume(), rel=1e-6)
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("box", [
     (154.1, 175.9, 128.5, 60.2, 55.9),  # the corner_bottom lost 424 mm^3 of its strut sleeve, silently
     (274.4, 554.488, 113.1, 107.1, 76.2),  # ... 459 of 648 mm^3, both corner_bottom parts

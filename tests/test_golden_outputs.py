@@ -20,6 +20,7 @@ _spec.loader.exec_module(golden)
 
 
 @pytest.mark.parametrize("params", sorted(GOLDEN["check_json"]))
+@pytest.mark.process
 def test_check_json_is_byte_identical_to_the_reference(params):
     assert golden.check_sha256(ROOT, params) == GOLDEN["check_json"][params]
 
@@ -32,6 +33,7 @@ def test_the_exclusions_are_the_files_that_carry_slicer_estimates():
 
 
 @pytest.mark.parametrize("params", sorted(GOLDEN["build"]))
+@pytest.mark.process
 def test_every_build_output_is_byte_identical_to_the_reference(params, preset_build):
     found = golden.manifest_sha256(preset_build(Path(params).stem))  # the run's build of the preset
     want = GOLDEN["build"][params]

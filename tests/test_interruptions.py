@@ -23,7 +23,7 @@ from test_outdir import fake_output, snapshot
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / "params" / "carbon.yaml"
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.cad, pytest.mark.process]  # builds in fresh cogniframe processes
 
 
 def start_build(final: Path, cache: Path) -> subprocess.Popen:
@@ -67,6 +67,10 @@ def beside(final: Path) -> list[str]:
     return sorted(p.name for p in final.parent.iterdir())
 
 
+@pytest.mark.cad
+@pytest.mark.fe
+@pytest.mark.process
+@pytest.mark.slicer
 def test_sigkill_mid_build_keeps_previous_output_and_next_build_cleans_up(tmp_path, run_cli, monkeypatch):
     final = fake_output(tmp_path / "carbon", {"report.html": b"<html>the previous build</html>"})
     before = snapshot(final)
@@ -85,6 +89,7 @@ def test_sigkill_mid_build_keeps_previous_output_and_next_build_cleans_up(tmp_pa
     assert "report.html" in snapshot(final) and snapshot(final)["report.html"] != before["report.html"]
 
 
+@pytest.mark.process
 def test_second_build_is_refused_and_ctrl_c_keeps_previous_output(tmp_path, run_cli):
     final = fake_output(tmp_path / "carbon", {"report.html": b"<html>the previous build</html>"})
     before = snapshot(final)

@@ -6,6 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import tiers
+
 from cogniframe.analysis.joints import meshing
 from cogniframe.analysis.joints import solid_fe as J
 
@@ -22,6 +24,7 @@ def _ties():
 
 
 @pytest.fixture(scope="module")
+@tiers.needs('fe')
 def box():
     return meshing.mesh_occ(lambda occ: occ.addBox(0, 0, 0, L, B, H), 1.5)
 

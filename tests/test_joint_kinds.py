@@ -105,7 +105,6 @@ def test_each_node_of_a_design_has_one_planned_kind(node):
         assert {kinds.kind_of(p).node for p in parts if p.family == "joint" and kinds.node_of(p) == node} == {node}
 
 
-@pytest.mark.slow
 @pytest.mark.cad  # main's test tiers (tests/tiers.py) register it: the fast tier leaves this out
 @pytest.mark.parametrize("label", kinds.labels())
 def test_joint_kind_closed_form_tracks_its_solid(label):

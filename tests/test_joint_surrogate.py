@@ -242,6 +242,7 @@ def test_live_fe_of_an_unseen_corner_agrees_with_the_surrogate():
     assert rel_error(sur.matrix, fe.matrix) <= 0.05
 
 
+@pytest.mark.fe
 def test_carbon_preset_k_from_the_surrogate_within_5_percent_of_the_fe(carbon):
     s = carbon
     f = frame_mod.frame_of(s)
@@ -252,6 +253,7 @@ def test_carbon_preset_k_from_the_surrogate_within_5_percent_of_the_fe(carbon):
     assert k_sur == pytest.approx(k_fe, rel=0.03)  # the preset is inside the box, near its lower wall
 
 
+@pytest.mark.fe
 def test_a_joint_outside_the_box_is_named_solved_by_fe_and_only_noted():
     # a 2.5 mm wall: thicker than any trained joint, so every joint that reads joints.wall leaves the
     # box (the pegged core link's columns have the connector's own wall: it stays in, its mirror with it)
@@ -305,6 +307,7 @@ def test_fit_with_fewer_than_two_samples_a_term_is_refused():
     assert fam.n_train == 8 and fam.quadratic == 0
 
 
+@pytest.mark.fe
 def test_sweep_row_k_equals_checks_fe_k_within_5_percent():
     """A sweep's row (surrogate joints, the sweeps' default) against `check` of the same params
     with `model.stiffness_model: fe`: bamboo rods, geometry no training design has."""
@@ -323,6 +326,7 @@ def test_sweep_row_k_equals_checks_fe_k_within_5_percent():
     assert row["verdict"] == fe["verdict"]
 
 
+@pytest.mark.process
 def test_a_joint_outside_the_box_is_solved_on_worker_processes_and_announced(tmp_path):
     """With the surrogate, `Design.needs_fe` says a check will solve a joint's FE (the studio then
     shows the fast figures first) exactly when a joint is outside the box and not cached; `check`

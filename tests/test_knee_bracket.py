@@ -117,6 +117,7 @@ def test_knee_builds_closed_with_other_walls_and_rods(changes):
     assert knee.estimate.volume == pytest.approx(built.shape.Volume(), rel=0.08)
 
 
+@pytest.mark.fe
 def test_knee_at_25mm_meshes_and_solves_in_the_joint_fe():
     """The joint FE meshes the U knee and gives a symmetric stiffness whose arm pair resists a
     rigid turn about the lateral axis (the fold axis) with the legs held: positive, and below the

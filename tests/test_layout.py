@@ -13,6 +13,9 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
+
 ROOT = Path(__file__).resolve().parents[1]
 _spec = importlib.util.spec_from_file_location("layout", ROOT / "tools" / "layout.py")
 layout = importlib.util.module_from_spec(_spec)
@@ -41,6 +44,7 @@ def test_no_module_over_650_lines_and_no_function_over_100():
     assert lines <= 100, where
 
 
+@pytest.mark.process
 def test_the_joints_plan_imports_no_cad_kernel():
     code = ("import sys, cogniframe.families.joint, cogniframe.parts.joint_plan, cogniframe.parts.record; "
             "print(sorted(m for m in ('cadquery', 'OCP') if m in sys.modules))")

@@ -48,6 +48,7 @@ def test_bamboo_is_near_the_papers_237_g_and_leaves_5_g_under_250(bamboo):
     assert b.by_material["bamboo"] == pytest.approx(18, rel=0.15)
 
 
+@pytest.mark.fe
 def test_cad_geometry_overrides_estimate(carbon):
     base = verdict.check(carbon).mass
     g = {"knee": mass.PartGeometry(2000.0, 100.0, 100.0, "cad")}

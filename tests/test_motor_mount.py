@@ -41,7 +41,6 @@ def _arm_angle(mount) -> float:
 
 # -- mass: the issue's targets --------------------------------------------------------------------
 
-@pytest.mark.slow
 @pytest.mark.parametrize("spacing, most_g", [(25.0, 1.6), (12.0, 1.66)])
 def test_1104_mount_weighs_no_more_than_the_issue_allows(spacing, most_g):
     """At the authors' 25 mm: at most 1.6 g (their part 1.11 g); at 12 mm: no heavier than the
@@ -58,7 +57,6 @@ def test_1104_mount_weighs_no_more_than_the_issue_allows(spacing, most_g):
 
 # -- the closed form and the print, across the spacing range ----------------------------------------
 
-@pytest.mark.slow
 @pytest.mark.parametrize("base, changes", [
     ("carbon", {"frame__arm_spacing": 12.0, "core__link": "tab"}),  # the pegs need 14 mm
     ("carbon", {"frame__arm_spacing": 16.0}),
@@ -171,7 +169,6 @@ def test_bridge_sag_and_twist_under_full_thrust_are_below_a_layer_PL3_over_12EI(
     assert twist < spec.printer.layer_height, twist
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("spacing", [12.0, 25.0])
 def test_level_arms_build_d_sleeves_that_print_flat(spacing):
     """Level arm rods (the authors' build; no preset height makes them exactly level yet): the

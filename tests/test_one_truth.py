@@ -19,6 +19,7 @@ def test_the_thrust_load_case_and_the_flight_model_use_the_same_maximum_thrust(c
     assert d["stiffness"]["thrust"]["max_thrust_g"] == d["flight"]["max_thrust_g_per_motor"] == 175.0
 
 
+@pytest.mark.fe
 def test_a_given_maximum_thrust_is_what_both_use(carbon):
     data = carbon.model_dump(mode="json")
     data["motors"]["max_thrust_g"] = 150.0

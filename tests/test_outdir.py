@@ -201,6 +201,7 @@ def test_non_atomic_swap_path_also_replaces(tmp_path, monkeypatch):
 
 # ---- single files -------------------------------------------------------------------------
 
+@pytest.mark.fe
 def test_check_plots_never_overwrite_a_users_png(run_cli, tmp_path):
     plots = tmp_path / "plots"
     plots.mkdir()
@@ -211,6 +212,7 @@ def test_check_plots_never_overwrite_a_users_png(run_cli, tmp_path):
     assert (plots / "energy_split.png").read_bytes() == b"\x89PNG my own figure"
 
 
+@pytest.mark.fe
 def test_check_plots_may_overwrite_its_own_pngs(run_cli, tmp_path):
     for _ in range(2):
         code, _, err = run_cli("check", ROOT / "params" / "carbon.yaml", "--plots", tmp_path, "--json")

@@ -279,6 +279,7 @@ def test_camera_mount_is_two_stiles_on_an_open_base():
      "printer": {"nozzle": 0.8}, "joints": {"wall": 1.6}},
     {"core": {"plate_thickness": 6.0, "camera": {"tilt_deg": -20.0}, "computer": {"hole_spacing": [58.0, 49.0]}}},
 ], ids=["30.5-M2.5-nozzle0.8", "thick-plate-pi4-holes"])
+@pytest.mark.cad
 def test_open_mounts_build_across_the_design_space(overrides, tmp_path):
     """Off the preset (the wider stack, M2.5 stack screws, a 0.8 mm nozzle, a small computer or a
     Raspberry Pi 4's 58 x 49 mm holes, a tilted camera, a thick plate): both mounts build as one
@@ -376,6 +377,7 @@ def test_a_new_family_is_one_module_and_one_registry_line(monkeypatch):
     assert np.array_equal(registry.print_from_local(after[-1]), np.eye(4))
 
 
+@pytest.mark.cad
 def test_part_larger_than_the_bed_is_a_user_error(tmp_path):
     from cogniframe.export.part_files import build_parts
 
@@ -389,6 +391,7 @@ def test_part_larger_than_the_bed_is_a_user_error(tmp_path):
     assert "printer.bed" in msg and "core.computer.hole_spacing" in msg
 
 
+@pytest.mark.cad
 def test_part_that_fits_only_turned_is_turned(tmp_path):
     from cogniframe.export.part_files import build_parts
     from cogniframe.export.mesh import load_stl
@@ -464,6 +467,8 @@ def test_knee_living_hinge_is_a_thin_web_between_slots():
         assert not contains(m, [mid + n * (h / 2 + joint_plan.HINGE_GAP / 2), mid - n * (h / 2 + joint_plan.HINGE_GAP / 2)]).any()
 
 
+@pytest.mark.cad
+@pytest.mark.fe
 def test_frame_without_struts_builds_and_fails_the_drop_check(tmp_path):
     """frame.struts: false leaves the core links with the arm pair only: it must still build,
     and the model must say what it means (the struts carry the payload)."""

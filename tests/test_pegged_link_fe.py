@@ -56,7 +56,6 @@ def test_pair_hinge_is_the_sum_of_the_bodies_springs_about_the_line_through_them
     assert pair_hinge(K, refs, [0, 1], [2]) == pytest.approx(2 * kr, rel=1e-9)
 
 
-@pytest.mark.slow
 def test_authors_connector_hinges_stiffer_than_the_flat_link_for_less_tpu():
     """The finding docs/stiffness-model.md builds on: at the carbon preset's 25 mm pair and TPU
     factor, the authors' connector (1.8 mm walls, pegs in rigid bores) holds the arm pair about

@@ -238,6 +238,7 @@ write_plates(pack_plates(items, (120.0, 120.0, 120.0), 4.0), sys.argv[1])
 """
 
 
+@pytest.mark.process
 def test_same_bytes_in_another_process(tmp_path):
     import os
     import subprocess

@@ -81,6 +81,7 @@ def test_printers_table_fits_an_80_column_terminal():
         assert p.key in text and " x ".join(f"{v:g}" for v in p.bed) in text, p.key
 
 
+@pytest.mark.process
 def test_printers_command_at_80_columns(tmp_path):
     """The command itself in a terminal of 80 columns (rich reads COLUMNS)."""
     import os
@@ -95,7 +96,7 @@ def test_printers_command_at_80_columns(tmp_path):
     assert "bambu_x1c" in out.stdout and "bambustudio" in out.stdout
 
 
-@pytest.mark.slow
+@pytest.mark.cad
 def test_180mm_printer_packs_the_carbon_parts_on_fewer_plates_than_120mm(tmp_path):
     """Real carbon part meshes (CAD), packed for the Monoprice Mini v2 (120 mm) and the Prusa MINI (180 mm).
 

@@ -68,6 +68,7 @@ def test_example_is_a_full_commented_params_file_like_the_presets():
     assert text.startswith("# yaml-language-server: $schema=../cogniframe/data/params.schema.json")
 
 
+@pytest.mark.fe
 def test_check_of_the_example_exits_0_or_1_with_finite_mass_and_stiffness(run_cli):
     """The solid FE of every joint (the mirrored ones by reflection), then the frame model: this is
     where the rectangle used to exit 3."""
@@ -234,7 +235,8 @@ def test_assembly_steps_name_the_mirrored_parts(rect):
 
 # -- one real build ----------------------------------------------------------------------------
 
-@pytest.mark.slow
+@pytest.mark.cad
+@pytest.mark.slicer
 def test_build_of_the_example_is_watertight_and_clash_checked(tmp_path):
     import trimesh
 

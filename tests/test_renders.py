@@ -111,6 +111,7 @@ renders.render_assembly([], renders.rod_segments(d.frame), sys.argv[2], views=("
 """
 
 
+@pytest.mark.process
 def test_same_bytes_in_another_process(scene, tmp_path):
     import subprocess
     import sys

@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
+import tiers
 import trimesh
 
 from cogniframe.analysis import verdict
@@ -82,6 +84,7 @@ def _png(path: Path, colour=(200, 30, 30)) -> Path:
 
 
 @pytest.fixture(scope="module", params=("carbon", "bamboo"))
+@tiers.needs('fe')
 def written(request, tmp_path_factory):
     out = tmp_path_factory.mktemp("report") / request.param
     spec = spec_mod.load(ROOT / "params" / f"{request.param}.yaml")
@@ -203,6 +206,7 @@ def test_same_input_same_report(written, tmp_path):
 
 
 @pytest.mark.skipif(shutil.which("chromium") is None, reason="chromium is not installed (optional check)")
+@pytest.mark.browser
 def test_opens_in_headless_chromium(written, tmp_path):
     import subprocess
 

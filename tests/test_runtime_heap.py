@@ -7,6 +7,8 @@ import subprocess
 import sys
 import textwrap
 
+import pytest
+
 
 def _run(code: str) -> list[str]:
     """Run `code` in a fresh interpreter (a freeze is for the life of a process) and return its
@@ -15,6 +17,7 @@ def _run(code: str) -> list[str]:
     return out.stdout.split()
 
 
+@pytest.mark.process
 def test_a_block_that_imports_runs_without_the_collector_then_freezes_its_objects():
     on_inside, frozen, on_after, again, off_stays_off = _run("""
         import gc
@@ -40,6 +43,7 @@ def test_a_block_that_imports_runs_without_the_collector_then_freezes_its_object
     assert int(again) == 0
 
 
+@pytest.mark.process
 def test_the_cad_workers_start_with_cadquery_frozen():
     """The forkserver (and the CAD server) import CadQuery, trimesh and the part builders inside
     the block: the ~400 000 objects are frozen, the collector has next to nothing left to walk."""
@@ -52,6 +56,7 @@ def test_the_cad_workers_start_with_cadquery_frozen():
     assert tracked < 0.02 * frozen
 
 
+@pytest.mark.process
 def test_the_build_command_freezes_its_imports_before_it_reads_the_params(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text("name: x\nrods:\n  diameter: -3\n")
@@ -66,6 +71,7 @@ def test_the_build_command_freezes_its_imports_before_it_reads_the_params(tmp_pa
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.process
 def test_the_warm_up_imports_are_frozen():
     names = ("colorsys",)
     frozen, imported = _run(f"""

@@ -35,6 +35,7 @@ def _pid_alive(pid: int) -> bool:
         return False
 
 
+@pytest.mark.process
 def test_workers_are_warm_forks_of_one_server_that_outlives_a_build(server_env):
     assert cad_server.running() is None
     with cad_server.connect(2, idle_s=60) as pool:
@@ -54,6 +55,7 @@ def test_workers_are_warm_forks_of_one_server_that_outlives_a_build(server_env):
         assert again.submit(os.getpid).result() not in pids | {server}
 
 
+@pytest.mark.process
 def test_workers_run_behind_the_build_and_the_server_does_not(server_env):
     """The workers are BACKGROUND_NICE steps nicer than the build (`behind_the_build`): the build's
     main thread goes first. The server itself keeps the build's priority (its start heads the
@@ -69,6 +71,7 @@ def test_workers_run_behind_the_build_and_the_server_does_not(server_env):
         assert pool.submit(eval, occ_threads).result() == 1
 
 
+@pytest.mark.process
 def test_jobs_run_in_the_builds_folder_and_raise_its_errors(server_env, monkeypatch):
     work = server_env / "work"
     work.mkdir()
@@ -82,6 +85,7 @@ def test_jobs_run_in_the_builds_folder_and_raise_its_errors(server_env, monkeypa
         assert pool.submit(math.hypot, 3.0, 4.0).result() == 5.0
 
 
+@pytest.mark.process
 def test_a_worker_that_dies_fails_its_job_and_the_next_job_gets_a_new_worker(server_env):
     with cad_server.connect(1, idle_s=60) as pool:
         first = pool.submit(os.getpid).result()
@@ -91,6 +95,7 @@ def test_a_worker_that_dies_fails_its_job_and_the_next_job_gets_a_new_worker(ser
         assert second != first and not _pid_alive(first)
 
 
+@pytest.mark.process
 def test_background_jobs_wait_for_the_others(server_env):
     with cad_server.connect(1, idle_s=60) as pool:
         busy = pool.submit(time.sleep, 0.5)  # the one worker is busy while the next two queue
@@ -100,6 +105,7 @@ def test_background_jobs_wait_for_the_others(server_env):
         assert soon.result() < late.result()
 
 
+@pytest.mark.process
 def test_stop_ends_the_server_and_removes_its_pid_file(server_env):
     with cad_server.connect(1, idle_s=60) as pool:
         pool.submit(os.getpid).result()
@@ -116,6 +122,7 @@ def test_stop_ends_the_server_and_removes_its_pid_file(server_env):
     assert cad_server.stop() is None
 
 
+@pytest.mark.process
 def test_an_idle_server_exits_by_itself(server_env):
     with cad_server.connect(1, idle_s=1.0) as pool:
         pool.submit(os.getpid).result()
@@ -127,6 +134,7 @@ def test_an_idle_server_exits_by_itself(server_env):
     assert not _pid_alive(pid)
 
 
+@pytest.mark.process
 def test_a_client_without_the_key_gets_nothing(server_env):
     with cad_server.connect(1, idle_s=60) as pool:
         pool.submit(os.getpid).result()
@@ -161,6 +169,7 @@ def test_wanted_follows_the_flag_then_the_environment(monkeypatch):
     assert cad_server.wanted() is True
 
 
+@pytest.mark.process
 def test_a_killed_build_leaves_no_worker_running(server_env):
     """The build's workers die with it (`die_with_build`), even by SIGKILL mid-job; the server stays."""
     import signal
@@ -189,6 +198,7 @@ def test_a_killed_build_leaves_no_worker_running(server_env):
     os.kill(server, signal.SIGTERM)
 
 
+@pytest.mark.process
 def test_deleting_the_cache_folder_ends_the_server_and_the_next_build_gets_a_new_one(server_env):
     """A cache folder deleted under a running server took its key file with it: the server (same
     address, another key) answered nobody, the next build's new server could not take the
@@ -212,6 +222,7 @@ def test_deleting_the_cache_folder_ends_the_server_and_the_next_build_gets_a_new
     assert not _pid_alive(old)
 
 
+@pytest.mark.process
 def test_the_server_runs_the_builds_code_and_refuses_a_key_it_does_not_compute(server_env, tmp_path):
     """The server imports cogniframe through the build's `sys.path` (not its own working
     directory's), and serves only under the key it computes itself: a build that ran a checkout's
@@ -238,6 +249,7 @@ def _written(root) -> list[str]:
     return sorted(p.name for p in root.iterdir()) if root.is_dir() else []
 
 
+@pytest.mark.process
 def test_a_server_started_early_is_the_one_its_build_connects_to_and_stays(server_env):
     """`cogniframe build` starts the server first thing (`prestart`), before it has validated the
     params: nothing is written until the build connects, which then waits for that process
@@ -254,6 +266,7 @@ def test_a_server_started_early_is_the_one_its_build_connects_to_and_stays(serve
     assert cad_server.prestart(idle_s=60) is None  # a server answers: no second one
 
 
+@pytest.mark.process
 def test_an_early_server_its_build_did_not_use_ends_having_written_nothing(server_env):
     """Bad params, an up-to-date folder, nothing to build: the CLI releases the early server,
     killed at once; and one whose build died before connecting exits by itself once it has
@@ -268,6 +281,7 @@ def test_an_early_server_its_build_did_not_use_ends_having_written_nothing(serve
     assert _written(orphan.root) == [] and cad_server.running() is None
 
 
+@pytest.mark.process
 def test_bad_params_with_the_server_on_leave_no_server_and_no_key(server_env, monkeypatch, tmp_path):
     """The CLI path: exit 2 with the usual message, and the early server is gone."""
     from pathlib import Path

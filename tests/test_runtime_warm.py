@@ -6,6 +6,8 @@ import subprocess
 import sys
 import textwrap
 
+import pytest
+
 
 def _run(code: str) -> list[str]:
     r = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True, timeout=300)
@@ -13,6 +15,7 @@ def _run(code: str) -> list[str]:
     return r.stdout.split()
 
 
+@pytest.mark.process
 def test_the_warm_up_imports_only_while_the_main_thread_holds_no_step():
     """Each module is imported under the baton that the build's main-thread steps hold: while a
     step holds it, nothing is imported; released, the rest follows, in order."""
@@ -30,6 +33,7 @@ def test_the_warm_up_imports_only_while_the_main_thread_holds_no_step():
     assert out == ["True", "True", "True"]
 
 
+@pytest.mark.process
 def test_a_stopped_warm_up_imports_nothing_more():
     out = _run("""
         import sys
@@ -45,6 +49,7 @@ def test_a_stopped_warm_up_imports_nothing_more():
     assert out == ["False"]
 
 
+@pytest.mark.process
 def test_a_part_plotter_made_while_another_thread_imports_pyvista_plotting_works():
     """The edit-rebuild crash: the main thread asked pyvista for `Plotter` while a thread was still
     importing `pyvista.plotting`, and pyvista, seeing the module in sys.modules but not its

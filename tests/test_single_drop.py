@@ -10,6 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import tiers
+
 from cogniframe.analysis import droplogs as L
 from cogniframe.analysis import fit as F
 from cogniframe.analysis import impact_nl as N
@@ -160,16 +162,19 @@ def _validate(hds, kind, release="spin"):
 
 
 @pytest.fixture(scope="module")
+@tiers.needs('long')
 def on50(heights):
     return {kind: _validate([heights[50]], kind) for kind in N.MODELS}
 
 
 @pytest.fixture(scope="module")
+@tiers.needs('long')
 def on100(heights):
     return _validate([heights[100]], "kelvin-voigt")
 
 
 @pytest.fixture(scope="module")
+@tiers.needs('long')
 def tilt_on50(heights):
     """The earlier model: the same attitude at every height (release "tilt"), learnt on 50 cm."""
     return _validate([heights[50]], "kelvin-voigt", release="tilt")

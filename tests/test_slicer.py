@@ -120,6 +120,7 @@ def test_checks_before_slicing(tmp_path):
 
 
 @needs_slicer
+@pytest.mark.slicer
 def test_a_plate_that_fails_its_check_stops_the_slicer_started_beside_it(tmp_path, spec):
     """slice_plate starts PrusaSlicer while it checks the plate: a failed check still raises its
     own message, and leaves no G-code and no slicer process behind."""
@@ -144,6 +145,7 @@ def test_a_plate_that_fails_its_check_stops_the_slicer_started_beside_it(tmp_pat
         assert str(plate).encode() not in cmd, f"a slicer is still running: {cmd!r} ({os.getpid()})"
 
 
+@pytest.mark.slicer
 def test_the_slicer_runs_behind_the_build(tmp_path):
     """PrusaSlicer (here a stand-in that writes down its nice value, then its G-code) runs
     BACKGROUND_NICE steps nicer than the build: its threads then leave the build's main thread go
@@ -195,6 +197,7 @@ def _plates(tmp_path, spec):
 
 
 @needs_slicer
+@pytest.mark.slicer
 def test_real_slice_grams_and_time(tmp_path, spec):
     files = _plates(tmp_path, spec)
     tpu_volume = 3 * 1000 + 2 * _cyl(6, 4).volume
@@ -224,6 +227,7 @@ def test_real_slice_grams_and_time(tmp_path, spec):
 
 
 @needs_slicer
+@pytest.mark.slicer
 def test_real_slicer_error_becomes_a_user_error(tmp_path, spec):
     flat = _box(10, 10, 0.05)  # thinner than a layer
     (f,) = write_plates(pack_plates([PlateItem("flat", "tpu_95a", 1, flat)], spec.printer.bed, 4), tmp_path)
@@ -241,6 +245,7 @@ def test_slice_command_without_plates(run_cli, tmp_path):
 
 
 @needs_slicer
+@pytest.mark.slicer
 def test_slice_command_table(run_cli, tmp_path):
     import json
     from pathlib import Path
@@ -290,6 +295,7 @@ def test_project_config_is_the_profile_as_prusaslicer_3mf_comments(spec):
 
 
 @needs_slicer
+@pytest.mark.slicer
 def test_3mf_slices_with_its_own_settings_and_no_profile(tmp_path):
     """The acceptance line: a plate's 3MF sliced with no --load gives TPU 100 % rectilinear at the
     TPU temperature and speed, and the core at core.infill (25 % here, not PrusaSlicer's 20 % default)."""
@@ -321,7 +327,8 @@ def test_3mf_slices_with_its_own_settings_and_no_profile(tmp_path):
 
 
 @needs_slicer
-@pytest.mark.slow
+@pytest.mark.cad
+@pytest.mark.slicer
 def test_build_gcode_keeps_gcode_per_plate_outside_the_promise(run_cli, tmp_path):
     import json
     from pathlib import Path
@@ -349,6 +356,7 @@ def test_build_gcode_keeps_gcode_per_plate_outside_the_promise(run_cli, tmp_path
 
 
 @needs_slicer
+@pytest.mark.slicer
 def test_prusaslicer_reads_copies_as_instances_of_one_object(tmp_path):
     """Copies of a shape are one PrusaSlicer object with instances (sliced once, not once per copy),
     kept where cogniframe laid them out, and the grams are the copies' sum."""

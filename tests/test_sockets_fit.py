@@ -130,6 +130,7 @@ def test_part_quantities_match_the_frame_graph(preset):
     assert sum(len(p.sockets) * p.qty for p in d.parts.values()) == 2 * len(d.frame.rods)
 
 
+@pytest.mark.cad
 def test_rod_diameter_drives_every_bore_and_the_cut_list(tmp_path):
     """3 -> 4 mm rods: every socket hole measured on the STL grows by 1 mm; the cut list follows."""
     from cogniframe import cutlist, frame as frame_mod, partlist, spec as spec_mod

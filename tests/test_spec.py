@@ -171,6 +171,7 @@ def test_lookup_lists_valid_choices():
         lookup(MOTOR_PRESETS, "2207", "motor")
 
 
+@pytest.mark.process
 def test_check_does_not_import_cadquery(tmp_path):
     """Cold (the joints' FE solved on worker processes, which build their CAD there) and warm:
     the checking process itself never imports the CAD kernel."""

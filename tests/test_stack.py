@@ -7,6 +7,8 @@ import subprocess
 import sys
 from importlib import metadata
 
+import pytest
+
 from cogniframe import __version__, stack
 
 
@@ -23,6 +25,7 @@ def test_the_versions_add_the_extra_libraries_and_are_stable():
     assert f["rich"] == metadata.version("rich") and stack.versions() == stack.versions()
 
 
+@pytest.mark.process
 def test_the_server_key_needs_no_heavy_import():
     """`cogniframe build` computes the CAD server's key first thing (to start the server while it
     validates the params): numpy, pydantic and the CAD libraries stay unimported for that."""

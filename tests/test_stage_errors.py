@@ -13,6 +13,9 @@ from cogniframe.pipeline import run_build
 from cogniframe.errors import UserError
 
 
+@pytest.mark.cad
+@pytest.mark.fe
+@pytest.mark.slicer
 def test_cad_stage_error_names_file_key_and_line(tmp_path, monkeypatch):
     params = tmp_path / "small_bed.yaml"
     params.write_text("name: small_bed\nprinter:\n  bed: [45, 45, 45]\n")

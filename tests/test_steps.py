@@ -79,6 +79,7 @@ def test_a_need_that_no_earlier_step_makes_is_an_error():
         graph.expand((Step("first", ("later",), lambda ctx: Made()), Step("later", (), lambda ctx: Made())), [{}])
 
 
+@pytest.mark.cad
 def test_unchanged_inputs_rerun_nothing_and_give_the_same_bytes(tmp_path, private_cache):
     ran = []
     a, status, _ = _run(tmp_path, "a", {"x": "abc", "y": "hello"}, ran)
@@ -93,6 +94,7 @@ def test_unchanged_inputs_rerun_nothing_and_give_the_same_bytes(tmp_path, privat
     assert all(_sha(a / p.name) == _sha(b / p.name) for p in a.iterdir())
 
 
+@pytest.mark.cad
 def test_a_change_reruns_exactly_what_reads_it(tmp_path, private_cache):
     ran = []
     _run(tmp_path, "a", {"x": "abc", "y": "hello"}, ran)
@@ -108,6 +110,7 @@ def test_a_change_reruns_exactly_what_reads_it(tmp_path, private_cache):
 
 
 @pytest.mark.parametrize("damage", ["truncate", "edit", "drop_meta", "bad_meta"])
+@pytest.mark.cad
 def test_a_damaged_cache_entry_is_rebuilt_not_used(tmp_path, private_cache, damage):
     ran = []
     a, _, _ = _run(tmp_path, "a", {"x": "abc" * 1000, "y": "hello"}, ran)
@@ -144,6 +147,7 @@ def test_put_files_is_whole_or_nothing(tmp_path, private_cache):
     assert cache.get_files("demo", "k2", dest) == {"value": {"v": 2}} and _sha(dest / "a.bin") == _sha(src / "a.bin")
 
 
+@pytest.mark.cad
 def test_waiting_steps_overlap_with_main_thread_steps(tmp_path):
     """A 'wait' step (stand-in for PrusaSlicer) blocks until a later main-thread step has run:
     this finishes only if the two really run at the same time."""
@@ -166,6 +170,7 @@ def test_waiting_steps_overlap_with_main_thread_steps(tmp_path):
     assert threads["render"] == threading.main_thread().name and threads["slicer"] != threads["render"]
 
 
+@pytest.mark.cad
 def test_an_error_stops_the_graph_and_is_raised(tmp_path):
     ran = []
 
@@ -178,6 +183,7 @@ def test_an_error_stops_the_graph_and_is_raised(tmp_path):
     assert ran == []
 
 
+@pytest.mark.cad
 def test_code_changes_are_part_of_the_key(tmp_path, private_cache, monkeypatch):
     ran = []
     steps = (Step("s", (), lambda ctx: ran.append(1) or Made(), key=lambda ctx: 1, code=("pipeline/graph.py",)),)
@@ -189,6 +195,7 @@ def test_code_changes_are_part_of_the_key(tmp_path, private_cache, monkeypatch):
     assert ran == [1, 1]
 
 
+@pytest.mark.cad
 def test_after_orders_without_being_an_input(tmp_path, private_cache):
     """`after` only orders: the step waits for it but its key does not read it."""
     order = []
@@ -211,6 +218,7 @@ def test_after_orders_without_being_an_input(tmp_path, private_cache):
     assert {r.task: r.status for r in records} == {"plates": "ran", "render": "cached"}
 
 
+@pytest.mark.cad
 def test_a_wait_step_starts_as_soon_as_its_needs_finish_even_during_a_main_step(tmp_path):
     """`slice` needs `plates` (a wait step); a long main step (a render) is running when `plates`
     finishes. `slice` must start then, not after the render: here the render only ends once
@@ -234,6 +242,7 @@ def test_a_wait_step_starts_as_soon_as_its_needs_finish_even_during_a_main_step(
     assert [r.task for r in records][0] == "plates" and {r.task for r in records} == {"plates", "slice", "render"}
 
 
+@pytest.mark.cad
 def test_a_main_step_error_waits_for_running_threads_and_starts_nothing_new(tmp_path):
     started, release = [], threading.Event()
 
@@ -253,6 +262,7 @@ def test_a_main_step_error_waits_for_running_threads_and_starts_nothing_new(tmp_
     assert started == ["slow"]
 
 
+@pytest.mark.cad
 def test_will_run_tells_before_the_build_which_keyed_tasks_the_cache_lacks(tmp_path, private_cache):
     """`graph.will_run` (the build's reason to start the CAD server early): a keyed task whose
     entry is stored will not run; a changed input, or no key at all, will."""
@@ -315,6 +325,7 @@ def test_the_cad_pool_connects_once_in_the_background_and_the_first_job_waits_fo
 
 
 
+@pytest.mark.cad
 def test_the_first_error_by_time_is_raised_with_its_step_and_the_rest_is_cancelled(tmp_path):
     """A waiting step fails first; the main thread's step under way then fails because of it (as
     a render failed when the part it drew was missing). The build reports the first failure, names
@@ -340,6 +351,7 @@ def test_the_first_error_by_time_is_raised_with_its_step_and_the_rest_is_cancell
     assert cancelled == [1] and started == []
 
 
+@pytest.mark.cad
 def test_a_main_thread_step_runs_holding_the_main_lock(tmp_path):
     lock = threading.Lock()
     held = []

@@ -17,11 +17,11 @@ from pathlib import Path
 import pytest
 import yaml
 
+import tiers
+
 from cogniframe import spec as spec_mod
 from cogniframe.pipeline import run_build
 from cogniframe.export import slicer as slicer_mod
-
-pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parents[1]
 HAVE_SLICER = slicer_mod.find_slicer() is not None
@@ -60,6 +60,7 @@ def _files(out: Path) -> list:
 
 
 @pytest.fixture(scope="module")
+@tiers.needs("cad", "fe", "slicer")
 def warm(tmp_path_factory):
     root = tmp_path_factory.mktemp("steps")
     with pytest.MonkeyPatch.context() as mp:
@@ -79,6 +80,8 @@ def test_cold_build_runs_every_step_once(warm):
     assert (f"slice:{TPU}" in _ran(first)) == HAVE_SLICER
 
 
+@pytest.mark.cad
+@pytest.mark.slicer
 def test_unchanged_build_reruns_nothing_and_gives_the_same_bytes(warm, tmp_path):
     import io
 
@@ -99,6 +102,8 @@ def test_unchanged_build_reruns_nothing_and_gives_the_same_bytes(warm, tmp_path)
     assert "\x1b[" not in log.getvalue()  # no colours or cursor moves in a log file
 
 
+@pytest.mark.cad
+@pytest.mark.slicer
 def test_a_damaged_cache_entry_is_rebuilt_in_a_real_build(warm, tmp_path):
     """A truncated cached render and a cached part STL with edited bytes: both rebuilt, same output."""
     root, params, first = warm
@@ -120,6 +125,10 @@ FLIGHT = {"flight"}  # the flight files: the mass properties, the modes, the rot
 
 
 @pytest.mark.skipif(not __import__("sys").platform.startswith("linux"), reason="the CAD server is Linux-only")
+@pytest.mark.cad
+@pytest.mark.fe
+@pytest.mark.process
+@pytest.mark.slicer
 def test_builds_through_the_cad_server_give_the_same_bytes(warm, tmp_path, monkeypatch, capsys):
     """A cold `cogniframe build` whose parts, joint FEs, clash check and assembly run in the CAD
     server's workers (runtime/cad_server.py) equals the module's cold build with a process pool of
@@ -201,6 +210,9 @@ CHANGES = [
 
 
 @pytest.mark.parametrize("key, value, sliced, expected", CHANGES, ids=[c[0] for c in CHANGES])
+@pytest.mark.cad
+@pytest.mark.fe
+@pytest.mark.slicer
 def test_a_change_reruns_exactly_its_dependents_and_matches_a_cold_build(warm, tmp_path, key, value, sliced, expected):
     root, _, _ = warm
     sliced = sliced and HAVE_SLICER
@@ -223,6 +235,7 @@ def test_a_change_reruns_exactly_its_dependents_and_matches_a_cold_build(warm, t
     shutil.rmtree(tmp_path / "cold")
 
 
+@pytest.mark.process
 def test_a_no_geometry_change_imports_no_cad_mesh_or_render_library(warm, tmp_path):
     """The battery's mass moves no part: a fresh `cogniframe build` process on the warm cache reruns
     only plots, figures and the flight files, and never imports CadQuery, OCP, trimesh, pyvista or vtk."""

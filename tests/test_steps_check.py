@@ -9,6 +9,9 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
+
 ROOT = Path(__file__).resolve().parents[1]
 
 HEAVY = ("pydantic", "numpy", "yaml", "typer", "cogniframe.spec", "cogniframe.analysis.verdict")
@@ -23,6 +26,7 @@ def _check(params: Path, cache: Path, *extra: str) -> tuple[str, list[str], int]
     return proc.stdout, [m for m in HEAVY if m in imported], proc.returncode
 
 
+@pytest.mark.process
 def test_repeated_check_is_answered_from_the_cache_without_heavy_imports(tmp_path):
     params = tmp_path / "carbon.yaml"
     params.write_text((ROOT / "params" / "carbon.yaml").read_text())
@@ -38,6 +42,7 @@ def test_repeated_check_is_answered_from_the_cache_without_heavy_imports(tmp_pat
     assert tables2 == tables and "all-up weight" in tables and heavy == []
 
 
+@pytest.mark.process
 def test_a_changed_params_file_is_checked_again(tmp_path):
     params = tmp_path / "carbon.yaml"
     text = (ROOT / "params" / "carbon.yaml").read_text()

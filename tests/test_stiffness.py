@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
+import tiers
 import yaml
 
 from cogniframe import frame as frame_mod
@@ -48,6 +50,7 @@ def _k(s, method="analytic", **kw) -> float:
 
 
 @pytest.fixture(scope="module")
+@tiers.needs('fe')
 def carbon_fe():
     s, f, p = _design(spec_mod.load(CARBON))
     joints = st.joint_models(s, p, "fe")
@@ -73,11 +76,13 @@ def test_carbon_k_within_15pct_of_7040_with_the_one_calibration(carbon_fe):
     assert 0.1 < JS.TPU_PRINTED_MODULUS_FACTOR <= 1.0
 
 
+@pytest.mark.fe
 def test_calibration_constant_is_what_calibrate_gives(carbon_fe):
     s, f, _, _ = carbon_fe
     assert JS.TPU_PRINTED_MODULUS_FACTOR == pytest.approx(st.calibrate_tpu_factor(s, f), rel=0.02)
 
 
+@pytest.mark.fe
 def test_fe_joint_stiffness_scales_exactly_with_the_tpu_factor(carbon_fe):
     s, f, p, _ = carbon_fe
     knee = next(x for x in p if x.name == "knee")
@@ -86,6 +91,7 @@ def test_fe_joint_stiffness_scales_exactly_with_the_tpu_factor(carbon_fe):
     assert np.allclose(b, 2 * a, rtol=1e-12, atol=0)
 
 
+@pytest.mark.fe
 def test_bamboo_k_is_reported_and_softer_than_carbon(carbon_fe):
     s, f, p, joints = carbon_fe
     k_carbon = st.predict_stiffness(s, f, p, joints=joints).k_n_per_m
@@ -120,10 +126,12 @@ def _k_fe(s) -> float:
     ("wall", 1.5, 1.8),
     ("hinge_thickness", 1.2, 1.8),  # thicker living hinge
 ])
+@pytest.mark.fe
 def test_fe_k_rises_with_socket_depth_wall_and_hinge(key, lo, hi):
     assert _k_fe(_variant(joints={key: hi})) > _k_fe(_variant(joints={key: lo}))
 
 
+@pytest.mark.fe
 def test_fe_looser_fit_lowers_k():
     # on the tab link: the pegged link's columns keep their wall round the bore, so a looser fit
     # fattens them and stiffens the link more than the interface loosens (docs/stiffness-model.md)
@@ -132,6 +140,7 @@ def test_fe_looser_fit_lowers_k():
     assert k(0.2) < k(0.1) < k(-0.05)
 
 
+@pytest.mark.fe
 def test_fe_stiffer_and_thicker_rods_raise_k():
     assert _k_fe(_variant(rods={"material": "carbon_rod"})) > _k_fe(_variant(rods={"material": "bamboo"}))
     # at wall 1.6 the core link's seat is raised for both diameters (see the wall trend above)
@@ -156,10 +165,12 @@ SOFT_RODS = {"rods": {"material": "soft_carbon"},
     (SOFT_RODS, {"rods": {"material": "carbon_rod"}}),
     ({"rods": {"diameter": 3.0}, "joints": {"wall": 1.6}}, {"rods": {"diameter": 3.5}, "joints": {"wall": 1.6}}),
 ])
+@pytest.mark.fe
 def test_fe_first_mode_rises_with_depth_wall_hinge_and_rod_stiffness(sections_lo, sections_hi):
     assert _first_mode(_variant(**sections_hi), "fe") > _first_mode(_variant(**sections_lo), "fe")
 
 
+@pytest.mark.fe
 def test_parallel_joint_fe_equals_serial(tmp_path, monkeypatch):
     # the pool (forkserver workers) and this process solve the same joints to the same numbers
     s, f, p = _design(_variant(joints={"socket_depth": 9}))
@@ -201,6 +212,7 @@ def test_stiffer_and_thicker_rods_raise_k():
         _k(_tab(rods={"diameter": 3.0}, joints={"wall": 1.6, "socket_depth": 8}))
 
 
+@pytest.mark.fe
 def test_removing_the_struts_lowers_k_fe(carbon_fe):
     s, f, p, joints = carbon_fe
     k = st.predict_stiffness(s, f, p, joints=joints).k_n_per_m
@@ -222,6 +234,7 @@ def test_first_mode_rises_with_depth_wall_hinge_and_rod_stiffness(sections_lo, s
     assert _first_mode(_tab(**sections_hi)) > _first_mode(_tab(**sections_lo))
 
 
+@pytest.mark.fe
 def test_analytic_and_fe_joints_agree_on_k_within_a_factor_2(carbon_fe):
     # the closed forms are a cross-check, not a substitute: they take the joint body as rigid in
     # bending and the sleeve as a plain tube in tension (docs/stiffness-model.md gives the ratios:
@@ -279,6 +292,7 @@ def test_symmetry_four_corners_behave_alike(carbon_fe):
     assert abs(u[pay]) < 1e-6 * abs(u[pay + 2]) and abs(u[pay + 1]) < 1e-6 * abs(u[pay + 2])
 
 
+@pytest.mark.process
 def test_module_imports_no_heavy_library():
     code = ("import sys, cogniframe.analysis.drop, cogniframe.analysis.stiffness, cogniframe.analysis.joints; "
             "bad = [m for m in ('cadquery', 'OCP', 'gmsh', 'skfem', 'Pynite', 'scipy.optimize') if m in sys.modules]; "
@@ -299,6 +313,7 @@ def test_cached_k_key_follows_the_materials_library(monkeypatch):
     assert drop._stiffness_key(s) != key
 
 
+@pytest.mark.fe
 def test_a_joint_the_mesher_cannot_handle_falls_back_to_closed_forms(monkeypatch):
     s, f, p = _design(_tab())  # the pegged link has no closed form to fall back on
 
@@ -466,6 +481,7 @@ def mirror_direct(carbon_fe):
     return JS.fe_joint(s, _mirror_pair(p)[1], 1.0)
 
 
+@pytest.mark.fe
 def test_derived_mirror_joint_matches_its_own_FE_within_the_discretisation(carbon_fe, mirror_direct):
     # Benchmark: the direct FE of core_link_mirrored. The two meshes differ (gmsh does not mesh a
     # mirror image as the mirror of the mesh): measured 0.30 % Frobenius, diagonal terms within
@@ -495,6 +511,7 @@ def test_derived_mirror_joint_matches_its_own_FE_within_the_discretisation(carbo
     assert k == pytest.approx(7041.0, rel=0.01)
 
 
+@pytest.mark.fe
 def test_solve_missing_solves_four_joint_FEs_and_derives_the_mirror(tmp_path, monkeypatch, caplog):
     import logging
 
@@ -526,6 +543,7 @@ def test_solve_missing_solves_four_joint_FEs_and_derives_the_mirror(tmp_path, mo
     assert calls.count("core_link_mirrored") == 0
 
 
+@pytest.mark.fe
 def test_solve_missing_runs_its_FEs_on_the_callers_workers(tmp_path, monkeypatch):
     """The build's CAD server workers (steps.estimate passes their submit): every FE goes through
     `submit`, the results are cached as by the pool, and a failed FE is reported, not raised."""
@@ -555,6 +573,7 @@ def test_solve_missing_runs_its_FEs_on_the_callers_workers(tmp_path, monkeypatch
     assert JS.has_unsolved(s, [x for x in joints if x.name == "knee"])
 
 
+@pytest.mark.fe
 def test_a_mirror_that_is_not_an_exact_image_is_solved_by_FE(tmp_path, monkeypatch):
     from dataclasses import replace
 
@@ -576,6 +595,7 @@ def test_a_mirror_that_is_not_an_exact_image_is_solved_by_FE(tmp_path, monkeypat
     assert calls == ["core_link_mirrored", "core_link_mirrored"]
 
 
+@pytest.mark.fe
 def test_solve_missing_submits_the_biggest_joint_first(tmp_path, monkeypatch):
     """Longest-processing-time-first: the FE jobs go to the workers by falling closed-form volume
     (the mesh has a fixed size, so the factorization grows with it), so the last one to start is
@@ -601,6 +621,7 @@ def test_solve_missing_submits_the_biggest_joint_first(tmp_path, monkeypatch):
     assert set(failed) == {"knee", "core_link", "corner_bottom", "corner_top", "core_link_mirrored"}
 
 
+@pytest.mark.fe
 def test_the_joint_fe_meshes_the_shape_the_part_build_shared_to_the_same_bits(tmp_path, monkeypatch):
     """The build's part job stores a joint's BREP (`build_part_files(share_shape=True)`); the joint
     FE then meshes that text instead of building the CAD again, and gets the same matrix, bit for

@@ -26,6 +26,8 @@ from pathlib import Path
 
 import pytest
 
+import tiers
+
 from browser import CHROMIUM, FLAGS, browser_or_skip
 
 import cogniframe as cf
@@ -100,6 +102,7 @@ class Events:
         raise AssertionError(f"no such event in {[e['type'] for e in self.items]}")
 
 
+@pytest.mark.fe
 def test_session_checks_edits_refuses_bad_values_and_saves(tmp_path, monkeypatch):
     from cogniframe.studio.session import Session
 
@@ -153,6 +156,7 @@ def test_session_checks_edits_refuses_bad_values_and_saves(tmp_path, monkeypatch
     assert sorted(p.name for p in tmp_path.iterdir()) == ["carbon.yaml"]  # nothing else written
 
 
+@pytest.mark.fe
 def test_pages_of_one_session_never_change_each_other(tmp_path, monkeypatch):
     """Each page's figures are its own design's: a page that connects or edits resets no other."""
     from cogniframe.studio.session import Session
@@ -241,6 +245,7 @@ def test_messages_the_studio_does_not_take_are_refused_in_a_sentence(tmp_path, m
     assert len(shorten("z" * 1_000_000)) < MAX_SHOWN + 60
 
 
+@pytest.mark.fe
 def test_compare_gives_each_designs_figures(tmp_path, monkeypatch):
     from cogniframe.studio.compare import COMPARE_ROWS
     from cogniframe.studio.session import Session
@@ -266,6 +271,7 @@ def test_compare_gives_each_designs_figures(tmp_path, monkeypatch):
     assert heavy["figures"]["verdict"] == "FAIL" and "rods.diameter" in bad["error"]
 
 
+@pytest.mark.fe
 def test_a_failed_3d_view_still_brings_the_fe_figures(tmp_path, monkeypatch):
     """The figures of a new joint geometry wait for its FE, which the view's build solves; when
     the view fails, the FE is solved on its own and the figures come, instead of a wait."""
@@ -363,6 +369,7 @@ def _other_addresses() -> list[str]:
     return sorted(a for a in found if not a.startswith("127."))
 
 
+@pytest.mark.process
 def test_listens_on_127_0_0_1_only_and_stops_on_ctrl_c(tmp_path):
     shutil.copy(CARBON, tmp_path / "carbon.yaml")
     proc, port = _start_studio(tmp_path)
@@ -441,6 +448,7 @@ def _token_and_base(port: int) -> tuple[str, str]:
     return re.search(r'data-token="([^"]+)"', text).group(1), re.search(r'data-base="([0-9a-f]{64})"', text).group(1)
 
 
+@pytest.mark.process
 def test_every_response_forbids_framing(tmp_path):
     import urllib.error
     import urllib.request
@@ -481,6 +489,7 @@ def test_bad_params_or_busy_port_exit_2(tmp_path, run_cli):
 
 
 @pytest.fixture(scope="module")
+@tiers.needs('browser', 'process', 'fe')
 def studio(tmp_path_factory):
     """A running `cogniframe studio carbon.yaml` in a folder of its own, and a browser."""
     browser_or_skip()
@@ -564,6 +573,7 @@ def test_an_edit_changes_the_figures_and_the_page_times_it(page, studio, capsys)
     assert page.is_disabled("#save") and page.text_content("#status") == "as in the file"  # every value back
 
 
+@pytest.mark.fe
 def test_a_bad_value_gets_the_cli_message_and_nothing_is_saved(page, studio, tmp_path, run_cli, monkeypatch):
     params = studio["folder"] / "carbon.yaml"
     before = hashlib.sha256(params.read_bytes()).hexdigest()
@@ -635,7 +645,7 @@ def test_the_3d_view_draws(page):
     assert page.get_attribute("#cf-viewer", "data-probe") == "kept"
 
 
-@pytest.mark.slow
+@pytest.mark.fe
 def test_a_new_joint_geometry_shows_the_fast_model_then_the_fe_and_a_new_view(page, studio, capsys):
     page.wait_for_selector("#cf-viewer[data-ready='1']", timeout=300_000)
     page.wait_for_function("document.body.dataset.model === 'fe'", timeout=600_000)
@@ -667,7 +677,6 @@ def test_a_new_joint_geometry_shows_the_fast_model_then_the_fe_and_a_new_view(pa
     assert float(_metric(page, "stiffness.k_n_per_m")) == k_fe
 
 
-@pytest.mark.slow
 def test_build_offers_the_plates_and_the_report(page, studio):
     page.click("#build")
     page.wait_for_selector("#downloads a[href$='report.html']", timeout=900_000)
@@ -883,6 +892,7 @@ def test_the_design_is_in_the_address(studio):
         other.close()
 
 
+@pytest.mark.fe
 def test_compare_of_two_snapshots_shows_both_columns(studio):
     ctx = studio["browser"].new_context(viewport={"width": 1400, "height": 1000})
     try:

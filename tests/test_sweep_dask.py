@@ -147,6 +147,7 @@ def _assert_equal_to_serial(table: pd.DataFrame, serial: dict[str, dict]) -> Non
             assert _same(got, v), (rec["design_id"], col, got, v)
 
 
+@pytest.mark.process
 def test_tcp_cluster_equals_serial_both_workers_work_and_rerun_skips(tcp_cluster, tmp_path):
     sw_path = tmp_path / "s.yaml"
     sw_path.write_text(SWEEP)
@@ -173,6 +174,7 @@ def test_tcp_cluster_equals_serial_both_workers_work_and_rerun_skips(tcp_cluster
     pd.testing.assert_frame_equal(pd.read_parquet(out / "results.parquet"), table)
 
 
+@pytest.mark.process
 def test_sweep_killed_mid_run_loses_only_batches_in_flight(tcp_cluster, tmp_path):
     """`cogniframe sweep` killed (SIGKILL) after its first batch: the rerun evaluates exactly the
     designs without a row, and the result is complete."""
@@ -213,6 +215,8 @@ def test_killed_sweep_resumes_with_only_the_missing_designs(tcp_cluster, tmp_pat
     assert sorted(pd.read_parquet(out / "results.parquet")["design_id"]) == sorted(i for i, _ in run_mod.plan(sweep))
 
 
+@pytest.mark.cluster
+@pytest.mark.process
 def test_cli_default_local_cluster_equals_serial_and_rerun_skips(tmp_path, run_cli):
     """The default LocalCluster (2 worker processes) through the CLI: --json counts, a plain line per
     batch, two workers, rows equal to the serial evaluation, and a rerun that evaluates nothing."""
@@ -249,6 +253,7 @@ def test_timed_out_designs_are_recorded_and_tried_again(tcp_cluster, tmp_path):
 EXAMPLE = ROOT / "examples" / "sweeps" / "carbon.yaml"
 
 
+@pytest.mark.fe
 def test_optimize_carbon_finds_a_lighter_design_that_passes(tcp_cluster, tmp_path, run_cli):
     """Acceptance: the issue's sweep on the carbon base, minimise mass_g with max_safe_drop_cm >= 120:
     a design >= 1 g lighter than the preset that PASSes; best.yaml is the base with only the changed
@@ -343,7 +348,6 @@ def test_optimize_option_errors_exit_2(tmp_path, run_cli, args, says):
     assert code == 2 and says in err and not (tmp_path / "o").exists()
 
 
-@pytest.mark.slow
 def test_cad_of_a_design_is_built_and_verified_on_a_worker(tcp_cluster):
     """--cad: the design's parts are built by a Dask worker into its own temporary folder and come
     back verified (watertight single shells on the bed, clash-free); the base preset's parts all pass."""

@@ -141,6 +141,7 @@ def test_random_sampler_is_seeded(tmp_path):
 
 # -- one design ------------------------------------------------------------------------------
 
+@pytest.mark.fe
 def test_row_matches_check_json_of_the_same_params(tmp_path):
     base = yaml.safe_load(CARBON.read_text())
     row = ev.evaluate_one(base, {"frame.height": 130.0}, 60, "here")

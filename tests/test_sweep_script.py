@@ -78,7 +78,7 @@ def test_main_guard_is_read_from_the_script_at_the_calling_line(tmp_path, monkey
     assert found == {1: (str(script), 1), 3: None, 5: (str(script), 5)}
 
 
-@pytest.mark.slow
+@pytest.mark.process
 def test_readme_python_example_runs_as_written(tmp_path):
     """The README's Python block, saved as a script and run as `python example.py` (no main guard), from
     a folder holding the params and sweep files it names, as a user runs it: with the CAD server (its

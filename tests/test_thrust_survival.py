@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 import pytest
+
+import tiers
 import yaml
 
 from cogniframe import spec as spec_mod
@@ -135,6 +137,7 @@ def test_socket_axial_push_pull_is_shear_lag():
 # -- the presets ----------------------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
+@tiers.needs('fe')
 def checked() -> dict:
     # the model's figures at full precision (check.json states them to 4 digits, cogniframe/numfmt.py)
     return {p: verdict.check_values(verdict.check(spec_mod.load(PARAMS / f"{p}.yaml"))) for p in PRESETS}
@@ -181,6 +184,7 @@ def test_arms_only_bend_without_folding_at_full_thrust(checked, name):
 
 
 @pytest.fixture(scope="module")
+@tiers.needs('fe')
 def carbon_tab():
     """The carbon preset with the bolted tab link (core.link: tab), its link, and the tab's contact
     solve."""
@@ -195,7 +199,6 @@ def carbon_tab():
     return spec, link, tab_contact(spec, link)
 
 
-@pytest.mark.slow
 def test_tab_in_one_sided_contact_keeps_most_of_the_tied_hinge(carbon_tab):
     """The joint FE ties the tab's underside both ways; under thrust part of it lifts off the
     plate near the corner (the screw head holds only what lies under it). The active-set contact
@@ -321,6 +324,7 @@ def test_socket_push_pull_solid_fe_is_interface_and_sleeve_shear_in_series():
 
 
 @pytest.mark.parametrize("name", PRESETS)
+@pytest.mark.fe
 def test_arms_only_compliance_is_all_in_the_core_link(checked, name):
     """Taken apart: rigid rods leave the bare arms' motor deflection within 5 % (carbon 0.5 %,
     bamboo 3.8 %); the core links' super-elements made 1000x stiffer make it 20x smaller (carbon

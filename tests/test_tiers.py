@@ -15,8 +15,10 @@ HERE = Path(__file__).resolve().parent
 
 
 @pytest.fixture
-def suite(pytester):
-    """A pytester folder with this suite's conftest and tiers module."""
+def suite(pytester, monkeypatch):
+    """A pytester folder with this suite's conftest and tiers module, its guard failing tests (not
+    recording them, as a survey of this suite would: COGNIFRAME_TIERS_RECORD)."""
+    monkeypatch.delenv("COGNIFRAME_TIERS_RECORD", raising=False)
     pytester.makeconftest((HERE / "conftest.py").read_text())
     pytester.makepyfile(tiers=(HERE / "tiers.py").read_text())
     (pytester.path / "params").mkdir()  # conftest's preset fixtures read ROOT/params lazily

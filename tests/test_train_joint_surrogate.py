@@ -118,7 +118,7 @@ def test_family_needs_the_files_it_merges_into(tmp_path, capsys):
     assert not (tmp_path / "work").exists() and not (tmp_path / "none.json").exists()
 
 
-@pytest.mark.slow
+@pytest.mark.fe
 def test_training_the_pegged_link_alone_keeps_the_other_families_and_adds_it(tmp_path, monkeypatch):
     """A tiny DOE (4 training designs and 1 held out, pegged carbon preset, only the layer height
     varying) through the real FE: the data file gains `core_link_pegs`, every other family's fit

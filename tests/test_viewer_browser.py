@@ -17,6 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import tiers
+
 from browser import CHROMIUM, FLAGS, browser_or_skip
 import trimesh
 
@@ -34,6 +36,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
+@tiers.needs('cad', 'fe')
 def carbon_report(tmp_path_factory):
     """report.html for the carbon preset with the real meshes; returns (path, items, check result)."""
     from cogniframe.cache import cache_dir
@@ -78,6 +81,7 @@ def test_html_loads_nothing_from_the_network(carbon_report):
 # -- in the browser -------------------------------------------------------------------------
 
 @pytest.fixture(scope="module")
+@tiers.needs('browser')
 def page_factory():
     browser_or_skip()
     from playwright.sync_api import sync_playwright

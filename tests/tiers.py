@@ -27,7 +27,10 @@ NEEDS = {
     "slicer": "runs PrusaSlicer",
     "browser": "drives Chromium through Playwright",
     "cluster": "starts a Dask cluster or its workers",
-    "process": "runs cogniframe (or a server of it) in a fresh Python process: seconds of imports each",
+    "process": "runs cogniframe (or a server of it, or a notebook's kernel) in a fresh Python process: seconds of imports each",
+    # the one need the guard cannot see: set by hand on a fixture or test that computes for many
+    # seconds with nothing but numpy (a fit over every drop log, a Monte Carlo of drops)
+    "long": "computes for many seconds in this process (fits over every drop log, Monte Carlo drops)",
 }
 HEAVY = "heavy"
 _ATTR = "_cogniframe_needs"
