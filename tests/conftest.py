@@ -59,21 +59,32 @@ def pytest_collection_modifyitems(config, items):
     tiers.mark_from_fixtures(items)
 
 
-@pytest.fixture(autouse=True)
-def _tier_guard(request, monkeypatch):
-    """A test that does heavy work without its marker fails, naming the marker (tests/tiers.py)."""
-    if tiers.item_needs(request.node) >= set(tiers.NEEDS):
-        yield
-        return
-    guard = tiers.Guard(request.node, monkeypatch)
-    yield
-    failures = guard.failures()
-    record = os.environ.get("COGNIFRAME_TIERS_RECORD")  # a survey of the suite: write what each test needed, fail none
-    if record and guard.found:
-        with open(record, "a") as fh:
-            fh.write(json.dumps({"test": request.node.nodeid, "needs": sorted(guard.found)}) + "\n")
-    elif failures:
-        pytest.fail("\n".join(failures), pytrace=False)
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_setup(item):
+    """The guard watches a test from before its fixtures are made (a module fixture's work counts
+    for the first test that asks for it) to after they are torn down (tests/tiers.py)."""
+    if not tiers.item_needs(item) >= set(tiers.NEEDS):
+        item.stash[_GUARD] = tiers.Guard(item)
+    return (yield)
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_teardown(item, nextitem):
+    try:
+        return (yield)
+    finally:
+        guard = item.stash.get(_GUARD, None)
+        if guard is not None:
+            guard.stop()
+            record = os.environ.get("COGNIFRAME_TIERS_RECORD")  # a survey of the suite: what each test needed, failing none
+            if record and guard.found:
+                with open(record, "a") as fh:
+                    fh.write(json.dumps({"test": item.nodeid, "needs": sorted(guard.found)}) + "\n")
+            elif guard.failures():
+                pytest.fail("\n".join(guard.failures()), pytrace=False)
+
+
+_GUARD = pytest.StashKey()
 
 
 def shared_dir(tmp_path_factory) -> Path:

@@ -44,6 +44,7 @@ def scenes():
 # -- clash-free ---------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("preset", PRESETS)
+@pytest.mark.cad
 def test_assembly_is_clash_free(scenes, preset):
     """Every pair of printed parts, rods and vitamins overlaps < 0.5 mm^3 and every propeller clears
     everything by prop_margin (the core links once cut 11.9 mm^3 into the carbon battery holder,
@@ -182,6 +183,7 @@ def test_motor_and_prop_solids_follow_the_presets():
     assert prop.bounds[0, 2] > m.prop_z  # above the bell, in the propeller plane
 
 
+@pytest.mark.cad
 def test_vitamins_are_in_the_assembly_step_with_names_and_colours(tmp_path):
     """Round trip through cq.Assembly.importStep: every vitamin by name, with its colour."""
     import cadquery as cq
@@ -544,6 +546,8 @@ def test_tilted_camera_mount_prints_without_support_and_carries_the_camera(tilt,
     assert intersection_volume(mw, grown) > 10
 
 
+@pytest.mark.cad
+@pytest.mark.fe
 def test_vitamins_are_items_of_the_report_3d_view():
     """Each vitamin is a `vitamin` item of the report's 3D view with its budget line's mass."""
     from cogniframe.report.renders import vitamin_viewer_items

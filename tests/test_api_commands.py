@@ -60,6 +60,7 @@ def test_check_drop_plots_are_two_pngs_and_never_over_a_foreign_file(fast_check,
 
 # -- coupon ---------------------------------------------------------------------------------
 
+@pytest.mark.cad
 def test_coupon_file_writes_one_socket_per_clearance_in_the_joints_material(tmp_path):
     from cogniframe.api.coupons import coupon_file
     from cogniframe.export.mesh import load_stl
@@ -74,6 +75,7 @@ def test_coupon_file_writes_one_socket_per_clearance_in_the_joints_material(tmp_
     assert all(e <= b for e, b in zip(mesh.extents, spec_mod.load(CARBON).printer.bed))
 
 
+@pytest.mark.cad
 def test_coupon_too_big_for_the_bed_names_the_key_and_writes_nothing(tmp_path):
     from cogniframe.api import ParamsError
     from cogniframe.api.coupons import coupon_file

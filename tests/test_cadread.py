@@ -79,6 +79,7 @@ def socket_assembly(tmp_path_factory):
     return read_exoskeleton(write_step(tmp, parts))
 
 
+@pytest.mark.cad
 def test_the_rod_is_found(socket_assembly):
     exo = socket_assembly
     assert [r.name for r in exo.rods] == ["rod_1"]
@@ -124,6 +125,7 @@ def test_joints_and_materials(socket_assembly):
     assert exo.unplaced == () and exo.loose_ends == () and exo.warnings == ()
 
 
+@pytest.mark.cad
 def test_unplaced_part_and_loose_end_are_named(tmp_path):
     parts = {
         "Flex_Corner": blind_block(BOTTOM, AXIS),
@@ -139,6 +141,7 @@ def test_unplaced_part_and_loose_end_are_named(tmp_path):
     assert f"rod_lonely:{far_end}" in text and "no joint's socket" in text
 
 
+@pytest.mark.cad
 def test_a_rod_pushed_past_the_bottom_reads_a_negative_gap_and_a_short_one_a_positive(tmp_path):
     parts = {"Flex_A": blind_block(BOTTOM, AXIS), "rod_deep": rod(BOTTOM - AXIS * 0.3, BOTTOM + AXIS * 40)}
     s = read_exoskeleton(write_step(tmp_path, parts, "deep.step")).sockets[0]
@@ -148,6 +151,7 @@ def test_a_rod_pushed_past_the_bottom_reads_a_negative_gap_and_a_short_one_a_pos
     assert s.gap == pytest.approx(1.5, abs=1e-6) and s.depth == pytest.approx(DEPTH - 1.5, abs=1e-6)
 
 
+@pytest.mark.cad
 def test_placements_of_the_assembly_tree_are_applied(tmp_path):
     assy = cq.Assembly(name="top")
     sub = cq.Assembly(name="corner", loc=cq.Location(cq.Vector(100, 0, 0)))
@@ -194,6 +198,7 @@ def _fcstd(path, objects):
     return path
 
 
+@pytest.mark.cad
 def test_fcstd_placements_baked_or_not(tmp_path):
     s = math.sqrt(0.5)
     turn_z_90 = (50.0, 0.0, 0.0, 0.0, 0.0, s, s)  # move 50 in x, turn 90 deg about z
@@ -204,6 +209,7 @@ def test_fcstd_placements_baked_or_not(tmp_path):
         assert (bb.xmin, bb.xmax, bb.ymin, bb.ymax) == pytest.approx((48.0, 50.0, 0.0, 10.0), abs=1e-6)
 
 
+@pytest.mark.cad
 def test_fcstd_exoskeleton(tmp_path):
     path = _fcstd(tmp_path / "frame.FCStd", [("Flex_Corner", blind_block(BOTTOM, AXIS), None, False),
                                              ("Rod", rod(BOTTOM, BOTTOM + AXIS * LENGTH), None, False)])
@@ -251,6 +257,7 @@ def test_materials_file_overrides_patterns(tmp_path):
         load_material_map(f)
 
 
+@pytest.mark.cad
 def test_a_bspline_socket_reads_like_a_cylindrical_one(tmp_path):
     """A CAD program's mirror or export can store a hole as a B-spline surface (one socket of each
     mirrored pair in the authors' FreeCAD document): it is still a socket, with its bore and depth."""
@@ -264,6 +271,7 @@ def test_a_bspline_socket_reads_like_a_cylindrical_one(tmp_path):
     assert np.allclose(s.direction, AXIS, atol=1e-4) and s.offset < 1e-3
 
 
+@pytest.mark.cad
 def test_unnamed_solids_are_named_after_matching_part_files(tmp_path):
     from cogniframe.cadread.identify import file_signature, identify
     from cogniframe.cadread.load import NamedSolid
@@ -291,6 +299,7 @@ def test_json_ready(socket_assembly):
     assert {s["kind"] for s in d["sockets"]} == {"blind", "through", "sleeve"}
 
 
+@pytest.mark.cad
 def test_module_entry_point(tmp_path, capsys):
     from cogniframe.cadread.summary import main
 

@@ -67,6 +67,7 @@ def carbon_roundtrip(tmp_path_factory):
     return spec, frame, read_exoskeleton(path)
 
 
+@pytest.mark.cad
 def test_rods_are_the_frames(carbon_roundtrip):
     _spec, frame, exo = carbon_roundtrip
     assert sorted(r.name for r in exo.rods) == sorted(frame.rods)
@@ -90,6 +91,7 @@ def test_sockets_are_the_frames_ports_and_directions(carbon_roundtrip):
             assert s.gap == pytest.approx(0.0, abs=1e-3)
 
 
+@pytest.mark.cad
 def test_toframe_gives_the_frames_rods_and_mouths(carbon_roundtrip):
     _spec, frame, exo = carbon_roundtrip
     rods = frame_rods(exo)

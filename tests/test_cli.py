@@ -13,6 +13,7 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 
 
+@pytest.mark.fe
 def test_check_json_has_the_stable_keys(run_cli):
     code, out, _ = run_cli("check", ROOT / "params/carbon.yaml", "--json")
     data = json.loads(out)

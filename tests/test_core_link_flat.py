@@ -39,6 +39,7 @@ def test_union_area_of_overlapping_squares_is_inclusion_exclusion():
     assert union_area(sq[:1] + [sq[0] + 5.0]) == pytest.approx(2.0, abs=1e-12)  # disjoint
 
 
+@pytest.mark.cad
 def test_flat_link_at_the_authors_spacing_is_lean_printable_and_estimated(tmp_path):
     """Carbon at frame.arm_spacing 25: the link prints flat (both arm sockets level in print, at one
     height), one watertight solid with no unsupported overhang, its closed form within 5 % of the

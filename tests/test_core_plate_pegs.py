@@ -233,6 +233,8 @@ def test_each_stem_is_as_strong_as_the_square_plates_corner(preset):
         assert min(float((f - b) @ u) for f in feet) == pytest.approx(1.0, abs=1e-6)
 
 
+@pytest.mark.cad
+@pytest.mark.fe
 def test_the_pegged_presets_meet_the_papers_masses():
     """With core.link: pegs the carbon preset's central ABS parts are within 10 % of the paper's
     25 g and its all-up mass within 5 % of 236 g; bamboo's all-up at most 245 g (issue: room for a
@@ -293,6 +295,7 @@ def _zmax(shape) -> float:
 
 
 @pytest.mark.parametrize("preset", PRESETS)
+@pytest.mark.cad
 def test_plate_with_tubes_is_one_watertight_solid_printed_upside_down(preset, tmp_path):
     """The CAD: one watertight solid, its volume the closed form's within test_parts' 0.5 % (the
     BRep's volume; the STL's faceting within it too), lying on its top (the plate's top plane, the
@@ -411,6 +414,7 @@ def _random_pegged_parts(rnd):
 
 
 @pytest.mark.parametrize("seed", range(3))
+@pytest.mark.cad
 def test_random_designs_with_pegs_give_one_watertight_plate(seed, tmp_path):
     """tests/design_space.py's random edits (other boxes, rectangles with the arms off the
     diagonal, other plates and motors) with core.link: pegs and level arms: the first two designs

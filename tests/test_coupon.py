@@ -36,6 +36,7 @@ def coupon(request, tmp_path_factory):
     return spec, path, clearances, load_stl(path)
 
 
+@pytest.mark.cad
 def test_clearances_span_the_authors_fits_and_beyond(coupon):
     """The authors' parts (docs/authors-parts.md): blind sockets 2.70-2.85 mm and through-sleeves
     3.19-3.20 mm for 3 mm rods, i.e. -0.30..-0.15 and +0.20 mm; the coupon runs 0.10 mm past both."""
@@ -44,6 +45,7 @@ def test_clearances_span_the_authors_fits_and_beyond(coupon):
     assert min(clearances) < 2.70 - 3.0 and max(clearances) > 3.20 - 3.0
 
 
+@pytest.mark.cad
 def test_one_hole_per_clearance_with_the_right_diameter(coupon):
     spec, _, clearances, mesh = coupon
     z = spec.joints.wall + spec.joints.socket_depth / 2  # mid-depth of the sockets
@@ -57,6 +59,7 @@ def test_one_hole_per_clearance_with_the_right_diameter(coupon):
     assert np.diff(holes) == pytest.approx([0.05] * (len(holes) - 1), abs=0.01)
 
 
+@pytest.mark.cad
 def test_coupon_is_closed_flat_and_fits_the_bed(coupon):
     from cogniframe.export.mesh import flat_contact_ratio, overhangs
 
@@ -83,6 +86,7 @@ def test_labels_are_engraved(coupon):
         assert mesh.area_faces[near].sum() > 1.0
 
 
+@pytest.mark.cad
 def test_coupon_bytes_are_stable(tmp_path):
     from cogniframe.export.coupon import write_coupon
 

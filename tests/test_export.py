@@ -65,6 +65,7 @@ def test_step_header_has_no_timestamp_or_counter():
 
 
 @pytest.mark.parametrize("preset,name", [(p, n) for p in PRESETS for n in PART_NAMES[p]])
+@pytest.mark.cad
 def test_step_round_trip_is_one_solid_of_the_same_volume(preset, name):
     import cadquery as cq
 
@@ -124,6 +125,7 @@ def test_only_changed_parts_are_rebuilt(tmp_path, monkeypatch):
     assert "core_plate" in changed and "knee_mirrored" in changed and "battery_holder" not in changed
 
 
+@pytest.mark.cad
 def test_assembly_has_every_part_copy_and_rod_named_and_coloured(tmp_path):
     import cadquery as cq
 

@@ -315,6 +315,7 @@ def _hole_faces(shape, radius: float):
 
 
 @pytest.mark.parametrize("spacing, wall, n", [(12.0, 1.2, 2), (25.0, 1.2, 4), (12.0, 3.5, 2)])
+@pytest.mark.cad
 def test_built_1104_mount_holes_are_4p5mm_from_the_axis_and_clear_the_rods(spacing, wall, n):
     """On the CAD solid: the screw holes' cylinder axes lie 4.5 mm from the shaft hole's axis, each
     hole's wall stays within the seat plate (it never runs through a clip sleeve), and the hole and

@@ -110,6 +110,7 @@ def test_straight_sides_check_with_closed_form_joints(run_cli, tmp_path):
 
 
 @pytest.mark.parametrize("base", ["carbon", "bamboo"])
+@pytest.mark.cad
 def test_straight_sides_build_every_joint_as_one_solid(base):
     from cogniframe.families import registry
 
@@ -122,6 +123,7 @@ def test_straight_sides_build_every_joint_as_one_solid(base):
 
 @pytest.mark.parametrize("base", ["carbon", "bamboo"])
 @pytest.mark.parametrize("height", [91, 92])
+@pytest.mark.cad
 def test_thin_rods_in_a_short_frame_keep_the_knee_in_one_piece(base, height):
     from cogniframe.families import registry
 
@@ -131,6 +133,7 @@ def test_thin_rods_in_a_short_frame_keep_the_knee_in_one_piece(base, height):
 
 
 @pytest.mark.parametrize("base, height", [("carbon", 91), ("bamboo", 91.5)])
+@pytest.mark.cad
 def test_thin_rods_core_links_mesh_watertight(base, height):
     """With 2.3 mm rods the bore (2.4 mm) equals the M2 clearance, so the core link's tab top met the
     strut sleeve's top exactly and the STL of one of the two links had open edges (build: MeshError)."""
@@ -184,6 +187,7 @@ def test_rigid_leg_reaches_into_the_arm_block():
 # -- rectangles ---------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("box", [(212, 210), (240, 180)])
+@pytest.mark.cad
 def test_rectangle_joints_have_no_sliver_faces(box):
     """Every joint of a near-square and of a clearly rectangular box is one valid solid with no
     face under 1e-4 mm^2 (the arm sleeves 1e-5 mm apart gave faces of 1e-8 mm^2 and 0 mm^2, and
@@ -236,6 +240,7 @@ def _in_polygon(p, poly) -> bool:
     return all(c >= -1e-9 for c in sides) or all(c <= 1e-9 for c in sides)
 
 
+@pytest.mark.cad
 def test_d22_knees_build_in_one_piece():
     """The reported case: `registry.solid` raised "joint geometry produced 2 solids instead of 1"
     for knee and knee_mirrored."""
@@ -269,6 +274,7 @@ def test_knee_seat_leaves_the_hinge_room(base, change):
 @pytest.mark.parametrize("base", ["carbon", "bamboo"])
 @pytest.mark.parametrize("change", [{"joints__seat": 0.0}, {"joints__wall": 2.88}, {"joints__wall": 6.0},
                                     {"joints__seat": 12.0}, {"rods__diameter": 1.0}])
+@pytest.mark.cad
 def test_knees_build_across_seats_and_walls(base, change):
     for knee in _parts(_variant(base, **change), ["knee"]):
         _one_watertight_solid(knee)
@@ -276,6 +282,7 @@ def test_knees_build_across_seats_and_walls(base, change):
 
 @pytest.mark.parametrize("change", [{"joints__fit_clearance__tpu_95a": v} for v in (0.12, 0.22, 0.38, 0.68, 0.76)]
                          + [{"joints__wall": 5.48}])
+@pytest.mark.cad
 def test_core_link_hub_top_clears_the_strut_sleeve(change):
     """The hub's top was level with the strut sleeve's round top (and, with 5.48 mm walls, 0.03 mm
     above the upper arm's axis): one of the two links' STL had a hole where the top face was."""
@@ -294,6 +301,7 @@ def test_core_link_hub_top_clears_the_strut_sleeve(change):
                 assert abs(hub_top - level) >= TAB_CLEAR - 1e-6, (link.name, hub_top, level)
 
 
+@pytest.mark.cad
 def test_knee_web_top_clears_the_legs_top():
     """carbon in a 153 x 190.6 x 168.2 box: the web's top, level with the upper leg's round top,
     went missing from the knee's STL."""
@@ -327,6 +335,7 @@ def test_knee_web_top_clears_the_legs_top():
     ("carbon", {"frame__arm_spacing": 30.0, "joints__wall": 3.0}),  # long bridges, thick sleeves
     ("carbon", {"frame__arm_spacing": 15.0, "joints__socket_depth": 16.0}),  # sleeves longer than the seat
 ])
+@pytest.mark.cad
 def test_motor_mount_builds(base, change):
     from cogniframe.families.motor_mount import sleeve_length
 
@@ -363,6 +372,7 @@ def test_motor_mount_clips_are_built_on_one_line():
 
 
 @pytest.mark.parametrize("thickness", [6.05, 8.0])
+@pytest.mark.cad
 def test_camera_mount_keeps_its_upright_on_a_thick_plate(thickness):
     """core.plate_thickness 6.05 on the 40 mm carbon plate: the base's corner cuts met on the centre
     line in front of the upright ("camera_mount geometry produced 2 solids instead of 1"); the base
@@ -386,6 +396,7 @@ def test_camera_mount_keeps_its_upright_on_a_thick_plate(thickness):
     (184.7, 169.7, 81.8, 66.3, 61.6),  # leg and strut, equal cylinders from one point: 781 of 1534 mm^3
     (284.4, 289.1, 141.2, 111.1, 76.2),  # the leg run through the bed: corner_top's STL had a hole
 ])
+@pytest.mark.cad
 def test_corner_hub_keeps_every_sleeve(box, monkeypatch):
     """Carbon boxes as a maker resizes them: every union the corner is built from holds all its
     pieces (fused all at once as built = fused one by one), and each mirrored corner has its

@@ -231,6 +231,7 @@ def test_surrogate_scales_with_the_tpu_factor_and_repeats_to_the_bit():
     assert sg.predict(s, p, 1.0)[0].K == a.K
 
 
+@pytest.mark.cad
 def test_live_fe_of_an_unseen_corner_agrees_with_the_surrogate():
     # rods, wall, depth and clearance between the presets': a geometry in no training or held-out design
     s, f, parts = design({"rods.diameter": 3.25, "joints.wall": 1.55, "joints.socket_depth": 10.5,

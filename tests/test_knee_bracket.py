@@ -34,6 +34,7 @@ def _built(part):
     return built, tessellate(built.shape)
 
 
+@pytest.mark.cad
 def test_teardrop_sleeve_volume_is_its_section_times_length():
     """The primitive: round top, 45 deg flanks tangent to it, a web to the bed. Its section is
     3/4 of the circle plus the kite (r^2) less the kite's tip below the web's top, plus the web."""
@@ -52,6 +53,7 @@ def test_teardrop_sleeve_volume_is_its_section_times_length():
 
 
 @pytest.mark.parametrize("spacing", [25.0, 30.0])
+@pytest.mark.cad
 def test_knee_at_the_authors_spacing_weighs_no_more_than_the_12mm_block(spacing):
     """At 25 mm (the authors' arm spacing) and 30 the knee's CAD and its estimate stay under the
     12 mm solid-block knee's 1755 mm^3 (2.14 g) at 25; 30 mm may not pass 2.5 g."""
@@ -65,6 +67,7 @@ def test_knee_at_the_authors_spacing_weighs_no_more_than_the_12mm_block(spacing)
 
 
 @pytest.mark.parametrize("spacing", [6.0, 12.0, 25.0])
+@pytest.mark.cad
 def test_knee_estimate_tracks_its_cad_across_spacings(spacing):
     """The closed form follows the U and the webs from the schema's floor (the sleeves touch,
     the print web is inside the bridge) up: within 5 %."""
@@ -73,6 +76,7 @@ def test_knee_estimate_tracks_its_cad_across_spacings(spacing):
     assert knee.estimate.volume == pytest.approx(built.shape.Volume(), rel=0.05)
 
 
+@pytest.mark.cad
 def test_knee_arm_pair_is_two_sleeves_a_bridge_and_a_web():
     """Between the two arm sleeves at 25 mm: solid in the bridge (one OD from their back face),
     past it only the web one wall thick on the pair's plane, open either side of it."""
@@ -99,6 +103,7 @@ def test_knee_arm_pair_is_two_sleeves_a_bridge_and_a_web():
 
 
 @pytest.mark.parametrize("spacing", [6.0, 25.0, 30.0])
+@pytest.mark.cad
 def test_knee_prints_without_supports_across_spacings(spacing):
     from cogniframe.export.mesh import overhangs
 
@@ -109,6 +114,7 @@ def test_knee_prints_without_supports_across_spacings(spacing):
 
 
 @pytest.mark.parametrize("changes", [{"joints__wall": 2.4}, {"joints__wall": 4.0}, {"rods__diameter": 2.3, "joints__wall": 0.95}])
+@pytest.mark.cad
 def test_knee_builds_closed_with_other_walls_and_rods(changes):
     """Thick walls (the teardrop's flanks shrink), thin rods with thin walls, at 25 mm."""
     knee = _knee(25.0, **changes)

@@ -42,6 +42,7 @@ def _arm_angle(mount) -> float:
 # -- mass: the issue's targets --------------------------------------------------------------------
 
 @pytest.mark.parametrize("spacing, most_g", [(25.0, 1.6), (12.0, 1.66)])
+@pytest.mark.cad
 def test_1104_mount_weighs_no_more_than_the_issue_allows(spacing, most_g):
     """At the authors' 25 mm: at most 1.6 g (their part 1.11 g); at 12 mm: no heavier than the
     square-plate mount (1.66 g). The CAD's volume and the closed form both."""
@@ -68,6 +69,7 @@ def test_1104_mount_weighs_no_more_than_the_issue_allows(spacing, most_g):
     ("carbon", {"frame__arm_spacing": 25.0, "motors__model": "1505"}),
     ("carbon", {"frame__arm_spacing": 25.0, "joints__wall": 3.0}),
 ])
+@pytest.mark.cad
 def test_closed_form_tracks_the_cad_and_the_mount_prints_flat(base, changes):
     """The estimate is the CAD volume within the part suite's 15 %; one closed solid on the bed,
     no unsupported overhang (printed seat down, no supports)."""
@@ -170,6 +172,7 @@ def test_bridge_sag_and_twist_under_full_thrust_are_below_a_layer_PL3_over_12EI(
 
 
 @pytest.mark.parametrize("spacing", [12.0, 25.0])
+@pytest.mark.cad
 def test_level_arms_build_d_sleeves_that_print_flat(spacing):
     """Level arm rods (the authors' build; no preset height makes them exactly level yet): the
     carbon mount's rods laid level, planned again by the module's own layout, build D-section

@@ -320,6 +320,7 @@ def _mesh(shape):
     return tessellate(shape)
 
 
+@pytest.mark.cad
 def test_overhang_measure_flags_a_cantilever_and_a_wide_hole_but_not_a_small_hole():
     import cadquery as cq
 
@@ -334,6 +335,7 @@ def test_overhang_measure_flags_a_cantilever_and_a_wide_hole_but_not_a_small_hol
     assert overhangs(_mesh(wide))["area"] > 20  # a 10 mm hole is not a bridge
 
 
+@pytest.mark.cad
 def test_flat_contact_ratio_of_a_ball_is_tiny():
     import cadquery as cq
 
@@ -443,6 +445,7 @@ def test_socket_bore_and_walls(preset, name):
         assert back >= part.wall - 0.05, (s.rod, back)
 
 
+@pytest.mark.cad
 def test_knee_living_hinge_is_a_thin_web_between_slots():
     import dataclasses
 

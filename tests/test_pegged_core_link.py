@@ -123,6 +123,7 @@ def test_arms_too_close_for_the_strut_sleeve_are_refused_naming_the_key():
     assert len(_links(_pegs_spec(frame__arm_spacing=14))) == 2
 
 
+@pytest.mark.cad
 def test_pegged_link_is_one_watertight_solid_standing_on_its_pegs(tmp_path):
     """Carbon with core.link: pegs, both parts: one watertight solid, its closed form within 2 % of
     the CAD (exact but for the mouths' chamfers; test_parts allows the joints 15 %) and its
@@ -177,6 +178,7 @@ def test_mirrored_pegged_link_is_found_as_the_mirror_image():
     assert np.linalg.det(found[1]) == pytest.approx(-1.0)
 
 
+@pytest.mark.cad
 def test_pegged_link_hinge_lies_between_the_authors_connector_with_a_shallow_and_a_full_arch():
     """The arm pair's hinge (`load_cases.arm_pair_hinge` on the link's FE, the pegs' sides and ends
     tied to the core) against tools/pegged_link_fe.py's `connector_hinge` of the authors'
@@ -203,6 +205,7 @@ def test_pegged_link_hinge_lies_between_the_authors_connector_with_a_shallow_and
     assert hinge > 3 * flat
 
 
+@pytest.mark.cad
 def test_the_core_holds_the_pegs_sides_and_ends_only():
     """The support body's tie in the joint FE is the pegs' cylindrical sides and inner ends, the
     faces the ABS bores hold: its meshed area is the two pegs'
@@ -247,6 +250,7 @@ def _layers(mesh, dz: float, px: float):
 
 
 @pytest.mark.parametrize("preset", ["carbon", "bamboo"])
+@pytest.mark.cad
 def test_the_pegged_link_prints_with_no_support(preset, tmp_path):
     """Sliced every 0.2 mm (0.05 mm pixels), the standing link has no floating island: every piece
     of a layer touches the layer below. And nothing overhangs more than 45 deg (a layer grows at
@@ -358,6 +362,7 @@ def test_a_strut_far_off_the_arms_refuses_the_pegs_naming_the_key():
 
 
 @pytest.mark.parametrize("seed", range(3))
+@pytest.mark.cad
 def test_random_designs_with_pegs_build_one_watertight_link_each(seed, tmp_path):
     """tests/design_space.py's random edits of a preset (other boxes, rectangles, struts or not,
     other motors) with core.link: pegs and level arms: the first design the params accept gives

@@ -21,6 +21,7 @@ sys.modules[_spec.name] = pl  # its dataclass looks its module up there
 _spec.loader.exec_module(pl)
 
 
+@pytest.mark.cad
 def test_connector_volume_is_its_cylinders_and_arch_less_the_sockets():
     """Pegs, columns and the strut's column are cylinders; the arch a box, less the two half
     columns inside it over z 6..8.6; less three sockets, and the two arm sockets' half bores where
@@ -56,6 +57,7 @@ def test_pair_hinge_is_the_sum_of_the_bodies_springs_about_the_line_through_them
     assert pair_hinge(K, refs, [0, 1], [2]) == pytest.approx(2 * kr, rel=1e-9)
 
 
+@pytest.mark.cad
 def test_authors_connector_hinges_stiffer_than_the_flat_link_for_less_tpu():
     """The finding docs/stiffness-model.md builds on: at the carbon preset's 25 mm pair and TPU
     factor, the authors' connector (1.8 mm walls, pegs in rigid bores) holds the arm pair about

@@ -111,10 +111,11 @@ def _subprocess_needs(argv) -> str | None:
 class Guard:
     """Watch one test that lacks some markers; `failures()` names each marker it turned out to need."""
 
-    def __init__(self, item, monkeypatch):
+    def __init__(self, item):
         self.item, self.have = item, item_needs(item)
         self.found: dict[str, str] = {}
         self.before = {m for m in _MODULES if m in sys.modules}
+        self._patches = monkeypatch = pytest.MonkeyPatch()
         if "fe" not in self.have:
             self._guard_fe(monkeypatch)
         if "slicer" not in self.have:
@@ -122,6 +123,13 @@ class Guard:
         if "cad" not in self.have:
             self._guard_cad(monkeypatch)
         self._watch_subprocesses(monkeypatch)
+
+    def stop(self) -> None:
+        """Undo the patches; the modules imported since the start count too."""
+        self._patches.undo()
+        for module, kind in _MODULES.items():
+            if module not in self.before and module in sys.modules:
+                self._note(kind, f"imported {module}")
 
     def _note(self, kind: str, what: str) -> None:
         if kind not in self.have:
@@ -161,6 +169,12 @@ class Guard:
         for module, name, what in ((graph, "run", "ran the build graph"),
                                    (part_files, "build_parts", "built the parts' solids")):
             monkeypatch.setattr(module, name, self._noting("cad", what, getattr(module, name)))
+        # every solid CadQuery makes is a Shape: where the kernel is loaded (the test modules that
+        # import it load it at collection), its use is what counts
+        if "cadquery" in sys.modules:
+            from cadquery.occ_impl.shapes import Shape
+
+            monkeypatch.setattr(Shape, "__init__", self._noting("cad", "made a CadQuery solid", Shape.__init__))
 
     def _noting(self, kind: str, what: str, fn):
         def noted(*a, **k):
@@ -195,9 +209,6 @@ class Guard:
         monkeypatch.setattr(subprocess.Popen, "__init__", watched)
 
     def failures(self) -> list[str]:
-        for module, kind in _MODULES.items():
-            if module not in self.before and module in sys.modules:
-                self._note(kind, f"imported {module}")
-        return [f"{self.item.nodeid} {what}: mark it @pytest.mark.{kind} ({NEEDS[kind]}), or give it a fixture "
-                f"declared with tiers.needs({kind!r}), so that the fast tier (-m 'not heavy') leaves it out"
+        return [f"{self.item.nodeid} {what}: mark it @pytest.mark.{kind} ({NEEDS[kind]}), or declare the fixture "
+                f"that does it with tiers.needs({kind!r}), so that the fast tier (-m 'not heavy') leaves it out"
                 for kind, what in sorted(self.found.items())]
