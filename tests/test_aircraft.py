@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 import pytest
+
+import tiers
 import trimesh
 
 from cogniframe import frame as frame_mod
@@ -26,6 +28,7 @@ def _bodies(d):
 
 
 @pytest.fixture(scope="module")
+@tiers.needs('cad')
 def scenes():
     """Per preset: the design and its clash result (one clash check per preset)."""
     from cogniframe.analysis import clash
@@ -67,6 +70,7 @@ def test_assembly_is_clash_free(scenes, preset):
 
 
 @pytest.mark.parametrize("preset", PRESETS)
+@pytest.mark.cad
 def test_mirror_pairs_of_core_links_are_mirror_images(preset):
     """front-left/rear-right and front-right/rear-left links are mirror images through x = 0 (they
     were 90 deg rotations of one chiral part, so the two pairs met the rectangular holder differently)."""
@@ -119,6 +123,7 @@ def test_moving_one_part_into_another_is_a_fail_naming_both(scenes):
     assert result.verdict == "FAIL" and any("battery_holder" in p and "sensor_mount" in p for p in result.problems)
 
 
+@pytest.mark.cad
 def test_screws_are_in_the_clash_check_and_one_off_its_hole_is_a_clash(scenes):
     """The motor screws are bodies of the clash check; in its own clearance hole a screw touches
     nothing (its head on the seat's underside, its tip in the motor's thread, which is exempt);
@@ -214,6 +219,7 @@ def test_vitamins_are_in_the_assembly_step_with_names_and_colours(tmp_path):
 
 # -- the core that carries it ---------------------------------------------------------------------
 
+@pytest.mark.cad
 def test_camera_and_sensor_mounts_are_printed_flat_watertight_and_on_the_plates():
     from cogniframe.export import plates as plates_mod
     from cogniframe.export.mesh import flat_contact_ratio, overhangs
@@ -475,6 +481,7 @@ def test_a_build_with_a_clash_exits_1_naming_both_solids(run_cli, tmp_path, monk
     assert any("core_link_fr" in x and "battery_holder" in x and "mm^3" in x for x in check["problems"])
 
 
+@pytest.mark.cad
 def test_zip_tie_slots_strap_slots_and_lead_exit_go_through():
     """Rays through the openings meet no material; rays beside them do (measured on the STLs)."""
     from cogniframe.export.mesh import ray_first_hit

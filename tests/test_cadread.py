@@ -9,6 +9,8 @@ import zipfile
 import numpy as np
 import pytest
 
+import tiers
+
 cq = pytest.importorskip("cadquery")
 
 from cogniframe.cadread import read_exoskeleton  # noqa: E402
@@ -65,6 +67,7 @@ def write_step(tmp_path, parts: dict, name="frame.step"):
 
 
 @pytest.fixture(scope="module")
+@tiers.needs('cad')
 def socket_assembly(tmp_path_factory):
     """A TPU block with a blind tilted socket, a rod home in it, a sleeve on the rod, and a second
     joint (a through hole) at the rod's far end."""
@@ -90,6 +93,7 @@ def test_the_rod_is_found(socket_assembly):
     assert np.allclose(ends[0], BOTTOM, atol=1e-6)
 
 
+@pytest.mark.cad
 def test_blind_socket_axis_bore_depth(socket_assembly):
     exo = socket_assembly
     s = next(s for s in exo.sockets if s.joint == "Flex_Corner")
@@ -103,6 +107,7 @@ def test_blind_socket_axis_bore_depth(socket_assembly):
     assert s.offset == pytest.approx(0.0, abs=1e-6) and s.tilt_deg == pytest.approx(0.0, abs=1e-3)
 
 
+@pytest.mark.cad
 def test_through_socket_and_sleeve(socket_assembly):
     exo = socket_assembly
     far = next(s for s in exo.sockets if s.joint == "MainBase_link")

@@ -13,6 +13,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import tiers
+
 cq = pytest.importorskip("cadquery")
 
 from cogniframe import frame as frame_mod  # noqa: E402
@@ -50,6 +52,7 @@ def stand_in_joint(frame, node: str, bore: float):
 
 
 @pytest.fixture(scope="module")
+@tiers.needs('cad')
 def carbon_roundtrip(tmp_path_factory):
     from cogniframe import spec as spec_mod
     import pathlib
@@ -77,6 +80,7 @@ def test_rods_are_the_frames(carbon_roundtrip):
     assert exo.loose_ends == () and exo.unplaced == ()
 
 
+@pytest.mark.cad
 def test_sockets_are_the_frames_ports_and_directions(carbon_roundtrip):
     spec, frame, exo = carbon_roundtrip
     assert len([s for s in exo.sockets if s.end is not None]) == 2 * len(frame.rods)

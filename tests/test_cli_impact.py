@@ -316,6 +316,7 @@ def _check(run_cli, tmp_path, **sections):
     return code, json.loads(out)
 
 
+@pytest.mark.fe
 def test_check_json_has_the_stiffness_load_cases(run_cli):
     code, out, _ = run_cli("check", ROOT / "params" / "carbon.yaml", "--json")
     d = json.loads(out)

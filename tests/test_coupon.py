@@ -8,6 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import tiers
+
 from cogniframe import spec as spec_mod
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -27,6 +29,7 @@ def _loops_at(mesh, z):
 
 
 @pytest.fixture(scope="module", params=("carbon", "bamboo"))
+@tiers.needs('cad')
 def coupon(request, tmp_path_factory):
     from cogniframe.export.coupon import write_coupon
     from cogniframe.export.mesh import load_stl
@@ -71,6 +74,7 @@ def test_coupon_is_closed_flat_and_fits_the_bed(coupon):
     assert overhangs(mesh)["fraction"] < 0.01
 
 
+@pytest.mark.cad
 def test_labels_are_engraved(coupon):
     """Every label cuts a floor 0.6 mm into the base: up-facing area at that depth, under each socket."""
     from cogniframe.parts import coupon_solid as cp

@@ -57,6 +57,7 @@ def test_parallel_build_gives_the_same_bytes(tmp_path):
         assert np.allclose(b.print_from_local, first.built[b.name].print_from_local)
 
 
+@pytest.mark.cad
 def test_step_header_has_no_timestamp_or_counter():
     text = (built_preset("carbon").out / "step" / "knee.step").read_text(encoding="latin-1")
     assert "2000-01-01T00:00:00" in text
@@ -76,6 +77,7 @@ def test_step_round_trip_is_one_solid_of_the_same_volume(preset, name):
     assert solids[0].Volume() == pytest.approx(d.built[name].volume_mm3, rel=0.002)
 
 
+@pytest.mark.cad
 def test_files_are_laid_out_by_material(tmp_path):
     d = built_preset("carbon")
     for b in d.built.values():
@@ -156,6 +158,7 @@ def test_assembly_has_every_part_copy_and_rod_named_and_coloured(tmp_path):
     assert _sha(step) == first
 
 
+@pytest.mark.cad
 def test_glb_places_every_copy_rod_and_vitamin_y_up_in_mm_and_is_byte_stable(tmp_path):
     """assembly.glb from the build's meshes: one node per part copy, rod and vitamin, by name and
     colour; glTF's y up (world z -> y) in mm; copies share their part's mesh; same bytes twice."""

@@ -27,6 +27,8 @@ def test_shell_never_exceeds_volume():
     assert mass.printed_mass_g(g, 1.0, 0.0, PrinterSection()) == pytest.approx(0.1)
 
 
+@pytest.mark.cad
+@pytest.mark.fe
 def test_groups_add_up(preset):
     b = verdict.check(preset).mass
     assert sum(b.groups.values()) == pytest.approx(b.total_g)
@@ -34,6 +36,8 @@ def test_groups_add_up(preset):
     assert b.groups["battery"] == preset.core.battery.mass
 
 
+@pytest.mark.cad
+@pytest.mark.fe
 def test_carbon_matches_the_papers_table(carbon):
     b = verdict.check(carbon).mass
     assert b.groups["exoskeleton"] == pytest.approx(62, rel=0.10)  # rods + TPU joints
@@ -41,6 +45,8 @@ def test_carbon_matches_the_papers_table(carbon):
     assert b.total_g == pytest.approx(236, rel=0.05)
 
 
+@pytest.mark.cad
+@pytest.mark.fe
 def test_bamboo_is_near_the_papers_237_g_and_leaves_5_g_under_250(bamboo):
     b = verdict.check(bamboo).mass
     # the paper's bamboo build weighs 237 g; 245 g leaves a maker room for a heavier pack or camera

@@ -14,6 +14,8 @@ from cogniframe import spec as spec_mod
 ROOT = Path(__file__).resolve().parents[1]
 
 
+@pytest.mark.cad
+@pytest.mark.fe
 def test_the_thrust_load_case_and_the_flight_model_use_the_same_maximum_thrust(carbon):
     d = verdict.check_dict(verdict.check(carbon))
     assert d["stiffness"]["thrust"]["max_thrust_g"] == d["flight"]["max_thrust_g_per_motor"] == 175.0

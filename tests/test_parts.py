@@ -67,6 +67,7 @@ def test_presets_have_the_expected_parts():
 
 
 @pytest.mark.parametrize("family", FAMILIES)
+@pytest.mark.cad
 def test_family_module_keeps_the_registry_contract(family):
     """Each family's module names itself, sizes from a real params key, plans its own parts (every
     family is planned by the carbon preset, so every family runs through the CAD cases below) and
@@ -86,6 +87,7 @@ def test_family_module_keeps_the_registry_contract(family):
 
 
 @pytest.mark.parametrize("preset,name", CASES)
+@pytest.mark.cad
 def test_stl_is_a_closed_single_volume(preset, name):
     d = built_preset(preset)
     m, b = d.meshes[name], d.built[name]
@@ -98,6 +100,7 @@ def test_stl_is_a_closed_single_volume(preset, name):
 
 
 @pytest.mark.parametrize("preset,name", CASES)
+@pytest.mark.cad
 def test_part_sits_flat_inside_the_bed(preset, name):
     from cogniframe.export.mesh import flat_contact_ratio
 
@@ -116,6 +119,7 @@ PEGGED_LINKS = {"core_link", "core_link_mirrored"}
 
 
 @pytest.mark.parametrize("preset,name", [(p, n) for p, n in CASES if n not in PEGGED_LINKS])
+@pytest.mark.cad
 def test_no_unsupported_overhang(preset, name):
     from cogniframe.export.mesh import overhangs
 
@@ -125,6 +129,7 @@ def test_no_unsupported_overhang(preset, name):
 
 
 @pytest.mark.parametrize("preset,name", CASES)
+@pytest.mark.cad
 def test_analytic_estimate_tracks_the_cad_volume(preset, name):
     d = built_preset(preset)
     est, cad = d.parts[name].estimate.volume, d.built[name].volume_mm3
@@ -132,6 +137,7 @@ def test_analytic_estimate_tracks_the_cad_volume(preset, name):
 
 
 @pytest.mark.parametrize("preset", PRESETS)
+@pytest.mark.cad
 def test_core_plate_volume_is_its_closed_form(preset):
     """The pegged presets' plate: its X, ribs and tubes (families/core_plate.py `_with_tubes`, by
     hand in tests/test_core_plate_pegs.py) within 0.5 % of the CAD; a square plate: the box less its
@@ -146,6 +152,7 @@ def test_core_plate_volume_is_its_closed_form(preset):
     assert d.built["core_plate"].volume_mm3 == pytest.approx(closed, rel=0.005)
 
 
+@pytest.mark.cad
 def test_battery_holder_volume_is_box_minus_cavity_and_openings():
     """Closed form: outer box - cavity - stack holes - two side windows and two strap slots through
     the walls - the floor window - the lead notch in the top wall over the mouth (pointed windows:
@@ -207,6 +214,7 @@ def _assert_computer_mount_frame_carries_its_screws(spec, p, mesh, print_from_lo
         assert x0 - x1 >= min_member
 
 
+@pytest.mark.cad
 def test_computer_mount_is_an_open_frame_of_plate_less_windows_and_holes():
     """Carbon: the mount is the authors' kind of part (RPI_Support_new, a 2.0 mm frame of bars,
     1.65 cm^3): its CAD volume is the closed form plate - windows - holes, it is under half the
@@ -239,6 +247,7 @@ def _camera_mount_closed_form(p, stack_d):
     return base * bt + up * wall
 
 
+@pytest.mark.cad
 def test_camera_mount_is_two_stiles_on_an_open_base():
     """Carbon: the camera bracket is the authors' kind of support (CameraConnectorLeft/Right, two
     stile brackets, 2 x 0.51 cm^3): the base opens between the stack holes and the upright is two
@@ -421,6 +430,7 @@ def _rays_to_surface(mesh, origin, dirs):
 
 
 @pytest.mark.parametrize("preset,name", [(p, n) for p in PRESETS for n in ("corner_top", "corner_bottom", "knee", "core_link")])
+@pytest.mark.cad
 def test_socket_bore_and_walls(preset, name):
     """At mid-depth the hole radius is bore/2, and the wall around it and behind its bottom is >= wall."""
     from cogniframe.export.mesh import ray_first_hit

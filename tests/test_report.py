@@ -239,6 +239,8 @@ def _text_outside(fig) -> list[str]:
 
 
 @pytest.mark.parametrize("preset", ["carbon", "bamboo"])
+@pytest.mark.cad
+@pytest.mark.fe
 def test_no_figure_clips_its_title(preset, monkeypatch, tmp_path):
     from cogniframe.report import drop_plots
 
@@ -288,6 +290,8 @@ def test_viewer_geometry_round_trips_within_the_quantisation_step():
         pack([ViewerItem("x", "screw", "steel", 1.0, 1, "", "#000000", box)])
 
 
+@pytest.mark.cad
+@pytest.mark.fe
 def test_viewer_section_under_the_verdicts(tmp_path):
     from cogniframe.report.viewer import design_items
 

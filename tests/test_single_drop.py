@@ -235,6 +235,7 @@ def test_150cm_out_of_sample_median_as_documented(on50, on100, tilt_on50):
     assert abs(err150(on50["kelvin-voigt"][1])) < abs(err150(tilt_on50[1]))
 
 
+@pytest.mark.long
 def test_150cm_from_both_heights_as_documented(heights):
     # the README's worked example (c = 69.5, k = 4323 from 50 + 100 cm): one drop's median at
     # 150 cm 155.0 G, +13.4 % against 136.7 G (the fixed tilt: 167.9 G, +22.8 %)

@@ -44,6 +44,7 @@ def _rod_mesh(rod):
 
 
 @pytest.mark.parametrize("preset", PRESETS)
+@pytest.mark.cad
 def test_every_rod_end_sits_at_a_socket_bottom(preset):
     d = built_preset(preset)
     sockets = []  # (instance, world bottom, world out-direction)
@@ -67,6 +68,7 @@ def test_every_rod_end_sits_at_a_socket_bottom(preset):
 
 
 @pytest.mark.parametrize("preset", PRESETS)
+@pytest.mark.cad
 def test_socket_holes_end_at_the_socket_bottom(preset):
     from cogniframe.export.mesh import ray_first_hit
     from cogniframe.parts.joint_plan import map_sockets
@@ -80,6 +82,7 @@ def test_socket_holes_end_at_the_socket_bottom(preset):
 
 
 @pytest.mark.parametrize("preset", PRESETS)
+@pytest.mark.cad
 def test_no_rod_intersects_a_printed_part(preset):
     from cogniframe.export.assembly import press_fits
     from cogniframe.export.mesh import intersection_volume
@@ -103,6 +106,7 @@ def test_no_rod_intersects_a_printed_part(preset):
     assert checked >= 2 * len(d.frame.rods)  # at least both joints of every rod were really tested
 
 
+@pytest.mark.cad
 def test_the_intersection_check_sees_a_rod_in_the_wrong_place():
     """Negative control: a rod shifted 1 mm sideways into its socket wall is caught."""
     from cogniframe.export.mesh import intersection_volume
@@ -116,6 +120,7 @@ def test_the_intersection_check_sees_a_rod_in_the_wrong_place():
 
 
 @pytest.mark.parametrize("preset", PRESETS)
+@pytest.mark.cad
 def test_part_quantities_match_the_frame_graph(preset):
     d = built_preset(preset)
     kinds = Counter(n.kind for n in d.frame.nodes.values())

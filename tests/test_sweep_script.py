@@ -24,6 +24,7 @@ def _run(script: Path, timeout: float = 600, env: dict | None = None) -> subproc
                           timeout=timeout)
 
 
+@pytest.mark.process
 def test_unguarded_script_sweeps_in_its_own_process_and_says_how_to_get_workers(tmp_path):
     script = tmp_path / "unguarded.py"
     script.write_text("import cogniframe as cf\n"
@@ -39,6 +40,8 @@ def test_unguarded_script_sweeps_in_its_own_process_and_says_how_to_get_workers(
     assert 'if __name__ == "__main__":' in r.stderr and "on 2 worker processes" in r.stderr
 
 
+@pytest.mark.process
+@pytest.mark.cluster
 def test_guarded_script_keeps_its_worker_processes(tmp_path):
     script = tmp_path / "guarded.py"
     script.write_text("import cogniframe as cf\n\n\n"

@@ -263,6 +263,8 @@ def test_holder_strike_stress_is_the_plane_wave_impact_stress(checked, name):
     assert holder["margin"][0] is None  # no strike from 10 cm
 
 
+@pytest.mark.cad
+@pytest.mark.fe
 def test_max_peak_g_makes_the_payload_a_failure_mode():
     data = copy.deepcopy(yaml.safe_load((PARAMS / "carbon.yaml").read_text(encoding="utf-8")))
     data.setdefault("requirements", {})["max_peak_g"] = 60.0
@@ -366,6 +368,8 @@ def test_arms_only_compliance_is_all_in_the_core_link(checked, name):
     assert deflection({**{n: stiffer(u) for n, u in fe.items()}, **{n: fe[n] for n in links}}) == pytest.approx(base, rel=1e-3)
 
 
+@pytest.mark.cad
+@pytest.mark.fe
 def test_report_says_what_breaks_first_with_every_margin(tmp_path):
     from cogniframe.report import html as report
 
