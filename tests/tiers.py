@@ -1,8 +1,8 @@
 """The suite's two tiers: what a heavy test needs, as pytest markers, and the guard that keeps
 the fast tier fast.
 
-    python -m pytest                  # everything (what .ci/run runs)
-    python -m pytest -m "not heavy"   # the fast tier: the loop to run after each edit
+    python -m pytest -n auto                  # everything (what .ci/run runs)
+    python -m pytest -n auto -m "not heavy"   # the fast tier: the loop to run after each edit
 
 A test is heavy when it needs one of `NEEDS`; `heavy` is added to it automatically. It gets its
 markers in three ways, so that a new heavy test cannot slip into the fast tier:
