@@ -198,6 +198,7 @@ def test_save_writes_the_file_with_its_comments(tmp_path, carbon):
 
 @pytest.mark.cad
 @pytest.mark.slicer
+@pytest.mark.fe
 def test_build_writes_the_cli_folder_under_its_rules(tmp_path, carbon):
     d = carbon.with_values({"core.battery.mass": 60})  # an edit that is not on disk: built from the design's text
     out = tmp_path / "out" / "carbon-60"

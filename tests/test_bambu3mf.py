@@ -158,6 +158,7 @@ def test_prusaslicer_measures_an_orca_plate_as_the_prusaslicer_plate(a1_mini, tm
 
 @pytest.mark.cad
 @pytest.mark.slicer
+@pytest.mark.fe
 def test_build_for_the_a1_mini_writes_orca_bambu_plates(tmp_path):
     """The acceptance check: `printer: {preset: bambu_a1_mini}` builds plates that lib3mf loads, each
     object with its filament slot, the TPU objects at 100 % infill and the rigid ones at core.infill."""

@@ -101,6 +101,7 @@ def test_bad_params_leave_the_output_untouched(run_cli, tmp_path):
 
 @pytest.mark.cad
 @pytest.mark.slicer
+@pytest.mark.fe
 def test_failure_mid_build_leaves_no_partial_folder(tmp_path, monkeypatch):
     from cogniframe.analysis import verdict
 

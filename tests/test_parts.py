@@ -44,13 +44,15 @@ CASES = [(p, n) for p in PRESETS for n in PART_NAMES[p]]
 
 @functools.lru_cache(maxsize=None)
 def built_preset(name: str):
-    """Build a preset's parts once (no cache) into a temp dir; meshes re-read from the STL files."""
+    """Build a preset's parts once a process into a temp dir, through the run's cache (the other
+    worker's parts are read from it, not built again); meshes re-read from the STL files."""
+    from cogniframe.cache import cache_dir
     from cogniframe.export.part_files import build_parts
     from cogniframe.export.mesh import load_stl
 
     spec, frame, parts = planned(name)
     out = Path(tempfile.mkdtemp(prefix=f"cogniframe-test-{name}-"))
-    built = build_parts(spec, frame, parts, out)
+    built = build_parts(spec, frame, parts, out, cache_dir=cache_dir())
     meshes = {b.name: load_stl(out / b.stl) for b in built}
     return SimpleNamespace(spec=spec, frame=frame, parts={p.name: p for p in parts}, built={b.name: b for b in built},
                            out=out, meshes=meshes)

@@ -237,6 +237,7 @@ def test_assembly_steps_name_the_mirrored_parts(rect):
 
 @pytest.mark.cad
 @pytest.mark.slicer
+@pytest.mark.fe
 def test_build_of_the_example_is_watertight_and_clash_checked(tmp_path):
     import trimesh
 

@@ -329,6 +329,7 @@ def test_3mf_slices_with_its_own_settings_and_no_profile(tmp_path):
 @needs_slicer
 @pytest.mark.cad
 @pytest.mark.slicer
+@pytest.mark.fe
 def test_build_gcode_keeps_gcode_per_plate_outside_the_promise(run_cli, tmp_path):
     import json
     from pathlib import Path

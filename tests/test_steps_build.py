@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import shutil
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 import yaml
@@ -59,15 +60,40 @@ def _files(out: Path) -> list:
     return json.loads((out / "manifest.json").read_text())["files"]
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 @tiers.needs("cad", "fe", "slicer")
-def warm(tmp_path_factory):
-    root = tmp_path_factory.mktemp("steps")
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("COGNIFRAME_CACHE", str(root / "cache"))
-        params = _params(root / "base")
-        first = _build(params, root / "out-base", slicer=True)
-        yield root, params, first
+def warm_root(tmp_path_factory):
+    """The cold build of the carbon preset whose cache the changes below build on: made once a run
+    (the first worker to ask builds it, the others wait), its step records kept beside it."""
+    from conftest import once, shared_dir
+
+    root = shared_dir(tmp_path_factory) / "steps-warm"
+    with once(root.parent / ".steps-warm.lock"):
+        if not (root / "first.json").is_file():
+            with pytest.MonkeyPatch.context() as mp:
+                mp.setenv("COGNIFRAME_CACHE", str(root / "cache"))
+                first = _build(_params(root / "base"), root / "out-base", slicer=True)
+            (root / "first.json").write_text(json.dumps({"steps": first.steps}))
+    return root
+
+
+@pytest.fixture
+def warm(warm_root, monkeypatch):
+    """(root, params, the cold build's record); the test builds on the shared warm cache. The
+    changes' builds may run beside each other on the run's workers: each writes only its own
+    entries (atomically, keyed by content), so a test that edits or counts the cache's entries
+    copies it first (`own_cache`)."""
+    monkeypatch.setenv("COGNIFRAME_CACHE", str(warm_root / "cache"))
+    steps = tuple(tuple(s) for s in json.loads((warm_root / "first.json").read_text())["steps"])
+    return warm_root, warm_root / "base" / "carbon.yaml", SimpleNamespace(steps=steps, out_dir=warm_root / "out-base")
+
+
+def own_cache(root: Path, tmp_path: Path, monkeypatch) -> Path:
+    """A copy of the warm cache for this test alone."""
+    cache = tmp_path / "cache"
+    shutil.copytree(root / "cache", cache)
+    monkeypatch.setenv("COGNIFRAME_CACHE", str(cache))
+    return cache
 
 
 def test_cold_build_runs_every_step_once(warm):
@@ -104,10 +130,10 @@ def test_unchanged_build_reruns_nothing_and_gives_the_same_bytes(warm, tmp_path)
 
 @pytest.mark.cad
 @pytest.mark.slicer
-def test_a_damaged_cache_entry_is_rebuilt_in_a_real_build(warm, tmp_path):
+def test_a_damaged_cache_entry_is_rebuilt_in_a_real_build(warm, tmp_path, monkeypatch):
     """A truncated cached render and a cached part STL with edited bytes: both rebuilt, same output."""
     root, params, first = warm
-    cache = root / "cache"
+    cache = own_cache(root, tmp_path, monkeypatch)
     (render,) = cache.glob("steps/render/*/files/renders/parts/knee.png")
     render.write_bytes(render.read_bytes()[:500])
     (stl,) = cache.glob("steps/part/*/files/stl/tpu_95a/core_link.stl")
@@ -236,7 +262,7 @@ def test_a_change_reruns_exactly_its_dependents_and_matches_a_cold_build(warm, t
 
 
 @pytest.mark.process
-def test_a_no_geometry_change_imports_no_cad_mesh_or_render_library(warm, tmp_path):
+def test_a_no_geometry_change_imports_no_cad_mesh_or_render_library(warm, tmp_path, monkeypatch):
     """The battery's mass moves no part: a fresh `cogniframe build` process on the warm cache reruns
     only plots, figures and the flight files, and never imports CadQuery, OCP, trimesh, pyvista or vtk."""
     import os
@@ -244,9 +270,10 @@ def test_a_no_geometry_change_imports_no_cad_mesh_or_render_library(warm, tmp_pa
     import sys
 
     root, _, _ = warm
+    cache = own_cache(root, tmp_path, monkeypatch)
     params = _params(tmp_path / "params", ("core.battery.mass", 59))
-    env = {**os.environ, "COGNIFRAME_CACHE": str(root / "cache"), "PYTHONPATH": str(ROOT)}
-    solved = {kind: len(list((root / "cache" / kind).glob("*.json"))) for kind in ("cases", "peaks")}
+    env = {**os.environ, "COGNIFRAME_CACHE": str(cache), "PYTHONPATH": str(ROOT)}
+    solved = {kind: len(list((cache / kind).glob("*.json"))) for kind in ("cases", "peaks")}
     proc = subprocess.run([sys.executable, "-X", "importtime", "-m", "cogniframe", "build", str(params), "-o",
                            str(tmp_path / "out")], capture_output=True, text=True, env=env, cwd=tmp_path, timeout=600)
     assert proc.returncode == 0, proc.stderr[-3000:]
@@ -254,7 +281,7 @@ def test_a_no_geometry_change_imports_no_cad_mesh_or_render_library(warm, tmp_pa
     assert not imported & {"cadquery", "OCP", "trimesh", "pyvista", "vtk", "rectpack"}
     # the load cases and peaks are solved once, for the mass with the CAD volumes (`estimate` no
     # longer solves them for the estimated mass too, only k and the joints, which the mass leaves alone)
-    assert {kind: len(list((root / "cache" / kind).glob("*.json"))) - n for kind, n in solved.items()} == {"cases": 1, "peaks": 1}
+    assert {kind: len(list((cache / kind).glob("*.json"))) - n for kind, n in solved.items()} == {"cases": 1, "peaks": 1}
     ran = {line.split("]", 1)[1].split()[0] for line in proc.stderr.splitlines()
            if line.startswith("[") and not line.endswith("cached")}
     assert ran == ({"estimate", "budget", "physics", "check", "plots", "figures", "flight", "bom", "report"}

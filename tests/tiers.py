@@ -32,6 +32,8 @@ NEEDS = {
     # seconds with nothing but numpy (a fit over every drop log, a Monte Carlo of drops)
     "long": "computes for many seconds in this process (fits over every drop log, Monte Carlo drops)",
 }
+# a joint's FE meshes the joint's CAD solid, made in the test's own process
+IMPLIES = {"fe": ("cad",)}
 HEAVY = "heavy"
 _ATTR = "_cogniframe_needs"
 
@@ -71,7 +73,9 @@ def mark_from_fixtures(items) -> None:
     tests of one module that share a heavy module-scoped fixture go to one pytest-xdist worker
     (`--dist loadgroup`), so that the fixture is made once a run, not once a worker."""
     for item in items:
-        for kind in sorted(fixture_needs(item) - item_needs(item)):
+        wanted = fixture_needs(item) | item_needs(item)
+        wanted |= {implied for kind in wanted for implied in IMPLIES.get(kind, ())}
+        for kind in sorted(wanted - item_needs(item)):
             item.add_marker(getattr(pytest.mark, kind))
         if item_needs(item):
             item.add_marker(HEAVY)
