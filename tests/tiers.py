@@ -18,6 +18,7 @@ from __future__ import annotations
 import shlex
 import subprocess
 import sys
+import threading
 
 import pytest
 
@@ -119,6 +120,7 @@ class Guard:
         self.item, self.have = item, item_needs(item)
         self.found: dict[str, str] = {}
         self.before = {m for m in _MODULES if m in sys.modules}
+        self.elsewhere = {t.ident for t in threading.enumerate()} - {threading.main_thread().ident}
         self._patches = monkeypatch = pytest.MonkeyPatch()
         if "fe" not in self.have:
             self._guard_fe(monkeypatch)
@@ -136,7 +138,9 @@ class Guard:
                 self._note(kind, f"imported {module}")
 
     def _note(self, kind: str, what: str) -> None:
-        if kind not in self.have:
+        # a thread an earlier test left running (a studio session's, a build's warm-up) is not this
+        # test's work: only the main thread and the threads started since this test began count
+        if kind not in self.have and threading.get_ident() not in self.elsewhere:
             self.found.setdefault(kind, what)
 
     def _guard_fe(self, monkeypatch) -> None:

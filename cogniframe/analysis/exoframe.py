@@ -45,6 +45,7 @@ import numpy as np
 
 from . import framefe as ff
 from .constants import G
+from .load_cases import thrust_figures
 
 DOWN = {"+z": (0.0, 0.0, 1.0), "-z": (0.0, 0.0, -1.0)}
 FLOOR_TOL = 0.5  # mm: a joint whose lowest point is this close to the lowest joint's stands on the floor
@@ -446,13 +447,7 @@ def thrust_case(lay: Layout, units: dict, factor: float, max_thrust_g: float, to
     for label, only in (("full", None), ("arms_only", lay.arms)):
         mdl = full if (label == "full" and full is not None) else model_of(lay, units, factor, only)
         dz, tilt = motors_under_thrust(lay, mdl, 1.0)
-        pre = "" if label == "full" else "arms_only_"
-        out[f"{pre}motor_deflection_mm_per_n"] = dz
-        out[f"{pre}motor_tilt_deg_per_n"] = math.degrees(tilt)
-        out[f"{pre}motor_deflection_hover_mm"] = dz * per_hover
-        out[f"{pre}motor_deflection_mm"] = dz * per_full
-        out[f"{pre}motor_tilt_hover_deg"] = math.degrees(tilt * per_hover)
-        out[f"{pre}motor_tilt_deg"] = math.degrees(tilt * per_full)
+        out.update(thrust_figures(dz, tilt, per_hover, per_full, "" if label == "full" else "arms_only_"))
     out["exoskeleton_stiffening"] = out["arms_only_motor_deflection_mm_per_n"] / out["motor_deflection_mm_per_n"]
     return out
 

@@ -271,13 +271,7 @@ def _thrust_case(spec, frame, parts, joints, masses, play=None, full: tuple | No
             mdl = build_model(spec, frame, parts, joints, only_roles=roles, play=play)
             K = mdl.fe.stiffness(sparse=True)
         dz, tilt = _motors_under_thrust(mdl, K, 1.0)  # 1 N up on each motor: linear, scaled below
-        pre = "" if label == "full" else "arms_only_"
-        out[f"{pre}motor_deflection_mm_per_n"] = dz
-        out[f"{pre}motor_tilt_deg_per_n"] = math.degrees(tilt)
-        out[f"{pre}motor_deflection_hover_mm"] = dz * per_n_hover
-        out[f"{pre}motor_deflection_mm"] = dz * per_n_full
-        out[f"{pre}motor_tilt_hover_deg"] = math.degrees(tilt * per_n_hover)
-        out[f"{pre}motor_tilt_deg"] = math.degrees(tilt * per_n_full)
+        out.update(thrust_figures(dz, tilt, per_n_hover, per_n_full, "" if label == "full" else "arms_only_"))
     out["arms_only_small_rotation"] = out["arms_only_motor_tilt_deg"] <= SMALL_ROTATION_DEG
     # the bracket's other end: the joints at printed TPU's datasheet modulus instead of the
     # calibrated fraction of it (the calibration lumps the rod-bore interface's idealisation, which
@@ -297,6 +291,14 @@ def _thrust_case(spec, frame, parts, joints, masses, play=None, full: tuple | No
 
 
 SMALL_ROTATION_DEG = 10.0  # sin x = x within 0.5 %: the linear frame's range
+
+
+def thrust_figures(dz: float, tilt: float, per_n_hover: float, per_n_full: float, pre: str = "") -> dict:
+    """The thrust case's figures from the motors' deflection (mm) and tilt (rad) under 1 N each
+    (the frame is linear): per newton, at hover and at full thrust; `pre` names the frame variant."""
+    return {f"{pre}motor_deflection_mm_per_n": dz, f"{pre}motor_tilt_deg_per_n": math.degrees(tilt),
+            f"{pre}motor_deflection_hover_mm": dz * per_n_hover, f"{pre}motor_deflection_mm": dz * per_n_full,
+            f"{pre}motor_tilt_hover_deg": math.degrees(tilt * per_n_hover), f"{pre}motor_tilt_deg": math.degrees(tilt * per_n_full)}
 
 
 def _motors_under_thrust(mdl: Model, K, thrust_n: float) -> tuple[float, float]:
