@@ -54,14 +54,6 @@ def pytest_configure(config):
     config.addinivalue_line("markers", f"{tiers.HEAVY}: needs one of {', '.join(tiers.NEEDS)}; added automatically")
 
 
-def pytest_xdist_auto_num_workers(config):
-    """`-n auto`: one worker more than the cores. A heavy test spends much of its time waiting on a
-    process of its own (a build, a slicer, a server, a cluster), whose CPU is counted apart: with one
-    worker a core, a third of the run's CPU time stood idle (2 cores: 15.4 min of wall time for
-    20.6 min of CPU)."""
-    return (os.cpu_count() or 1) + 1
-
-
 @pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the groups
 def pytest_collection_modifyitems(config, items):
     tiers.mark_from_fixtures(items)
