@@ -1,9 +1,9 @@
 """Read the authors' crash-test frame (thecognifly/CogniFly-STL) with cogniframe.cadread and print
 what it finds: rods by length, joints by name with their sockets, what it could not place.
 
-    python tools/authors_frame.py /work/.mirror/thecognifly+CogniFly-STL/repo   # a clone or bare git dir
+    python tools/authors_frame.py CogniFly-STL                                 # a clone (or bare git dir) of their repository
     python tools/authors_frame.py CogniFly-Flex.FCStd --refs DIR                 # the document + part files
-    python tools/authors_frame.py /work/.mirror/thecognifly+CogniFly-STL/repo --analyse   # + the physics
+    python tools/authors_frame.py CogniFly-STL --analyse                       # + the physics
 
 `--analyse` runs `cogniframe analyse`'s model on it (api.analyse: +z down, the rods' real 3.0 mm
 carbon for the beams and the fits): k at the datasheet TPU modulus (factor 1) and at the package's
