@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import shutil
 from pathlib import Path
 
 import pytest
@@ -91,6 +92,14 @@ def shared_dir(tmp_path_factory) -> Path:
     """A folder every worker of this run sees (pytest-xdist's workers share their base's parent)."""
     base = tmp_path_factory.getbasetemp()
     return base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+
+
+def copy_cache(src: Path, dst: Path) -> Path:
+    """Copy a cache folder (or one kind of it) that other workers may be writing to: its entries
+    only, never the temporary files a writer is about to rename (`cache.store_text`), which may be
+    gone by the time they are copied. An entry, once there, is never removed or changed."""
+    shutil.copytree(src, dst, ignore=shutil.ignore_patterns(".*.tmp"), dirs_exist_ok=True)
+    return dst
 
 
 @contextlib.contextmanager

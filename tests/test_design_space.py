@@ -13,7 +13,6 @@ import json
 import math
 import os
 import random
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -24,6 +23,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import design_space
+import tiers
+from conftest import copy_cache
 
 NIGHTLY = os.environ.get("HYPOTHESIS_PROFILE") == "nightly"
 ROOT = Path(__file__).resolve().parents[1]
@@ -175,35 +176,52 @@ def _files(out: Path) -> dict:
     return {f["path"]: f["sha256"] for f in json.loads((out / "manifest.json").read_text())["files"]}
 
 
+HEIGHTS = (112.0, 117.0, 118.0, 125.0, 131.0) if NIGHTLY else (112.0, 117.0)
+
+
+@pytest.fixture(scope="module")
+@tiers.needs("process")
+def cold_builds(tmp_path_factory):
+    """{height: the folder of a cold build (an empty cache, no server) of the bamboo preset at that
+    frame.height}: the bytes both edit-rebuild loops below must give, built once for the two."""
+    root = tmp_path_factory.mktemp("cold")
+    env = {**os.environ, "COGNIFRAME_CAD_SERVER": "0"}
+    out = {}
+    for h in HEIGHTS:
+        folder = root / f"cold-{h}"
+        folder.mkdir()
+        params = design_space.write(_preset_with("bamboo", frame__height=h), folder / "bamboo.yaml")
+        r = _build(params, folder / "out", {**env, "COGNIFRAME_CACHE": str(folder / "cache")})
+        assert r.returncode in (0, 1), f"cold build at height {h}: {r.stderr[-3000:]}"
+        out[h] = (folder, r.returncode)
+    return out
+
+
 @pytest.mark.parametrize("server", [True, False], ids=["server", "no-server"])
 @pytest.mark.process
-def test_the_edit_rebuild_loop_builds_every_time_and_matches_cold_builds(server, tmp_path):
+def test_the_edit_rebuild_loop_builds_every_time_and_matches_cold_builds(server, cold_builds, tmp_path):
     """A maker edits frame.height and rebuilds into the same folder, again and again, the CAD
     server warm after the first: every build ends with 0 or 1, and each output is the bytes of a
     cold build (an empty cache, no server) of the same params."""
-    heights = (112.0, 117.0, 118.0, 125.0, 131.0) if NIGHTLY else (112.0, 117.0)
     cache = tmp_path / "cache"
     env = {**os.environ, "COGNIFRAME_CACHE": str(cache), "COGNIFRAME_CAD_SERVER": "1" if server else "0"}
+    # PrusaSlicer's time estimate moves by seconds between runs of one plate (a part's print time
+    # can then round to the next minute): the loop starts with the cold builds' measurements of
+    # their plates, keyed by the plates' bytes (a plate that differs from the cold build's is
+    # sliced anew, and the manifests below differ anyway), and cold for everything else
+    for folder, _ in cold_builds.values():
+        if (folder / "cache" / "slice").is_dir():
+            copy_cache(folder / "cache" / "slice", cache / "slice")
     base = design_space.preset("bamboo")
     try:
         first = _build(design_space.write(base, tmp_path / "bamboo.yaml"), tmp_path / "out", env)
         assert first.returncode in (0, 1), first.stderr[-3000:]
-        for h in heights:
-            doc = _preset_with("bamboo", frame__height=h)
-            params = design_space.write(doc, tmp_path / "bamboo.yaml")
+        for h in HEIGHTS:
+            params = design_space.write(_preset_with("bamboo", frame__height=h), tmp_path / "bamboo.yaml")
             r = _build(params, tmp_path / "out", env)
             assert r.returncode in (0, 1), f"height {h}: {r.stderr[-3000:]}"
-            cold_dir = tmp_path / f"cold-{h}"
-            cold_dir.mkdir()
-            cold_params = design_space.write(doc, cold_dir / "bamboo.yaml")
-            cold_env = {**env, "COGNIFRAME_CACHE": str(cold_dir / "cache"), "COGNIFRAME_CAD_SERVER": "0"}
-            # PrusaSlicer's time estimate moves by seconds between runs of one plate (a part's
-            # print time can then round to the next minute): the cold build gets the loop's
-            # measurements of the plates, keyed by their bytes, and starts cold for the rest
-            if (cache / "slice").is_dir():
-                shutil.copytree(cache / "slice", cold_dir / "cache" / "slice")
-            cold = _build(cold_params, cold_dir / "out", cold_env)
-            assert cold.returncode == r.returncode, cold.stderr[-3000:]
+            cold_dir, cold_code = cold_builds[h]
+            assert cold_code == r.returncode, f"height {h}"
             assert _files(tmp_path / "out") == _files(cold_dir / "out"), f"height {h}"
     finally:
         if server:
