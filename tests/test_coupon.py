@@ -41,11 +41,13 @@ def coupon(request, tmp_path_factory):
 
 @pytest.mark.cad
 def test_clearances_span_the_authors_fits_and_beyond(coupon):
-    """The authors' parts (docs/authors-parts.md): blind sockets 2.70-2.85 mm and through-sleeves
-    3.19-3.20 mm for 3 mm rods, i.e. -0.30..-0.15 and +0.20 mm; the coupon runs 0.10 mm past both."""
-    _, _, clearances, _ = coupon
+    """The authors' parts (docs/authors-parts.md, each socket read across its own axis): blind
+    sockets 2.69-2.70 mm and through-sleeves 3.19-3.20 mm for 3 mm rods, i.e. -0.30 and +0.20 mm;
+    the coupon runs 0.10 mm past both, and the preset's own fit is one of its sockets."""
+    spec, _, clearances, _ = coupon
     assert clearances == pytest.approx([round(-0.40 + 0.05 * i, 2) for i in range(15)])
     assert min(clearances) < 2.70 - 3.0 and max(clearances) > 3.20 - 3.0
+    assert -0.30 in clearances and spec.joints.fit_clearance[spec.joints.material] in clearances
 
 
 @pytest.mark.cad

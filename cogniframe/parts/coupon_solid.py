@@ -3,11 +3,12 @@
 Each socket is a boss of the joints' wall around a blind hole of diameter rod diameter +
 clearance, rod pushed in from the top (vertical holes print roundest), with the joints' socket
 depth, bottom wall and mouth chamfer. The clearances step from -0.40 to +0.30 mm in 0.05 mm
-(15 sockets): the authors' parts span -0.30 to -0.15 mm in their blind sockets (2.70-2.85 mm
-bores for 3 mm rods, a deliberate interference in TPU) and +0.20 mm in their through-sleeves
-(3.19-3.20 mm), measured on thecognifly/CogniFly-STL `CogniFly_v8_Crash_Tests` (docs/authors-parts.md);
-the coupon runs 0.10 mm past both. Each socket is labelled with its clearance engraved in the
-base plate in front of it (DejaVu Sans Bold when installed, else OpenCASCADE's fallback font).
+(15 sockets): the authors press 3 mm rods into blind sockets of 2.69-2.70 mm (-0.30, a deliberate
+interference in TPU: the reference fit) and slide them through sleeves of 3.19-3.20 mm (+0.20),
+measured across each socket's axis on thecognifly/CogniFly-STL `CogniFly_v8_Crash_Tests`
+(docs/authors-parts.md); the coupon runs 0.10 mm past both, and holds the presets' -0.15 between.
+Each socket is labelled with its clearance engraved in the base plate in front of it (DejaVu Sans
+Bold when installed, else OpenCASCADE's fallback font).
 The sockets run in as few rows as the bed's width allows, tightest first.
 """
 
