@@ -116,7 +116,7 @@ def test_with_values_edits_only_those_lines(carbon):
 @pytest.mark.parametrize("values, old, new, key", [
     ({"rods.diameter": 20}, "  diameter: 3.0 ", "  diameter: 20  ", "rods.diameter"),        # the schema's bound
     ({"joints.wall": 0.9}, "  wall: 1.2 ", "  wall: 0.9 ", "joints.wall"),                   # a cross-field rule
-    ({"frame.width": 90}, "  width: 210 ", "  width: 90  ", "motors.prop_diameter"),         # the frame geometry
+    ({"frame.width": 90}, "  width: 209.6 ", "  width: 90    ", "motors.prop_diameter"),     # the frame geometry
     ({"motors.model": "9999"}, 'model: "1104"', 'model: "9999"', "motors.model"),           # an unknown name
 ])
 def test_params_error_is_the_cli_paragraph(values, old, new, key, tmp_path, monkeypatch, run_cli):

@@ -32,8 +32,9 @@ def test_box_extent_is_the_outside_size(carbon):
     f = frame_mod.frame_of(carbon)
     lo, hi = f.bbox()
     outer = carbon.bore / 2 + carbon.joints.wall  # joint wall beyond the node
-    assert hi[0] - lo[0] + 2 * outer == pytest.approx(210)
-    assert hi[2] - lo[2] + 2 * outer == pytest.approx(120)
+    assert hi[0] - lo[0] + 2 * outer == pytest.approx(carbon.frame.width)
+    assert hi[1] - lo[1] + 2 * outer == pytest.approx(carbon.frame.depth)
+    assert hi[2] - lo[2] + 2 * outer == pytest.approx(carbon.frame.height)
     assert lo[2] - outer == pytest.approx(f.ground_z)
 
 

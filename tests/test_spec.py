@@ -38,7 +38,15 @@ def test_presets_load_with_their_names(preset):
 
 
 def test_carbon_preset_is_the_papers_build(carbon):
-    assert (carbon.frame.width, carbon.frame.depth, carbon.frame.height) == (210, 210, 120)
+    """The box is the authors' frame as their CAD draws it (thecognifly/CogniFly-STL,
+    CogniFly_v8_Crash_Tests, CogniFly-Flex.FCStd, read by tools/authors_frame.py): the cage's rod
+    axes 204.4 apart across and 106.6 apart in height (their rods' end faces, to 0.1 mm; the paper's
+    text rounds the frame to 210 x 210 x 120). Blind sockets 2.70 mm for the 3 mm rods."""
+    from cogniframe import frame as frame_mod
+
+    lo, hi = frame_mod.frame_of(carbon).bbox()
+    assert hi - lo == pytest.approx((204.4, 204.4, 106.6), abs=0.2)
+    assert carbon.bore == pytest.approx(2.70)
     assert carbon.rods.material == "carbon_rod" and carbon.joints.material == "tpu_95a"
     assert carbon.core.material == "abs" and carbon.core.battery.mass == 58
     assert carbon.motors.model == "1104" and carbon.requirements.mass_limit == 250

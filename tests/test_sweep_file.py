@@ -316,7 +316,7 @@ def test_best_yaml_edits_only_the_changed_values_and_keeps_comments(tmp_path):
     from cogniframe.sweep import optimize as opt
 
     sw = sweepfile.load(sweep_file(tmp_path, GOOD + "set:\n  requirements.drop_heights_cm: [50, 120]\n"))
-    row = {"rods.diameter": np.float64(2.75), "frame.height": 120.0, "rods.material": "bamboo"}  # height unchanged
+    row = {"rods.diameter": np.float64(2.75), "frame.height": 111.8, "rods.material": "bamboo"}  # height unchanged
     changed = opt.write_best_yaml(sw, row, tmp_path / "best.yaml")
     assert changed == ["requirements.drop_heights_cm", "rods.diameter", "rods.material"]
     before, after = CARBON.read_text().splitlines(), (tmp_path / "best.yaml").read_text().splitlines()
@@ -326,7 +326,7 @@ def test_best_yaml_edits_only_the_changed_values_and_keeps_comments(tmp_path):
     assert any(b.startswith("  drop_heights_cm: [50, 120]") and "# heights in the crash table" in b for _, b in diff)
     assert any(b.startswith("  material: bamboo") and "# pultruded" in b for _, b in diff)
     best = spec_mod.load(tmp_path / "best.yaml")
-    assert best.rods.diameter == 2.75 and best.frame.height == 120 and best.requirements.drop_heights_cm == (50, 120)
+    assert best.rods.diameter == 2.75 and best.frame.height == 111.8 and best.requirements.drop_heights_cm == (50, 120)
 
 
 def test_sobol_example_is_a_full_saltelli_design():

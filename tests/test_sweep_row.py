@@ -104,9 +104,9 @@ def test_batch_sizes_shrink_towards_the_end_and_cover_every_design():
 
 
 @pytest.mark.parametrize("over, short", [
-    ({"core.plate_thickness": 4.0}, False),  # a thicker core plate: it breaks past 400 cm (~476)
-    ({}, True),  # the carbon preset: the core plate, a stem bent at a link, at ~269 cm
-    ({"rods.diameter": 2.5}, True),  # thin carbon rods: a soft frame, the core plate at ~375 cm
+    ({"core.plate_thickness": 4.5}, False),  # a thicker core plate: it breaks past 400 cm (~490)
+    ({}, True),  # the carbon preset: the core plate, a stem bent at a link, at ~383 cm
+    ({"rods.diameter": 2.6}, False),  # thin carbon rods: a soft frame, the core plate past 400 cm (~486)
     ({"core.plate_thickness": 2.0}, True),  # a thinner core plate breaks lower still (~139 cm)
     ({"rods.material": "bamboo", "rods.diameter": 2.6, "joints.wall": 1.6, "frame.height": 110.0}, True),
 ])
