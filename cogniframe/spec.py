@@ -68,7 +68,7 @@ class JointsSection(_M):
         default_factory=lambda: {"tpu_95a": -0.15},
         description="blind socket hole = rod diameter + this, per joint material, mm: negative is a press fit, the "
                     "TPU stretches round the rod and grips it (the authors' sockets: 2.70 mm for 3 mm rods, -0.30; "
-                    "the presets: -0.15); "
+                    "the presets too; a file without this key: -0.15, a lighter press); "
                     "tune with `cogniframe coupon`",
     )
     sleeve_clearance: Annotated[float, Field(ge=0.0, le=1.0, description="through-sleeve hole (a motor mount's sleeves, which a rod slides through) = rod diameter + this, mm (the authors' 3.20 mm for 3 mm rods: 0.20); tune with `cogniframe coupon`")] = 0.2

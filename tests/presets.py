@@ -34,3 +34,8 @@ def link_for(spacing: float) -> dict:
     naming core.link): tests of the mount or the knee at narrow pairs build them on the tab."""
     return {"core__link": "tab"} if spacing < 14.0 else {}
 
+
+# The carbon preset before it took the authors' dimensions where they carry load (the calibration
+# from the authors' frame, docs/stiffness-model.md): the figures some tests quote were measured on it.
+FORMER_CARBON = dict(joints__fit_clearance={"tpu_95a": -0.15}, frame__width=210.0, frame__depth=210.0,
+                     frame__height=120.0, frame__knee_inset=12.0, core__plate_thickness=3.0)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -233,3 +234,38 @@ def test_the_frame_model_finds_feet_core_and_links_and_calibrates():
     assert 1.95 < X.k_at(lay, units, 1.0) / k <= 2.0
     assert X.calibrate(lay, units, k) == pytest.approx(0.5, rel=1e-6)
     assert "no motor mount" in X.thrust_case(lay, units, 0.5, 175.0, 241.0)["note"]
+
+
+# -- the one calibration, from the frame the paper measured ------------------------------------------
+
+AUTHORS_REPO = os.environ.get("COGNIFRAME_AUTHORS_REPO")
+
+
+@pytest.mark.skipif(not AUTHORS_REPO, reason="set COGNIFRAME_AUTHORS_REPO to a clone of thecognifly/CogniFly-STL "
+                                             "(their files are never part of this repository)")
+@pytest.mark.cad
+@pytest.mark.fe
+@pytest.mark.long
+def test_the_package_factor_gives_the_authors_frame_the_papers_k(tmp_path):
+    """The authors' assembled frame (CogniFly_v8_Crash_Tests, CogniFly-Flex.FCStd, +z down, 3.0 mm
+    carbon rods), each printed joint's FE condensed at its sockets: at the package's TPU factor its
+    k is the paper's static 7040 N/m (the root find gives the factor back within 0.1 %)."""
+    import importlib.util
+    import sys
+
+    from cogniframe.analysis.exoframe import k_at
+    from cogniframe.analysis.joints import TPU_PRINTED_MODULUS_FACTOR
+    from cogniframe.api.analyse import calibrate, frame_model
+    from cogniframe.cadread.identify import file_signature, identify
+    from cogniframe.cadread.load import load_solids
+
+    spec = importlib.util.spec_from_file_location("authors_frame", ROOT / "tools" / "authors_frame.py")
+    tool = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = tool
+    spec.loader.exec_module(tool)
+    doc, refs = tool.from_git(Path(AUTHORS_REPO), tmp_path)
+    references = {f.stem: file_signature(f) for f in sorted(refs.iterdir()) if f.suffix.lower() in (".stl", ".step")}
+    solids, _ = identify(load_solids(doc), references)
+    fm = frame_model(solids=solids, source=doc.name, down="+z", rod_diameter=3.0)
+    assert k_at(fm.layout, fm.units, TPU_PRINTED_MODULUS_FACTOR) == pytest.approx(7040.0, rel=2e-3)
+    assert calibrate(fm, 7040.0) == pytest.approx(TPU_PRINTED_MODULUS_FACTOR, rel=1e-3)

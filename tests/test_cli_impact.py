@@ -12,6 +12,7 @@ from ruamel.yaml import YAML
 from typer.testing import CliRunner
 
 from cogniframe.analysis.fit import model_accel_g
+from cogniframe.analysis.joints import TPU_PRINTED_MODULUS_FACTOR
 from cogniframe.commands.drop_fit import register
 from cogniframe.errors import UserError
 from droplogs import write_drops
@@ -322,7 +323,9 @@ def test_check_json_has_the_stiffness_load_cases(run_cli):
     d = json.loads(out)
     s = d["stiffness"]
     assert code == 0 and d["verdict"] == "PASS"
-    assert s["k_n_per_m"] == pytest.approx(d["drop"]["k_n_per_m"], rel=1e-6) == pytest.approx(7040, rel=0.15)
+    # a prediction (the TPU factor is the authors' frame's): docs/stiffness-model.md "Results" has it
+    assert s["k_n_per_m"] == pytest.approx(d["drop"]["k_n_per_m"], rel=1e-6) and d["drop"]["k_source"] == "predicted"
+    assert s["tpu_modulus_factor"] == TPU_PRINTED_MODULUS_FACTOR
     assert s["joint_model"] == "fe"
     assert s["k_lateral_n_per_m"] > 0 and s["wall"]["max_wall_speed_m_s"] >= 2.5
     t = s["thrust"]

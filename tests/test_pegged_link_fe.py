@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from presets import preset_spec
+from presets import FORMER_CARBON, preset_spec
 
 from cogniframe.analysis.joints.model import TPU_PRINTED_MODULUS_FACTOR
 
@@ -61,10 +61,10 @@ def test_pair_hinge_is_the_sum_of_the_bodies_springs_about_the_line_through_them
 def test_authors_connector_hinges_stiffer_than_the_flat_link_for_less_tpu():
     """The finding docs/stiffness-model.md builds on: at the carbon preset's 25 mm pair and TPU
     factor, the authors' connector (1.8 mm walls, pegs in rigid bores) holds the arm pair about
-    five times as stiffly as the flat link (377 against 75 N mm/rad at 0.1809), with less TPU; at
+    five times as stiffly as the flat link (377 against 75 N mm/rad at 0.1809, on the carbon preset of that time), with less TPU; at
     cogniframe's 1.2 mm wall it loses most of that (129). The flat link's figure is the one
     `check` reports: the tool reads it through the build's FE."""
-    spec = preset_spec("carbon", core__link="tab")  # the flat link
+    spec = preset_spec("carbon", core__link="tab", **FORMER_CARBON)  # the flat link, on the preset the figures are of
     flat, flat_vol = pl.flat_link_hinge(spec)
     # docs/stiffness-model.md's 75.0 at the tab's own calibration (0.1809): the FE is linear in the factor
     assert flat == pytest.approx(75.0 * TPU_PRINTED_MODULUS_FACTOR / 0.1809, rel=1e-3)

@@ -66,20 +66,21 @@ def _mass(s) -> float:
 
 
 # -- the paper's k, one calibration ---------------------------------------------------------------
+# The factor is fitted on the authors' frame (tests/test_analyse.py, opt-in: their repository), not
+# on a preset: the carbon preset's k is a prediction, its figures in docs/stiffness-model.md's
+# "Results" (tests/test_docs_tables.py) and its gap to the paper's 7040 N/m explained per dimension
+# in docs/authors-parts.md.
 
-def test_carbon_k_within_15pct_of_7040_with_the_one_calibration(carbon_fe):
+def test_carbon_k_is_predicted_at_the_one_calibration(carbon_fe):
     s, f, p, joints = carbon_fe
     k = st.secant_k(s, f, p, joints)
-    assert k == pytest.approx(7040.0, rel=0.15)
     assert st.predict_stiffness(s, f, p, joints=joints).tpu_factor == JS.TPU_PRINTED_MODULUS_FACTOR
     # the factor is a material property of printed TPU: between 0.1 and 1 of the datasheet
     assert 0.1 < JS.TPU_PRINTED_MODULUS_FACTOR <= 1.0
-
-
-@pytest.mark.fe
-def test_calibration_constant_is_what_calibrate_gives(carbon_fe):
-    s, f, _, _ = carbon_fe
-    assert JS.TPU_PRINTED_MODULUS_FACTOR == pytest.approx(st.calibrate_tpu_factor(s, f), rel=0.02)
+    # every stiffness of the joints is proportional to the factor; the rods' bending is the rest
+    half = {n: JS.JointStiffness(j.name, j.method, j.labels, j.refs, tuple(map(tuple, (0.5 * j.matrix).tolist())))
+            for n, j in joints.items()}
+    assert 0.5 * k < st.secant_k(s, f, p, half) < 0.55 * k
 
 
 @pytest.mark.fe
@@ -508,7 +509,6 @@ def test_derived_mirror_joint_matches_its_own_FE_within_the_discretisation(carbo
                                     tuple(map(tuple, (fac * Kd).tolist())))
     k, k_own = st.secant_k(s, f, p, joints), st.secant_k(s, f, p, own)
     assert k == pytest.approx(k_own, rel=0.005)
-    assert k == pytest.approx(7041.0, rel=0.01)
 
 
 @pytest.mark.fe

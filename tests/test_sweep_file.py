@@ -48,7 +48,7 @@ def error_of(path: Path) -> str:
 def test_example_sweep_file_loads_with_its_five_keys():
     sw = sweepfile.load(ROOT / "examples" / "sweeps" / "carbon.yaml")
     assert [k.name for k in sw.keys] == ["rods.diameter", "joints.wall", "joints.socket_depth", "frame.height", "rods.material"]
-    assert (sw.keys[0].lo, sw.keys[0].hi) == (2.5, 4.0) and sw.keys[4].choices == ("carbon_rod", "bamboo")
+    assert (sw.keys[0].lo, sw.keys[0].hi) == (2.6, 4.0) and sw.keys[4].choices == ("carbon_rod", "bamboo")
     assert sw.settings.samples == 300 and sw.settings.sampler == "lhs" and sw.base_data["name"] == "carbon"
 
 

@@ -576,22 +576,3 @@ def secant_solution(spec, frame, parts, joints) -> SecantSolution:
     if not (d > 0 and math.isfinite(d)):
         raise RuntimeError(f"stiffness model: payload deflection {d!r} mm is not a positive number")
     return SecantSolution(float(1000.0 * DEFAULT_LOAD_N / d), play, mdl, K0, u)
-
-
-def calibrate_tpu_factor(spec, frame, target_n_per_m: float = PAPER_K_N_PER_M,
-                         joint_model: str = "fe", start: float = 0.3, rtol: float = 1e-4) -> float:
-    """The printed-TPU modulus factor that makes `frame` reach `target_n_per_m` (set once, carbon).
-
-    k is nearly proportional to the factor (the rods are ~1000x stiffer than the TPU), so a
-    fixed-point iteration f <- f * target / k converges in a few steps."""
-    from .. import partlist
-
-    parts = partlist.part_list(spec, frame)
-    f = start
-    for _ in range(12):
-        k = secant_k(spec, frame, parts, joint_models(spec, parts, joint_model, f))
-        nf = f * target_n_per_m / k
-        if abs(nf - f) < rtol * f:
-            return nf
-        f = nf
-    return f

@@ -6,7 +6,7 @@ depth, bottom wall and mouth chamfer. The clearances step from -0.40 to +0.30 mm
 (15 sockets): the authors press 3 mm rods into blind sockets of 2.69-2.70 mm (-0.30, a deliberate
 interference in TPU: the reference fit) and slide them through sleeves of 3.19-3.20 mm (+0.20),
 measured across each socket's axis on thecognifly/CogniFly-STL `CogniFly_v8_Crash_Tests`
-(docs/authors-parts.md); the coupon runs 0.10 mm past both, and holds the presets' -0.15 between.
+(docs/authors-parts.md), the presets' fits; the coupon runs 0.10 mm past both.
 Each socket is labelled with its clearance engraved in the base plate in front of it (DejaVu Sans
 Bold when installed, else OpenCASCADE's fallback font).
 The sockets run in as few rows as the bed's width allows, tightest first.
