@@ -59,6 +59,17 @@ def _z_section_bore(solid: m3.Manifold, z: float) -> float:
     return 2 * np.sqrt(-min(areas) / np.pi)
 
 
+def _the_hole(solid, path: Path, material: str, kind: str, d: float, axis) -> dict:
+    """The one hole the tool finds in `solid`: its kind, its bore within 0.03 mm, its axis within 1 deg."""
+    found = compare_parts.measure(_stl(solid, path), material)["holes"]
+    assert len(found) == 1
+    h = found[0]
+    assert h["kind"] == kind
+    assert h["diameter"] == pytest.approx(d, abs=0.03)
+    assert _angle_deg(h["axis"], axis) < 1.0
+    return h
+
+
 def test_tilted_blind_socket(tmp_path):
     """A 2.70 mm blind socket tilted 25 deg about x, 7.5 deep (its mouth on the block's top face),
     1.5 mm from the block's x faces (which run along it), as the authors' knee sockets are.
@@ -75,12 +86,7 @@ def test_tilted_blind_socket(tmp_path):
     cutter = (m3.Manifold.cylinder(depth + 3.0, r, r, SEGMENTS).translate([0, 0, -depth])
               .transform(np.c_[rot, np.zeros(3)]))
     block = _box(lo, hi) - cutter
-    found = compare_parts.measure(_stl(block, tmp_path / "tilted.stl"), "tpu_95a")["holes"]
-    assert len(found) == 1
-    h = found[0]
-    assert h["kind"] == "blind"
-    assert h["diameter"] == pytest.approx(d, abs=0.03)
-    assert _angle_deg(h["axis"], axis) < 1.0
+    h = _the_hole(block, tmp_path / "tilted.stl", "tpu_95a", "blind", d, axis)
     assert h["depth"] == pytest.approx(depth, abs=0.2)
     mid = -0.5 * depth * axis
     assert _wall_to_box(lo, hi, mid, axis, r) == pytest.approx(wall, abs=1e-9)  # the x faces decide it
@@ -107,12 +113,7 @@ def test_oblique_through_sleeve(tmp_path):
     assert rot @ [0, 0, 1.0] == pytest.approx(axis)
     cutter = m3.Manifold.cylinder(20.0, r, r, SEGMENTS, True).transform(np.c_[rot, np.zeros(3)])
     plate = _box(lo, hi) - cutter
-    found = compare_parts.measure(_stl(plate, tmp_path / "oblique.stl"), "abs")["holes"]
-    assert len(found) == 1
-    h = found[0]
-    assert h["kind"] == "through"
-    assert h["diameter"] == pytest.approx(d, abs=0.03)
-    assert _angle_deg(h["axis"], axis) < 1.0  # through: its largest component (z) positive
+    h = _the_hole(plate, tmp_path / "oblique.stl", "abs", "through", d, axis)  # through: its axis' z positive
     assert h["depth"] == pytest.approx(6.0 / np.cos(t), abs=0.2)
     assert h["wall"] == pytest.approx(_wall_to_box(lo, hi, np.zeros(3), axis, r), abs=0.05)
     assert _wall_to_box(lo, hi, np.zeros(3), axis, r) == pytest.approx(4.0 / np.sqrt(1 - axis[0] ** 2) - r)

@@ -109,14 +109,9 @@ def main(argv=None) -> int:
     ap.add_argument("preset", nargs="?", type=Path, default=ROOT / "params" / "carbon.yaml")
     ap.add_argument("--write", action="store_true", help="replace the table in docs/authors-parts.md")
     a = ap.parse_args(argv)
-    t = table(a.preset)
-    if a.write:
-        head, rest = DOC.read_text(encoding="utf-8").split(BEGIN, 1)
-        tail = rest.split(END, 1)[1]
-        DOC.write_text(f"{head}{BEGIN}\n{t}\n{END}{tail}", encoding="utf-8")
-    else:
-        print(t)
-    return 0
+    from doctable import emit  # tools/, beside this script
+
+    return emit(table(a.preset), DOC, BEGIN, END, a.write)
 
 
 if __name__ == "__main__":
