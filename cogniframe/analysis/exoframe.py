@@ -54,6 +54,9 @@ _TIE_STIFF = 1.0e4  # support ties, per unit area x E: effectively rigid (as joi
 _RIGID_E_MPA, _RIGID_G_MPA, _RIGID_D_MM = 1.0e6, 4.0e5, 20.0  # as stiffness
 _FLOOR_SPRING_N_PER_MM = 1.0e6
 LOAD_N = 10.0
+# A joint whose outside lies this close to a side face's plane touches the wall (the cage's corner
+# joints; the knees, bowed in by the hourglass, do not), mm
+WALL_TOUCH_MM = 3.0
 RIGID_MATERIALS = ("abs", "pla", "petg", "asa", "pc", "nylon")
 
 
@@ -285,6 +288,7 @@ class Model:
     payload: str
     feet: list[str]
     motors: list[str]
+    joint_nodes: dict[str, tuple[str, ...]] = field(default_factory=dict)  # each FE joint's reference bodies
 
 
 def model_of(lay: Layout, units: dict[str, Unit], factor: float, only: tuple[str, ...] | None = None) -> Model:
@@ -331,6 +335,7 @@ def model_of(lay: Layout, units: dict[str, Unit], factor: float, only: tuple[str
             fe.add_beam(f"mount:{m}:{rn}", m, f"{rn}:{m}", _RIGID_E_MPA, _RIGID_G_MPA, _RIGID_D_MM)
     # the joints
     kept = set(rods)
+    joint_nodes: dict[str, tuple[str, ...]] = {}
     for n in lay.fe_joints:
         u = units[n]
         rod_labels = [lab for lab in u.labels if not lab.startswith(("floor:", "body:", "glue:"))]
@@ -349,6 +354,7 @@ def model_of(lay: Layout, units: dict[str, Unit], factor: float, only: tuple[str
             else:
                 names.append(fe.add_node(f"{n}:{lab}:free", ref))
         fe.add_spring(tuple(names), factor * u.K)
+        joint_nodes[n] = tuple(names)
     # the core: rigid, the payload at the core parts' centroid
     if lay.core:
         vols = np.array([next(a.volume for a in exo.attached if a.name == c) for c in lay.core])
@@ -361,7 +367,7 @@ def model_of(lay: Layout, units: dict[str, Unit], factor: float, only: tuple[str
         if f"body:{n}" in fe.nodes:
             fe.add_beam(f"core:{n}", "payload", f"body:{n}", _RIGID_E_MPA, _RIGID_G_MPA, _RIGID_D_MM)
     feet = [f"floor:{n}" for n in lay.feet if f"floor:{n}" in fe.nodes]
-    return Model(fe, "payload", feet, mnodes)
+    return Model(fe, "payload", feet, mnodes, joint_nodes)
 
 
 def _unconnected(K, fixed: np.ndarray) -> np.ndarray:
@@ -450,6 +456,69 @@ def thrust_case(lay: Layout, units: dict, factor: float, max_thrust_g: float, to
         out.update(thrust_figures(dz, tilt, per_hover, per_full, "" if label == "full" else "arms_only_"))
     out["exoskeleton_stiffening"] = out["arms_only_motor_deflection_mm_per_n"] / out["motor_deflection_mm_per_n"]
     return out
+
+
+def wall_case(lay: Layout, mdl: Model, mass_kg: float, zeta: float, prop_diameter_mm: float,
+              touch_mm: float = WALL_TOUCH_MM) -> dict:
+    """`check --json`'s `stiffness.wall` for the read frame: each side face against a wall in turn
+    (the joints whose outside lies within `touch_mm` of the face's plane held, sticking contact),
+    the payload pushed towards it; the face that allows the lowest speed before a propeller disc
+    (`prop_diameter_mm`, centred on each motor mount's centroid) or the core reaches the wall's plane: as
+    `load_cases._wall_face`, the faces and the touching joints read from the solids' boxes."""
+    from .load_cases import _TIE, _damped_peak_factor
+
+    exo, fe = lay.exo, mdl.fe
+    idx = fe.index()
+    K = fe.stiffness(sparse=True).tocsc()
+    joints = {j.name: j for j in exo.joints}
+    vz = _vertical(lay.down)
+    radius = prop_diameter_mm / 2
+    cases = []
+    for axis in (a for a in range(3) if a != vz):
+        for sign in (1, -1):
+            def out(box):
+                return max(sign * box[0][axis], sign * box[1][axis])
+            plane = max(out(joints[n].bbox) for n in mdl.joint_nodes)
+            side = [n for n in mdl.joint_nodes if out(joints[n].bbox) >= plane - touch_mm]
+            held = np.array([fe.nodes[node] for n in side for node in mdl.joint_nodes[n]])
+            if np.linalg.svd(held - held.mean(axis=0), compute_uv=False)[1] < 1.0:
+                continue  # the joints on the wall lie on a line: the frame would turn about it
+            fixed = np.zeros(K.shape[0], bool)
+            for n in side:
+                for node in mdl.joint_nodes[n]:
+                    fixed[6 * idx[node]:6 * idx[node] + 3] = True
+            fixed = _unconnected(K, fixed)
+            f = np.zeros(K.shape[0])
+            f[6 * idx[mdl.payload] + axis] = sign * LOAD_N
+            u = ff.solve(K, f, fixed)
+            d_pay = sign * u[6 * idx[mdl.payload] + axis]
+            if not (d_pay > 0 and math.isfinite(d_pay)):
+                raise RuntimeError(f"exoframe: payload deflection {d_pay!r} mm towards a wall is not a positive number")
+            limits = []
+            for m in mdl.motors:  # the disc round the mount's centroid (the motor's axis), moving with the mount
+                gap = plane - (sign * joints[m].centroid[axis] + radius)
+                ratio = sign * u[6 * idx[m] + axis] / d_pay
+                if ratio > 0:
+                    limits.append((gap / ratio, f"propeller of {m}", gap))
+            core = [a for a in exo.attached if a.name in lay.core]
+            if core:
+                gap_core = plane - max(out(c.bbox) for c in core)
+                limits.append((gap_core, "core", gap_core))
+            t_min = min(x[0] for x in limits)
+            travel, what, gap = min((x for x in limits if x[0] <= t_min + _TIE * abs(t_min)), key=lambda x: x[1])
+            k_lat = 1000.0 * LOAD_N / d_pay
+            v = travel / 1000.0 * math.sqrt(k_lat / mass_kg) / _damped_peak_factor(zeta)
+            face = f"{'+' if sign > 0 else '-'}{'xyz'[axis]}"
+            cases.append({"k_lateral_n_per_m": k_lat, "max_wall_speed_m_s": v, "limited_by": what,
+                          "payload_travel_mm": travel, "gap_mm": gap, "damping_ratio": zeta, "face": face,
+                          "joints_on_the_wall": sorted(side)})
+    if not cases:
+        return {"note": "no side face with joints on the wall round a plane (three or more not in a line): no wall case"}
+    best = cases[0]
+    for c in cases[1:]:
+        if c["max_wall_speed_m_s"] < best["max_wall_speed_m_s"] * (1 - _TIE):
+            best = c
+    return best
 
 
 def k_at(lay: Layout, units: dict, factor: float) -> float:

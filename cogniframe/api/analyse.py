@@ -21,6 +21,7 @@ PAPER_MASS_KG = 0.241  # the crash-test build with its data logger
 PAPER_C_N_S_PER_M = 46.0  # fitted to the drop tests
 PAPER_CLEARANCE_MM = 16.0  # battery holder above the ground
 DEFAULT_MAX_THRUST_G = 175.0  # per motor: cogniframe's figure for the paper's 1104 6000KV on 3025 props (the carbon preset)
+DEFAULT_PROP_DIAMETER_MM = 76.2  # the paper's 3 inch propellers
 DROP_HEIGHTS_CM = (50.0, 100.0, 150.0)
 
 
@@ -37,6 +38,7 @@ class Analysis:
     tpu_factor: float
     k_n_per_m: float
     thrust: dict
+    wall: dict  # the side faces against a wall: `check --json`'s stiffness.wall keys
     drop: dict
     model: dict  # which parts play which role: feet, core, links, glued pairs, motor mounts, arms, joints' DOFs
     survival: str
@@ -107,14 +109,14 @@ def frame_model(path=None, *, solids=None, source: str = "", materials=None, dow
 def analyse(path=None, *, solids=None, source: str = "", materials=None, down: str = "-z",
             rod_diameter: float | None = None, factor: float | None = None, mass_kg: float = PAPER_MASS_KG,
             c_n_s_per_m: float = PAPER_C_N_S_PER_M, clearance_mm: float = PAPER_CLEARANCE_MM,
-            max_thrust_g: float = DEFAULT_MAX_THRUST_G, layer_height: float = 0.2, progress=None,
-            model: FrameModel | None = None) -> Analysis:
+            max_thrust_g: float = DEFAULT_MAX_THRUST_G, prop_diameter_mm: float = DEFAULT_PROP_DIAMETER_MM,
+            layer_height: float = 0.2, progress=None, model: FrameModel | None = None) -> Analysis:
     """k, the thrust case and the drop model of the exoskeleton at `path` (see the module)."""
     from ..analysis import exoframe, impact
     from ..analysis.joints import TPU_PRINTED_MODULUS_FACTOR
 
     for label, v in (("mass_kg", mass_kg), ("c_n_s_per_m", c_n_s_per_m), ("clearance_mm", clearance_mm),
-                     ("max_thrust_g", max_thrust_g)):
+                     ("max_thrust_g", max_thrust_g), ("prop_diameter_mm", prop_diameter_mm)):
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
             raise UserError(f"--{label.replace('_', '-')} {v!r}: give a positive number")
     fm = model or frame_model(path, solids=solids, source=source, materials=materials, down=down,
@@ -124,13 +126,15 @@ def analyse(path=None, *, solids=None, source: str = "", materials=None, down: s
     full = exoframe.model_of(lay, units, f)
     k = exoframe.payload_k(lay, full)
     thrust = exoframe.thrust_case(lay, units, f, max_thrust_g, mass_kg * 1000.0, full=full)
+    zeta = impact.damping_ratio(c_n_s_per_m, k, mass_kg)
+    wall = exoframe.wall_case(lay, full, mass_kg, zeta, prop_diameter_mm)
     safe = impact.max_safe_height_cm(mass_kg, c_n_s_per_m, k, clearance_mm)
     heights = []
     for h in DROP_HEIGHTS_CM:
         r = impact.simulate_height(mass_kg, c_n_s_per_m, k, h, clearance_mm)
         heights.append({"height_cm": h, "x_max_mm": r.x_max_mm, "strikes": r.x_max_mm > clearance_mm})
     drop = {"mass_kg": mass_kg, "c_n_s_per_m": c_n_s_per_m, "clearance_mm": clearance_mm, "k_n_per_m": k,
-            "damping_ratio": impact.damping_ratio(c_n_s_per_m, k, mass_kg),
+            "damping_ratio": zeta,
             "max_safe_height_cm": safe if math.isfinite(safe) else None, "heights": heights}
     mdl = {"feet": list(lay.feet), "core": list(lay.core), "links": list(lay.links), "glued": [list(p) for p in lay.glue],
            "motor_mounts": list(lay.mounts), "arms": list(lay.arms), "rods_modelled": len(lay.rods),
@@ -141,7 +145,7 @@ def analyse(path=None, *, solids=None, source: str = "", materials=None, down: s
     if left:
         warnings += (f"{len(left)} rod(s) with an end in no socket left out of the model: {', '.join(left)}",)
     return Analysis(source or str(path), down, len(exo.rods), len(exo.joints), rod_diameter, lay.rod_material, f, k, thrust,
-                    drop, mdl, "not computed: the survival sweep needs a design's parts and their strengths (`check`)",
+                    wall, drop, mdl, "not computed: the survival sweep needs a design's parts and their strengths (`check`)",
                     tuple(exo.unplaced), tuple(exo.loose_ends), warnings)
 
 
@@ -167,6 +171,13 @@ def summary(a: Analysis) -> list[str]:
                    f"{t['exoskeleton_stiffening']:.1f}x")
     else:
         out.append(f"thrust: {t.get('note')}")
+    w = a.wall
+    if "max_wall_speed_m_s" in w:
+        out.append(f"wall ({w['face']} face, joints on the wall: {', '.join(w['joints_on_the_wall'])}): k_lateral "
+                   f"{w['k_lateral_n_per_m']:.0f} N/m, highest wall speed {w['max_wall_speed_m_s']:.2f} m/s, limited by the "
+                   f"{w['limited_by']}")
+    else:
+        out.append(f"wall: {w['note']}")
     safe = d["max_safe_height_cm"]
     out.append(f"drop model (m {d['mass_kg']:g} kg, c {d['c_n_s_per_m']:g} N s/m, zeta {d['damping_ratio']:.3f}, "
                f"clearance {d['clearance_mm']:g} mm): safe drop height {'unbounded' if safe is None else f'{safe:.1f} cm'}; "

@@ -28,8 +28,10 @@ def analyse_cmd(
     c: Annotated[float, typer.Option("--c", help="damping of the drop model, N s/m")] = 46.0,
     clearance: Annotated[float, typer.Option("--clearance-mm", help="battery holder's clearance above the ground")] = 16.0,
     thrust_g: Annotated[float, typer.Option("--max-thrust-g", help="full thrust per motor, g")] = 175.0,
+    prop_diameter: Annotated[float, typer.Option("--prop-diameter", help="propeller diameter, mm, for the wall case "
+                                                 "(a disc centred on each motor mount)")] = 76.2,
 ) -> None:
-    """Frame stiffness k, thrust case and safe drop height of an exoskeleton read from CAD."""
+    """Frame stiffness k, thrust case, wall case and safe drop height of an exoskeleton read from CAD."""
     from cogniframe.errors import UserError
 
     if down not in ("+z", "-z"):
@@ -44,7 +46,7 @@ def analyse_cmd(
     from cogniframe.api.analyse import analyse, summary
 
     a = analyse(assembly, materials=materials, down=down, rod_diameter=rod_diameter, factor=factor, mass_kg=mass_kg,
-                c_n_s_per_m=c, clearance_mm=clearance, max_thrust_g=thrust_g,
+                c_n_s_per_m=c, clearance_mm=clearance, max_thrust_g=thrust_g, prop_diameter_mm=prop_diameter,
                 progress=None if as_json else (lambda msg: print(msg, file=sys.stderr, flush=True)))
     if as_json:
         print(json.dumps(a.to_dict(), indent=2, default=float))
