@@ -465,7 +465,7 @@ def wall_case(lay: Layout, mdl: Model, mass_kg: float, zeta: float, prop_diamete
     the payload pushed towards it; the face that allows the lowest speed before a propeller disc
     (`prop_diameter_mm`, centred on each motor mount's centroid) or the core reaches the wall's plane: as
     `load_cases._wall_face`, the faces and the touching joints read from the solids' boxes."""
-    from .load_cases import _TIE, _damped_peak_factor
+    from .load_cases import TIE, damped_peak_factor
 
     exo, fe = lay.exo, mdl.fe
     idx = fe.index()
@@ -505,9 +505,9 @@ def wall_case(lay: Layout, mdl: Model, mass_kg: float, zeta: float, prop_diamete
                 gap_core = plane - max(out(c.bbox) for c in core)
                 limits.append((gap_core, "core", gap_core))
             t_min = min(x[0] for x in limits)
-            travel, what, gap = min((x for x in limits if x[0] <= t_min + _TIE * abs(t_min)), key=lambda x: x[1])
+            travel, what, gap = min((x for x in limits if x[0] <= t_min + TIE * abs(t_min)), key=lambda x: x[1])
             k_lat = 1000.0 * LOAD_N / d_pay
-            v = travel / 1000.0 * math.sqrt(k_lat / mass_kg) / _damped_peak_factor(zeta)
+            v = travel / 1000.0 * math.sqrt(k_lat / mass_kg) / damped_peak_factor(zeta)
             face = f"{'+' if sign > 0 else '-'}{'xyz'[axis]}"
             cases.append({"k_lateral_n_per_m": k_lat, "max_wall_speed_m_s": v, "limited_by": what,
                           "payload_travel_mm": travel, "gap_mm": gap, "damping_ratio": zeta, "face": face,
@@ -516,7 +516,7 @@ def wall_case(lay: Layout, mdl: Model, mass_kg: float, zeta: float, prop_diamete
         return {"note": "no side face with joints on the wall round a plane (three or more not in a line): no wall case"}
     best = cases[0]
     for c in cases[1:]:
-        if c["max_wall_speed_m_s"] < best["max_wall_speed_m_s"] * (1 - _TIE):
+        if c["max_wall_speed_m_s"] < best["max_wall_speed_m_s"] * (1 - TIE):
             best = c
     return best
 

@@ -19,7 +19,7 @@ from .stiffness import (DEFAULT_LOAD_N, PLAY_REFERENCE_N, Model, SecantSolution,
                         _play, _solve_payload, build_model, joint_models,
                         joint_parts, masses_g, mouth, socket_loads)
 
-_TIE = 1e-6  # relative: results this close are equal (symmetric members; the solver's round-off)
+TIE = 1e-6  # relative: results this close are equal (symmetric members; the solver's round-off)
 
 
 # Propeller thrust coefficient C_T = T / (rho n^2 D^4) of small two-blade props (3-4 in) at
@@ -33,7 +33,7 @@ MODE_WARN_BAND = 0.15  # a mode within 15 % of the hover rotor frequency is flag
 N_MODES = 8
 
 
-def _damped_peak_factor(zeta: float) -> float:
+def damped_peak_factor(zeta: float) -> float:
     """x_max * w0 / v0 for a damped oscillator started at x = 0 with speed v0 (no other force)."""
     if zeta <= 0:
         return 1.0
@@ -203,7 +203,7 @@ def _wall_case(spec, frame, mdl: Model, K, masses, zeta: float) -> dict:
     cases = [_wall_face(spec, frame, mdl, K, masses, zeta, axis, sign) for axis, sign in WALL_FACES]
     best = cases[0]
     for c in cases[1:]:
-        if c["max_wall_speed_m_s"] < best["max_wall_speed_m_s"] * (1 - _TIE):
+        if c["max_wall_speed_m_s"] < best["max_wall_speed_m_s"] * (1 - TIE):
             best = c
     return best
 
@@ -241,9 +241,9 @@ def _wall_face(spec, frame, mdl: Model, K, masses, zeta: float, axis: int, sign:
     # the first to reach the wall; symmetric motors tie (to round-off): the first by name, so
     # the answer does not hang on the solver's last digits
     t_min = min(x[0] for x in limits)
-    travel, what, gap = min((x for x in limits if x[0] <= t_min + _TIE * abs(t_min)), key=lambda x: x[1])
+    travel, what, gap = min((x for x in limits if x[0] <= t_min + TIE * abs(t_min)), key=lambda x: x[1])
     w0 = math.sqrt(k_lat / (masses["total"] / 1000.0))
-    v_max = travel / 1000.0 * w0 / _damped_peak_factor(zeta)
+    v_max = travel / 1000.0 * w0 / damped_peak_factor(zeta)
     return {"k_lateral_n_per_m": k_lat, "max_wall_speed_m_s": v_max, "limited_by": what, "payload_travel_mm": travel,
             "gap_mm": gap, "damping_ratio": zeta, "face": FACE_NAMES[(axis, sign)]}
 
@@ -437,7 +437,7 @@ def _strain(frame, parts, mdl: Model, u: np.ndarray, eps_break: float, itf, hing
     eps_h = max(hinge.values(), default=0.0)
     eps_s = max((x for _, _, x in socks), default=0.0)
     # symmetric sockets tie (to round-off): the first by name
-    where = min((f"{n}/{rn}" for n, rn, x in socks if x >= eps_s * (1 - _TIE) and x > 0), default=None)
+    where = min((f"{n}/{rn}" for n, rn, x in socks if x >= eps_s * (1 - TIE) and x > 0), default=None)
     return {"hinge": round(eps_h, 4), "socket": round(eps_s, 4), "socket_at": where, "elongation_at_break": eps_break,
             "peak": round(max(eps_h, eps_s), 4), "ratio_to_break": round(max(eps_h, eps_s) / eps_break, 4)}
 
@@ -485,14 +485,14 @@ def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: d
     for inst, x in sorted(hinge.items()):
         part = mdl.instance_part[inst]
         j = joints.setdefault(part, {"strain_per_n": 0.0, "at": None})
-        if x > j["strain_per_n"] * (1 + _TIE):
+        if x > j["strain_per_n"] * (1 + TIE):
             j["strain_per_n"], j["at"] = x, f"{inst} hinge"
     for inst, rn, x in sorted(socks):
         part = mdl.instance_part.get(inst)
         if part is None:
             continue
         j = joints.setdefault(part, {"strain_per_n": 0.0, "at": None})
-        if x > j["strain_per_n"] * (1 + _TIE):
+        if x > j["strain_per_n"] * (1 + TIE):
             j["strain_per_n"], j["at"] = x, f"{inst}/{rn}"
     # the core links' pull on the core, at each link's support body
     c = spec.core
