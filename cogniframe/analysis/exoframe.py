@@ -463,62 +463,60 @@ def wall_case(lay: Layout, mdl: Model, mass_kg: float, zeta: float, prop_diamete
     """`check --json`'s `stiffness.wall` for the read frame: each side face against a wall in turn
     (the joints whose outside lies within `touch_mm` of the face's plane held, sticking contact),
     the payload pushed towards it; the face that allows the lowest speed before a propeller disc
-    (`prop_diameter_mm`, centred on each motor mount's centroid) or the core reaches the wall's plane: as
-    `load_cases._wall_face`, the faces and the touching joints read from the solids' boxes."""
+    (`prop_diameter_mm`, centred on each motor mount's centroid) or the core reaches the wall's
+    plane: as `load_cases._wall_face`, the faces and the touching joints read from the solids' boxes."""
+    from .load_cases import lowest_wall_speed
+
+    K = mdl.fe.stiffness(sparse=True).tocsc()
+    vz = _vertical(lay.down)
+    cases = [c for axis in range(3) if axis != vz for sign in (1, -1)
+             if (c := _wall_face(lay, mdl, K, axis, sign, mass_kg, zeta, prop_diameter_mm / 2, touch_mm))]
+    if not cases:
+        return {"note": "no side face with joints on the wall round a plane (three or more not in a line): no wall case"}
+    return lowest_wall_speed(cases)
+
+
+def _wall_face(lay: Layout, mdl: Model, K, axis: int, sign: int, mass_kg: float, zeta: float, radius: float,
+               touch_mm: float) -> dict | None:
+    """The side face at `sign` along `axis` against a wall, or None when the joints on it lie in a line."""
     from .load_cases import TIE, damped_peak_factor
 
     exo, fe = lay.exo, mdl.fe
     idx = fe.index()
-    K = fe.stiffness(sparse=True).tocsc()
     joints = {j.name: j for j in exo.joints}
-    vz = _vertical(lay.down)
-    radius = prop_diameter_mm / 2
-    cases = []
-    for axis in (a for a in range(3) if a != vz):
-        for sign in (1, -1):
-            def out(box):
-                return max(sign * box[0][axis], sign * box[1][axis])
-            plane = max(out(joints[n].bbox) for n in mdl.joint_nodes)
-            side = [n for n in mdl.joint_nodes if out(joints[n].bbox) >= plane - touch_mm]
-            held = np.array([fe.nodes[node] for n in side for node in mdl.joint_nodes[n]])
-            if np.linalg.svd(held - held.mean(axis=0), compute_uv=False)[1] < 1.0:
-                continue  # the joints on the wall lie on a line: the frame would turn about it
-            fixed = np.zeros(K.shape[0], bool)
-            for n in side:
-                for node in mdl.joint_nodes[n]:
-                    fixed[6 * idx[node]:6 * idx[node] + 3] = True
-            fixed = _unconnected(K, fixed)
-            f = np.zeros(K.shape[0])
-            f[6 * idx[mdl.payload] + axis] = sign * LOAD_N
-            u = ff.solve(K, f, fixed)
-            d_pay = sign * u[6 * idx[mdl.payload] + axis]
-            if not (d_pay > 0 and math.isfinite(d_pay)):
-                raise RuntimeError(f"exoframe: payload deflection {d_pay!r} mm towards a wall is not a positive number")
-            limits = []
-            for m in mdl.motors:  # the disc round the mount's centroid (the motor's axis), moving with the mount
-                gap = plane - (sign * joints[m].centroid[axis] + radius)
-                ratio = sign * u[6 * idx[m] + axis] / d_pay
-                if ratio > 0:
-                    limits.append((gap / ratio, f"propeller of {m}", gap))
-            core = [a for a in exo.attached if a.name in lay.core]
-            if core:
-                gap_core = plane - max(out(c.bbox) for c in core)
-                limits.append((gap_core, "core", gap_core))
-            t_min = min(x[0] for x in limits)
-            travel, what, gap = min((x for x in limits if x[0] <= t_min + TIE * abs(t_min)), key=lambda x: x[1])
-            k_lat = 1000.0 * LOAD_N / d_pay
-            v = travel / 1000.0 * math.sqrt(k_lat / mass_kg) / damped_peak_factor(zeta)
-            face = f"{'+' if sign > 0 else '-'}{'xyz'[axis]}"
-            cases.append({"k_lateral_n_per_m": k_lat, "max_wall_speed_m_s": v, "limited_by": what,
-                          "payload_travel_mm": travel, "gap_mm": gap, "damping_ratio": zeta, "face": face,
-                          "joints_on_the_wall": sorted(side)})
-    if not cases:
-        return {"note": "no side face with joints on the wall round a plane (three or more not in a line): no wall case"}
-    best = cases[0]
-    for c in cases[1:]:
-        if c["max_wall_speed_m_s"] < best["max_wall_speed_m_s"] * (1 - TIE):
-            best = c
-    return best
+
+    def out(box):  # how far a box reaches towards the wall
+        return max(sign * box[0][axis], sign * box[1][axis])
+
+    plane = max(out(joints[n].bbox) for n in mdl.joint_nodes)
+    side = [n for n in mdl.joint_nodes if out(joints[n].bbox) >= plane - touch_mm]
+    held = np.array([fe.nodes[node] for n in side for node in mdl.joint_nodes[n]])
+    if np.linalg.svd(held - held.mean(axis=0), compute_uv=False)[1] < 1.0:
+        return None  # the joints on the wall lie on a line: the frame would turn about it
+    fixed = np.zeros(K.shape[0], bool)
+    for node in (node for n in side for node in mdl.joint_nodes[n]):
+        fixed[6 * idx[node]:6 * idx[node] + 3] = True
+    f = np.zeros(K.shape[0])
+    f[6 * idx[mdl.payload] + axis] = sign * LOAD_N
+    u = ff.solve(K, f, _unconnected(K, fixed))
+    d_pay = sign * u[6 * idx[mdl.payload] + axis]
+    if not (d_pay > 0 and math.isfinite(d_pay)):
+        raise RuntimeError(f"exoframe: payload deflection {d_pay!r} mm towards a wall is not a positive number")
+    limits = []
+    for m in mdl.motors:  # the disc round the mount's centroid (the motor's axis), moving with the mount
+        gap = plane - (sign * joints[m].centroid[axis] + radius)
+        ratio = sign * u[6 * idx[m] + axis] / d_pay
+        if ratio > 0:
+            limits.append((gap / ratio, f"propeller of {m}", gap))
+    gap_core = plane - max(out(a.bbox) for a in exo.attached if a.name in lay.core)
+    limits.append((gap_core, "core", gap_core))
+    t_min = min(x[0] for x in limits)
+    travel, what, gap = min((x for x in limits if x[0] <= t_min + TIE * abs(t_min)), key=lambda x: x[1])
+    k_lat = 1000.0 * LOAD_N / d_pay
+    v_max = travel / 1000.0 * math.sqrt(k_lat / mass_kg) / damped_peak_factor(zeta)
+    return {"k_lateral_n_per_m": k_lat, "max_wall_speed_m_s": v_max, "limited_by": what, "payload_travel_mm": travel,
+            "gap_mm": gap, "damping_ratio": zeta, "face": f"{'+' if sign > 0 else '-'}{'xyz'[axis]}",
+            "joints_on_the_wall": sorted(side)}
 
 
 def k_at(lay: Layout, units: dict, factor: float) -> float:

@@ -200,7 +200,11 @@ FACE_NAMES = {(0, 1): "+x (right)", (0, -1): "-x (left)", (1, 1): "+y (front)", 
 def _wall_case(spec, frame, mdl: Model, K, masses, zeta: float) -> dict:
     """Each side face against a wall, in turn; the face that allows the lowest wall speed.
     ``K``: the model's assembled stiffness (no supports)."""
-    cases = [_wall_face(spec, frame, mdl, K, masses, zeta, axis, sign) for axis, sign in WALL_FACES]
+    return lowest_wall_speed([_wall_face(spec, frame, mdl, K, masses, zeta, axis, sign) for axis, sign in WALL_FACES])
+
+
+def lowest_wall_speed(cases: list[dict]) -> dict:
+    """The face that allows the lowest wall speed; faces that tie (symmetric, to round-off): the first."""
     best = cases[0]
     for c in cases[1:]:
         if c["max_wall_speed_m_s"] < best["max_wall_speed_m_s"] * (1 - TIE):
