@@ -46,18 +46,10 @@ BEGIN, END = "<!-- differences:begin -->", "<!-- differences:end -->"
 DOC = ROOT / "docs" / "authors-parts.md"
 
 
-def ring_spans(design) -> tuple[float, float, float]:
-    """(x span, y span, height) of the cage's rod axes, from the frame."""
-    import numpy as np
-
-    pts = np.array([p for r in design.derived.frame.rods.values() if r.role == "cage" for p in (r.a.port, r.b.port)])
-    span = pts.max(axis=0) - pts.min(axis=0)
-    return float(span[0]), float(span[1]), float(span[2])
-
-
 def box_values(design) -> dict:
     """The outside sizes that put the cage's rod axes where the authors' are (0.1 mm)."""
-    sx, sy, sz = ring_spans(design)
+    lo, hi = design.derived.frame.bbox()  # the joints' centres: the cage's rod axes span it
+    sx, sy, sz = (float(v) for v in hi - lo)
     s = design.spec.frame
     return {"frame.width": round(s.width + AUTHORS_RING_SPAN - sx, 1),
             "frame.depth": round(s.depth + AUTHORS_RING_SPAN - sy, 1),
