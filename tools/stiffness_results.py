@@ -18,7 +18,6 @@ ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "stiffness-model.md"
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
 PRESETS = ("carbon", "bamboo")
-PAPER_K_N_PER_M = 7040.0  # the paper's static k of the authors' carbon frame
 
 
 def _first_failure(sv: dict) -> str:
@@ -29,6 +28,8 @@ def _first_failure(sv: dict) -> str:
 
 def rows(checks: dict[str, dict]) -> list[tuple[str, ...]]:
     """(label, one cell per preset) from each preset's `check --json` object."""
+    from cogniframe.analysis.stiffness import PAPER_K_N_PER_M
+
     def each(fn):
         return tuple(fn(d) for d in checks.values())
 
