@@ -98,59 +98,94 @@ def evaluate(spec, frame, drop, stiffness: dict, peaks: list[dict] | None = None
     ``stiffness`` its load cases (`check --json`'s stiffness section, with ``survival_per_n``),
     ``peaks`` the peak model's entries for ``heights_cm`` (None: payload G not assessed)."""
     from ..materials import strength
-    from .constants import G
-    from .impact import simulate_height
 
     per_n = stiffness["survival_per_n"]
-    m, k, c, clear = drop.mass_kg, drop.k_n_per_m, drop.c_n_s_per_m, drop.clearance_mm
-    springs, forces, strikes = [], [], []
-    for h in heights_cm:
-        r = simulate_height(m, c, k, h, clear)
-        # what deforms the joints: the spring's share, k x (x capped at the clearance)
-        springs.append(k * min(r.x_max_mm, clear) / 1000.0)
-        # what the frame carries to the floor: spring and damper, m (|a| + g) at the payload's peak
-        forces.append(m * G * (r.peak_g + 1.0))
-        strikes.append(math.sqrt(2 * r.energy_j * r.energy_rigid_pct / 100.0 / m) if r.strikes else 0.0)
-
+    springs, forces, strikes = drop_loads(drop, heights_cm)
     series: list[dict] = []
 
     def add(part: str, mode: str, limit: float, unit: str, loads: list[float]):
-        series.append({"part": part, "mode": mode, "limit": limit, "unit": unit,
-                       "margin": [_m(limit / x) if x > 0 else None for x in loads]})
+        series.append(margin_series(part, mode, limit, unit, loads))
 
     tpu = strength(spec.joints.material)
     if tpu is not None:
         for part, j in sorted(per_n["joints"].items()):
             add(f"joint {part} ({j['at']})", "TPU strain", tpu.value, "strain", [j["strain_per_n"] * f for f in springs])
+    series.extend(rod_series(per_n["rods"], lambda name: strength(frame.rods[name].material), forces))
+    core = strength(spec.core.material)
+    if core is not None:
+        add("core plate", "bending at a core link", core.value, "MPa", [per_n["core_plate_mpa_per_n"] * f for f in forces])
+        impedance = strike_impedance_mpa_per_m_s(spec.material(spec.core.material))
+        add("battery holder", "strike on the floor", core.value, "MPa", [impedance * v for v in strikes])
+    max_g = spec.requirements.max_peak_g
+    if max_g is not None and peaks is not None:
+        add("payload", "peak G", float(max_g), "G", [p.get("peak_g_drop_median", p["peak_g"]) for p in peaks])
+
+    note = ("flat drops; joints strained by the drop model's spring force (capped where the battery holder reaches the "
+            "floor), rods and core loaded by its whole force (spring and damper), both quasi-static in the payload "
+            "case's pattern; the holder strike as a plane-wave bound; no fatigue, no tumbling, no edge landings")
+    return summarise(series, heights_cm, note)
+
+
+def drop_loads(drop, heights_cm=SWEEP_CM) -> tuple[list[float], list[float], list[float]]:
+    """Per height of the sweep, from the drop model (`drop`: m, c, k, clearance): the spring's
+    force that deforms the joints, k min(x_max, clearance) (N); the whole force the frame carries
+    to the floor, spring and damper, m (|a|max + g) (N); and the speed at which the holder strikes
+    the floor once the clearance is used up (m/s, 0 when it is not)."""
+    from .constants import G
+    from .impact import simulate_height
+
+    m, k, c, clear = drop.mass_kg, drop.k_n_per_m, drop.c_n_s_per_m, drop.clearance_mm
+    springs, forces, strikes = [], [], []
+    for h in heights_cm:
+        r = simulate_height(m, c, k, h, clear)
+        springs.append(k * min(r.x_max_mm, clear) / 1000.0)
+        forces.append(m * G * (r.peak_g + 1.0))
+        strikes.append(math.sqrt(2 * r.energy_j * r.energy_rigid_pct / 100.0 / m) if r.strikes else 0.0)
+    return springs, forces, strikes
+
+
+def rod_series(rods_per_n: dict, strength_of, forces: list[float]) -> list[dict]:
+    """The rods' margin series: per role, its most stressed rod in bending (against
+    ``strength_of(name)``, a `materials.Strength` or None) and its rod nearest its Euler load.
+    ``rods_per_n``: {rod: {role, stress_mpa_per_n, axial_n_per_n, euler_n}} per newton of ``forces``."""
+    out = []
     by_role: dict[str, list[tuple[str, dict]]] = {}
-    for name, r in sorted(per_n["rods"].items()):
+    for name, r in sorted(rods_per_n.items()):
         by_role.setdefault(r["role"], []).append((name, r))
     for role, rods in sorted(by_role.items()):
         # the role's most stressed rod; ties (symmetric rods) go to the first by name: compared at the
         # precision check.json states (numfmt), so the last bits of the solve, which differ between
         # mirror images, do not choose
         name, r = min(rods, key=lambda x: (-numfmt.sig(x[1]["stress_mpa_per_n"]), x[0]))
-        rod = strength(frame.rods[name].material)
+        rod = strength_of(name)
         if rod is not None:
-            add(f"rod {name}", "bending", rod.value, "MPa", [r["stress_mpa_per_n"] * f for f in forces])
+            out.append(margin_series(f"rod {name}", "bending", rod.value, "MPa", [r["stress_mpa_per_n"] * f for f in forces]))
         buck = [(n, r) for n, r in rods if r["euler_n"] and r["axial_n_per_n"] < 0]
         if buck:
             name, r = min(buck, key=lambda x: (-numfmt.sig(-x[1]["axial_n_per_n"] / x[1]["euler_n"]), x[0]))
-            add(f"rod {name}", "buckling", r["euler_n"], "N", [-r["axial_n_per_n"] * f for f in forces])
-    core_mat = spec.material(spec.core.material)
-    core = strength(spec.core.material)
-    if core is not None:
-        add("core plate", "bending at a core link", core.value, "MPa", [per_n["core_plate_mpa_per_n"] * f for f in forces])
-        impedance = math.sqrt(core_mat.e_mpa * 1e6 * core_mat.density_g_cm3 * 1000.0) / 1e6  # MPa per m/s
-        add("battery holder", "strike on the floor", core.value, "MPa", [impedance * v for v in strikes])
-    max_g = spec.requirements.max_peak_g
-    if max_g is not None and peaks is not None:
-        add("payload", "peak G", float(max_g), "G", [p.get("peak_g_drop_median", p["peak_g"]) for p in peaks])
+            out.append(margin_series(f"rod {name}", "buckling", r["euler_n"], "N", [-r["axial_n_per_n"] * f for f in forces]))
+    return out
 
+
+def margin_series(part: str, mode: str, limit: float, unit: str, loads: list[float]) -> dict:
+    """One part's margins over the sweep: strength / load per height (None where it carries nothing)."""
+    return {"part": part, "mode": mode, "limit": limit, "unit": unit,
+            "margin": [_m(limit / x) if x > 0 else None for x in loads]}
+
+
+def strike_impedance_mpa_per_m_s(material) -> float:
+    """sqrt(E rho) of a `materials.Material`, MPa per m/s: a flat face's plane-wave stress per unit
+    strike speed on a rigid floor."""
+    return math.sqrt(material.e_mpa * 1e6 * material.density_g_cm3 * 1000.0) / 1e6
+
+
+def summarise(series: list[dict], heights_cm, note: str) -> Survival:
+    """The sweep's verdict from its margin series: the first part to fail (at the stated 0.1 cm,
+    then by name), the highest undamaged drop, the series worst first."""
     fails = [(crossing(heights_cm, s["margin"]), s) for s in series]
     failing = [(h, s) for h, s in fails if h is not None]
     if failing:
-        h, s = min(failing, key=lambda x: (round(x[0], 1), x[1]["part"]))  # at the stated 0.1 cm, then by name
+        h, s = min(failing, key=lambda x: (round(x[0], 1), x[1]["part"]))
         first = {"part": s["part"], "mode": s["mode"], "at_drop_cm": round(h, 1)}
         top = round(h, 1)
     else:
@@ -160,7 +195,4 @@ def evaluate(spec, frame, drop, stiffness: dict, peaks: list[dict] | None = None
     worst = sorted(series, key=lambda s: (s["fails_at_drop_cm"] is None, s["fails_at_drop_cm"] or 0.0,
                                           numfmt.sig(min((x for x in s["margin"] if x is not None), default=math.inf)),
                                           s["part"]))
-    note = ("flat drops; joints strained by the drop model's spring force (capped where the battery holder reaches the "
-            "floor), rods and core loaded by its whole force (spring and damper), both quasi-static in the payload "
-            "case's pattern; the holder strike as a plane-wave bound; no fatigue, no tumbling, no edge landings")
     return Survival(tuple(heights_cm), top, first, tuple(worst), note)
