@@ -134,6 +134,15 @@ SAFE_DROP_TOL = 0.03
 # the lateral stiffness: the joints' differences that move k (+4.8 %), the core link's pegs loaded
 # sideways where its read ties and the check's planned ties differ most (measured +6.5 %)
 K_LATERAL_TOL = 0.08
+# The survival sweep (measured on the carbon preset, docs/stiffness-model.md "Survival of a read
+# frame"): the struts' buckling margin +12.7 % (their sockets' rotational restraint read from the
+# B-rep, the drop force from a k 4.8 % higher); the core's strike margin -4.8 % (its speed at the
+# clearance follows k alone); the most strained socket, the strut's in the bottom corner, +42 % per
+# newton (the read corner stands on its floor faces, where the check ties its planned foot: the
+# strut's moment at the mouth is the bearing's largest term, and it follows where the floor holds)
+BUCKLING_TOL = 0.15
+STRIKE_TOL = 0.08
+SOCKET_STRAIN_TOL = 0.50
 
 
 @pytest.fixture(scope="module")
@@ -179,6 +188,29 @@ def test_round_trip_reproduces_check(carbon_step):
     assert w["limited_by"].startswith("propeller of motor_mount") and wc["limited_by"].startswith("propeller")
     assert sorted(a.model["feet"]) == [f"corner_bottom_{c}" for c in ("fl", "fr", "rl", "rr")]
     assert a.model["core"] == ["core_plate"] and len(a.model["arms"]) == 8
+    # the survival sweep: the same parts near their limits, by the same margins within what the models' differences allow
+    s, sc = _by_mode(a.survival), _by_mode(c["survival"])
+    buck, buck_c = s[("buckling", "strut")], sc[("buckling", "strut")]
+    assert buck["margin"][9] == pytest.approx(buck_c["margin"][9], rel=BUCKLING_TOL)  # at 100 cm
+    assert buck is min((x for (mode, _), x in s.items() if mode == "buckling"), key=lambda x: x["margin"][9])
+    strike, strike_c = s[("strike on the floor", "core")], sc[("strike on the floor", "battery")]
+    assert strike["margin"][-1] == pytest.approx(strike_c["margin"][-1], rel=STRIKE_TOL)  # at 6 m
+    strain = max((x for (mode, _), x in s.items() if mode == "TPU strain"), key=lambda x: 1 / x["margin"][9])
+    assert strain["part"].startswith("joint corner_bottom_") and "rod_strut_" in strain["part"]
+    assert strain["margin"][9] == pytest.approx(sc[("TPU strain", "corner")]["margin"][9], rel=SOCKET_STRAIN_TOL)
+    # nothing the read frame can check fails below the check's first failure, the core plate's bending (not read)
+    assert a.survival["first_failure"] is None or a.survival["first_failure"]["at_drop_cm"] >= c["survival"]["max_undamaged_drop_cm"]
+
+
+def _by_mode(survival: dict) -> dict:
+    """{(mode, what the part is: a rod's role, a joint's kind, else the part's first word): series},
+    the worst of each (the sweep lists them worst first)."""
+    out = {}
+    for x in survival["margins"]:
+        kind, _, rest = x["part"].partition(" ")
+        what = rest.split("_")[1] if kind == "rod" else rest.split("_")[0] if kind == "joint" else kind
+        out.setdefault((x["mode"], what), x)
+    return out
 
 
 # -- the frame model on its own (no CAD, no FE): joints as condensed beam stars ---------------------
@@ -281,3 +313,39 @@ def test_the_package_factor_gives_the_authors_frame_the_papers_k(tmp_path):
     fm = frame_model(solids=solids, source=doc.name, down="+z", rod_diameter=3.0)
     assert k_at(fm.layout, fm.units, TPU_PRINTED_MODULUS_FACTOR) == pytest.approx(7040.0, rel=2e-3)
     assert calibrate(fm, 7040.0) == pytest.approx(TPU_PRINTED_MODULUS_FACTOR, rel=1e-3)
+
+
+def test_the_survival_sweep_of_a_read_frame():
+    from cogniframe.analysis import exoframe as X
+    from cogniframe.analysis import exosurvival as S
+    from cogniframe.analysis.survival import SWEEP_CM, drop_loads
+    from cogniframe.materials import MATERIALS, STRENGTHS
+
+    lay, units = _synthetic_frame()
+    mdl = X.model_of(lay, units, 0.5)
+    k, u = X.payload_case(lay, mdl)
+    per_n = S.influence(lay, mdl, units, 0.5, u / X.LOAD_N)
+    # four rods of one span, one group; each Euler load between the pinned and the clamped column's
+    ei = MATERIALS["carbon_rod"].e_mpa * math.pi * ROD_D**4 / 64
+    span = math.dist(*(lay.exo.socket_at("rod_0", e).mouth for e in "ab"))
+    assert len({r["role"] for r in per_n["rods"].values()}) == 1 and len(per_n["rods"]) == 4
+    for r in per_n["rods"].values():
+        assert math.pi**2 * ei / span**2 < r["euler_n"] < 4 * math.pi**2 * ei / span**2
+        assert r["axial_n_per_n"] < 0  # the payload pushes the legs into the floor
+    # two sockets a rod, each bearing the rod's load
+    assert len(per_n["sockets"]) == 8 and all(q > 0 for _, _, q, _ in per_n["sockets"])
+    drop = S.DropModel(0.241, 46.0, k, 16.0)
+    sv = S.evaluate(lay, mdl, units, 0.5, u / X.LOAD_N, drop)
+    modes = sorted({(x["mode"], x["part"].split()[0]) for x in sv.margins})
+    assert modes == [("TPU strain", "joint"), ("bending", "rod"), ("buckling", "rod"), ("strike on the floor", "core")]
+    # margins are strength / load, the load each drop's force times the part's load per newton
+    springs, forces, strikes = drop_loads(drop)
+    bend = next(x for x in sv.margins if x["mode"] == "bending")
+    stress = max(r["stress_mpa_per_n"] for r in per_n["rods"].values())
+    assert bend["margin"][0] == pytest.approx(STRENGTHS["carbon_rod"].value / (stress * forces[0]), rel=1e-3)
+    strike = next(x for x in sv.margins if x["mode"] == "strike on the floor")
+    abs_ = MATERIALS["abs"]
+    v = strikes[-1]
+    assert v > 0 and strike["margin"][-1] == pytest.approx(
+        STRENGTHS["abs"].value / (v * math.sqrt(abs_.e_mpa * 1e6 * abs_.density_g_cm3 * 1e3) / 1e6), rel=1e-3)
+    assert sv.heights_cm == SWEEP_CM and "core's bending" in sv.note

@@ -31,8 +31,8 @@ so each joint is solved once at factor 1 and cached (by its B-rep text and its t
 scaled: a factor sweep or a calibration only re-solves the beam model.
 
 Not modelled here (the check's model has them): the fit's play (a bore looser than the rod
-makes k a secant; here the clearance only thickens the interface layer), the modes, buckling,
-strain and the survival sweep.
+makes k a secant; here the clearance only thickens the interface layer) and the modes. The
+survival sweep of a read frame is `exosurvival`'s.
 """
 
 from __future__ import annotations
@@ -382,6 +382,11 @@ def payload_k(lay: Layout, mdl: Model, load_n: float = LOAD_N) -> float:
     """k (N/m): a force along `down` on the payload over its deflection, the feet on a rigid,
     frictionless floor (vertical held, one tangential spring each against the in-plane rigid-body
     modes: as `stiffness`)."""
+    return payload_case(lay, mdl, load_n)[0]
+
+
+def payload_case(lay: Layout, mdl: Model, load_n: float = LOAD_N) -> tuple[float, np.ndarray]:
+    """(k in N/m, the displacements under `load_n` newtons): `payload_k`'s solve."""
     from scipy.sparse import coo_matrix
 
     fe = mdl.fe
@@ -413,7 +418,7 @@ def payload_k(lay: Layout, mdl: Model, load_n: float = LOAD_N) -> float:
     d = float(u[6 * idx[mdl.payload]:6 * idx[mdl.payload] + 3] @ np.asarray(lay.down))
     if not (d > 0 and math.isfinite(d)):
         raise RuntimeError(f"exoframe: payload deflection {d!r} mm is not a positive number (a mechanism?)")
-    return 1000.0 * load_n / d
+    return 1000.0 * load_n / d, u
 
 
 def motors_under_thrust(lay: Layout, mdl: Model, thrust_n: float = 1.0) -> tuple[float, float]:

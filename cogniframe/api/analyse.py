@@ -1,6 +1,6 @@
 """`cogniframe analyse`: the physics of any rod-and-joint exoskeleton read from CAD (issue 43).
 
-    a = analyse("out/carbon/assembly.step")                 # Analysis: k, thrust case, safe drop
+    a = analyse("out/carbon/assembly.step")                 # Analysis: k, thrust case, safe drop, survival
     a = analyse("CogniFly-Flex.FCStd", down="+z", rod_diameter=3.0)
 
 The reading is `cadread`'s (rods, joints, sockets, contacts); the frame model is
@@ -41,7 +41,7 @@ class Analysis:
     wall: dict  # the side faces against a wall: `check --json`'s stiffness.wall keys
     drop: dict
     model: dict  # which parts play which role: feet, core, links, glued pairs, motor mounts, arms, joints' DOFs
-    survival: str
+    survival: dict  # `survival.Survival.to_dict()`: the flat-drop sweep of the read frame (`exosurvival`)
     unplaced: tuple[str, ...] = ()
     loose_ends: tuple[str, ...] = ()
     warnings: tuple[str, ...] = field(default=())
@@ -112,7 +112,7 @@ def analyse(path=None, *, solids=None, source: str = "", materials=None, down: s
             max_thrust_g: float = DEFAULT_MAX_THRUST_G, prop_diameter_mm: float = DEFAULT_PROP_DIAMETER_MM,
             layer_height: float = 0.2, progress=None, model: FrameModel | None = None) -> Analysis:
     """k, the thrust case and the drop model of the exoskeleton at `path` (see the module)."""
-    from ..analysis import exoframe, impact
+    from ..analysis import exoframe, exosurvival, impact
     from ..analysis.joints import TPU_PRINTED_MODULUS_FACTOR
 
     for label, v in (("mass_kg", mass_kg), ("c_n_s_per_m", c_n_s_per_m), ("clearance_mm", clearance_mm),
@@ -124,7 +124,7 @@ def analyse(path=None, *, solids=None, source: str = "", materials=None, down: s
     lay, units, exo = fm.layout, fm.units, fm.exo
     f = TPU_PRINTED_MODULUS_FACTOR if factor is None else float(factor)
     full = exoframe.model_of(lay, units, f)
-    k = exoframe.payload_k(lay, full)
+    k, u = exoframe.payload_case(lay, full)
     thrust = exoframe.thrust_case(lay, units, f, max_thrust_g, mass_kg * 1000.0, full=full)
     zeta = impact.damping_ratio(c_n_s_per_m, k, mass_kg)
     wall = exoframe.wall_case(lay, full, mass_kg, zeta, prop_diameter_mm)
@@ -140,12 +140,14 @@ def analyse(path=None, *, solids=None, source: str = "", materials=None, down: s
            "motor_mounts": list(lay.mounts), "arms": list(lay.arms), "rods_modelled": len(lay.rods),
            "joint_dofs": {n: u.n_dofs for n, u in units.items()},
            "interface": "h_i = max(bore - rod, 0) / 2 + layer / 2 per socket (layer 0.2 mm); no play"}
+    survival = exosurvival.evaluate(lay, full, units, f, u / exoframe.LOAD_N,
+                                    exosurvival.DropModel(mass_kg, c_n_s_per_m, k, clearance_mm)).to_dict()
     warnings = tuple(exo.warnings) + tuple(lay.notes)
     left = [r.name for r in exo.rods if r.name not in lay.rods]
     if left:
         warnings += (f"{len(left)} rod(s) with an end in no socket left out of the model: {', '.join(left)}",)
     return Analysis(source or str(path), down, len(exo.rods), len(exo.joints), rod_diameter, lay.rod_material, f, k, thrust,
-                    wall, drop, mdl, "not computed: the survival sweep needs a design's parts and their strengths (`check`)",
+                    wall, drop, mdl, survival,
                     tuple(exo.unplaced), tuple(exo.loose_ends), warnings)
 
 
@@ -182,6 +184,14 @@ def summary(a: Analysis) -> list[str]:
     out.append(f"drop model (m {d['mass_kg']:g} kg, c {d['c_n_s_per_m']:g} N s/m, zeta {d['damping_ratio']:.3f}, "
                f"clearance {d['clearance_mm']:g} mm): safe drop height {'unbounded' if safe is None else f'{safe:.1f} cm'}; "
                + ", ".join(f"x_max {h['x_max_mm']:.2f} mm at {h['height_cm']:g} cm" for h in d["heights"]))
-    out.append(f"survival: {a.survival}")
+    sv = a.survival
+    first = sv["first_failure"]
+    out.append("survival (flat drops; not checked: the core's bending, living hinges): "
+               + (f"undamaged up to {sv['max_undamaged_drop_cm']:.1f} cm, then the {first['part']} ({first['mode']})"
+                  if first else f"nothing fails up to {sv['max_undamaged_drop_cm']:g} cm"
+                  + "".join(f"; the nearest, the {s['part']} ({s['mode']}): margin {min(x for x in s['margin'] if x):.2f} at "
+                            f"{sv['heights_cm'][-1]:g} cm" for s in sv["margins"][:1]))
+               + "".join(f"; {s['part']} ({s['mode']}) at {s['fails_at_drop_cm']:.1f} cm"
+                         for s in sv["margins"][1:4] if s["fails_at_drop_cm"] is not None))
     out.extend(f"warning: {w}" for w in a.warnings)
     return out
