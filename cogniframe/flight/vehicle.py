@@ -51,6 +51,13 @@ class Vehicle:
         return [self.rotor_at(c) for c in order]
 
     @property
+    def hover_thrust_fraction(self) -> float:
+        """Each rotor's thrust at hover over its full-throttle thrust, (w_hover / w_max)^2: what
+        ArduPilot (MOT_THST_HOVER, SITL's hoverThrOut, INS_HNTCH_REF) and PX4 (MPC_THR_HOVER) mean
+        by hover "throttle"; the ESC's raw throttle at hover is `rotor.hover_throttle`."""
+        return (self.rotor.omega_hover / self.rotor.omega_max) ** 2
+
+    @property
     def rotor_centre_m(self) -> np.ndarray:
         """The rotors' hubs' centroid relative to the centre of gravity (frame axes)."""
         return np.mean([r.position_m for r in self.rotors], axis=0)
