@@ -560,3 +560,18 @@ def test_fly_without_a_thrust_table_is_exit_2_naming_motors_kv_and_writes_nothin
     code, _, err = run_cli("fly", str(p), "-o", str(out))
     assert code == 2 and not out.exists()
     assert "odd.yaml: motors.kv (line" in err and "Fix:" in err and "Traceback" not in err
+
+
+def test_docs_preset_tables_are_the_flight_files(flown):
+    """docs/flight-files.md's mass, rotor and mode tables are what tools/flight_tables.py makes of
+    the presets' flight files now (`python tools/flight_tables.py --write` renews them)."""
+    import sys
+
+    sys.path.insert(0, str(ROOT / "tools"))
+    import flight_tables
+
+    doc = (ROOT / "docs" / "flight-files.md").read_text()
+    made = flight_tables.tables({n: flown[n][0] for n in PRESETS})
+    for key, (begin, end) in flight_tables.MARKS.items():
+        assert doc.split(begin, 1)[1].split(end, 1)[0].strip() == made[key], key
+    assert f"{flown['carbon'][1].mass.total_g:.2f}" in made["mass"]  # check's all-up mass, to the hundredth of a gram
