@@ -109,21 +109,6 @@ def frame_model(v: Vehicle) -> dict:
     return out
 
 
-def sitl_thrust(model: dict) -> tuple[float, float]:
-    """(full thrust per rotor N, hover thrust / full thrust) as SITL derives them from a frame
-    model (SIM_Frame.cpp `Frame::init`: velocity_max = hover_velocity_out / sqrt(hoverThrOut), and
-    SIM_Motor.cpp `calc_thrust` at command 1 with a full pack, voltage_scale 1, no inflow):
-    1/2 rho A_eff velocity_max^2 over the rotors, A_eff = mass g / (1/2 rho hover_velocity_out^2)."""
-    g = 9.80665  # GRAVITY_MSS
-    hover_thrust = model["mass"] * g
-    v_hover = 2 * model["refCurrent"] * model["refVoltage"] / hover_thrust
-    rho = 1.225  # cancels: A_eff carries 1 / rho
-    area = hover_thrust / (0.5 * rho * v_hover**2)
-    v_max = v_hover / math.sqrt(model["hoverThrOut"])
-    full = 0.5 * rho * area * v_max**2 / model["num_motors"]
-    return full, hover_thrust / model["num_motors"] / full
-
-
 def frame_json(v: Vehicle) -> str:
     head = ["# ArduPilot SITL frame model for " + v.name + ", written by cogniframe (`cogniframe fly`).",
             "# sim_vehicle.py -v ArduCopter -f quad --model quad:frame.json --add-param-file=params.parm",
