@@ -197,12 +197,19 @@ def test_sdf_passes_sdformats_own_check(flown, name):
     ign = shutil.which("ign")
     if ign is None:
         pytest.skip("ign (ignition-tools with libsdformat) is not installed")
-    folder = flown[name][0]
+    folder, result = flown[name]
     r = subprocess.run([ign, "sdf", "-k", str(folder / "gazebo" / "model.sdf")], capture_output=True, text=True, timeout=60)
     assert r.returncode == 0 and "Valid" in r.stdout, r.stdout + r.stderr
     sdf = (folder / "gazebo" / "model.sdf").read_text()
-    assert sdf.count('filename="libgazebo_motor_model.so"') == 4
+    # gz-sim (Harmonic) as PX4's x500: the motor model system per rotor, IMU and barometer, drag
+    assert sdf.count('filename="gz-sim-multicopter-motor-model-system"') == 4 and "libgazebo" not in sdf
     assert sorted(re.findall(r"<turningDirection>(\w+)</turningDirection>", sdf)) == ["ccw", "ccw", "cw", "cw"]
+    assert 'type="imu"' in sdf and 'type="air_pressure"' in sdf
+    assert all(float(x) > 0 for x in re.findall(r"<(?:rotorDragCoefficient|rollingMomentCoefficient)>([^<]+)<", sdf))
+    # the collision is the cage: its joints' centres' box
+    size = [float(x) for x in re.search(r'<collision name="base_link_collision">.*?<size>([^<]+)</size>', sdf, re.S).group(1).split()]
+    lo, hi = result.design.frame.bbox()
+    assert sorted(size) == pytest.approx(sorted((hi - lo) / 1000), abs=1e-5)
 
 
 # The frame model's keys, as libraries/SITL/SIM_Frame.cpp (Frame::load_frame_params) reads them:
@@ -233,11 +240,109 @@ def test_ardupilot_frame_file_has_the_keys_sitl_reads_with_its_types(flown, name
     # ArduCopter quad X: motor 1 front right and 2 rear left counter-clockwise (yaw +1), FRD positions
     assert model["motor1_position"][0] > 0 < model["motor1_position"][1] and model["motor1_yaw"] == 1.0
     assert model["motor2_position"][0] < 0 > model["motor2_position"][1] and model["motor2_yaw"] == 1.0
-    assert model["hoverThrOut"] == pytest.approx(result.flight.hover_throttle, abs=1e-3)
-    parm = (folder / "ardupilot" / "params.parm").read_text()
-    values = dict(line.split() for line in parm.splitlines() if line and not line.startswith("#"))
+    assert model["hoverThrOut"] == pytest.approx(_hover_thrust_fraction(result), abs=1e-4)
+    values = _parm(folder)
     assert values["FRAME_CLASS"] == "1" and values["FRAME_TYPE"] == "1" and values["INS_HNTCH_ENABLE"] == "1"
     assert float(values["INS_HNTCH_FREQ"]) == pytest.approx(result.stiffness["hover_rotor_hz"], abs=0.1)
+    assert _ardupilot_defects(folder, result) == []
+
+
+def _hover_thrust_fraction(result) -> float:
+    """check's hover thrust over full thrust: a quarter of the all-up weight over one rotor's
+    full-throttle thrust (the flight table's)."""
+    return result.mass.total_g / 4 / result.flight.max_thrust_g_per_motor
+
+
+def _parm(folder) -> dict[str, str]:
+    text = (folder / "ardupilot" / "params.parm").read_text()
+    return dict(line.split() for line in text.splitlines() if line and not line.startswith("#"))
+
+
+def _sitl_thrust(model: dict) -> tuple[float, float]:
+    """ArduPilot SITL's full thrust per rotor (N) and hover thrust fraction from a frame model,
+    written out from its source (ArduPilot/ardupilot libraries/SITL/SIM_Frame.cpp Frame::init:
+    hover_velocity_out = 2 refCurrent refVoltage / (mass g), effective_disc_area = mass g /
+    (1/2 rho hover_velocity_out^2), velocity_max = hover_velocity_out / sqrt(hoverThrOut);
+    SIM_Motor.cpp Motor::calc_thrust at command 1, full pack, no inflow: 1/2 rho
+    effective_prop_area velocity_max^2, effective_prop_area = effective_disc_area / motors)."""
+    g, rho = 9.80665, 1.225
+    weight = model["mass"] * g
+    v_hover = 2 * model["refCurrent"] * model["refVoltage"] / weight
+    area = weight / (0.5 * rho * v_hover**2) / model["num_motors"]
+    full = 0.5 * rho * area * (v_hover / math.sqrt(model["hoverThrOut"])) ** 2
+    return full, weight / model["num_motors"] / full
+
+
+@pytest.mark.parametrize("name", PRESETS)
+def test_ardupilot_sitl_full_thrust_and_hover_fraction_are_checks(flown, name):
+    """SITL flies our frame.json with check's full thrust per rotor and hover thrust fraction
+    (within 2 %): hoverThrOut is a thrust fraction, not the ESC throttle (0.55 would give
+    SITL 1.07 N a rotor instead of 1.72 N for carbon)."""
+    folder, result = flown[name]
+    model = json.loads(_strip_hash_comments((folder / "ardupilot" / "frame.json").read_text()))
+    full, fraction = _sitl_thrust(model)
+    assert full == pytest.approx(result.flight.max_thrust_g_per_motor / 1000 * G, rel=0.02)
+    assert fraction == pytest.approx(_hover_thrust_fraction(result), rel=0.02)
+    raw = dict(model, hoverThrOut=result.flight.hover_throttle)
+    assert _sitl_thrust(raw)[0] < 0.8 * result.flight.max_thrust_g_per_motor / 1000 * G
+
+
+# ArduCopter's quad motor tables (ArduPilot/ardupilot libraries/AP_Motors/AP_MotorsMatrix.cpp,
+# master at 7c86187): FRAME_TYPE -> (arm angle from the nose, clockwise positive, yaw factor) per
+# motor number. 1 X; 12 BF_X; 18 BF_X_REV.
+AP_QUAD = {1: ((45, 1), (-135, 1), (-45, -1), (135, -1)), 12: ((135, -1), (45, 1), (-135, 1), (-45, -1)),
+           18: ((135, 1), (45, -1), (-135, -1), (-45, 1))}
+
+
+def _ardupilot_defects(folder, result, parm: dict | None = None, model: dict | None = None, text: str | None = None) -> list[str]:
+    """What ArduCopter would read otherwise than we mean in params.parm and frame.json."""
+    from cogniframe.flight.ardupilot import RANGES
+
+    parm = parm if parm is not None else _parm(folder)
+    model = model if model is not None else json.loads(_strip_hash_comments((folder / "ardupilot" / "frame.json").read_text()))
+    text = text if text is not None else (folder / "ardupilot" / "params.parm").read_text()
+    out = []
+    fraction = _hover_thrust_fraction(result)
+    for key, got in (("MOT_THST_HOVER", parm["MOT_THST_HOVER"]), ("INS_HNTCH_REF", parm["INS_HNTCH_REF"]),
+                     ("hoverThrOut", model["hoverThrOut"])):
+        if float(got) != pytest.approx(fraction, rel=0.02):
+            out.append(f"{key} {got} is not the hover thrust fraction {fraction:.3f}")
+    # the notch keeps harmonic h only below 0.48 x the gyro rate (HarmonicNotchFilter.cpp update);
+    # the throttle notch reaches h x the full-throttle rotor frequency
+    res = json.loads((folder / "resonance.json").read_text())
+    full_hz = next(b for b in res["bands"] if b["name"] == "rotor 1x")["hi_hz"]
+    rate = 1000 * 2 ** int(parm.get("INS_GYRO_RATE", 0))
+    for h in range(1, 9):
+        if int(parm["INS_HNTCH_HMNCS"]) & (1 << (h - 1)) and h * full_hz >= 0.48 * rate:
+            out.append(f"harmonic {h} ({h * full_hz:.0f} Hz at full throttle) dropped at {rate} Hz")
+    for i, (angle, yaw) in enumerate(AP_QUAD[int(parm["FRAME_TYPE"])], start=1):
+        x, y, _ = model[f"motor{i}_position"]
+        if abs((math.degrees(math.atan2(y, x)) - angle + 180) % 360 - 180) > 20 or model[f"motor{i}_yaw"] != yaw:
+            out.append(f"motor {i} of FRAME_TYPE {parm['FRAME_TYPE']} is at {angle} deg with yaw {yaw}")
+    lines = text.splitlines()
+    for n, line in enumerate(lines):
+        key, _, val = line.partition(" ")
+        if key in RANGES and not RANGES[key][0] <= float(val) <= RANGES[key][1]:
+            if not any(key in c and "documented range" in c for c in lines[max(0, n - 3):n]):
+                out.append(f"{key} {val} outside {RANGES[key]} without a comment")
+    return out
+
+
+def test_ardupilot_defect_check_fails_on_each_defect_of_issue_46(flown):
+    """Raw throttle where thrust is meant, a dropped harmonic, props-out yaw under FRAME_TYPE 1, an
+    out-of-range value without its comment: each is caught."""
+    folder, result = flown["carbon"]
+    parm, text = _parm(folder), (folder / "ardupilot" / "params.parm").read_text()
+    model = json.loads(_strip_hash_comments((folder / "ardupilot" / "frame.json").read_text()))
+    raw = f"{result.flight.hover_throttle:.3f}"
+    assert any("MOT_THST_HOVER" in d for d in _ardupilot_defects(folder, result, parm=dict(parm, MOT_THST_HOVER=raw)))
+    assert any("hoverThrOut" in d for d in _ardupilot_defects(folder, result, model=dict(model, hoverThrOut=float(raw))))
+    dropped = _ardupilot_defects(folder, result, parm=dict(parm, INS_HNTCH_HMNCS="7", INS_GYRO_RATE="0"))
+    assert any("harmonic 2" in d for d in dropped) and any("harmonic 3" in d for d in dropped)
+    flipped = dict(model, **{f"motor{i}_yaw": -model[f"motor{i}_yaw"] for i in range(1, 5)})
+    assert any("FRAME_TYPE 1" in d for d in _ardupilot_defects(folder, result, model=flipped))
+    bare = re.sub(r"^# MOT_THST_EXPO.*\n(# \(.*\n)?", "", text.replace("MOT_THST_EXPO 0.8", "MOT_THST_EXPO 0.848"), flags=re.M)
+    assert any("MOT_THST_EXPO 0.848" in d for d in _ardupilot_defects(folder, result, text=bare))
 
 
 # PX4's parameter names, from its sources: src/modules/simulation/simulator_sih/sih_params.yaml
@@ -248,7 +353,9 @@ def test_ardupilot_frame_file_has_the_keys_sitl_reads_with_its_types(flown, name
 PX4_NAMES = {"SIH_MASS", "SIH_IXX", "SIH_IYY", "SIH_IZZ", "SIH_IXY", "SIH_IXZ", "SIH_IYZ", "SIH_T_MAX", "SIH_Q_MAX",
              "SIH_L_ROLL", "SIH_L_PITCH", "SIH_KDV", "SIH_KDW", "SIH_T_TAU", "SIH_VEHICLE_TYPE",
              "CA_AIRFRAME", "CA_ROTOR_COUNT", "MPC_THR_HOVER", "THR_MDL_FAC", "IMU_GYRO_CUTOFF", "IMU_DGYRO_CUTOFF",
-             "IMU_GYRO_NF0_FRQ", "IMU_GYRO_NF0_BW"} | {f"CA_ROTOR{i}_{a}" for i in range(12) for a in ("PX", "PY", "PZ", "KM", "CT")}
+             "IMU_GYRO_NF0_FRQ", "IMU_GYRO_NF0_BW", "SENS_EN_GPSSIM", "SENS_EN_BAROSIM", "SENS_EN_MAGSIM"} \
+    | {f"CA_ROTOR{i}_{a}" for i in range(12) for a in ("PX", "PY", "PZ", "KM", "CT")} \
+    | {f"{p}{i}" for p in ("PWM_MAIN_FUNC", "SIM_GZ_EC_FUNC") for i in range(1, 9)}
 
 
 @pytest.mark.parametrize("name", PRESETS)
@@ -257,11 +364,27 @@ def test_px4_parameters_are_names_px4_defines(flown, name):
     sih = [line.split("\t") for line in (folder / "px4" / "sih.params").read_text().splitlines() if not line.startswith("#")]
     assert all(len(f) == 5 and f[:2] == ["1", "1"] and f[4] in ("6", "9") for f in sih)
     names = [f[2] for f in sih]
-    air = re.findall(r"^param set-default (\S+) (\S+)$", (folder / "px4" / "airframe").read_text(), re.M)
+    airframes = list((folder / "px4").glob("[0-9]*_*"))
+    assert len(airframes) == 1 and re.fullmatch(r"\d+_sihsim_\w+", airframes[0].name)  # PX4 lists numbered airframes
+    script = airframes[0].read_text()
+    assert "PX4_SIMULATOR=${PX4_SIMULATOR:=sihsim}" in script and ". ${R}etc/init.d/rc.mc_defaults" in script
+    air = re.findall(r"^param set-default (\S+) (\S+)$", script, re.M)
     assert set(names) | {n for n, _ in air} <= PX4_NAMES
-    assert {"SIH_MASS", "SIH_IXX", "SIH_T_MAX", "SIH_Q_MAX", "SIH_L_ROLL", "SIH_L_PITCH"} <= set(names)
+    assert {"SIH_MASS", "SIH_IXX", "SIH_T_MAX", "SIH_Q_MAX", "SIH_L_ROLL", "SIH_L_PITCH", "SIH_KDV", "SIH_KDW"} <= set(names)
     a = dict(air)
-    assert a["CA_ROTOR_COUNT"] == "4" and float(a["MPC_THR_HOVER"]) == pytest.approx(result.flight.hover_throttle, abs=1e-3)
+    assert a["CA_ROTOR_COUNT"] == "4" and float(a["MPC_THR_HOVER"]) == pytest.approx(_hover_thrust_fraction(result), abs=1e-3)
+    # SIH's thrust is linear in the command: no thrust curve under SIH, and hover at m g / (4 T_max)
+    s = {f[2]: float(f[3]) for f in sih}
+    assert a["THR_MDL_FAC"] == "0.0" and s["THR_MDL_FAC"] == 0.0
+    assert s["MPC_THR_HOVER"] == pytest.approx(s["SIH_MASS"] * G / 4 / s["SIH_T_MAX"], abs=1e-3)
+    assert [a[f"PWM_MAIN_FUNC{i}"] for i in range(1, 5)] == ["101", "102", "103", "104"]  # Motor 1 .. 4
+    # drag sized for this aircraft: SIH's freefall speed 10 MASS / KDV (sih_params.yaml) is the cage's
+    # quadratic-drag terminal speed, far above the 1 kg default's 2.4 m/s
+    lo, hi = (np.asarray(c) for c in result.design.frame.bbox())
+    area = (hi[0] - lo[0]) * (hi[1] - lo[1]) / 1e6
+    v_t = math.sqrt(2 * s["SIH_MASS"] * G / (1.225 * 1.0 * area))
+    assert s["SIH_MASS"] * G / s["SIH_KDV"] == pytest.approx(v_t, rel=1e-3) and v_t > 5
+    assert float(a["SIH_KDV"]) == s["SIH_KDV"]
     # PX4 quad X: rotor 0 front right CCW (KM > 0), rotor 2 front left CW (KM < 0)
     assert float(a["CA_ROTOR0_PX"]) > 0 < float(a["CA_ROTOR0_PY"]) and float(a["CA_ROTOR0_KM"]) > 0
     assert float(a["CA_ROTOR2_PX"]) > 0 > float(a["CA_ROTOR2_PY"]) and float(a["CA_ROTOR2_KM"]) < 0
@@ -315,6 +438,18 @@ def test_props_out_reverses_every_spin(flown, tmp_path):
     rp = json.loads((folder / "rotorpy.json").read_text())
     base = json.loads((flown["carbon"][0] / "rotorpy.json").read_text())
     assert rp["rotor_directions"] == [-x for x in base["rotor_directions"]]
+    # ArduCopter: props out is FRAME_TYPE 18 (BetaFlightXReversed), frame.json in its motor order;
+    # FRAME_TYPE 1 with the reversed yaw signs would turn ArduCopter's yaw control around
+    assert _parm(folder)["FRAME_TYPE"] == "18"
+    assert _ardupilot_defects(folder, d.check().result) == []
+    sdf = (folder / "gazebo" / "model.sdf").read_text()
+    base_sdf = (flown["carbon"][0] / "gazebo" / "model.sdf").read_text()
+    flip = {"cw": "ccw", "ccw": "cw"}
+    spins = re.findall(r"<turningDirection>(\w+)</turningDirection>", sdf)
+    assert spins == [flip[x] for x in re.findall(r"<turningDirection>(\w+)</turningDirection>", base_sdf)]
+    km = dict(re.findall(r"^param set-default (CA_ROTOR\d_KM) (\S+)$", next((folder / "px4").glob("1*")).read_text(), re.M))
+    base_km = dict(re.findall(r"^param set-default (CA_ROTOR\d_KM) (\S+)$", next((flown["carbon"][0] / "px4").glob("1*")).read_text(), re.M))
+    assert {k: float(x) for k, x in km.items()} == {k: -float(x) for k, x in base_km.items()}
 
 
 # -- resonance -------------------------------------------------------------------------------------
@@ -425,3 +560,18 @@ def test_fly_without_a_thrust_table_is_exit_2_naming_motors_kv_and_writes_nothin
     code, _, err = run_cli("fly", str(p), "-o", str(out))
     assert code == 2 and not out.exists()
     assert "odd.yaml: motors.kv (line" in err and "Fix:" in err and "Traceback" not in err
+
+
+def test_docs_preset_tables_are_the_flight_files(flown):
+    """docs/flight-files.md's mass, rotor and mode tables are what tools/flight_tables.py makes of
+    the presets' flight files now (`python tools/flight_tables.py --write` renews them)."""
+    import sys
+
+    sys.path.insert(0, str(ROOT / "tools"))
+    import flight_tables
+
+    doc = (ROOT / "docs" / "flight-files.md").read_text()
+    made = flight_tables.tables({n: flown[n][0] for n in PRESETS})
+    for key, (begin, end) in flight_tables.MARKS.items():
+        assert doc.split(begin, 1)[1].split(end, 1)[0].strip() == made[key], key
+    assert f"{flown['carbon'][1].mass.total_g:.2f}" in made["mass"]  # check's all-up mass, to the hundredth of a gram

@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-FILES = ("inav.txt", "betaflight.txt", "ardupilot/frame.json", "ardupilot/params.parm", "px4/sih.params", "px4/airframe",
+FILES = ("inav.txt", "betaflight.txt", "ardupilot/frame.json", "ardupilot/params.parm", "px4/sih.params", "px4/10090_sihsim_cogniframe",
          "gazebo/model.sdf", "gazebo/model.config", "rotorpy.json", "resonance.json", "resonance.png")
 
 
@@ -46,7 +46,7 @@ def texts(v) -> dict[str, str]:
            **v.resonance.to_dict()}
     return {"inav.txt": inav.text(v), "betaflight.txt": betaflight.text(v),
             "ardupilot/frame.json": ardupilot.frame_json(v), "ardupilot/params.parm": ardupilot.params_parm(v),
-            "px4/sih.params": px4.sih_params(v), "px4/airframe": px4.airframe(v),
+            "px4/sih.params": px4.sih_params(v), px4.AIRFRAME_FILE: px4.airframe(v),
             "gazebo/model.sdf": gazebo.model_sdf(v), "gazebo/model.config": gazebo.model_config(v),
             "rotorpy.json": rotorpy_params.text(v), "resonance.json": json.dumps(res, indent=2) + "\n"}
 

@@ -53,6 +53,7 @@ def header(v: Vehicle, what: str) -> list[str]:
 
     return [f"# {what} for {v.name}, written by cogniframe (`cogniframe fly`). Paste into the Configurator's CLI tab.",
             f"# {v.motor} motors, {v.prop} propellers, props {'out' if v.props_out else 'in'}; "
-            f"all-up mass {v.mass.mass_kg * 1000:.1f} g; hover throttle {v.rotor.hover_throttle:.0%} (flight tables).",
+            f"all-up mass {v.mass.mass_kg * 1000:.1f} g; ESC throttle at hover {v.rotor.hover_throttle:.0%} (flight tables), "
+            f"hover thrust {v.hover_thrust_fraction:.0%} of full.",
             f"# Centre of gravity from the motors' centre: {mm(c[1])} mm front, {mm(c[0])} mm right, "
             f"{mm(-c[2])} mm below the propellers' plane."]

@@ -43,12 +43,20 @@ class Vehicle:
     props_out: bool
     hover_current_a: float  # battery current at hover, motors and avionics (analysis/flight.py)
     imu_m: tuple[float, float, float]  # the flight controller's board centre relative to the centre of gravity
+    cage_m: tuple[tuple[float, float, float], tuple[float, float, float]]  # the cage's joint centres' box (min, max) from the centre of gravity
 
     def rotor_at(self, corner: str) -> Rotor:
         return next(r for r in self.rotors if r.corner == corner)
 
     def ordered(self, order) -> list[Rotor]:
         return [self.rotor_at(c) for c in order]
+
+    @property
+    def hover_thrust_fraction(self) -> float:
+        """Each rotor's thrust at hover over its full-throttle thrust, (w_hover / w_max)^2: what
+        ArduPilot (MOT_THST_HOVER, SITL's hoverThrOut, INS_HNTCH_REF) and PX4 (MPC_THR_HOVER) mean
+        by hover "throttle"; the ESC's raw throttle at hover is `rotor.hover_throttle`."""
+        return (self.rotor.omega_hover / self.rotor.omega_max) ** 2
 
     @property
     def rotor_centre_m(self) -> np.ndarray:
@@ -84,6 +92,8 @@ def vehicle_of(spec, design, budget, mass: MassProps, resonance: Resonance) -> V
     kv = spec.motors.kv or flight.default_kv(spec.motor.name)
     fr = flight.evaluate(spec, mass.mass_kg * 1000.0, len(rot))
     imu = np.asarray(design.frame.core.stack.centre, float) / 1000.0 - np.asarray(mass.cg_m)
+    lo, hi = (np.asarray(c, float) / 1000.0 - np.asarray(mass.cg_m) for c in design.frame.bbox())
     return Vehicle(spec.name, mass, rot, model, b.cells, b.cells * flight.CELL_V, b.capacity_mah, b.usable_fraction,
                    resonance, f"{spec.motor.name} {kv}KV", flight.prop_name(spec), bool(spec.motors.props_out),
-                   fr.hover_current_a, (float(imu[0]), float(imu[1]), float(imu[2])))
+                   fr.hover_current_a, (float(imu[0]), float(imu[1]), float(imu[2])),
+                   (tuple(float(x) for x in lo), tuple(float(x) for x in hi)))
