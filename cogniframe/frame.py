@@ -424,6 +424,9 @@ STACK_H = 16.0  # FC + 4-in-1 ESC on 8 mm standoffs, mm
 STACK_BOTTOM = 3.0  # soft-mount grommets / nylon nuts under the ESC, mm: the core links' tabs keep below it
 CAMERA_BASE_T = 2.0  # camera mount base plate under the stack, mm
 SENSOR_GAP = 3.0  # holder rear face to the flow board's edge, mm
+# The companion computer stands on nylon spacers this tall over its mount: the stack screws' 2 mm
+# heads sit on the mount under the computer's board (fasteners.py), mm
+COMPUTER_LIFT = 3.0
 
 
 def strap_mouth(spec: Spec) -> float:
@@ -489,7 +492,7 @@ def _core(spec: Spec) -> Core:
     computer = None
     if c.computer:
         w, h = c.computer.hole_spacing
-        computer = Box("computer", (0.0, 0.0, top + STACK_H + 6.0), (w + 7.0, h + 7.0, 5.0))
+        computer = Box("computer", (0.0, 0.0, top + STACK_H + 6.0 + COMPUTER_LIFT), (w + 7.0, h + 7.0, 5.0))
     return Core(plate, holder, battery, stack, computer, spacer, flow, camera, base, mouth, hang)
 
 

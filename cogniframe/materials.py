@@ -122,13 +122,20 @@ SCREWS: dict[str, Screw] = {
     # stock lengths: the ISO 4762 preferred lengths sold for these sizes.
     "M1.4": Screw("M1.4", 1.4, 1.6, 2.6, 3.0, 0.12, 0.3, 1.4, 1.2, (3, 4, 5, 6, 8),
                   "ISO 4762 M1.4: dk 2.6, k 1.4; ISO 4032 (DIN 934) M1.4 nut s 3.0, m 1.2; ISO 273 medium clearance 1.6; pitch 0.3"),
-    "M2": Screw("M2", 2.0, 2.4, 3.8, 4.0, 0.25, 0.4, 2.0, 1.6, (3, 4, 5, 6, 8, 10, 12, 16, 20),
-                "ISO 4762 M2: dk 3.8, k 2.0; ISO 4032 M2 nut s 4.0, m 1.6; ISO 273 medium clearance 2.4; pitch 0.4"),
+    "M2": Screw("M2", 2.0, 2.4, 3.8, 4.0, 0.25, 0.4, 2.0, 1.6, (3, 4, 5, 6, 8, 10, 12, 16, 20, 25, 30),
+                "ISO 4762 M2: dk 3.8, k 2.0; ISO 4032 M2 nut s 4.0, m 1.6; ISO 273 medium clearance 2.4; pitch 0.4; "
+                "25 and 30 mm: DIN 912's M2 lengths, an FC stack's screws"),
     "M2.5": Screw("M2.5", 2.5, 2.9, 4.5, 5.0, 0.4, 0.45, 2.5, 2.0, (4, 5, 6, 8, 10, 12, 16, 20, 25),
                   "ISO 4762 M2.5: dk 4.5, k 2.5; ISO 4032 M2.5 nut s 5.0, m 2.0; ISO 273 medium clearance 2.9; pitch 0.45"),
     "M3": Screw("M3", 3.0, 3.4, 5.5, 5.5, 0.6, 0.5, 3.0, 2.4, (4, 5, 6, 8, 10, 12, 16, 20, 25, 30),
                 "ISO 4762 M3: dk 5.5, k 3.0; ISO 4032 M3 nut s 5.5, m 2.4; ISO 273 medium clearance 3.4; pitch 0.5"),
 }
+
+# ISO 7046-1 (cross-recessed countersunk, 90 deg) head diameter dk and height k, mm: the M2 head
+# is 3.8 across and 1.2 tall, so it sits flush in a 1.6 mm wall (ISO 7046-1 starts at M1.6: the
+# M1.4 row scales its M1.6 head, 3.0 x 0.96, to the thread).
+COUNTERSUNK = {"M1.4": (2.6, 0.84), "M2": (3.8, 1.2), "M2.5": (4.7, 1.5), "M3": (5.5, 1.65)}
+COUNTERSINK_SLACK = 0.2  # mm: a printed countersink's mouth is this much wider than the head
 
 # A screw holds in a thread by at least this many full turns of its pitch (4 pitches: 1.6 mm of
 # an M2). Motor bases are thin aluminium: their thread is what limits the screw, so the fit check

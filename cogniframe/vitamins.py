@@ -30,8 +30,7 @@ PROP_DISC_T = 3.0  # mm
 PROP_GAP = 0.5  # bell top to the underside of the blade disc, mm
 SHAFT_D = 1.5  # motor shaft diameter (mm): 1.5 mm on the 11xx-15xx classes
 SHAFT_ABOVE = 2.5  # shaft length above the bell (into the prop hub), mm
-STACK_STANDOFF = 8.0  # between the ESC and the FC, mm
-STANDOFF_D = 4.0  # nylon M2 standoff across flats (drawn round), mm
+STANDOFF_D = 4.0  # nylon M2 grommet under the ESC across flats (drawn round), mm
 
 COLOURS = {
     "motor": (0.62, 0.62, 0.66),
@@ -44,6 +43,7 @@ COLOURS = {
     "flow_sensor": (0.40, 0.10, 0.50),
     "screw": (0.20, 0.20, 0.22),
     "nut": (0.75, 0.75, 0.78),
+    "standoff": (0.93, 0.93, 0.88),  # white nylon
 }
 
 
@@ -59,18 +59,20 @@ class Prim:
     axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
     radius: float = 0.0
     length: float = 0.0
+    radius_end: float | None = None  # a cone: the radius at the far end (a countersunk head); None: a cylinder
 
 
 @dataclass(frozen=True)
 class Vitamin:
     name: str  # assembly name: motor_fl, propeller_fl, battery, flight_controller ...
-    family: str  # motor | propeller | battery | fc | esc | computer | camera | flow_sensor | screw | nut
+    family: str  # motor | propeller | battery | fc | esc | computer | camera | flow_sensor | screw | nut | standoff
     bom: str  # the data table's description (what to buy)
     budget_line: str  # the mass budget item this vitamin's mass is in
     prims: tuple[Prim, ...]
     colour: tuple[float, float, float]
     disc: tuple[tuple[float, float, float], float, float] | None = None  # propeller: (centre, radius, thickness)
     view: tuple[tuple[float, float, float], tuple[float, float, float], float] | None = None  # sensor: (apex, direction, half-angle deg)
+    stage: str = ""  # when it is fitted (fasteners.STAGES); "" = by its family (fasteners.VITAMIN_STAGES)
 
     @property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -87,9 +89,10 @@ def box(lo, hi) -> Prim:
     return Prim("box", _t((lo + hi) / 2), _t(hi - lo))
 
 
-def cyl(base, axis, radius: float, length: float) -> Prim:
+def cyl(base, axis, radius: float, length: float, radius_end: float | None = None) -> Prim:
     a = np.asarray(axis, float)
-    return Prim("cyl", _t(base), axis=_t(a / np.linalg.norm(a)), radius=float(radius), length=float(length))
+    return Prim("cyl", _t(base), axis=_t(a / np.linalg.norm(a)), radius=float(radius), length=float(length),
+                radius_end=None if radius_end is None else float(radius_end))
 
 
 def _prim_corners(p: Prim) -> np.ndarray:
@@ -111,7 +114,8 @@ def _transform_prims(prims, m: np.ndarray) -> tuple[Prim, ...]:
             rot = r @ np.asarray(p.rot)
             out.append(Prim("box", _t(r @ np.asarray(p.centre) + t), p.size, tuple(_t(row) for row in rot)))
         else:
-            out.append(Prim("cyl", _t(r @ np.asarray(p.centre) + t), axis=_t(r @ np.asarray(p.axis)), radius=p.radius, length=p.length))
+            out.append(Prim("cyl", _t(r @ np.asarray(p.centre) + t), axis=_t(r @ np.asarray(p.axis)), radius=p.radius, length=p.length,
+                            radius_end=p.radius_end))
     return tuple(out)
 
 
@@ -178,7 +182,10 @@ def _board_prims(board: Board, lo_z: float, centre_xy, parts_down: bool = False)
 
 
 def stack_vitamins(spec: Spec, frame: Frame) -> list[Vitamin]:
-    """FC and 4-in-1 ESC on the stack pattern: grommets, ESC, standoffs, FC (bottom up)."""
+    """FC and 4-in-1 ESC on the stack pattern: grommets, ESC, FC (bottom up); the nylon spacers
+    between them are fasteners (families/core_plate.stack_plan)."""
+    from .families.core_plate import STACK_SPACER
+
     lines = _budget_lines(spec)
     pitch, _ = STACK_PATTERNS[spec.core.stack_pattern]
     key = "20x20" if pitch < 25 else "30x30"
@@ -188,15 +195,13 @@ def stack_vitamins(spec: Spec, frame: Frame) -> list[Vitamin]:
     grommets = [cyl((x, y, z0), (0, 0, 1), STANDOFF_D / 2, STACK_BOTTOM) for x, y in holes]
     z_esc = z0 + STACK_BOTTOM
     esc = _board_prims(esc_b, z_esc, (0.0, 0.0))
-    z_st = z_esc + esc_b.size[2]
-    standoffs = [cyl((x, y, z_st), (0, 0, 1), STANDOFF_D / 2, STACK_STANDOFF) for x, y in holes]
-    fc = _board_prims(fc_b, z_st + STACK_STANDOFF, (0.0, 0.0))
+    fc = _board_prims(fc_b, z_esc + esc_b.size[2] + STACK_SPACER, (0.0, 0.0))
     if "fc_esc_stack" in lines:
         return [Vitamin("fc_esc_stack", "fc", f"{fc_b.bom} + {esc_b.bom}", lines["fc_esc_stack"],
-                        tuple(grommets + esc + standoffs + fc), COLOURS["fc"])]
+                        tuple(grommets + esc + fc), COLOURS["fc"])]
     out = []
     if "esc" in lines:
-        out.append(Vitamin("esc", "esc", esc_b.bom, lines["esc"], tuple(grommets + esc + standoffs), COLOURS["esc"]))
+        out.append(Vitamin("esc", "esc", esc_b.bom, lines["esc"], tuple(grommets + esc), COLOURS["esc"]))
     if "fc" in lines:
         out.append(Vitamin("flight_controller", "fc", fc_b.bom, lines["fc"], tuple(fc), COLOURS["fc"]))
     return out
@@ -251,25 +256,33 @@ def flow_vitamin(spec: Spec, frame: Frame) -> Vitamin | None:
 
 
 def fastener_vitamins(spec: Spec, frame: Frame, parts=None) -> list[Vitamin]:
-    """Each screw as its head (ISO 4762 head diameter and height, under `base`) and its shank (the
-    nominal diameter, its length under the head); each nut as a cylinder across its flats."""
+    """Every screw, nut and standoff of the design (fasteners.py), drawn (`fastener_vitamin`)."""
     from .fasteners import fasteners
-    from .materials import SCREWS
 
     if parts is None:
         from . import partlist
 
         parts = partlist.part_list(spec, frame)
-    out = []
-    for f in fasteners(spec, frame, parts):
-        sc = SCREWS[f.size]
-        base, axis = np.asarray(f.base), np.asarray(f.axis)
-        if f.kind == "screw":
-            prims = (cyl(base - axis * sc.head_h, axis, sc.head_d / 2, sc.head_h), cyl(base, axis, sc.d / 2, f.length))
-        else:
-            prims = (cyl(base, axis, sc.nut_af / 2, f.length),)
-        out.append(Vitamin(f.name, f.kind, f.bom, f.budget_line, prims, COLOURS[f.kind]))
-    return out
+    return [fastener_vitamin(f) for f in fasteners(spec, frame, parts)]
+
+
+def fastener_vitamin(f) -> Vitamin:
+    """A screw as its head and its shank (the nominal diameter): a socket head (ISO 4762 head
+    diameter and height) on the part's face behind `base`, a countersunk head (ISO 7046, a 90 deg
+    cone) inside the part ahead of it; a nut as a cylinder across its flats; a standoff or spacer
+    as a cylinder across its hex's flats."""
+    from .materials import COUNTERSUNK, SCREWS
+
+    sc = SCREWS[f.size]
+    base, axis = np.asarray(f.base), np.asarray(f.axis)
+    if f.kind == "screw" and f.head == "countersunk":
+        dk, _ = COUNTERSUNK[f.size]
+        prims = (cyl(base, axis, dk / 2, (dk - sc.d) / 2, sc.d / 2), cyl(base, axis, sc.d / 2, f.length))
+    elif f.kind == "screw":
+        prims = (cyl(base - axis * sc.head_h, axis, sc.head_d / 2, sc.head_h), cyl(base, axis, sc.d / 2, f.length))
+    else:  # a nut, a standoff: across the flats of its hex
+        prims = (cyl(base, axis, sc.nut_af / 2, f.length),)
+    return Vitamin(f.name, f.kind, f.bom, f.budget_line, prims, COLOURS[f.kind], stage=f.stage)
 
 
 def thread_pairs(spec: Spec, frame: Frame, parts=None) -> frozenset:
@@ -317,7 +330,8 @@ def _prims_manifold(prims: tuple[Prim, ...], segments: int):
             mat[:, 3] = p.centre
             parts.append(s.transform(mat))
         else:
-            s = m3.Manifold.cylinder(float(p.length), float(p.radius), float(p.radius), segments)
+            r_end = p.radius if p.radius_end is None else p.radius_end
+            s = m3.Manifold.cylinder(float(p.length), float(p.radius), float(r_end), segments)
             mat = np.zeros((3, 4))
             mat[:, :3] = _frame_z(np.asarray(p.axis))
             mat[:, 3] = p.centre
@@ -363,6 +377,8 @@ def to_cq(v: Vitamin):
             from .parts.joint_solid import apply
 
             solids.append(apply(s, m))
+        elif p.radius_end is not None:
+            solids.append(cq.Solid.makeCone(p.radius, p.radius_end, p.length, cq.Vector(*p.centre), cq.Vector(*p.axis)))
         else:
             solids.append(cq.Solid.makeCylinder(p.radius, p.length, cq.Vector(*p.centre), cq.Vector(*p.axis)))
     if len(solids) == 1:

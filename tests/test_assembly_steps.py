@@ -45,7 +45,7 @@ def test_fold_as_you_assemble_order_and_lengths():
     d = _design("carbon")
     steps = assembly_steps(d)
     titles = [s.title for s in steps]
-    assert titles == ["Top ring", "Bottom ring", "Knees and upper legs", "Fold the sides", "Arms and motor mounts",
+    assert titles == ["Top ring", "Bottom ring", "Knees and upper legs", "Fold the sides", "Arms, motor mounts and motors",
                       "Struts", "Core", "Hang the core", "Camera and sensors", "Electronics"]
     cut = {n: r.length_mm for r in d.cut.rows for n in r.rods}
     for s in steps:
@@ -55,8 +55,9 @@ def test_fold_as_you_assemble_order_and_lengths():
     assert by["Top ring"].parts == ("corner_top_fl", "corner_top_fr", "corner_top_rr", "corner_top_rl")
     assert {d.frame.rods[r].role for r, _ in by["Top ring"].rods} == {"cage"}
     assert all("_top_" in r for r, _ in by["Top ring"].rods)
-    assert {d.frame.rods[r].role for r, _ in by["Arms and motor mounts"].rods} == {"arm"}
-    assert by["Arms and motor mounts"].parts == ("motor_mount_fl", "motor_mount_fr", "motor_mount_rr", "motor_mount_rl")
+    arms = by["Arms, motor mounts and motors"]
+    assert {d.frame.rods[r].role for r, _ in arms.rods} == {"arm"}
+    assert arms.parts == ("motor_mount_fl", "motor_mount_fr", "motor_mount_rr", "motor_mount_rl")
     assert set(by["Core"].parts) >= {"core_plate", "battery_holder", "core_link_fl", "core_link_mirrored_fr", "sensor_mount"}
     assert by["Camera and sensors"].parts == ("front_camera_mount",)
     assert any("hook-and-loop battery strap" in h for h in by["Core"].hardware)
@@ -64,7 +65,9 @@ def test_fold_as_you_assemble_order_and_lengths():
     assert "CA" in by["Top ring"].glue and "CA" in by["Fold the sides"].glue
     assert by["Core"].glue.startswith("none") and by["Hang the core"].glue.startswith("none")
     assert not any("core link to plate" in h for h in by["Core"].hardware)  # the pegs press in: no link screw
-    assert any("motor to mount" in h for h in by["Electronics"].hardware)
+    # the motors go on while the mounts are threaded on the free arm rods, before the arms go in
+    assert any("motor to mount" in h for h in arms.hardware) and "before the arm goes in" in arms.text
+    assert not any("motor to mount" in h for h in by["Electronics"].hardware)
 
 
 def test_markdown():
@@ -74,3 +77,28 @@ def test_markdown():
     top = d.frame.rods["rod_cage_top_front"].cut_length
     assert "## 1. Top ring" in md and f"rod_cage_top_front ({top:g} mm)" in md
     assert md.count("- Glue:") == len(assembly_steps(d))
+
+
+@pytest.mark.parametrize("name, over", [("carbon", {}), ("bamboo", {}), ("carbon", {"core__link": "tab"}),
+                                        ("carbon", {"core__link": "tab", "frame__level_arms": False})])
+def test_no_step_names_what_the_build_lacks(name, over):
+    """Issue 45: the steps named a strut peg and a middle tube the pegged link does not have, clipped
+    on motor mounts whose sleeves are closed and put ABS tubes on bamboo's PLA core. Every step now
+    names only parts, features and materials the build has; a step naming one it lacks is caught."""
+    from dataclasses import replace as _replace
+
+    from cogniframe.design import design
+    from cogniframe.report.assembly_steps import unbuilt
+    from presets import preset_spec
+
+    d = design(preset_spec(name, **over))
+    steps = assembly_steps(d)
+    for s in steps:
+        assert unbuilt(s, d) == [], (s.number, s.title)
+    text = " ".join(s.text for s in steps)
+    assert "clip" not in text.lower() and "strut's peg" not in text
+    core = next(s for s in steps if s.title == "Core")
+    assert unbuilt(_replace(core, text=core.text + " Clip the motor mounts on."), d) == ["clip"]
+    wrong = "PLA" if d.spec.core.material == "abs" else "ABS"
+    assert unbuilt(_replace(core, text=f"Press the pegs into the {wrong} tubes of core_link_xx."), d) == \
+        [wrong] + (["tube", "peg"] if over else []) + ["core_link_xx"]

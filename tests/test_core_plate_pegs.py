@@ -393,7 +393,7 @@ def test_assembly_steps_press_the_pegs_in_rather_than_bolt():
     from cogniframe.report.assembly_steps import assembly_steps
 
     core = next(s for s in assembly_steps(design_mod.design(preset_spec("carbon", core__link="pegs"))) if s.title == "Core")
-    assert "pegs all the way into the pair of ABS tubes" in core.text and "screw down through the link tab" not in core.text
+    assert "pegs all the way into the pair of tubes" in core.text and "screw down through the link tab" not in core.text
     assert "pressed in" in core.glue
     tab = next(s for s in assembly_steps(design_mod.design(preset_spec("carbon", core__link="tab"))) if s.title == "Core")
     assert "screw down through the link tab" in tab.text

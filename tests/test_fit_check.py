@@ -351,8 +351,9 @@ def test_built_1104_mount_holes_are_4p5mm_from_the_axis_and_clear_the_rods(spaci
 
 def test_camera_and_computer_screws_pass_through_board_and_mount_into_a_nut():
     """Carbon: the Pi camera v2 (M2 on 21 x 12.5 mm) through its 1.0 mm board and the 1.6 mm upright,
-    and the Pi Zero (M2.5 on 58 x 23 mm) through its 1.4 mm board and the 2.0 mm mount frame, each
-    into an ISO 4032 nut it fills."""
+    and the Pi Zero (M2.5 on 58 x 23 mm) through its 1.4 mm board, a 3 mm nylon spacer (the board
+    stands over the stack screws' heads) and the 2.0 mm mount frame, each into an ISO 4032 nut it
+    fills: M2.5 x 10, 3.6 mm past the 6.4 mm grip (the 2.0 mm nut and 1.6 mm beyond)."""
     spec = preset_spec("carbon")
     fr, parts = _design(spec)
     fs = {f.name: f for f in fasteners_mod.fasteners(spec, fr, parts)}
@@ -368,7 +369,7 @@ def test_camera_and_computer_screws_pass_through_board_and_mount_into_a_nut():
     assert sorted({(round(f.base[0] - c.centre[0], 6), round(f.base[1] - c.centre[1], 6)) for f in pi}) == \
         [(-29.0, -11.5), (-29.0, 11.5), (29.0, -11.5), (29.0, 11.5)]
     for f in pi:
-        assert f.size == "M2.5" and f.grip == pytest.approx(3.4) and f.engagement >= SCREWS["M2.5"].nut_m
+        assert f.size == "M2.5" and f.grip == pytest.approx(6.4) and f.length == 10.0 and f.engagement == pytest.approx(3.6)
 
 
 def test_fails_a_screw_that_does_not_fill_its_nut():
@@ -376,7 +377,7 @@ def test_fails_a_screw_that_does_not_fill_its_nut():
     fr, parts = _design(spec)
     fs = list(fasteners_mod.fasteners(spec, fr, parts))
     i = next(k for k, f in enumerate(fs) if f.name == "screw_computer_1")
-    fs[i] = replace(fs[i], length=5.0, engagement=round(5.0 - fs[i].grip, 4))  # 1.6 mm into a 2.0 mm nut
+    fs[i] = replace(fs[i], length=8.0, engagement=round(8.0 - fs[i].grip, 4))  # 1.6 mm into a 2.0 mm nut
     r = fit_check.check(spec, parts, fs)
     (p,) = r.problems
     assert (p.rule, p.a, p.b) == ("thread", "screw_computer_1", "nut_computer_1") and "does not fill the nut" in p.message

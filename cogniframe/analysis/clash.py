@@ -7,7 +7,10 @@ A pure function over named solids (trimesh meshes with a 4x4 world transform eac
   pair's designed interference volume, a hole narrower than its rod); a socket that clears its
   rod overlaps it by ~0 like any other pair;
 * every propeller disc (a body with `disc` set) must clear every other body by `prop_margin` mm,
-  except the bodies named in `ignore` (its own motor, on whose shaft it sits).
+  except the bodies named in `ignore` (its own motor, on whose shaft it sits);
+* every keep-out volume (analysis/fit_check.keepouts: a screw's or nut's driver, the battery's
+  slide path) overlaps no body fitted by its stage (`Body.stage`, fasteners.STAGES) but those it
+  exempts by less than the tolerance.
 
 Booleans and gaps are manifold3d's (`^` intersection volume, `min_gap`), after an axis-aligned
 bounding-box prefilter (grown by the margin for the discs), so only neighbours are tested.
@@ -38,19 +41,26 @@ class Body:
     mesh: object  # trimesh.Trimesh in its own frame
     transform: np.ndarray | None = None  # 4x4 world <- mesh; None = identity
     disc: bool = False  # a propeller disc: tested for clearance, not only overlap
+    stage: str = ""  # when it is fitted (fasteners.STAGES; "" = the first): a keep-out sees it from then on
 
 
 @dataclass(frozen=True)
 class Clash:
     a: str
     b: str
-    kind: str  # "overlap" | "prop_margin"
+    kind: str  # "overlap" | "prop_margin" | a keep-out's rule: "driver" | "battery_path" (a: the keep-out)
     volume_mm3: float  # overlap volume (0 for a margin clash that does not touch)
     gap_mm: float | None = None  # propeller clearance found (margin clashes)
 
     def message(self, margin: float) -> str:
         if self.kind == "overlap":
             return f"clash: {self.a} and {self.b} overlap by {self.volume_mm3:.2f} mm^3"
+        if self.kind == "driver":
+            return (f"fit: {self.a.removeprefix('driver_')} cannot be turned: its driver (along the screw's axis, from "
+                    f"outside) hits {self.b} ({self.volume_mm3:.2f} mm^3)")
+        if self.kind == "battery_path":
+            return (f"fit: {self.b} sits in the battery's slide path ({self.volume_mm3:.2f} mm^3 of it): the pack cannot "
+                    "slide from the holder's open end to its seat")
         return (f"clash: propeller {self.a} comes within {self.gap_mm:.1f} mm of {self.b} "
                 f"(needs {margin:g} mm, requirements.prop_margin); overlap {self.volume_mm3:.2f} mm^3")
 
@@ -65,6 +75,7 @@ class ClashResult:
     prop_margin_mm: float
     max_overlap: tuple[str, str, float] = ("", "", 0.0)  # largest overlap seen (a clash or not)
     prop_gaps: tuple[tuple[str, str, float], ...] = field(default=())  # each disc's nearest body and gap
+    keepouts: int = 0  # keep-out volumes tested (drivers, the battery's slide path)
 
     @property
     def ok(self) -> bool:
@@ -78,6 +89,7 @@ class ClashResult:
                 "tolerance_mm3": self.tolerance_mm3, "prop_margin_mm": self.prop_margin_mm,
                 "max_overlap": {"a": self.max_overlap[0], "b": self.max_overlap[1], "volume_mm3": round(self.max_overlap[2], 3)},
                 "prop_gaps": [{"propeller": p, "nearest": n, "gap_mm": round(g, 2)} for p, n, g in self.prop_gaps],
+                "keepouts": self.keepouts,
                 "clashes": [{"a": c.a, "b": c.b, "kind": c.kind, "volume_mm3": round(c.volume_mm3, 3),
                              "gap_mm": None if c.gap_mm is None else round(c.gap_mm, 2)} for c in self.clashes]}
 
@@ -87,7 +99,8 @@ def from_dict(d: dict) -> ClashResult:
     mo = d["max_overlap"]
     return ClashResult(tuple(Clash(c["a"], c["b"], c["kind"], c["volume_mm3"], c["gap_mm"]) for c in d["clashes"]), d["bodies"],
                        d["pairs_total"], d["pairs_tested"], d["tolerance_mm3"], d["prop_margin_mm"],
-                       (mo["a"], mo["b"], mo["volume_mm3"]), tuple((g["propeller"], g["nearest"], g["gap_mm"]) for g in d["prop_gaps"]))
+                       (mo["a"], mo["b"], mo["volume_mm3"]), tuple((g["propeller"], g["nearest"], g["gap_mm"]) for g in d["prop_gaps"]),
+                       d.get("keepouts", 0))
 
 
 def _mesh_manifold(mesh):
@@ -154,7 +167,7 @@ def _pair_key(ka: str, kb: str, margin: float | None) -> str:
 
 def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_margin: float = 5.0,
           ignore: frozenset[frozenset[str]] = frozenset(), memo: MutableMapping[str, list] | None = None,
-          allowed: Mapping[frozenset[str], float] | None = None) -> ClashResult:
+          allowed: Mapping[frozenset[str], float] | None = None, keepouts: Sequence = ()) -> ClashResult:
     """Test every pair of `bodies`; `ignore` holds name pairs not tested at all (a disc and its motor);
     `allowed` the pairs that overlap by design (a rod pressed into a narrower socket) and by how
     much, mm^3: such a pair clashes only past that volume plus the tolerance.
@@ -162,7 +175,10 @@ def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_mar
     `memo`: pair results from earlier checks (key -> [overlap mm^3, gap mm or None]), read and
     filled here; the key is the hash of both bodies' meshes and transforms (`body_key`) and, for a
     disc, the margin. A rebuild after one part changed only re-tests the pairs that hold a copy of
-    it; the result is the same as testing every pair again."""
+    it; the result is the same as testing every pair again.
+
+    `keepouts`: analysis/fit_check.Keepout volumes, each tested against the bodies fitted by its
+    stage that it does not exempt (not memoised: a few dozen small cylinders)."""
     names = [b.name for b in bodies]
     if len(set(names)) != len(names):
         dup = sorted({n for n in names if names.count(n) > 1})
@@ -233,6 +249,31 @@ def check(bodies: Sequence[Body], tolerance_mm3: float = TOLERANCE_MM3, prop_mar
                     clashes.append(Clash(disc.name, other.name, "prop_margin", vol, gap))
             elif vol >= tolerance_mm3 + (allowed or {}).get(frozenset((a.name, b.name)), 0.0):
                 clashes.append(Clash(a.name, b.name, "overlap", vol))
+    clashes += _keepout_clashes(bodies, mans, lo, hi, keepouts, tolerance_mm3)
     clashes.sort(key=lambda c: (-round(c.volume_mm3, 3), c.a, c.b))
     return ClashResult(tuple(clashes), n, n * (n - 1) // 2, tested, tolerance_mm3, prop_margin, worst,
-                       tuple((p, o, g) for p, (o, g) in sorted(gaps.items())))
+                       tuple((p, o, g) for p, (o, g) in sorted(gaps.items())), len(keepouts))
+
+
+def _keepout_clashes(bodies, mans, lo, hi, keepouts, tolerance_mm3: float) -> list[Clash]:
+    """Each keep-out against the bodies fitted by its stage (bounding boxes first)."""
+    if not keepouts:
+        return []
+    from ..fasteners import STAGES
+    from ..vitamins import _prims_manifold
+
+    rank = {s: i for i, s in enumerate(STAGES)}
+    out = []
+    for ko in keepouts:
+        man = _prims_manifold(ko.prims, 48)
+        kb = np.asarray(man.bounding_box(), float)
+        klo, khi = kb[:3], kb[3:]
+        for i, b in enumerate(bodies):
+            if b.name in ko.exempt or rank.get(b.stage, 0) > rank[ko.stage]:
+                continue
+            if (klo > hi[i]).any() or (lo[i] > khi).any():
+                continue
+            vol = float((man ^ mans[i]).volume())
+            if vol >= tolerance_mm3:
+                out.append(Clash(ko.name, b.name, ko.rule, vol))
+    return out

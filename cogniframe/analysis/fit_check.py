@@ -16,6 +16,17 @@ Rules:
   catalogue pattern (opposite holes across the shaft, MotorPreset.hole_points) turned onto the
   arm by the mount's `pattern_turn` (the motor sits at any turn about its shaft; the pattern's
   shape does not change), and at least one opposite pair of them.
+
+Two rules need the solids, so the build's clash check runs them on its bodies (`keepouts` says
+what each keeps clear; analysis/clash.py tests them; clash.json lists a failure, and `check` of
+a build FAILs with it):
+
+* `driver`: every screw head and nut can be turned from outside: a driver, a cylinder as wide as
+  the head (a nut: a nut driver round its corners) reaching DRIVER_REACH (NUT_DRIVER_REACH) mm
+  along the screw's axis away from the part, meets no solid fitted by then (fasteners.STAGES:
+  what comes later in the assembly guide is not there yet);
+* `battery_path`: nothing sits in the battery's slide path: the pack at its catalogue size, swept
+  from the holder's open end (its rear face at the mouth) to its seat, meets no solid but the pack.
 """
 
 from __future__ import annotations
@@ -44,7 +55,7 @@ class FitResult:
     problems: tuple[FitProblem, ...]
     screws: int
     holes: int
-    rules: tuple[str, ...] = ("screw_hole", "thread", "rod_wall", "pattern")
+    rules: tuple[str, ...] = ("screw_hole", "thread", "rod_wall", "pattern")  # `driver`, `battery_path`: the build's (keepouts)
     details: tuple[dict, ...] = ()
 
     @property
@@ -171,3 +182,55 @@ def _screw(f) -> list[FitProblem]:
                               f"fit: {f.name} ({f.size} x {f.length:g}) enters {f.thread} {f.engagement:.2f} mm, past its "
                               f"{f.thread_depth:g} mm thread: it reaches the windings (motors.thread_depth)"))
     return out
+
+
+# -- the build's rules: what must stay clear (tested on the solids by analysis/clash.py) ---------
+
+DRIVER_REACH = 30.0  # mm: a screwdriver's or hex key's shaft, clear of everything along the screw's axis
+NUT_DRIVER_REACH = 10.0  # mm: a nut driver's socket over the nut and the screw's end
+NUT_DRIVER_WALL = 1.0  # mm: the nut driver's wall round the nut's corners
+
+
+@dataclass(frozen=True)
+class Keepout:
+    """A volume that must stay empty: `prims` (vitamins.Prim, world mm), which `rule` asks for it,
+    whose it is (`owner`: the screw, nut or the battery), the stage it is tested at (the solids
+    fitted then or before: fasteners.STAGES) and the solids it may touch (`exempt`)."""
+
+    name: str
+    rule: str  # driver | battery_path
+    owner: str
+    prims: tuple
+    stage: str
+    exempt: frozenset
+
+
+def keepouts(spec, frame, fasteners) -> tuple[Keepout, ...]:
+    """Each screw head's and nut's driver, and the battery's slide path (module docstring)."""
+    from ..materials import COUNTERSUNK
+    from ..vitamins import box, cyl
+
+    out = []
+    partner = {f.thread: f.name for f in fasteners if f.kind == "screw" and f.thread}
+    for f in fasteners:
+        sc = SCREWS[f.size]
+        base, axis = np.asarray(f.base, float), np.asarray(f.axis, float)
+        if f.kind == "screw":
+            if f.head == "countersunk":  # flush: the driver starts at the part's face
+                start, r = base, COUNTERSUNK[f.size][0] / 2
+            else:
+                start, r = base - axis * sc.head_h, sc.head_d / 2
+            prims = (cyl(start, -axis, r, DRIVER_REACH),)
+            exempt = frozenset((f.name, f.thread))
+        elif f.kind == "nut":
+            r = sc.nut_af / math.sqrt(3) + NUT_DRIVER_WALL  # round the corners (af / cos 30 deg / 2)
+            prims = (cyl(base + axis * f.length, axis, r, NUT_DRIVER_REACH),)
+            exempt = frozenset((f.name, partner.get(f.name, "")))
+        else:
+            continue  # a standoff is turned by hand
+        out.append(Keepout(f"driver_{f.name}", "driver", f.name, prims, f.stage, exempt))
+    b, holder = frame.core.battery, frame.core.holder
+    lo, hi = np.asarray(b.lo, float), np.asarray(b.hi, float)
+    hi[1] = float(holder.hi[1]) + float(spec.core.battery.length)  # from its rear face at the mouth to its seat
+    out.append(Keepout("battery_path", "battery_path", "battery", (box(lo, hi),), "last", frozenset(("battery",))))
+    return tuple(out)

@@ -203,6 +203,7 @@ def bodies(spec: Spec, frame, parts: Sequence[PartSpec], built, meshes: dict) ->
     """Every solid of the aircraft for the clash check: part copies (their print meshes with the
     world <- print transform), rods, vitamins (propellers as discs)."""
     from ..analysis.clash import Body
+    from ..fasteners import VITAMIN_STAGES, part_stage, rod_stage
     from ..vitamins import to_trimesh, vitamins
 
     by_name = {b.name: b for b in built}
@@ -210,11 +211,12 @@ def bodies(spec: Spec, frame, parts: Sequence[PartSpec], built, meshes: dict) ->
     for p in parts:
         for pl in p.placements:
             out.append(Body(instance_name(p, pl.instance), "part", meshes[p.name],
-                            world_from_print(pl.matrix(), by_name[p.name].print_from_local)))
+                            world_from_print(pl.matrix(), by_name[p.name].print_from_local), stage=part_stage(p)))
     for rod in frame.rods.values():
-        out.append(Body(rod.name, "rod", rod_mesh(rod)))
+        out.append(Body(rod.name, "rod", rod_mesh(rod), stage=rod_stage(rod)))
     for v in vitamins(spec, frame, parts):
-        out.append(Body(v.name, "propeller" if v.disc else "vitamin", to_trimesh(v), None, v.disc is not None))
+        out.append(Body(v.name, "propeller" if v.disc else "vitamin", to_trimesh(v), None, v.disc is not None,
+                        v.stage or VITAMIN_STAGES.get(v.family, "frame")))
     return out
 
 
@@ -258,14 +260,18 @@ def check_clashes(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: 
         from ..cache import Memo
 
         store = Memo("clash-pairs", memo[1], memo[0])
+    from ..analysis.fit_check import keepouts
+    from ..fasteners import fasteners
+
     return clash.check(bodies(spec, frame, parts, built, meshes), prop_margin=spec.requirements.prop_margin,
-                       ignore=not_clashes(spec, frame, parts), memo=store, allowed=press_fits(spec, frame))
+                       ignore=not_clashes(spec, frame, parts), memo=store, allowed=press_fits(spec, frame),
+                       keepouts=keepouts(spec, frame, fasteners(spec, frame, parts)))
 
 
 def _vitamin_key(spec: Spec, frame) -> list:
     from ..vitamins import vitamins
 
-    return [[v.name, v.colour, [[p.kind, p.centre, p.size, p.rot, p.axis, p.radius, p.length] for p in v.prims]]
+    return [[v.name, v.colour, [[p.kind, p.centre, p.size, p.rot, p.axis, p.radius, p.length, p.radius_end] for p in v.prims]]
             for v in vitamins(spec, frame)]
 
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import UserError
 from ..frame import Frame
-from ..materials import CONNECTORS, SCREWS, STACK_PATTERNS
+from ..materials import CONNECTORS, COUNTERSINK_SLACK, COUNTERSUNK, SCREWS, STACK_PATTERNS
 from ..parts.blocks import pointed, prism_xy, prism_xz
 from ..parts.joint_solid import Built, apply
 from ..parts.joint_plan import transform
@@ -81,7 +81,14 @@ def _battery_holder(spec: Spec, frame: Frame) -> PartSpec:
     cut_floor = hexagon_area(f["floor_window"][1] - f["floor_window"][0], f["floor_window"][2]) if f["floor_window"] else 0.0
     cut_strap = 2 * f["strap_slot"][2] * f["strap_slot"][3] if f["strap_slot"] else 0.0
     cut_lead = f["lead_exit"][0] * (length / 2 - f["lead_exit"][1])  # notch in the top wall, over the mouth
-    vol = (w * length * height - iw * il * ih - len(holes) * math.pi / 4 * screw.clearance_d**2 * skin
+    # each stack hole's countersink in the cavity's ceiling: the countersunk screw's head sits flush
+    # in it, so the pack slides under it (fasteners.py): a 90 deg cone from the head's diameter
+    # (+ slack) at the ceiling to the hole, a frustum less the hole's own cylinder
+    csk_d = COUNTERSUNK[c.stack_screw][0] + COUNTERSINK_SLACK
+    r1, r0 = csk_d / 2, screw.clearance_d / 2
+    csk_h = r1 - r0
+    csk_vol = math.pi * csk_h / 3 * (r1 * r1 + r1 * r0 + r0 * r0) - math.pi * r0 * r0 * csk_h
+    vol = (w * length * height - iw * il * ih - len(holes) * (math.pi / 4 * screw.clearance_d**2 * skin + csk_vol)
            - (cut_side + cut_strap) * t - cut_floor * skin - cut_lead * skin)
     # Walls are vertical when printed on end: outside and cavity faces; horizontal: the back stop
     # and the rim of the open end.
@@ -90,7 +97,7 @@ def _battery_holder(spec: Spec, frame: Frame) -> PartSpec:
     area_h = w * height + rim - f["lead_exit"][0] * skin
     est = Estimate(vol, area_h, area_v, (w, height, length))
     params = (("inner", (b.width, il, b.height + 1.0)), ("wall", t), ("holes", holes), ("hole_d", screw.clearance_d),
-              ("outer", (w, length, height)), *sorted(f.items()))
+              ("countersink_d", round(csk_d, 4)), ("outer", (w, length, height)), *sorted(f.items()))
     # The strap runs across the mouth and round the holder's outside, closing on itself: the
     # holder's cross-section perimeter + 40 mm of overlap, rounded up to 10 mm; about 1 g per
     # 100 mm of 10 mm hook-and-loop.
@@ -137,6 +144,11 @@ def solid(part: PartSpec) -> Built:
     cavity = cq.Solid.makeBox(iw, il + 1.0, ih, cq.Vector(-iw / 2, -length / 2 + back, -h / 2 + skin))
     d = float(part.param("hole_d"))
     holes = [cq.Solid.makeCylinder(d / 2, skin + 2.0, cq.Vector(float(x), float(y), h / 2 - skin - 1.0)) for x, y in part.param("holes")]
+    csk = dict(part.params).get("countersink_d")
+    if csk:  # the countersinks, from 0.5 mm inside the cavity (no face on the ceiling's) to the hole at 45 deg
+        r1 = float(csk) / 2 + 0.5
+        holes += [cq.Solid.makeCone(r1, d / 2, r1 - d / 2, cq.Vector(float(x), float(y), h / 2 - skin - 0.5), cq.Vector(0, 0, 1))
+                  for x, y in part.param("holes")]
     cutters = holder_cutters(part) if "lead_exit" in dict(part.params) else []
     shape = outer.cut(cavity, *holes, *cutters)  # one boolean with every tool: half the time of one per tool
     m = print_from_local(part)

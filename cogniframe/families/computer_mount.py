@@ -7,9 +7,11 @@ bars between its holes rather than a plate.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from ..frame import Frame
+from ..frame import COMPUTER_LIFT, Frame
 from ..materials import SCREWS, STACK_PATTERNS
 from ..parts.blocks import plate
 from ..parts.joint_solid import Built
@@ -87,9 +89,20 @@ def _computer_mount(spec: Spec, frame: Frame) -> PartSpec:
     est = Estimate(area * t, 2 * area, (2 * (a + b) + win_p + sum(np.pi * d for d in hole_d)) * t, (a, b, t))
     params = (("size", (a, b)), ("thickness", t), ("computer_holes", pi_holes), ("computer_hole_d", screw_pi.clearance_d),
               ("stack_holes", st_holes), ("stack_hole_d", screw_st.clearance_d), ("windows", wins))
-    hw = (HardwareLine(f"{screw_pi.name} x 6 screw + nut ({comp.name} to mount)", 4, screw_pi.mass_g + 0.15),)
+    # the board stands on nylon spacers over the stack screws' heads: the screw passes board,
+    # spacer and frame and fills its nut (the shortest stock length that does)
+    from ..materials import BOARDS
+
+    grip = BOARDS["pi_zero"].size[2] + COMPUTER_LIFT + t
+    length = float(next((L for L in screw_pi.lengths if L >= grip + screw_pi.nut_m - 1e-9), screw_pi.lengths[-1]))
+    # M2.5 nylon spacer: a 5 mm hexagon less its 2.5 mm bore, PA66 at 1.14 g/cm^3
+    spacer_g = round((math.sqrt(3) / 2 * screw_pi.nut_af**2 - math.pi / 4 * screw_pi.d**2) * COMPUTER_LIFT * 1.14e-3, 3)
+    hw = (HardwareLine(f"{screw_pi.name} x {length:g} screw + nut ({comp.name} to mount)", 4, round(screw_pi.mass_of(length) + 0.15, 3)),
+          HardwareLine(f"{screw_pi.name} x {COMPUTER_LIFT:g} mm nylon spacer ({comp.name} over the stack screws' heads)", 4,
+                       spacer_g))
     return PartSpec("computer_mount", "computer_mount", "core", c.material, c.infill,
-                    (Placement("core", 0.0, rounded((box.centre[0], box.centre[1], box.lo[2] - t / 2))),), (), t, est, params, hw)
+                    (Placement("core", 0.0, rounded((box.centre[0], box.centre[1], box.lo[2] - COMPUTER_LIFT - t / 2))),), (), t, est,
+                    params, hw)
 
 
 # -- the solid --------------------------------------------------------------------------------

@@ -16,6 +16,7 @@ above the slab never steeper than 45 deg), the ribs standing up from the stems.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -81,28 +82,131 @@ def _core_plate(spec: Spec, frame: Frame) -> PartSpec:
         params += [("tube_bore", bore), ("tube_wall", PEG_TUBE_WALL), ("tubes", tubes), ("outline", outline),
                    ("ribs", ribs), ("rib_width", PLATE_RAIL), ("rib_depth", RIB)]
         est = _with_tubes(dict(params))
-    hang = frame.core.hang
-    if hang > 0:
-        # level arms: the plate stands on four standoffs on the holder; the stack screws end in
-        # their tops, short screws come up through the holder (and spacer) into their bottoms
-        from .sensor_mount import rear_only
-
-        if rear_only(spec):  # the spacer under the rear two only: the front two stand on the holder
-            front = hang + c.spacer_thickness
-            under = "sensor mount" if c.flow_sensor else "spacer"
-            legs = (HardwareLine(f"{screw.name} x {hang:g} mm nylon standoff, female-female (plate on the {under}'s bar, rear)", 2,
-                                 round(NYLON_STANDOFF_G_PER_MM * hang, 3)),
-                    HardwareLine(f"{screw.name} x {front:g} mm nylon standoff, female-female (plate on the battery holder, front)", 2,
-                                 round(NYLON_STANDOFF_G_PER_MM * front, 3)))
-        else:
-            legs = (HardwareLine(f"{screw.name} x {hang:g} mm nylon standoff, female-female (plate on the battery holder)", 4,
-                                 round(NYLON_STANDOFF_G_PER_MM * hang, 3)),)
-        hw = (HardwareLine(f"{screw.name} x 20 screw + 8 mm nylon standoffs (FC/ESC stack onto the plate)", 4, 1.0), *legs,
-              HardwareLine(f"{screw.name} x 6 screw (battery holder to standoff)", 4, screw.mass_of(6)))
-    else:
-        hw = (HardwareLine(f"{screw.name} x 20 screw + 8 mm nylon standoffs (FC/ESC stack through plate and holder)", 4, 1.0),)
+    hw = stack_plan(spec, frame).lines
     return PartSpec("core_plate", "core_plate", "core", c.material, c.infill,
                     (Placement("core", 0.0, rounded(frame.core.plate.centre)),), (), c.plate_thickness, est, tuple(params), hw)
+
+
+# -- the stack's hardware ------------------------------------------------------------------------
+
+STACK_SPACER = 8.0  # mm: the nylon spacers between the ESC and the FC (a 20x20 stack's)
+CORNERS = {(-1, 1): "fl", (1, 1): "fr", (-1, -1): "rl", (1, -1): "rr"}  # as frame.py's: fl = (-x, +y)
+
+
+@dataclass(frozen=True)
+class Leg:
+    """One stack hole's hardware, world coordinates (mm): the standoff under the plate (level arms;
+    `standoff` its length, from `z0`), what the countersunk screw from inside the holder passes
+    (`under`: the parts with their hole, `grip` their thickness from the cavity's ceiling)."""
+
+    corner: str
+    xy: tuple[float, float]
+    z0: float
+    standoff: float
+    under: tuple[tuple[str, float], ...]
+    grip: float
+
+
+@dataclass(frozen=True)
+class StackPlan:
+    """The FC/ESC stack's screws, spacers and standoffs (fasteners.py places them, the hardware
+    lines carry their masses): one truth for both. `ceiling`: the holder cavity's ceiling, where the
+    countersunk heads sit flush; `head_z`: the stack screws' heads (on the FC, or on the computer
+    mount); `spacers`: (z0, length, hardware line) of the nylon spacers every hole carries."""
+
+    level: bool
+    screw: str
+    legs: tuple[Leg, ...]
+    ceiling: float
+    holder_screw: float  # its length (ISO 7046: overall, the head included)
+    stack_screw: float  # level: from the FC (or computer mount) into the standoffs; else 0
+    head_z: float
+    stack_grip: float  # level: head to the plate's underside; else head to the ceiling
+    through: tuple[tuple[str, float], ...]  # the printed parts the stack screw passes (hole d)
+    spacers: tuple[tuple[float, float, str], ...]
+    lines: tuple[HardwareLine, ...]
+
+
+def _stock(screw, need: float) -> float:
+    """The shortest stock length of `screw` at least `need` mm (the longest when none is)."""
+    return float(next((L for L in screw.lengths if L >= need - 1e-9), screw.lengths[-1]))
+
+
+def stack_plan(spec: Spec, frame: Frame) -> StackPlan:
+    """The stack's hardware (fasteners.py's docstring tells the order). The holder screw is the
+    shortest stock length that engages its standoff 4 turns past the thickest grip; the stack screw
+    the shortest that engages 4 turns past the plate's underside (level arms), or fills a nut on
+    top (the plate on the holder)."""
+    from ..materials import BOARDS, MIN_THREAD_TURNS
+    from ..frame import STACK_BOTTOM
+    from .computer_mount import COMPUTER_T
+    from .sensor_mount import sensor_mount_outline
+
+    c, core = spec.core, frame.core
+    screw = SCREWS[c.stack_screw]
+    pitch, _ = STACK_PATTERNS[c.stack_pattern]
+    key = "20x20" if pitch < 25 else "30x30"
+    esc_t, fc_t = BOARDS[f"esc_{key}"].size[2], BOARDS[f"fc_{key}"].size[2]
+    wall = c.holder_wall
+    ceiling = float(core.holder.hi[2]) - wall
+    spacer_holes = set()
+    spacer_name = "sensor_mount" if c.flow_sensor else "core_spacer"
+    if core.spacer is not None:
+        spacer_holes = {(round(x, 6), round(y, 6)) for x, y in sensor_mount_outline(spec, frame)["stack_holes"]}
+    level = core.hang > 0
+    z_fc = float(core.stack.lo[2]) + STACK_BOTTOM + esc_t + STACK_SPACER + fc_t  # the FC's top face
+    head_z, through = z_fc, []
+    spacers = [(z_fc - fc_t - STACK_SPACER, STACK_SPACER,
+                f"{screw.name} x {STACK_SPACER:g} mm nylon spacer (between the ESC and the FC)")]
+    lines = [HardwareLine(spacers[0][2], 4, round(NYLON_STANDOFF_G_PER_MM * STACK_SPACER, 3))]
+    if c.computer and core.computer is not None:
+        from ..frame import COMPUTER_LIFT
+
+        mount_z = float(core.computer.lo[2]) - COMPUTER_LIFT - COMPUTER_T
+        gap = round(mount_z - z_fc, 3)
+        spacers.append((z_fc, gap, f"{screw.name} x {gap:g} mm nylon spacer (computer mount over the FC)"))
+        lines.append(HardwareLine(spacers[-1][2], 4, round(NYLON_STANDOFF_G_PER_MM * gap, 3)))
+        head_z = mount_z + COMPUTER_T
+        through.append(("computer_mount", screw.clearance_d))
+    if c.camera:
+        through.append(("front_camera_mount", screw.clearance_d))
+    through.append(("core_plate", screw.clearance_d))
+    legs = []
+    for sx, sy in ((-1, 1), (1, 1), (-1, -1), (1, -1)):
+        xy = (sx * pitch / 2, sy * pitch / 2)
+        on_spacer = (round(xy[0], 6), round(xy[1], 6)) in spacer_holes
+        under = (("battery_holder", screw.clearance_d),) + (((spacer_name, screw.clearance_d),) if on_spacer else ())
+        z0 = float(core.spacer.hi[2]) if on_spacer else float(core.holder.hi[2])
+        legs.append(Leg(CORNERS[(sx, sy)], xy, z0, round(float(core.plate.lo[2]) - z0, 4) if level else 0.0, under,
+                        round(z0 - ceiling, 4)))
+    engage = MIN_THREAD_TURNS * screw.pitch
+    if level:
+        holder_screw = _stock(screw, max(g.grip for g in legs) + engage)
+        grip = round(head_z - float(core.plate.lo[2]), 4)
+        stack_screw = _stock(screw, grip + engage)
+        by_length: dict[float, list[str]] = {}
+        for g in legs:
+            by_length.setdefault(g.standoff, []).append(g.corner)
+        split = len(by_length) > 1  # the spacer's bar under the rear two only (sensor_mount.rear_only)
+        for length, corners in sorted(by_length.items()):
+            on_spacer = any(dict(g.under).get(spacer_name) for g in legs if g.standoff == length)
+            where = (f"on the {'sensor mount' if c.flow_sensor else 'spacer'}'s bar" if on_spacer else "on the battery holder") \
+                + ((", rear" if on_spacer else ", front") if split else "")
+            lines.append(HardwareLine(f"{screw.name} x {length:g} mm nylon standoff, female-female (plate {where})", len(corners),
+                                      round(NYLON_STANDOFF_G_PER_MM * length, 3)))
+        lines.insert(0, HardwareLine(f"{screw.name} x {stack_screw:g} socket-head screw (ISO 4762): FC/ESC stack"
+                                     + (", computer mount" if c.computer else "") + " into the standoffs", 4,
+                                     screw.mass_of(stack_screw)))
+        lines.append(HardwareLine(f"{screw.name} x {holder_screw:g} countersunk screw (ISO 7046): battery holder to "
+                                  "standoff, from inside", 4, screw.mass_of(holder_screw)))
+    else:  # one long screw from inside the holder through everything, a nut on top
+        grip = round(head_z - ceiling, 4)
+        holder_screw = _stock(screw, grip + screw.nut_m)
+        stack_screw = 0.0
+        lines.insert(0, HardwareLine(f"{screw.name} x {holder_screw:g} countersunk screw (ISO 7046) + nut: battery holder, "
+                                     "plate and FC/ESC stack, from inside the holder", 4, screw.mass_of(holder_screw) + 0.1))
+    return StackPlan(level, screw.name, tuple(legs), round(ceiling, 4), holder_screw, stack_screw, round(head_z, 4), grip,
+                     tuple(through), tuple((round(z, 4), L, line) for z, L, line in spacers), tuple(lines))
 
 
 # -- the pegs' tubes (core.link: pegs) -----------------------------------------------------------

@@ -421,9 +421,10 @@ def _motor_mount(spec: Spec, frame: Frame) -> PartSpec:
 
 def fitting(spec: Spec) -> str:
     """How the builder fits the motor mounts on the arms."""
-    return ("Clip a motor mount onto each pair of arm rods (the two rods of one arm run parallel, "
-            f"{spec.frame.arm_spacing:g} mm apart), then push both arm rods into the knee's arm sockets. Slide the mount "
-            f"to {spec.motors.radius:g} mm from the frame centre. Leave the inner ends free.")
+    return ("Thread a motor mount onto each pair of arm rods: its sleeves are closed, so slide both rods through them "
+            f"(the two rods of one arm run parallel, {spec.frame.arm_spacing:g} mm apart) before the arm goes in, and screw "
+            "its motor on now, while the mount's underside is free: {screws}. Then push both arm rods into the knee's arm "
+            f"sockets and slide the mount to {spec.motors.radius:g} mm from the frame centre. Leave the inner ends free.")
 
 
 def screw_words(mount: PartSpec | None) -> str:

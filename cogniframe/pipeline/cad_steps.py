@@ -99,7 +99,7 @@ def make_clash(ctx) -> Made:
     (ctx.out / "clash.json").write_text(json.dumps(result.to_dict(), indent=2) + "\n", encoding="utf-8")
     return Made(("clash.json",), result.to_dict())
 
-CLASH_CODE = ("analysis/clash.py", "export/assembly.py", "export/mesh.py", "vitamins.py", "fasteners.py", "materials.py",
+CLASH_CODE = ("analysis/clash.py", "analysis/fit_check.py", "export/assembly.py", "export/mesh.py", "vitamins.py", "fasteners.py", "materials.py",
               "partlist.py", "families/*.py", "families/joint_kinds/*.py", "numfmt.py")
 
 

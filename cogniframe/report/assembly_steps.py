@@ -12,7 +12,7 @@ Glue policy (docs/fabrication.md explains why):
   a rod that pulls out on impact defeats the frame.
 - core links: NO glue. The arm and strut ends only push in, and the links are bolted to the
   core plate, so the core (and its electronics) comes out as one unit.
-- motor mounts: no glue; they clip onto the arm rods and are held by the motor screws.
+- motor mounts: no glue; they are threaded onto the arm rods and held by the motor screws.
 """
 
 from __future__ import annotations
@@ -132,8 +132,8 @@ def assembly_steps(design: "Derived") -> tuple[Step, ...]:
         "at the knees (the hourglass) and push the lower legs into the bottom corners one corner at a time. "
         + _knee_text(spec))
     arms = rods_by_role.get("arm", [])
-    add("Arms and motor mounts", ["motor_mount"], arms, f"knee end of each arm rod only: {GLUE_CA}; motor mounts: none",
-        motor_mount.fitting(spec))
+    add("Arms, motor mounts and motors", ["motor_mount"], arms, f"knee end of each arm rod only: {GLUE_CA}; motor mounts: none",
+        motor_mount.fitting(spec).replace("{screws}", motor_mount.screw_words(parts.get("motor_mount"))), hw("motor_mount"))
     struts = rods_by_role.get("strut", [])
     if struts:
         add("Struts", [], struts, f"bottom-corner end of each strut: {GLUE_CA}",
@@ -155,7 +155,7 @@ def assembly_steps(design: "Derived") -> tuple[Step, ...]:
     rest = [n for n in parts if n not in used_parts]
     add("Electronics", rest, [], "none",
         _electronics_text(spec, parts),
-        hw("motor_mount", *rest))
+        hw(*rest))
     leftover = [n for n in frame.rods if n not in used_rods]
     if leftover:  # a rod role this module does not know yet: still tell the builder to fit it
         add("Remaining rods", [], leftover, "none", "Fit these rods where the assembly drawing shows them.")
@@ -181,7 +181,8 @@ def _core_text(spacer: str | None, mirrored: bool, link) -> str:
         return fix + stacking
     return (fix
             + (f"Lay the {spacer} on the battery holder and the plate on it; " if spacer else "Put the plate on the battery holder; ")
-            + "screw them together with the stack screws. The holder's open end faces the front so the battery slides in.")
+            + "the stack's long countersunk screws hold them together: they go up from inside the holder (heads flush in its "
+            "ceiling's countersinks) with the stack. The holder's open end faces the front so the battery slides in.")
 
 
 def _knee_text(spec) -> str:
@@ -213,17 +214,50 @@ def _ring_text(spec) -> str:
 
 
 def _electronics_text(spec, parts: dict) -> str:
-    """The motors, the stack, the computer, the other components and the battery."""
+    """The stack, the computer, the other components and the battery (the motors went on in the arms' step)."""
     comps = ", ".join(f"{c.qty} x {c.name}" if c.qty > 1 else c.name for c in spec.components)
-    screws = motor_mount.screw_words(parts.get("motor_mount"))
-    return (f"Screw the {spec.motor.name} motors onto the motor mounts: {screws}. Mount the flight controller / "
-            "ESC stack on the core plate standoffs"
-            + (f", the {spec.core.computer.name} on the computer mount" if spec.core.computer else "")
-            + (f"; fit {comps}" if comps else "") + ". Solder the motors to the ESC, route wires along the arm rods, fit "
+    computer = spec.core.computer
+    stack = ("Stack the FC/ESC on the core plate: the ESC on its grommets, the 8 mm nylon spacers, the FC"
+             + (", the nylon spacers and the computer mount" if computer else "")
+             + ("; screw the four stack screws down from the top into the standoffs under the plate" if spec.frame.level_arms else
+                "; push the four long countersunk screws up from inside the battery holder through it all and nut them on top")
+             + (f"; then the {computer.name} on its nylon spacers over the mount, screws down through board, spacer and mount, "
+                "nuts underneath" if computer else ""))
+    return (stack + (f"; fit {comps}" if comps else "") + ". Solder the motors to the ESC, route wires along the arm rods, fit "
             "the propellers (2 CW, 2 CCW) last. Battery: "
             f"slide the pack in from the front, lead last, lay its {spec.core.battery.connector} lead up through the notch at the "
             f"top of the holder's mouth, close the {spec.core.strap_width:g} mm hook-and-loop strap across the mouth through the two 45 deg slots "
             "(no tools: open the strap to swap the pack).")
+
+
+def unbuilt(step: Step, design: "Derived") -> list[str]:
+    """What `step`'s text names that the build lacks: a material no part is printed in, a feature
+    no part has (tubes, pegs, countersinks, standoffs, nut traps, a clip), a part copy or part that
+    is not in the part list. Empty for every step this module writes (tests/test_assembly_steps.py):
+    the words come from the same part list and joint kinds as the parts."""
+    import re
+
+    from ..fasteners import fasteners
+
+    spec, parts = design.spec, design.parts
+    text = f"{step.title} {step.text} {step.glue}"
+    materials = {p.material.split("_")[0].upper() for p in parts}
+    params = {k for p in parts for k, _ in p.params}
+    kinds = {f.kind for f in fasteners(spec, design.frame, parts)} | {f.head for f in fasteners(spec, design.frame, parts)}
+    has = {"ABS": "ABS" in materials, "PLA": "PLA" in materials, "TPU": "TPU" in materials,
+           "tube": "tubes" in params and any(dict(p.params).get("tubes") for p in parts),
+           "peg": core_link(spec).label == "core_link_pegs", "countersink": "countersink_d" in params,
+           "countersunk": "countersunk" in kinds, "standoff": "standoff" in kinds, "nut trap": "link_holes" in params
+           and any(dict(p.params).get("link_holes") for p in parts), "hex trap": any(dict(p.params).get("link_holes") for p in parts),
+           "clip": False, "strut": spec.frame.struts, "camera": spec.core.camera is not None,
+           "flow": spec.core.flow_sensor is not None, "computer": spec.core.computer is not None}
+    out = [w for w, ok in has.items() if not ok and re.search(rf"\b{w}", text, flags=0 if w.isupper() else re.I)]
+    names = {p.name for p in parts} | {label for p in parts for label in copy_labels(p)}
+    for m in re.finditer(r"\b((?:corner_top|corner_bottom|knee|core_link|motor_mount|core_plate|battery_holder|sensor_mount|"
+                         r"core_spacer|front_camera_mount|computer_mount)\w*)", text):
+        if "_" in m.group(1) and m.group(1) not in names:  # an identifier, not the word "knees"
+            out.append(m.group(1))
+    return out
 
 
 def to_markdown(steps: Sequence[Step], title: str = "Assembly") -> str:

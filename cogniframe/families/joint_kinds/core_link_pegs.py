@@ -81,16 +81,17 @@ class CoreLinkPegs(JointKind):
 
     def fixing_words(self, which: str, spacer: str | None) -> str:
         return (f"Press a TPU core link onto each corner of the core plate{which}: push its two pegs all the way into the "
-                "pair of ABS tubes under the plate's arm there (and the strut's peg into the tube between them), up to the "
-                "columns' shoulders (no screw). ")
+                "pair of tubes under the plate's arm there, up to the columns' shoulders (no screw). ")
 
     def stacking_words(self, spacer: str | None) -> str | None:
         """The plate hangs on standoffs (no link bolt clamps it to the spacer)."""
         if not spacer:
             return None
-        return (f"Screw four standoffs under the plate's stack holes. Lay the {spacer}'s bar on the battery holder under "
-                "the two rear ones, the two longer front ones straight on the holder, and screw the holder (and the bar) to "
-                "them from inside. The holder's open end faces the front so the battery slides in.")
+        return (f"Lay the {spacer}'s bar on the battery holder's rear stack holes. Screw the four standoffs onto the holder "
+                "with the countersunk screws from inside it (the driver comes up through the floor window; each head sits "
+                f"flush in its countersink in the ceiling): the two rear ones through the {spacer}'s bar, the two longer front "
+                "ones straight on the holder. Set the plate on them; the stack's screws clamp it to them later. The holder's "
+                "open end faces the front so the battery slides in.")
 
     def print_from_local(self, part: PartSpec) -> np.ndarray:
         pl = pegged_plan(part.sockets, dict(part.params))
