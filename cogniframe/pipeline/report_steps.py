@@ -91,6 +91,28 @@ def make_renders(ctx) -> Made:
                                     vitamins=renders.vitamin_meshes(ctx.spec, d.frame))  # the bought parts
     return Made(tuple(p.relative_to(ctx.out).as_posix() for p in views.values()), list(views))
 
+def step_views_key(ctx):
+    """The guide's pictures read what the assembly renders read and the views themselves (each
+    step's title, what it shows, what is new, the exploded offsets; not the steps' texts)."""
+    import dataclasses
+
+    from ..report import assembly_steps, step_views
+
+    views = step_views.step_views(ctx.design, assembly_steps.assembly_steps(ctx.design))
+    return [renders_key(ctx), [dataclasses.asdict(v) for v in views]]
+
+def make_step_views(ctx) -> Made:
+    """A picture per assembly step, and an exploded one where its parts go in along a line
+    (report/step_views.py); the value maps each step's number to its pictures."""
+    from ..report import assembly_steps, step_views
+
+    d = ctx.design
+    views = step_views.step_views(d, assembly_steps.assembly_steps(d))
+    items = step_views.scene_items(d, {p.name: ctx.mesh(p.name) for p in d.parts},
+                                   {p.name: ctx.part_value(p.name)["print_from_local"] for p in d.parts})
+    step_views.render_step_views(views, items, ctx.out)
+    return Made(tuple(f for v in views for f in v.files()), {str(v.number): list(v.files()) for v in views})
+
 def _slice_report(ctx):
     from ..export import slicer
 
@@ -110,7 +132,8 @@ def bom(ctx) -> Made:
                               sizes={b.name: b.bbox_mm for b in ctx.built_parts()})
     bom_mod.write_bom(lines, ctx.out)
     steps = assembly_steps.assembly_steps(ctx.design)
-    (ctx.out / "assembly.md").write_text(assembly_steps.to_markdown(steps), encoding="utf-8")
+    pictures = {int(n): files for n, files in ctx["step_views"].items()}
+    (ctx.out / "assembly.md").write_text(assembly_steps.to_markdown(steps, pictures=pictures), encoding="utf-8")
     return Made(("bom.csv", "bom.md", "assembly.md"), (lines, steps, sliced))
 
 def report(ctx) -> Made:
@@ -135,7 +158,8 @@ def report(ctx) -> Made:
         figures["flight"] = [("Campbell diagram: frame modes against the rotors and the attitude controller",
                               ctx.out / "flight" / "resonance.png")]
     html.write_report(ctx["check"], ctx.out, images, lines, steps, plates, sliced, figures=figures,
-                      viewer_html=ctx["viewer"], flight_files=tuple(f"flight/{f}" for f in FLIGHT_FILES) if flown else ())
+                      viewer_html=ctx["viewer"], flight_files=tuple(f"flight/{f}" for f in FLIGHT_FILES) if flown else (),
+                      step_pictures={int(n): [ctx.out / f for f in files] for n, files in ctx["step_views"].items()})
     return Made(("report.html", "report.md"))
 
 def _plate_files(ctx):
@@ -186,6 +210,12 @@ RENDERS = Step("renders", ("part:*",), make_renders, renders_key,
 VIEWER = Step("viewer", ("check", "plates:*"), make_viewer, viewer_key,
               ("report/viewer/*", "export/plates.py", "report/assembly_steps.py", "report/renders.py", "vitamins.py", "fasteners.py"),
               reads="STL hashes, placements, grams each, plates, rods, cut list")
-BOM = Step("bom", ("check", "slice:*"), bom, reads="(always: BOM, assembly steps)")
-REPORT = Step("report", ("check", "bom", "plots", "figures", "previews:*", "render:*", "renders", "viewer", "flight"), report,
+STEP_VIEWS = Step("step_views", ("part:*",), make_step_views, step_views_key,
+                  ("report/step_views.py", "report/renders.py", "report/assembly_steps.py", "export/plates.py",
+                   "export/assembly.py", "vitamins.py", "fasteners.py"),
+                  after=("plates:*",),  # like the renders: the slicer's plates first
+                  reads="STL hashes, placements, rods, vitamins, the assembly steps")
+BOM = Step("bom", ("check", "slice:*", "step_views"), bom, reads="(always: BOM, assembly steps)")
+REPORT = Step("report", ("check", "bom", "plots", "figures", "previews:*", "render:*", "renders", "step_views", "viewer", "flight"),
+              report,
               reads="(always: HTML and Markdown from the files above)")

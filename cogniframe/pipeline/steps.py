@@ -35,6 +35,7 @@ STEPS = (
     plate_steps.PREVIEWS,
     report_steps.RENDER_PART,
     report_steps.RENDERS,
+    report_steps.STEP_VIEWS,
     report_steps.VIEWER,
     report_steps.BOM,
     report_steps.REPORT,

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Sequence
 
 from ..families import camera_mount, motor_mount, sensor_mount
+from ..fasteners import STAGES
 from ..families.joint_kinds.kinds import core_link
 
 if TYPE_CHECKING:
@@ -39,6 +40,11 @@ class Step:
     glue: str  # what to glue, or "none"
     text: str  # what to do
     hardware: tuple[str, ...] = ()
+    # the fasteners' and bought parts' stages fitted in this step (fasteners.STAGES): each stage in one step
+    stages: tuple[str, ...] = ()
+    # earlier steps whose sub-assembly this step puts in place (the core, built off the frame, then hung in it)
+    places: tuple[int, ...] = ()
+    apart: bool = False  # built off the frame: its picture shows this step's parts alone
 
     def as_dict(self) -> dict:
         return {"number": self.number, "title": self.title, "parts": list(self.parts),
@@ -97,8 +103,9 @@ def assembly_steps(design: "Derived") -> tuple[Step, ...]:
         return tuple(f"{q} x {item}" for item, q in count.items())
 
     def add(title: str, part_names: Sequence[str], rod_names: Sequence[str], glue: str, text: str,
-            hardware: Sequence[str] = ()) -> None:
-        steps.append(Step(len(steps) + 1, title, take_parts(*part_names), take_rods(rod_names), glue, text, tuple(hardware)))
+            hardware: Sequence[str] = (), stages: Sequence[str] = (), places: Sequence[int] = (), apart: bool = False) -> None:
+        steps.append(Step(len(steps) + 1, title, take_parts(*part_names), take_rods(rod_names), glue, text, tuple(hardware),
+                          tuple(stages), tuple(places), apart))
 
     def ring(level: str) -> list[str]:
         return [n for n in rods_by_role.get("cage", []) if n.startswith(f"rod_cage_{level}_")]
@@ -133,29 +140,32 @@ def assembly_steps(design: "Derived") -> tuple[Step, ...]:
         + _knee_text(spec))
     arms = rods_by_role.get("arm", [])
     add("Arms, motor mounts and motors", ["motor_mount"], arms, f"knee end of each arm rod only: {GLUE_CA}; motor mounts: none",
-        motor_mount.fitting(spec).replace("{screws}", motor_mount.screw_words(parts.get("motor_mount"))), hw("motor_mount"))
+        motor_mount.fitting(spec).replace("{screws}", motor_mount.screw_words(parts.get("motor_mount"))), hw("motor_mount"),
+        stages=("frame",))  # the motors and their screws: the frame's only bought parts
     struts = rods_by_role.get("strut", [])
     if struts:
         add("Struts", [], struts, f"bottom-corner end of each strut: {GLUE_CA}",
-            "Push a damping strut into the inward socket of each bottom corner; leave the inner end free.")
+            "Push a damping strut into the inward socket of each bottom corner; leave the inner end free.", stages=("struts",))
     spacer = next((n for n in ("sensor_mount", "core_spacer") if n in parts), None)
     core_parts = [n for n in ("core_plate", spacer, "battery_holder", "core_link", "core_link_mirrored") if n and n in parts]
     mirrored = "core_link_mirrored" in parts
     link = core_link(spec)
     add("Core", core_parts, [], f"none: the core links are {link.fitted}, so the core stays removable",
         _core_text(spacer, mirrored, link),
-        hw("core_link", "core_link_mirrored", "core_plate", "battery_holder", *([spacer] if spacer else [])))
+        hw("core_link", "core_link_mirrored", "core_plate", "battery_holder", *([spacer] if spacer else [])),
+        stages=("core",), apart=True)
     add("Hang the core", [], [], "none: arm and strut ends are only pushed into the core links",
         "Hold the core in the middle of the frame and push the free ends of both arm rods"
         + (" and the strut" if struts else "") + " of each corner into its core link. To remove the core later, pull "
-        "the rods out of the links.")
+        "the rods out of the links.", places=(len(steps),))
     if "front_camera_mount" in parts or spec.core.flow_sensor:
         add("Camera and sensors", [n for n in ("front_camera_mount",) if n in parts], [], "none", _sensors_text(spec, parts),
-            hw("front_camera_mount"))
+            hw("front_camera_mount"), stages=("sensors",))
     rest = [n for n in parts if n not in used_parts]
+    claimed = {st for s in steps for st in s.stages}
     add("Electronics", rest, [], "none",
         _electronics_text(spec, parts),
-        hw(*rest))
+        hw(*rest), stages=[st for st in STAGES if st not in claimed])  # the stack, the computer, props and battery
     leftover = [n for n in frame.rods if n not in used_rods]
     if leftover:  # a rod role this module does not know yet: still tell the builder to fit it
         add("Remaining rods", [], leftover, "none", "Fit these rods where the assembly drawing shows them.")
@@ -260,13 +270,19 @@ def unbuilt(step: Step, design: "Derived") -> list[str]:
     return out
 
 
-def to_markdown(steps: Sequence[Step], title: str = "Assembly") -> str:
+def to_markdown(steps: Sequence[Step], title: str = "Assembly", pictures: dict[int, Sequence[str]] | None = None) -> str:
+    """The steps as Markdown; `pictures`: each step's pictures (paths relative to the file), linked
+    under its text."""
     out = [f"# {title}", ""] if title else []
     for s in steps:
         out.append(f"## {s.number}. {s.title}")
         out.append("")
         out.append(s.text)
         out.append("")
+        for path in (pictures or {}).get(s.number, ()):
+            exploded = " (exploded)" if path.endswith("_exploded.png") else ""
+            out.append(f"![step {s.number}: {s.title}{exploded}]({path})")
+            out.append("")
         if s.parts:
             out.append(f"- Parts: {', '.join(s.parts)}")
         if s.rods:

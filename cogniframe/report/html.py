@@ -70,6 +70,8 @@ class Table:
     rows: tuple[tuple[str, ...], ...]
     numeric: tuple[int, ...] = ()  # right-aligned columns
     footer: tuple[str, ...] | None = None
+    # a last column of pictures, one tuple of (caption, PNG) per row (the assembly steps' views)
+    pictures: tuple[tuple[tuple[str, Path], ...], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -257,7 +259,8 @@ def _dur(s: float) -> str:
     return format_duration(s)
 
 
-def _tables(result: "Findings", cd: Mapping, bom, steps, plates, slice_report) -> dict[str, Table]:
+def _tables(result: "Findings", cd: Mapping, bom, steps, plates, slice_report,
+            step_pictures: Mapping[int, Sequence[Path]] | None = None) -> dict[str, Table]:
     t: dict[str, Table] = {}
     m = cd["mass"]
     t["mass-budget"] = Table("mass-budget", "Mass budget", ("item", "group", "qty", "g each", "g", "material", "source"),
@@ -307,9 +310,13 @@ def _tables(result: "Findings", cd: Mapping, bom, steps, plates, slice_report) -
                                    "" if c.diff_pct is None else f"{c.diff_pct:+.1f} %", _dur(c.time_s),
                                    "over 10 %" if c.flagged else "ok") for c in slice_report.materials), (1, 2, 3, 4))
     if steps:
-        t["assembly"] = Table("assembly", "Assembly steps", ("step", "what", "parts", "rods (cut length)", "glue"),
+        pictures = tuple(tuple((f"step {s.number}: {s.title}" + (" (exploded)" if Path(f).stem.endswith("_exploded") else ""),
+                                Path(f)) for f in step_pictures.get(s.number, ())) for s in steps) if step_pictures else ()
+        t["assembly"] = Table("assembly", "Assembly steps", ("step", "what", "parts", "rods (cut length)", "glue")
+                              + (("pictures (new parts in orange)",) if pictures else ()),
                               tuple((str(s.number), f"{s.title}: {s.text}", ", ".join(s.parts),
-                                     ", ".join(f"{n} ({length:g} mm)" for n, length in s.rods), s.glue) for s in steps), (0,))
+                                     ", ".join(f"{n} ({length:g} mm)" for n, length in s.rods), s.glue) for s in steps), (0,),
+                              pictures=pictures)
     return t
 
 
@@ -323,6 +330,7 @@ th{background:#f3f3f3;text-align:left} td.n{text-align:right;font-variant-numeri
 .PASS{background:#d9f2d9} .FAIL{background:#f7d4d4} .WARN{background:#fbefc9} .N\\/A{background:#eee}
 .status{font-weight:bold;padding:.1em .5em;border-radius:3px} img{max-width:100%;border:1px solid #ddd;margin:.3em 0}
 figure{display:inline-block;margin:.5em;vertical-align:top} figcaption{font-size:.85em;color:#555}
+td figure{margin:.2em} td img{width:320px}
 .warn{color:#8a5a00}
 """
 
@@ -382,8 +390,11 @@ def _html_table(t: Table) -> str:
     out = [f'<table id="{t.id}"><caption>{html.escape(t.title)}</caption><thead><tr>']
     out += [f"<th>{html.escape(h)}</th>" for h in t.headers]
     out.append("</tr></thead><tbody>")
-    for row in t.rows:
-        out.append("<tr>" + "".join(f'<td{" class=n" if i in t.numeric else ""}>{html.escape(c)}</td>' for i, c in enumerate(row)) + "</tr>")
+    for r, row in enumerate(t.rows):
+        pics = ("<td>" + "".join(_img_html(path, caption, "step-exploded" if caption.endswith("(exploded)") else "step-view")
+                                 for caption, path in t.pictures[r]) + "</td>") if t.pictures else ""
+        out.append("<tr>" + "".join(f'<td{" class=n" if i in t.numeric else ""}>{html.escape(c)}</td>' for i, c in enumerate(row))
+                   + pics + "</tr>")
     out.append("</tbody>")
     if t.footer:
         out.append("<tfoot><tr>" + "".join(f'<td{" class=n" if i in t.numeric else ""}>{html.escape(c)}</td>' for i, c in enumerate(t.footer)) + "</tr></tfoot>")
@@ -403,9 +414,10 @@ def _md_table(t: Table) -> str:
     return "\n".join(out) + "\n"
 
 
-def _img_html(path: Path, caption: str) -> str:
+def _img_html(path: Path, caption: str, css_class: str = "") -> str:
     data = base64.b64encode(Path(path).read_bytes()).decode("ascii")
-    return (f'<figure><img src="data:image/png;base64,{data}" alt="{html.escape(caption)}">'
+    cls = f' class="{css_class}"' if css_class else ""
+    return (f'<figure><img{cls} src="data:image/png;base64,{data}" alt="{html.escape(caption)}">'
             f"<figcaption>{html.escape(caption)}</figcaption></figure>")
 
 
@@ -419,13 +431,14 @@ def write_report(result: "Findings", out_dir: Path | str, images: Mapping[str, P
                  slice_report: "SliceReport | None" = None,
                  figures: Mapping[str, Sequence[tuple[str, Path]]] | None = None,
                  viewer_items: Sequence["ViewerItem"] = (), viewer_html: str | None = None,
-                 flight_files: Sequence[str] = ()) -> tuple[Path, Path]:
+                 flight_files: Sequence[str] = (), step_pictures: Mapping[int, Sequence[Path]] | None = None) -> tuple[Path, Path]:
     """Write `report.html` and `report.md` into out_dir (charts go to out_dir/report_files/).
 
     `figures`: {"mass": [(caption, png)], "drop": [...]} already drawn (the build draws and caches
     them as steps); None draws them here with `draw_figures`.
 
     `images`: caption -> PNG (renders of the assembly and parts), shown in the given order.
+    `step_pictures`: each assembly step's pictures (report/step_views.py), beside its text.
     `plates`: what `write_plates` returned (their preview PNGs are shown).
     `viewer_items`: the assembly as named meshes (`viewer.design_items` + any vitamins): an
     interactive 3D view right under the verdicts (HTML only). `viewer_html`: that section already
@@ -440,7 +453,7 @@ def write_report(result: "Findings", out_dir: Path | str, images: Mapping[str, P
     name = cd["name"]
     figs = dict(figures) if figures is not None else draw_figures(result, files)
     verdicts = _verdicts(result, cd, plates, slice_report)
-    tables = _tables(result, cd, bom, steps, plates, slice_report)
+    tables = _tables(result, cd, bom, steps, plates, slice_report, step_pictures)
     warnings = list(slice_report.warnings) if slice_report is not None else []
     if slice_report is not None:
         from ..export.slicer import sliced_total_g
@@ -569,6 +582,8 @@ def _render_md(name: str, cd: Mapping, verdicts: list[Verdict], sections, warnin
         for b in blocks:
             if isinstance(b, Table):
                 out.append(_md_table(b))
+                for pics in b.pictures:  # a table cell holds no picture in Markdown: each step's under the table
+                    out += [_img_md(path, caption, base) for caption, path in pics] + [""]
             elif b[0] == "img":
                 out += [_img_md(b[2], b[1], base), ""]
             elif b[0] == "warn":
