@@ -150,8 +150,7 @@ def assembly_steps(design: "Derived") -> tuple[Step, ...]:
     core_parts = [n for n in ("core_plate", spacer, "battery_holder", "core_link", "core_link_mirrored") if n and n in parts]
     mirrored = "core_link_mirrored" in parts
     link = core_link(spec)
-    add("Core", core_parts, [], f"none: the core links are {link.fitted}, so the core stays removable",
-        _core_text(spacer, mirrored, link),
+    add("Core", core_parts, [], f"none: the core links are {link.fitted}, so the core stays removable", _core_text(spacer, mirrored, link),
         hw("core_link", "core_link_mirrored", "core_plate", "battery_holder", *([spacer] if spacer else [])),
         stages=("core",), apart=True)
     add("Hang the core", [], [], "none: arm and strut ends are only pushed into the core links",
@@ -162,10 +161,8 @@ def assembly_steps(design: "Derived") -> tuple[Step, ...]:
         add("Camera and sensors", [n for n in ("front_camera_mount",) if n in parts], [], "none", _sensors_text(spec, parts),
             hw("front_camera_mount"), stages=("sensors",))
     rest = [n for n in parts if n not in used_parts]
-    claimed = {st for s in steps for st in s.stages}
-    add("Electronics", rest, [], "none",
-        _electronics_text(spec, parts),
-        hw(*rest), stages=[st for st in STAGES if st not in claimed])  # the stack, the computer, props and battery
+    claimed = {st for s in steps for st in s.stages}  # the stack, the computer, props and battery: the rest
+    add("Electronics", rest, [], "none", _electronics_text(spec, parts), hw(*rest), stages=[st for st in STAGES if st not in claimed])
     leftover = [n for n in frame.rods if n not in used_rods]
     if leftover:  # a rod role this module does not know yet: still tell the builder to fit it
         add("Remaining rods", [], leftover, "none", "Fit these rods where the assembly drawing shows them.")
