@@ -112,10 +112,8 @@ def assembly_steps(design: "Derived") -> tuple[Step, ...]:
 
     def mirror_note(kind: str) -> str:
         """A rectangle's fr/rl joints are the mirror image of its fl/rr ones (partlist): which goes where."""
-        if f"{kind}_mirrored" not in parts:
-            return ""
         return (f"{kind} at front-left and rear-right, its mirror image {kind}_mirrored at front-right and rear-left: "
-                "they do not swap")
+                "they do not swap") if f"{kind}_mirrored" in parts else ""
 
     def aside(kind: str) -> str:
         note = mirror_note(kind)
