@@ -198,7 +198,7 @@ def render_step_views(views: Sequence[StepView], items: Sequence[Item], out_dir:
     out_dir = Path(out_dir)
     by_name = {i.name: i for i in items}
     wanted = sorted({n for v in views for n in v.shown})
-    p = renders._plotter(size, "msaa")
+    p = renders._plotter(size)  # SSAA: 85 ms a picture here against MSAA's 125 (llvmpipe, 480 x 360)
     actors = {}
     lo_hi = {}
     written: dict[int, tuple[Path, ...]] = {}
