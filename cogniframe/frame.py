@@ -512,7 +512,8 @@ def _motor(k: str, rods: dict[str, Rod], spec: Spec) -> Motor:
     # The motor screws come up through the seat from below: leave room for their heads
     # (ISO 4762 head height = d) above the rod clips, plus the seat plate itself.
     head = SCREWS[spec.motor.screw].d
-    seat_z = float(axis[2]) + spec.sleeve_bore / 2 + spec.joints.wall + head + spec.joints.wall
+    # motors.seat_raise lifts a bigger propeller over the core (the authors' taller motor bases)
+    seat_z = float(axis[2]) + spec.sleeve_bore / 2 + spec.joints.wall + head + spec.joints.wall + spec.motors.seat_raise
     prop_z = seat_z + spec.motor.height
     return Motor(f"motor_{k}", k, (r1.name, r2.name), _t(axis), seat_z, prop_z, slope)
 

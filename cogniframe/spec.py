@@ -126,6 +126,7 @@ class MotorsSection(_M):
     thread_depth: Annotated[float, Field(gt=0.5, le=10, description="override the preset's thread depth in the motor base, mm: how far a mounting screw may enter before it reaches the windings (measure yours)")] | None = None
     mass: Annotated[float, Field(gt=0, le=100, description="override the preset's mass, g each")] | None = None
     radius: Annotated[float, Field(ge=20, le=300, description="motor axis distance from the frame centre, in plan, mm")] = 82
+    seat_raise: Annotated[float, Field(ge=0, le=15, description="raise each motor's seat (and its propeller) this far above the least the mount needs, mm: the authors' taller motor bases for 1106 and larger motors, whose bigger propellers reach over the core (CogniFly-STL v8 MotorBase_Shorter_Taller +5 mm, _Tallest +10 mm); the mount's webs grow by as much")] = 0
     prop_diameter: Annotated[float, Field(ge=25, le=260, description="propeller diameter, mm (3 in = 76.2)")] = 76.2
     prop_mass: Annotated[float, Field(ge=0, le=30, description="g each")] = 1.0
     max_thrust_g: Annotated[float, Field(gt=0, le=5000, description="static thrust of one motor at full throttle, g (thrust load case and thrust-to-weight); null = the flight tables' value for motors.model, kv, prop and the pack, else the motor class's typical value (1104 on 3S with 3025 props: 190 g; 1404 on 2S with 4 in props: 200 g)")] | None = None

@@ -68,6 +68,8 @@ def test_1104_mount_weighs_no_more_than_the_issue_allows(spacing, most_g):
     ("carbon", {"frame__arm_spacing": 25.0, "motors__model": "1103"}),
     ("carbon", {"frame__arm_spacing": 25.0, "motors__model": "1505"}),
     ("carbon", {"frame__arm_spacing": 25.0, "joints__wall": 3.0}),
+    ("carbon", {"motors__model": "1106", "motors__seat_raise": 5.0}),  # the authors' taller motor base
+    ("carbon", {"motors__model": "1106", "motors__seat_raise": 10.0}),  # and their tallest
 ])
 @pytest.mark.cad
 def test_closed_form_tracks_the_cad_and_the_mount_prints_flat(base, changes):
@@ -201,3 +203,37 @@ def test_level_arms_build_d_sleeves_that_print_flat(spacing):
     oh = overhangs(mesh)
     assert oh["fraction"] < 0.01 and oh["area"] < 1.0, oh
     assert abs(est.volume / built.shape.Volume() - 1) < 0.15
+
+
+# -- the taller motor base (motors.seat_raise) -------------------------------------------------------
+
+def test_a_raised_seat_lifts_motor_and_propeller_and_weighs_its_webs():
+    """motors.seat_raise: the seat, the motor and the propeller plane go up by it; the mount's
+    closed form grows by the two webs under the sleeves, each `raise` taller along its clip, and
+    the all-up weight by the motor-mount line alone, four webs of TPU (printed solid at most)."""
+    from cogniframe import design as design_mod
+    from cogniframe.analysis.mass import budget
+    from cogniframe.materials import MATERIALS
+
+    def made(raise_mm):
+        spec = preset_spec(motors__model="1106", motors__seat_raise=raise_mm)
+        d = design_mod.design(spec)
+        return d, next(p for p in d.parts if p.family == "motor_mount"), budget(spec, d.frame, d.cut, d.parts)
+
+    d0, m0, mass0 = made(0.0)
+    d5, m5, mass5 = made(5.0)
+    assert m5.param("seat_z") == pytest.approx(m0.param("seat_z") + 5.0)
+    assert d5.frame.motors[0].prop_z == pytest.approx(d0.frame.motors[0].prop_z + 5.0)
+    # two webs (level arms), each the sleeve's width (a skirt of its outer radius each side) by the clip's length, 5 mm taller
+    r = m5.param("bore") / 2 + m5.wall
+    web = sum(2 * f * r for f in m5.param("skirt")) * m5.param("clip_len") * 5.0
+    assert m5.estimate.volume - m0.estimate.volume == pytest.approx(web, rel=0.02)
+    line = {i.name: i.mass_g for i in mass5.items}["motor_mount"] - {i.name: i.mass_g for i in mass0.items}["motor_mount"]
+    assert mass5.total_g - mass0.total_g == pytest.approx(line, abs=1e-9)  # nothing else changes
+    solid = 4 * web * MATERIALS[m5.material].density_g_mm3
+    assert 0.3 * solid < line <= solid * 1.001
+
+
+def test_seat_raise_is_bounded_by_the_schema():
+    with pytest.raises(UserError, match="motors.seat_raise"):
+        preset_spec(motors__seat_raise=20.0)
