@@ -200,7 +200,7 @@ def test_builds_through_the_cad_server_give_the_same_bytes(warm, tmp_path, monke
 
 def _part_change(*parts: str) -> set[str]:
     """Steps that rerun when exactly these parts' geometry changes (their mass changes too)."""
-    out = set(MASS) | FLIGHT | {"assembly", "glb", "renders", "viewer", "clash"}  # clash: keyed like the assembly
+    out = set(MASS) | FLIGHT | {"assembly", "glb", "renders", "step_views", "viewer", "clash"}  # clash: keyed like the assembly
     for p in parts:
         m = TPU if p in TPU_PARTS else ABS
         out |= {f"part:{m}/{p}", f"render:{p}", f"plates:{m}", f"previews:{m}"}
