@@ -113,16 +113,18 @@ def make_slice(ctx, material: str) -> Made:
     ini.write_text(_profile(ctx, material), encoding="utf-8")
     plates = []
     kept = []
+    # each material's slicer on a CPU of its own (PrusaSlicer runs on one: `slicer.slice_plate`)
+    cpu = sorted({p.material for p in ctx.design.parts}).index(material)
     with tempfile.TemporaryDirectory(prefix="cogniframe-gcode-") as tmp:
         for v in ctx[f"plates:{material}"]:
             where = ctx.out / "plates" if _keep_gcode(ctx) else Path(tmp)
             items = ctx.plate_items(v)
             if ctx.use_cache and not _keep_gcode(ctx):  # per plate: a plate whose bytes did not change is not sliced again
                 r = slicer._slice_cached(ctx.out / v["threemf"], ini, ctx.spec.printer.bed, exe, version,
-                                         where / f"{v['name']}.gcode", items=items, started=behind_the_build)
+                                         where / f"{v['name']}.gcode", items=items, started=behind_the_build, cpu=cpu)
             else:
                 r = slicer.slice_plate(ctx.out / v["threemf"], ini, ctx.spec.printer.bed, exe,
-                                       gcode=where / f"{v['name']}.gcode", items=items, started=behind_the_build)
+                                       gcode=where / f"{v['name']}.gcode", items=items, started=behind_the_build, cpu=cpu)
             plates.append({"plate": r.plate, "material": r.material, "grams": r.grams, "time_s": r.time_s,
                            "objects": [list(o) for o in r.objects]})
             if _keep_gcode(ctx):
