@@ -1,10 +1,14 @@
 """The issue-11 numbers: `cogniframe build` and `check` as a user runs them, each in a fresh process.
 
     python benchmarks/bench_incremental.py [--params params/carbon.yaml] [--runs 3] [--jobs N] [--analytic]
-                                           [--no-server]
+                                           [--no-server] [--steps]
 
 `--analytic` sets model.stiffness_model: analytic in the copy (closed-form joints instead of their
 solid FE): the build's own cost without the joints' finite elements.
+
+`--steps` also prints, for each build of the first run, the steps that ran, as the build's progress
+lines say them (how long each took and when it ended, seconds into the build): the build's
+timeline, whose last lines are its critical path.
 
 `--no-server` builds with `--no-server` (a process pool per build, as before the CAD server).
 By default the builds run as a user's do: the cold build starts the CAD server (its start is
@@ -59,6 +63,7 @@ def _battery_mass(text: str, grams: str) -> str:
 
 
 CPU: dict[str, list[float]] = {}
+STEPS: dict[str, list[str]] = {}  # label -> the progress lines of the steps that ran (first run only)
 
 
 def _subreaper() -> bool:
@@ -146,6 +151,8 @@ def _run(args: list[str], env: dict, label: str | None = None) -> float:
     if label:
         server_share = _server_cpu(started) - (s0 if started == server else 0.0)
         CPU.setdefault(label, []).append(_cpu() - c0 + server_share)
+        STEPS.setdefault(label, [ln.strip() for ln in proc.stderr.splitlines() if re.match(r"\[\s*\d+/\d+\]", ln)
+                                 and "cached" not in ln])
     if proc.returncode not in (0, 1):
         sys.exit(f"cogniframe {' '.join(args)} failed ({proc.returncode}):\n{proc.stderr[-2000:]}")
     return wall
@@ -204,6 +211,7 @@ def main() -> None:
     ap.add_argument("--jobs", default=None)
     ap.add_argument("--analytic", action="store_true", help="closed-form joints (no joint FE)")
     ap.add_argument("--no-server", action="store_true", help="builds without the CAD server (a process pool each)")
+    ap.add_argument("--steps", action="store_true", help="print each build's steps that ran, with when each ended")
     a = ap.parse_args()
     global LOAD0
     adopted = _subreaper()
@@ -222,6 +230,11 @@ def main() -> None:
         print(f"  {k:9s} median {statistics.median(vals):6.2f} s wall, {statistics.median(CPU[k]):6.2f} s CPU  "
               f"(wall runs {', '.join(f'{v:.2f}' for v in vals)}; goal <= {goal:g} s)")
     print(f"  peak RSS of the largest child process: {peak_mb:.0f} MB (goal <= 1024 MB)")
+    if a.steps:
+        for label in ("cold", "no-geom", "one-part"):
+            print(f"  steps of the first {label} build that ran (seconds it took, and when it ended):")
+            for line in STEPS.get(label, []):
+                print(f"    {line}")
     if not adopted:
         print("  (no subreaper: the CAD workers' CPU seconds are not counted)")
 

@@ -146,10 +146,13 @@ def test_a_plate_that_fails_its_check_stops_the_slicer_started_beside_it(tmp_pat
 
 
 @pytest.mark.slicer
-def test_the_slicer_runs_behind_the_build(tmp_path):
-    """PrusaSlicer (here a stand-in that writes down its nice value, then its G-code) runs
-    BACKGROUND_NICE steps nicer than the build: its threads then leave the build's main thread go
-    first (the build passes `runtime.pools.behind_the_build` as `started`)."""
+@pytest.mark.parametrize("cpu", [0, 1])
+def test_the_slicer_runs_on_one_cpu_and_started_gets_its_pid(tmp_path, cpu):
+    """PrusaSlicer (here a stand-in that writes down the CPUs it may use and its nice value, then
+    its G-code) runs on one CPU, the `cpu`-th of this process's (modulo their number): its G-code
+    is then the same every run. `started(pid)` gets the slicer's own pid through the launcher,
+    before it has started its work: given `runtime.pools.behind_the_build`, it runs
+    BACKGROUND_NICE steps nicer than the caller."""
     import os
 
     from cogniframe.runtime.pools import BACKGROUND_NICE, behind_the_build
@@ -158,18 +161,21 @@ def test_the_slicer_runs_behind_the_build(tmp_path):
     ok.apply_translation([10, 10, 0])
     plate = _scene_3mf(tmp_path / "abs_1.3mf", {"a_1": ok})
     fake = tmp_path / "prusa-slicer"
-    seen = tmp_path / "nice.txt"
-    # (the last argument is the G-code path; the nice value is read once the build has set it)
-    fake.write_text(f"#!/bin/sh\nsleep 0.5\nnice > {seen}\n"
+    seen = tmp_path / "seen.txt"
+    # (the last argument is the G-code path; the nice value is read once the caller has set it)
+    fake.write_text(f"#!/bin/sh\nsleep 0.5\nnice > {seen}\ngrep Cpus_allowed_list /proc/$$/status >> {seen}\n"
                     "for a; do out=$a; done\n"
                     "printf '; filament used [g] = 0.5\\n; estimated printing time (normal mode) = 1m 0s\\n' > $out\n")
     fake.chmod(0o755)
     ini = tmp_path / "abs.ini"
     ini.write_text("layer_height = 0.2\n")
     got = slicer.slice_plate(plate, ini, (120, 120, 120), exe=str(fake), gcode=tmp_path / "abs_1.gcode",
-                             started=behind_the_build)
+                             started=behind_the_build, cpu=cpu)
     assert (got.grams, got.time_s) == (0.5, 60.0)
-    assert int(seen.read_text()) == min(19, os.nice(0) + BACKGROUND_NICE)
+    nice, allowed = seen.read_text().splitlines()
+    assert int(nice) == min(19, os.nice(0) + BACKGROUND_NICE)
+    cpus = sorted(os.sched_getaffinity(0))
+    assert allowed.split()[-1] == str(cpus[cpu % len(cpus)])
 
 
 def test_slicer_messages_are_explained(tmp_path):
@@ -350,8 +356,11 @@ def test_build_gcode_keeps_gcode_per_plate_outside_the_promise(run_cli, tmp_path
     # the report's numbers come from these very files
     check = json.loads((out / "check.json").read_text())
     assert check["verdict"] == "PASS"
-    grams, _ = slicer.read_gcode_stats(out / "plates" / "tpu_95a_1.gcode")
-    assert grams > 30
+    grams, secs = slicer.read_gcode_stats(out / "plates" / "tpu_95a_1.gcode")
+    row = next(ln for ln in (out / "report.md").read_text().splitlines() if ln.startswith("| tpu_95a_1 |"))
+    assert row.endswith(f"| {grams:.1f} | {slicer.format_duration(secs)} |")
+    # the slicer's grams against the mass budget's for the same material, within the slicer check's tolerance
+    assert abs(grams / check["mass"]["by_material"]["tpu_95a"] - 1) < slicer.TOLERANCE
     code, _, err = run_cli("build", PARAMS / "carbon.yaml", "-o", out, "--gcode")
     assert code == 0 and "nothing rebuilt" in err  # a --gcode build is kept by the next --gcode build
 

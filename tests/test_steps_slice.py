@@ -51,7 +51,7 @@ def recorder(monkeypatch, tmp_path):
     monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "cache"))
     calls = []
 
-    def fake_slice(plate, profile, bed, exe=None, gcode=None, timeout_s=0, items=None, started=None):
+    def fake_slice(plate, profile, bed, exe=None, gcode=None, timeout_s=0, items=None, started=None, cpu=0):
         plate = Path(plate)
         objs = slicer.check_plate(plate, bed, items=items)
         calls.append(plate.stem)

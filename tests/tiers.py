@@ -102,7 +102,8 @@ def _subprocess_needs(argv) -> str | None:
     text = " ".join(args)
     if not args:
         return None
-    if "prusa-slicer" in args[0]:
+    # export.slicer starts PrusaSlicer through a Python one-liner that pins it to one CPU and execs it
+    if "prusa-slicer" in args[0] or (args[0] == sys.executable and any(a.endswith("prusa-slicer") for a in args[1:8])):
         return "slicer"
     if "chromium" in args[0]:
         return "browser"

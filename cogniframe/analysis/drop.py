@@ -35,6 +35,7 @@ class Session:
     def __init__(self, spec: Spec, frame: Frame, parts=None):
         self.spec, self.frame, self._parts = spec, frame, parts
         self._joints = None
+        self._outside = None
         self.solution = None  # stiffness.SecantSolution once solved in this check
 
     @property
@@ -46,11 +47,24 @@ class Session:
         return self._parts
 
     @property
+    def outside(self) -> dict[str, str]:
+        """The joints outside the surrogate's training box, {name: why} (`surrogate.outside_reasons`):
+        what the joint models and `check`'s notes both read."""
+        if self._outside is None:
+            from .joints.surrogate import outside_reasons
+            from .stiffness import joint_parts
+
+            self._outside = outside_reasons(self.spec, joint_parts(self.parts))
+        return self._outside
+
+    @property
     def joints(self) -> dict:
         if self._joints is None:
             from .stiffness import joint_models
 
-            self._joints = joint_models(self.spec, self.parts, self.spec.model.stiffness_model)
+            surrogate = self.spec.model.stiffness_model == "surrogate"
+            self._joints = joint_models(self.spec, self.parts, self.spec.model.stiffness_model,
+                                        outside=self.outside if surrogate else None)
         return self._joints
 
     def solve(self):

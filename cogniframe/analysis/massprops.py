@@ -171,15 +171,15 @@ def combine(bodies, source: str) -> MassProps:
 
 # -- the aircraft -----------------------------------------------------------------------------
 
-def _vitamin_bodies(spec, frame, budget) -> tuple[list, set[str]]:
+def _vitamin_bodies(spec, frame, budget, parts) -> tuple[list, set[str]]:
     """Bodies of the bought parts drawn in the assembly (vitamins.py): each vitamin carries its
     budget line's mass (spread over the vitamins that share the line by their volume), each
     primitive its share by volume. Propellers as spinning bars (`propeller`). Returns the bodies
-    and the budget lines they used."""
+    and the budget lines they used. `parts`: the design's part list (the screws sit in its holes)."""
     from ..vitamins import vitamins
 
     lines = {i.name: i for i in budget.items}
-    vits = [v for v in vitamins(spec, frame) if v.budget_line in lines]
+    vits = [v for v in vitamins(spec, frame, parts) if v.budget_line in lines]
     by_line: dict[str, list] = {}
     for v in vits:
         by_line.setdefault(v.budget_line, []).append(v)
@@ -261,7 +261,7 @@ def _combined(spec, design, budget, copies, source: str) -> MassProps:
     are modelled."""
     frame = design.frame
     bodies = _rod_bodies(frame, budget)
-    vit, used = _vitamin_bodies(spec, frame, budget)
+    vit, used = _vitamin_bodies(spec, frame, budget, design.parts)
     bodies += vit
     items = {i.name: i for i in budget.items}
     for p in design.parts:

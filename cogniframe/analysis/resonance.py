@@ -130,7 +130,8 @@ def _advice(flags: tuple[Flag, ...], f: dict) -> tuple[tuple[str, tuple[str, ...
     inav = [*common, f"rotor noise from {f['rotor_notch_min_hz']:.0f} Hz (1x at hover, less 15 %) up: dynamic gyro notch and, "
             "with ESC telemetry, the RPM filter"]
     bf = [*common, "bidirectional DShot and the RPM filter (3 harmonics) follow the rotors; the dynamic notch covers the rest"]
-    ap = [*common, f"throttle-based harmonic notch at the hover rotor frequency {f['hover_rotor_hz']:.0f} Hz, harmonics 1-3"]
+    ap = [*common, f"throttle-based harmonic notch at the hover rotor frequency {f['hover_rotor_hz']:.0f} Hz, the harmonics and "
+                    "gyro rate the flight files' params.parm sets (INS_HNTCH_HMNCS, INS_GYRO_RATE)"]
     px4 = [*common, "PX4: IMU_GYRO_CUTOFF / IMU_DGYRO_CUTOFF as below; dynamic notch from ESC RPM (IMU_GYRO_DNF_EN)"]
     if notch is not None:
         inav.append(f"static notch at {notch.hz:.0f} Hz")

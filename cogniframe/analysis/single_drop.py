@@ -50,6 +50,7 @@ past 100 cm.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Callable, Sequence
@@ -154,7 +155,28 @@ def _until_release(f: np.ndarray) -> np.ndarray:
 def mount_response(u: np.ndarray, dt: float, mount_hz: float, zeta: float) -> np.ndarray:
     """Absolute acceleration of a base-excited oscillator (frequency `mount_hz`, damping ratio
     `zeta`) at rest, for a base acceleration `u` sampled every `dt` and linear in between
-    (exact first-order-hold steps: the transfer is (2 zeta w s + w^2) / (s^2 + 2 zeta w s + w^2))."""
+    (exact first-order-hold steps: the transfer is (2 zeta w s + w^2) / (s^2 + 2 zeta w s + w^2)).
+
+    The steps are s[i+1] = P s[i] + B0 u[i] + B1 u[i+1] from rest, read as y = C s, so
+    y[n] = sum over i < n of a[n-1-i] u[i] + b[n-1-i] u[i+1] with a[m] = C P^m B0 and
+    b[m] = C P^m B1 (`_mount_kernels`): two convolutions, taken by FFT (the same sums as
+    stepping, to rounding: tests/test_single_drop.py steps them)."""
+    u = np.asarray(u, float)
+    n = len(u)
+    out = np.zeros(n)
+    if n < 2:
+        return out
+    size = 1 << (2 * n - 1).bit_length()  # no wrap-around: the full convolution fits
+    ka, kb = _mount_kernels(float(dt), float(mount_hz), float(zeta), n - 1, size)
+    full = np.fft.irfft(ka * np.fft.rfft(u[:-1], size) + kb * np.fft.rfft(u[1:], size), size)
+    out[1:] = full[:n - 1]
+    return out
+
+
+@functools.lru_cache(maxsize=8)
+def _mount_kernels(dt: float, mount_hz: float, zeta: float, m: int, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """The spectra (rfft, `size` points) of the mount's kernels a[k] = C P^k B0 and b[k] = C P^k B1,
+    k < m, of `mount_response`'s steps: one per mount (check's is always PAPER_SCATTER's), read-only."""
     from .impact_nl import _expm
 
     w = 2.0 * math.pi * mount_hz
@@ -163,16 +185,19 @@ def mount_response(u: np.ndarray, dt: float, mount_hz: float, zeta: float) -> np
     M[1, 0], M[1, 1], M[1, 2] = -w * w, -2.0 * zeta * w, -1.0  # relative z'' = -w^2 z - 2 zeta w z' - u
     M[2, 3] = 1.0  # u' constant over a step
     E = _expm(M * dt)
-    p00, p01, p10, p11 = E[0, 0], E[0, 1], E[1, 0], E[1, 1]
-    g0, g1, h0, h1 = E[0, 2], E[1, 2], E[0, 3], E[1, 3]
-    z = zd = 0.0
-    uu = u.tolist()
-    out = [0.0]  # at rest: the base's step reaches the mass only through the mount
-    for i in range(len(uu) - 1):
-        du = (uu[i + 1] - uu[i]) / dt
-        z, zd = p00 * z + p01 * zd + g0 * uu[i] + h0 * du, p10 * z + p11 * zd + g1 * uu[i] + h1 * du
-        out.append(-(w * w * z + 2.0 * zeta * w * zd))
-    return np.asarray(out)
+    p00, p01, p10, p11 = (float(x) for x in E[:2, :2].ravel())
+    c0, c1 = -w * w, -2.0 * zeta * w
+    kernels = []
+    # u[i] enters through the state's step (E[:, 2]) and the slope (u[i+1] - u[i]) / dt (E[:, 3])
+    for z, zd in ((E[0, 2] - E[0, 3] / dt, E[1, 2] - E[1, 3] / dt), (E[0, 3] / dt, E[1, 3] / dt)):
+        z, zd, k = float(z), float(zd), []
+        for _ in range(m):  # plain floats: a few ms once per mount
+            k.append(c0 * z + c1 * zd)
+            z, zd = p00 * z + p01 * zd, p10 * z + p11 * zd
+        kernels.append(k)
+    ka, kb = (np.fft.rfft(np.asarray(k), size) for k in kernels)
+    ka.flags.writeable = kb.flags.writeable = False
+    return ka, kb
 
 
 def mount_step_peak(zeta: float) -> float:
@@ -223,11 +248,48 @@ def drop_peaks(pulse_g: np.ndarray, height_cm: float, scatter: Scatter, footprin
     logger = mount_response(pulse_g, dt, scatter.mount_hz, scatter.mount_zeta) if scatter.mount_hz > 0 else pulse_g
     tj = foot_delays_s(feet(footprint_mm), math.radians(scatter.tilt_scale_deg(height_cm)) * d.tilt_unit, d.azimuth,
                        impact_velocity(height_cm))
-    ts = (np.arange(n_samples)[None, :] + d.phase[:, None]) / rate_hz
-    t = ts[:, None, :] - tj[:, :, None]  # (drop, foot, sample): time since that foot landed
     grid = np.arange(len(logger)) * dt
-    a = np.interp(t, grid, logger, left=0.0, right=0.0).mean(axis=1)  # a quarter of the frame per foot
-    return np.abs(a).max(axis=1)
+    peak = np.zeros(len(d.phase))
+    # A sample's |a| is at most the largest |logger| its feet can read: over the grid points
+    # round [its earliest time less the longest stagger, its latest time]. Samples are taken in
+    # order of that bound, and the rest are skipped once it is below every drop's peak so far:
+    # none of them can be a drop's peak (after the pulse and the mount's ringing, ~20 of 60).
+    env = np.abs(np.asarray(logger, float))
+    lo = np.searchsorted(grid, np.arange(n_samples) / rate_hz - tj.max(), side="right") - 1
+    hi = np.searchsorted(grid, (np.arange(n_samples) + 1) / rate_hz, side="left") + 1
+    bound = np.array([env[max(a, 0):min(b, len(env) - 1) + 1].max(initial=0.0) for a, b in zip(lo, hi)])
+    order = np.argsort(-bound, kind="stable")
+    for first in range(0, n_samples, _SAMPLES_AT_ONCE):
+        chunk = order[first:first + _SAMPLES_AT_ONCE]
+        if bound[chunk[0]] < peak.min():
+            break
+        ts = (chunk[None, :] + d.phase[:, None]) / rate_hz
+        t = ts[:, None, :] - tj[:, :, None]  # (drop, foot, sample): time since that foot landed
+        a = interp_uniform(t, dt, logger).mean(axis=1)  # a quarter of the frame per foot
+        peak = np.maximum(peak, np.abs(a).max(axis=1))
+    return peak
+
+
+def interp_uniform(t: np.ndarray, dt: float, values: np.ndarray) -> np.ndarray:
+    """`np.interp(t, np.arange(n) * dt, values, left=0.0, right=0.0)`, the same numbers, for the
+    grid's equal steps: each t's cell from t / dt (one cell either way where that quotient rounds
+    across a grid point) instead of a search, then numpy's own formula on it,
+    slope[j] (t - grid[j]) + values[j]."""
+    values = np.asarray(values, float)
+    n = len(values)
+    grid = np.arange(n) * dt
+    slopes = (values[1:] - values[:-1]) / (grid[1:] - grid[:-1])
+    with np.errstate(invalid="ignore"):
+        j = np.clip(np.floor(t / dt), 0, n - 2).astype(np.intp)
+    j += (t >= grid[np.minimum(j + 1, n - 1)]) & (j < n - 2)
+    j -= (t < grid[j]) & (j > 0)
+    out = slopes[j] * (t - grid[j]) + values[j]
+    out[(t < grid[0]) | (t > grid[-1])] = 0.0
+    out[t == grid[-1]] = values[-1]
+    return out
+
+
+_SAMPLES_AT_ONCE = 4  # `drop_peaks`' samples per pass: the peaks come in the first few
 
 
 def distribution(peaks: np.ndarray) -> dict:

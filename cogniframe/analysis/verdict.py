@@ -85,7 +85,7 @@ def complete(spec: Spec, d: Derived, budget: mass_mod.MassBudget, drop, session=
     # the mass properties and resonance flags the flight files are written from: a flagged mode
     # WARNs, never FAILs
     model, warn = _flight_model(spec, d, budget, stiffness)
-    return Findings(d, budget, drop, tuple(problems), stiffness, peak, flight, survival=surv, notes=tuple(_notes(spec, d)),
+    return Findings(d, budget, drop, tuple(problems), stiffness, peak, flight, survival=surv, notes=tuple(_notes(spec, d, session)),
                        fit=fit, flight_model=model, warnings=warn)
 
 
@@ -127,13 +127,15 @@ def fit_of(spec: Spec, d: Derived):
     return fit_check.check(spec, d.parts, fasteners(spec, d.frame, d.parts))
 
 
-def _notes(spec: Spec, d: Derived) -> list[str]:
-    """Joints the surrogate model does not cover (solved by FE instead): a note, not a FAIL."""
+def _notes(spec: Spec, d: Derived, session=None) -> list[str]:
+    """Joints the surrogate model does not cover (solved by FE instead): a note, not a FAIL.
+    ``session``: the check's frame model (`drop.Session`), whose joint models asked the same."""
     if spec.model.stiffness_model != "surrogate" or spec.model.k_n_per_m is not None:
         return []
     from .joints import surrogate_notes
 
-    return surrogate_notes(spec, [p for p in d.parts if p.family == "joint"])
+    return surrogate_notes(spec, [p for p in d.parts if p.family == "joint"],
+                           session.outside if session is not None and session.parts is d.parts else None)
 
 
 # ``survival_margins=False``: the survival sweep's heights tried first (10 to 400 cm, two thirds

@@ -268,11 +268,16 @@ def check_clashes(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: 
                        keepouts=keepouts(spec, frame, fasteners(spec, frame, parts)))
 
 
-def _vitamin_key(spec: Spec, frame) -> list:
-    from ..vitamins import vitamins
+def _vitamin_key(spec: Spec, frame, vits=None) -> list:
+    """What a step reads of the bought parts: each one's name, colour and primitives. `vits`: the
+    design's `vitamins.vitamins(...)` when the caller has them (a build makes them once:
+    `BuildContext.vitamins`), else made here."""
+    if vits is None:
+        from ..vitamins import vitamins
 
+        vits = vitamins(spec, frame)
     return [[v.name, v.colour, [[p.kind, p.centre, p.size, p.rot, p.axis, p.radius, p.length, p.radius_end] for p in v.prims]]
-            for v in vitamins(spec, frame)]
+            for v in vits]
 
 
 def write_assembly(spec: Spec, frame, parts: Sequence[PartSpec], built, out_dir: str | Path) -> tuple[Path, Path]:

@@ -25,7 +25,7 @@ Grams and time per part are the plate's totals shared out by each copy's volume 
 from __future__ import annotations
 
 import hashlib
-
+import os
 import re
 import shutil
 import subprocess
@@ -129,9 +129,15 @@ def profile_ini(spec: Spec, material: str, infill: float) -> str:
         # PrusaSlicer 2.5's "aligned" seam placer takes most of the slicing time on small joints
         # (docs/measurements.md); "rear" gives the same grams and puts every seam at the back.
         "seam_position": "rear",
-        # Simplify sliced outlines to 0.0125 mm (PrusaSlicer's default 0 keeps every facet edge): less
-        # slicing time on the joint plate, the same grams and the print time within seconds.
-        "resolution": "0.0125",
+        # Perimeters of the widths above (2.5's default, Arachne, varies them, so the slicer would not
+        # count the shell the mass model counts), and the same G-code on every run of the same plate
+        # on one CPU (`slice_plate`), which Arachne's is not (docs/fabrication.md).
+        "perimeter_generator": "classic",
+        # Simplify sliced outlines to 0.025 mm (PrusaSlicer's default 0 keeps every facet edge): the
+        # STLs are tessellated to 0.02 mm (export/part_files.LINEAR_TOL), so finer detail is facets,
+        # not shape. The carbon TPU plate: 2.3 s CPU instead of 3.1 s at 0.0125, grams -0.4 %, the
+        # print time within seconds (docs/measurements.md).
+        "resolution": "0.025",
         "filament_type": s.filament_type,
         "filament_diameter": f"{FILAMENT_DIAMETER:g}",
         "filament_density": f"{mat.density_g_cm3:g}",
@@ -320,8 +326,7 @@ def parse_duration(text: str) -> float:
 
 
 def format_duration(seconds: float) -> str:
-    """Whole minutes ('16 min', '5h 23m'): PrusaSlicer's estimate moves by a few seconds between
-    runs of the same plate (thread-dependent path order), and nobody plans a print by the second."""
+    """Whole minutes ('16 min', '5h 23m'): nobody plans a print by the second."""
     m_total = int(round(seconds / 60.0))
     h, m = divmod(m_total, 60)
     return f"{h}h {m:02d}m" if h else f"{m} min"
@@ -455,12 +460,33 @@ def _explain_failure(plate: Path, rc: int, output: str) -> str:
 
 # -- slicing ---------------------------------------------------------------------------------
 
+# PrusaSlicer's path order, hence its time estimate, depends on how its threads interleave: the same
+# plate gave 3h 41m 20s to 27s over five runs, and its G-code differed every time. Its thread pool
+# (TBB) is as large as the CPUs the process may use, and the slicer has no option for it; started on
+# one CPU it runs one thread, and with the classic perimeter generator (`profile_ini`) the same
+# plate then gives the same G-code, byte for byte, every run (docs/fabrication.md). This launcher
+# pins itself to one CPU and becomes PrusaSlicer (same process: its pid is the slicer's).
+_ONE_CPU = ("import os, sys; cpus = sorted(os.sched_getaffinity(0)); "
+            "os.sched_setaffinity(0, {cpus[int(sys.argv[1]) % len(cpus)]}); os.execv(sys.argv[2], sys.argv[2:])")
+
+
+def _on_one_cpu(cmd: list[str], cpu: int = 0) -> list[str]:
+    """`cmd` started on one CPU (the `cpu`-th the process may use, modulo their number: slicers that
+    run at once get different ones); as it is where the OS cannot pin a process."""
+    if not hasattr(os, "sched_setaffinity"):
+        return cmd
+    exe = shutil.which(cmd[0]) or cmd[0]
+    return [sys.executable, "-I", "-S", "-c", _ONE_CPU, str(int(cpu)), exe, *cmd[1:]]
+
+
 def slice_plate(plate: Path | str, profile: Path | str, bed: Sequence[float], exe: str | None = None,
                 gcode: Path | str | None = None, timeout_s: float = TIMEOUT_S, items=None,
-                started: Callable[[int], None] | None = None) -> PlateSlice:
+                started: Callable[[int], None] | None = None, cpu: int = 0) -> PlateSlice:
     """Check and slice one plate with a profile .ini; returns grams and time from the G-code.
     `items`: the plate's contents as read back (`load_plate_objects`), when known. `started(pid)`
-    is called the moment PrusaSlicer starts, before it has loaded (a build lowers its priority)."""
+    is called the moment PrusaSlicer starts, before it has loaded (a build lowers its priority).
+    PrusaSlicer runs on one CPU (`_on_one_cpu`: the same plate, the same G-code and estimate);
+    `cpu` picks which, so that plates sliced at the same time run on different ones."""
     plate = Path(plate)
     exe = exe or find_slicer()
     if exe is None:
@@ -468,7 +494,8 @@ def slice_plate(plate: Path | str, profile: Path | str, bed: Sequence[float], ex
     material, _ = parse_plate_name(plate.stem)
     gcode = Path(gcode) if gcode else plate.with_suffix(".gcode")
     gcode.unlink(missing_ok=True)
-    cmd = [exe, "--loglevel", "1", "--export-gcode", "--load", str(profile), "--dont-arrange", str(plate), "-o", str(gcode)]
+    cmd = _on_one_cpu([exe, "--loglevel", "1", "--export-gcode", "--load", str(profile), "--dont-arrange", str(plate),
+                       "-o", str(gcode)], cpu)
     t0 = time.perf_counter()
     # PrusaSlicer starts first and the plate is checked while it loads (reading the 3MF back
     # takes a fraction of a second, off the slicing's critical path); a plate that fails the check stops it
@@ -544,12 +571,11 @@ def slice_plates(plates: Sequence[Path | str], spec: Spec, estimated_g: Mapping[
 
 
 def _slice_cached(plate: Path, profile: Path, bed: Sequence[float], exe: str, version: str, gcode: Path,
-                  items=None, started: Callable[[int], None] | None = None) -> PlateSlice:
+                  items=None, started: Callable[[int], None] | None = None, cpu: int = 0) -> PlateSlice:
     """slice_plate, reusing the numbers of an identical earlier run.
 
-    Keyed by the plate's bytes, the profile and the slicer's version: the same plate always
-    reports the same grams and time (PrusaSlicer's own estimate jitters by seconds between
-    runs), and a rebuild with nothing changed does not pay 10-20 s of slicing again.
+    Keyed by the plate's bytes, the profile and the slicer's version: a rebuild with nothing
+    changed does not slice again (a new run would give the same numbers: `slice_plate`).
     """
     from .. import cache
 
@@ -560,7 +586,7 @@ def _slice_cached(plate: Path, profile: Path, bed: Sequence[float], exe: str, ve
         check_plate(plate, bed, items=items)
         return PlateSlice(plate.stem, hit["material"], plate, gcode, hit["grams"], hit["time_s"],
                           tuple((n, v) for n, v in hit["objects"]), 0.0)
-    r = slice_plate(plate, profile, bed, exe, gcode=gcode, items=items, started=started)
+    r = slice_plate(plate, profile, bed, exe, gcode=gcode, items=items, started=started, cpu=cpu)
     cache.store_json("slice", key, {"material": r.material, "grams": r.grams, "time_s": r.time_s,
                                     "objects": [list(o) for o in r.objects]})
     return r

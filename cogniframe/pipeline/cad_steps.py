@@ -47,11 +47,9 @@ def _copies(ctx, file_hash: str) -> list:
 def _rods_and_vitamins(ctx) -> list:
     import numpy as np
 
-    from ..export.assembly import _vitamin_key
-
     rods = [[r.name, np.round(r.start, 9).tolist(), np.round(r.end, 9).tolist(), r.diameter]
             for r in ctx.design.frame.rods.values()]
-    return [rods, _vitamin_key(ctx.spec, ctx.design.frame)]
+    return [rods, ctx.vitamin_key()]
 
 def assembly_key(ctx):
     """The assembly reads each part's STEP file (by its bytes, not the CAD inputs: a code edit that

@@ -39,6 +39,8 @@ class BuildContext(graph.Context):
     once, and the plate items the plates step read back."""
 
     part_plotter: Any = field(default=None, init=False)
+    _vitamins: Any = field(default=None, init=False)
+    _vitamins_lock: Any = field(default_factory=threading.Lock, init=False)
     _meshes: dict = field(default_factory=dict, init=False)
     _plate_items: dict = field(default_factory=dict, init=False)
 
@@ -69,6 +71,24 @@ class BuildContext(graph.Context):
         from ..export.part_files import _built
 
         return tuple(_built(p, self.part_value(p.name)) for p in self.design.parts)
+
+    def vitamins(self) -> tuple:
+        """The bought parts (`vitamins.vitamins`), made once per build from the design's part list:
+        the keys of the clash check, assembly, GLB, renders, 3D view and flight files and three of
+        those steps read them, and made without the part list each costs a part list (0.1-0.3 s
+        with the pegged core link). The key functions of waiting steps run in threads: a lock."""
+        with self._vitamins_lock:
+            if self._vitamins is None:
+                from ..vitamins import vitamins
+
+                self._vitamins = vitamins(self.spec, self.design.frame, self.design.parts)
+            return self._vitamins
+
+    def vitamin_key(self) -> list:
+        """What a step's key reads of the bought parts (`export.assembly._vitamin_key`)."""
+        from ..export.assembly import _vitamin_key
+
+        return _vitamin_key(self.spec, self.design.frame, self.vitamins())
 
     def warm_imports(self) -> None:
         """Start importing the main thread's libraries while it waits for the CAD workers

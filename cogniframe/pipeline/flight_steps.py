@@ -11,14 +11,12 @@ from .graph import Made, Step
 def flight_key(ctx):
     """What the flight files read: each part's mesh, copies and placements, the rods, the bought
     parts, the budget's lines, the modes, the flight numbers and the motors' params."""
-    from ..export.assembly import _vitamin_key
-
     check = ctx["check"]
     d = ctx.design
     return [ctx.spec.name, ctx.spec.motors.model_dump(mode="json"), ctx.spec.core.battery.model_dump(mode="json"),
             [[p.name, p.placements, ctx.part_value(p.name)["stl_sha256"], ctx.part_value(p.name)["print_from_local"]]
              for p in d.parts],
-            list(d.frame.rods.values()), d.frame.motors, d.frame.core, _vitamin_key(ctx.spec, d.frame),
+            list(d.frame.rods.values()), d.frame.motors, d.frame.core, ctx.vitamin_key(),
             check.mass.as_dict(), (check.stiffness or {}).get("modes_hz"),
             None if check.flight is None else check.flight.summary()]
 

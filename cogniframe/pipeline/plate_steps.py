@@ -103,7 +103,6 @@ def make_slice(ctx, material: str) -> Made:
     """Slice this material's plates (G-code in a temp folder: it is not byte-stable; keep the numbers,
     and with `build --gcode` the G-code too, as plates/<plate>.gcode)."""
     from ..export import slicer
-    from ..runtime.pools import behind_the_build  # PrusaSlicer runs behind the build's main thread
 
     found = ctx.slicer.get()
     if not found:
@@ -113,16 +112,20 @@ def make_slice(ctx, material: str) -> Made:
     ini.write_text(_profile(ctx, material), encoding="utf-8")
     plates = []
     kept = []
+    # each material's slicer on a CPU of its own. PrusaSlicer runs on one (`slicer.slice_plate`), so
+    # it runs at the build's priority, not behind it as the CAD workers do: it cannot take the main
+    # thread's core, and it heads the chain a one-part rebuild waits for (part -> plates -> slice)
+    cpu = sorted({p.material for p in ctx.design.parts}).index(material)
     with tempfile.TemporaryDirectory(prefix="cogniframe-gcode-") as tmp:
         for v in ctx[f"plates:{material}"]:
             where = ctx.out / "plates" if _keep_gcode(ctx) else Path(tmp)
             items = ctx.plate_items(v)
             if ctx.use_cache and not _keep_gcode(ctx):  # per plate: a plate whose bytes did not change is not sliced again
                 r = slicer._slice_cached(ctx.out / v["threemf"], ini, ctx.spec.printer.bed, exe, version,
-                                         where / f"{v['name']}.gcode", items=items, started=behind_the_build)
+                                         where / f"{v['name']}.gcode", items=items, cpu=cpu)
             else:
                 r = slicer.slice_plate(ctx.out / v["threemf"], ini, ctx.spec.printer.bed, exe,
-                                       gcode=where / f"{v['name']}.gcode", items=items, started=behind_the_build)
+                                       gcode=where / f"{v['name']}.gcode", items=items, cpu=cpu)
             plates.append({"plate": r.plate, "material": r.material, "grams": r.grams, "time_s": r.time_s,
                            "objects": [list(o) for o in r.objects]})
             if _keep_gcode(ctx):

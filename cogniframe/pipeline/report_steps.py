@@ -74,11 +74,9 @@ def _close_part_plotter(ctx) -> None:
 def renders_key(ctx):
     from ..report import renders
 
-    from ..export.assembly import _vitamin_key
-
     return [[[p.name, p.material, p.placements, ctx.part_value(p.name)["stl_sha256"],
               ctx.part_value(p.name)["print_from_local"]] for p in ctx.design.parts],
-            renders.rod_segments(ctx.design.frame), ctx.spec.name, _vitamin_key(ctx.spec, ctx.design.frame)]
+            renders.rod_segments(ctx.design.frame), ctx.spec.name, ctx.vitamin_key()]
 
 def make_renders(ctx) -> Made:
     from ..report import renders
@@ -88,7 +86,7 @@ def make_renders(ctx) -> Made:
     pfl = {p.name: ctx.part_value(p.name)["print_from_local"] for p in d.parts}
     views = renders.render_assembly(renders.world_meshes(d.parts, meshes, pfl), renders.rod_segments(d.frame),
                                     ctx.out / "renders", title=ctx.spec.name,
-                                    vitamins=renders.vitamin_meshes(ctx.spec, d.frame))  # the bought parts
+                                    vitamins=renders.vitamin_meshes(ctx.spec, d.frame, ctx.vitamins()))  # the bought parts
     return Made(tuple(p.relative_to(ctx.out).as_posix() for p in views.values()), list(views))
 
 def step_views_key(ctx):
@@ -172,14 +170,12 @@ def _plate_files(ctx):
 def viewer_key(ctx):
     """What the 3D view shows: each part's mesh (STL hash), copies, placement and grams each, the plates'
     copies, the rods and the cut list."""
-    from ..export.assembly import _vitamin_key
-
     d = ctx.design
     grams = {i.name: i.mass_g_each for i in ctx["check"].mass.items}
     return [[[p.name, p.material, p.qty, p.placements, ctx.part_value(p.name)["stl_sha256"],
               ctx.part_value(p.name)["print_from_local"], grams.get(p.name)] for p in d.parts],
             [[p.name, p.copies] for p in _plate_files(ctx)], list(d.frame.rods.values()), d.cut.rows,
-            _vitamin_key(ctx.spec, d.frame)]  # the vitamins' solids (their grams are not shown in the view)
+            ctx.vitamin_key()]  # the vitamins' solids (their grams are not shown in the view)
 
 def make_viewer(ctx) -> Made:
     """The report's interactive 3D view as one HTML section, kept as this step's value."""
@@ -192,7 +188,7 @@ def make_viewer(ctx) -> Made:
                          _plate_files(ctx))
     from ..report.renders import vitamin_viewer_items
 
-    items += vitamin_viewer_items(ctx.spec, d.frame)  # the bought parts (geometry in viewer_key)
+    items += vitamin_viewer_items(ctx.spec, d.frame, vits=ctx.vitamins())  # the bought parts (geometry in viewer_key)
     return Made((), viewer_section(items))
 
 

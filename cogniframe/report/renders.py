@@ -213,17 +213,20 @@ class VitaminMesh:
     opacity: float = 1.0
 
 
-def vitamin_meshes(spec, frame) -> list[VitaminMesh]:
-    """The aircraft's vitamins (cogniframe.vitamins) as meshes; propeller discs see-through."""
+def vitamin_meshes(spec, frame, vits=None) -> list[VitaminMesh]:
+    """The aircraft's vitamins (cogniframe.vitamins) as meshes; propeller discs see-through.
+    `vits`: the design's `vitamins.vitamins(...)` when the caller has them, else made here."""
     from ..vitamins import to_trimesh, vitamins
 
-    return [VitaminMesh(v.name, v.colour, to_trimesh(v), 0.35 if v.disc else 1.0) for v in vitamins(spec, frame)]
+    vits = vitamins(spec, frame) if vits is None else vits
+    return [VitaminMesh(v.name, v.colour, to_trimesh(v), 0.35 if v.disc else 1.0) for v in vits]
 
 
-def vitamin_viewer_items(spec, frame, mass=None) -> list:
+def vitamin_viewer_items(spec, frame, mass=None, vits=None) -> list:
     """The vitamins as items of the report's 3D view (kind "vitamin"): their mesh in world
     coordinates (manifold3d, no mesh library), colour, what to buy and which budget line holds
-    their mass (the grams themselves only when `mass` is given)."""
+    their mass (the grams themselves only when `mass` is given). `vits`: the design's
+    `vitamins.vitamins(...)` when the caller has them, else made here."""
     from ..vitamins import mesh_arrays, vitamins
     from .viewer import Mesh, ViewerItem
 
@@ -232,7 +235,7 @@ def vitamin_viewer_items(spec, frame, mass=None) -> list:
         return Mesh(verts, faces)
 
     grams = {i.name: i.mass_g_each for i in mass.items} if mass is not None else {}
-    vits = vitamins(spec, frame)
+    vits = vitamins(spec, frame) if vits is None else vits
     count: dict[str, int] = {}
     for v in vits:
         count[v.bom] = count.get(v.bom, 0) + 1

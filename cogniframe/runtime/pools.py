@@ -20,9 +20,12 @@ from concurrent.futures import ProcessPoolExecutor
 from .lifecycle import BACKGROUND_NICE, CAD_PRELOAD, FE_PRELOAD, behind_the_build, die_with_build, start_worker  # noqa: F401
 
 
-# The order of the CAD workers' jobs (lower first, then in order of submission): the parts first,
-# because everything waits for them (the plates, then the slicer, are the critical path).
-JOB_ORDER = {"part": 0, "clash": 0, "assembly": 0, "joint FE": 1}
+# The order of the CAD workers' jobs (lower first, then in order of submission), by how much waits
+# for each: the parts first (everything does: the plates, then the slicer, and the main thread's
+# previews and renders); then the joints' FE, which heads the longest chain left (estimate ->
+# physics -> check -> flight, 3D view, BOM -> report); then the clash check (check waits for it);
+# the assembly STEP last, since nothing waits for it (it ran before the FE, which then ended last).
+JOB_ORDER = {"part": 0, "joint FE": 1, "clash": 2, "assembly": 3}
 
 
 

@@ -251,13 +251,14 @@ def _solve(spec, todo, mesh_mm: float, submit=None) -> dict[str, str]:
     return failed
 
 
-def _surrogate_split(spec, parts, factor: float | None = None):
+def _surrogate_split(spec, parts, factor: float | None = None, outside: dict[str, str] | None = None):
     """({part name: surrogate super-element}, {part name: why it is outside the training box}):
     originals predicted, mirrored joints reflected from their predicted original (as the FE path
-    reflects them); which joints are outside is `surrogate.outside_reasons`."""
+    reflects them); which joints are outside is `surrogate.outside_reasons` (``outside``: its
+    answer for these parts when the caller has it)."""
     from .surrogate import outside_reasons, predict
 
-    outside = outside_reasons(spec, parts)
+    outside = outside_reasons(spec, parts) if outside is None else outside
     inside = {}
     for p in parts:
         if not is_mirror(p) and p.name not in outside:
@@ -269,11 +270,12 @@ def _surrogate_split(spec, parts, factor: float | None = None):
     return inside, outside
 
 
-def surrogate_models(spec, parts, factor: float | None = None, submit=None) -> dict:
+def surrogate_models(spec, parts, factor: float | None = None, submit=None, outside: dict[str, str] | None = None) -> dict:
     """Every joint's super-element from the surrogate; the joints outside its training box from the
     solid FE (cached; `solve_missing` on `submit`'s workers), those the FE cannot mesh from the
-    closed forms, as `stiffness.joint_models` does for the FE."""
-    inside, outside = _surrogate_split(spec, parts, factor)
+    closed forms, as `stiffness.joint_models` does for the FE. ``outside``: `surrogate.outside_reasons`
+    for these parts when the caller has it."""
+    inside, outside = _surrogate_split(spec, parts, factor, outside)
     out = dict(inside)
     if outside:
         rest = [p for p in parts if p.name in outside]
@@ -291,11 +293,13 @@ def surrogate_models(spec, parts, factor: float | None = None, submit=None) -> d
     return {p.name: out[p.name] for p in parts}
 
 
-def surrogate_notes(spec, parts) -> list[str]:
+def surrogate_notes(spec, parts, outside: dict[str, str] | None = None) -> list[str]:
     """One line per joint outside the surrogate's training box (what `check` reports as a note and
     a sweep as its `joints_outside_box` column); empty when every joint is inside. Milliseconds:
-    the features and the box, no fit evaluated."""
+    the features and the box, no fit evaluated (``outside``: `surrogate.outside_reasons` for these
+    parts when the caller has it)."""
     from .surrogate import outside_reasons
 
+    outside = outside_reasons(spec, parts) if outside is None else outside
     return [f"joint {name}: outside the surrogate's training box ({why}); its stiffness is from the solid FE"
-            for name, why in outside_reasons(spec, parts).items()]
+            for name, why in outside.items()]

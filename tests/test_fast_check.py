@@ -1,0 +1,218 @@
+"""`check`'s fast paths give the figures of the straightforward ones (issue 44): each fast piece
+against a plain reference written here (every point tested, every sample interpolated, the mount
+stepped), and the whole `check --json` of the presets and random designs with the references
+swapped in against the shipped code. The timings are benchmarks/bench_check_profile.py's, never
+asserted here."""
+
+from __future__ import annotations
+
+import copy
+import functools
+import math
+import random
+
+import numpy as np
+import pytest
+
+import design_space
+from cogniframe import frame as frame_mod
+from cogniframe.errors import UserError
+from cogniframe import spec as spec_mod
+from cogniframe.analysis import single_drop as S
+from cogniframe.families import joint
+from cogniframe.parts import peg_plan
+
+
+# -- the references: the plain computations the fast paths replace ------------------------------
+
+def sleeve_in_arch_every_point(p0, d, t0, t1, r, box, opening, block, n=96) -> float:
+    """The midpoint rule over every point: n steps along the sleeve, n / 3 across its radius, n round."""
+    d = np.asarray(d, float)
+    a, b = peg_plan._frame_of(d)
+    nr = max(4, n // 3)
+    t = t0 + (np.arange(n) + 0.5) * (t1 - t0) / n
+    rho = (np.arange(nr) + 0.5) * r / nr
+    phi = (np.arange(n) + 0.5) * 2 * math.pi / n
+    T, P, F = np.meshgrid(t, rho, phi, indexing="ij")
+    pts = (np.asarray(p0, float)[:, None] + d[:, None] * T.ravel() + a[:, None] * (P * np.cos(F)).ravel()
+           + b[:, None] * (P * np.sin(F)).ravel())
+    lo, hi = (np.asarray(v, float)[:, None] for v in box)
+    inside = np.all((pts >= lo) & (pts <= hi), axis=0)
+    if block is not None:
+        blo, bhi = (np.asarray(v, float)[:, None] for v in block)
+        inside |= np.all((pts >= blo) & (pts <= bhi), axis=0)
+    if opening is not None:
+        inside &= ~opening.contains(pts[0], pts[2])
+    w = P.ravel() * (r / nr) * (2 * math.pi / n) * ((t1 - t0) / n)
+    return float(w[inside].sum())
+
+
+def mount_response_stepped(u, dt, mount_hz, zeta):
+    """The mount's exact first-order-hold steps, one after another."""
+    from cogniframe.analysis.impact_nl import _expm
+
+    w = 2.0 * math.pi * mount_hz
+    M = np.zeros((4, 4))
+    M[0, 1] = 1.0
+    M[1, 0], M[1, 1], M[1, 2] = -w * w, -2.0 * zeta * w, -1.0
+    M[2, 3] = 1.0
+    E = _expm(M * dt)
+    z = zd = 0.0
+    uu = list(map(float, u))
+    out = [0.0]
+    for i in range(len(uu) - 1):
+        du = (uu[i + 1] - uu[i]) / dt
+        z, zd = (E[0, 0] * z + E[0, 1] * zd + E[0, 2] * uu[i] + E[0, 3] * du,
+                 E[1, 0] * z + E[1, 1] * zd + E[1, 2] * uu[i] + E[1, 3] * du)
+        out.append(-(w * w * z + 2.0 * zeta * w * zd))
+    return np.asarray(out)
+
+
+def drop_peaks_every_sample(pulse_g, height_cm, scatter, footprint_mm=S.PAPER_FOOTPRINT_MM, d=None, dt=S.DT_S,
+                            rate_hz=S.RATE_HZ, n_samples=S.N_SAMPLES, mount=mount_response_stepped):
+    """Every drop's peak over all its samples, each foot's reading by np.interp."""
+    d = d if d is not None else S.draws()
+    logger = mount(pulse_g, dt, scatter.mount_hz, scatter.mount_zeta) if scatter.mount_hz > 0 else pulse_g
+    tj = S.foot_delays_s(S.feet(footprint_mm), math.radians(scatter.tilt_scale_deg(height_cm)) * d.tilt_unit, d.azimuth,
+                         S.impact_velocity(height_cm))
+    ts = (np.arange(n_samples)[None, :] + d.phase[:, None]) / rate_hz
+    t = ts[:, None, :] - tj[:, :, None]
+    a = np.interp(t, np.arange(len(logger)) * dt, logger, left=0.0, right=0.0).mean(axis=1)
+    return np.abs(a).max(axis=1)
+
+
+# -- the designs ---------------------------------------------------------------------------------
+
+@functools.lru_cache(maxsize=None)
+def _random_docs(n: int, seed: int) -> tuple[dict, ...]:
+    """n random designs ("edit" mode) that validate, their joints inside the surrogate's box."""
+    import cogniframe.api as api
+    from cogniframe.analysis.joints.surrogate import outside_reasons
+
+    rnd = random.Random(seed)
+    out = []
+    while len(out) < n:
+        doc = design_space.random_design(rnd, "edit")
+        doc["model"]["stiffness_model"] = "surrogate"
+        try:
+            d = api.Design(spec_mod.from_dict(copy.deepcopy(doc), source="x.yaml"), "", "x.yaml", None).validate()
+        except UserError:  # a design the validation refuses: drawn again
+            continue
+        if not outside_reasons(d.spec, [p for p in d.derived.parts if p.family == "joint"]):  # no FE to solve
+            out.append(doc)
+    return tuple(out)
+
+
+def _presets() -> list[dict]:
+    out = []
+    for name in design_space.PRESETS:
+        doc = design_space.preset(name)
+        doc["model"]["stiffness_model"] = "surrogate"
+        out.append(doc)
+    return out
+
+
+# -- the pieces ----------------------------------------------------------------------------------
+
+def test_the_sleeve_in_the_arch_is_the_midpoint_rule_over_every_point():
+    """The presets' and twelve random designs' pegged links (both hands): the runs along lines sum
+    the same points as testing each."""
+    rnd = random.Random(7)
+    docs = _presets() + [design_space.random_design(rnd, "edit") for _ in range(12)]
+    compared = 0
+    for doc in docs:
+        try:
+            s = spec_mod.from_dict(copy.deepcopy(doc), source="x.yaml")
+            links = joint.core_links(s, frame_mod.frame_of(s))
+        except Exception:  # noqa: BLE001 - a design the validation refuses: not a link to compare
+            continue
+        for link in links:
+            pl = peg_plan.pegged_plan(link.sockets, dict(link.params))
+            for st in pl.struts:
+                back, mouth = np.asarray(st.back), np.asarray(st.mouth)
+                d = (mouth - back) / np.linalg.norm(mouth - back)
+                box = ((pl.arch_x[0], pl.arch_n[0], pl.arch_lo), (pl.arch_x[1], pl.arch_n[1], pl.arch_hi))
+                want = sleeve_in_arch_every_point(back - d * st.start, d, st.start, st.end, pl.col_r, box, pl.opening, pl.block)
+                assert want > 0
+                assert peg_plan.sleeve_in_arch(pl, st) == pytest.approx(want, rel=1e-12)
+                compared += 1
+    assert compared >= 10
+
+
+def test_the_runs_count_a_box_a_block_and_an_opening_crossed_at_any_angle():
+    """A sleeve through a box with a block on it and an opening under it, at slants where a line
+    crosses every face, and along an axis (lines parallel to faces)."""
+    box = ((-10.0, -3.0, 0.0), (10.0, 3.0, 8.0))
+    block = ((-2.0, -3.0, 8.0), (2.0, 3.0, 11.0))
+    opening = peg_plan.ArchOpening(0.0, 6.0, 2.0, 0.0, 4.0)
+    for d in ([0.0, 0.0, 1.0], [0.3, 0.1, 0.95], [-0.6, 0.2, 0.77], [1.0, 0.0, 0.0]):
+        d = np.asarray(d) / np.linalg.norm(d)
+        p0 = np.array([0.5, 0.2, 1.0]) - 3.0 * d
+        want = sleeve_in_arch_every_point(p0, d, 0.0, 14.0, 2.5, box, opening, block, n=48)
+        got = peg_plan._sleeve_in_arch(p0, d, 0.0, 14.0, 2.5, box, opening, block, n=48)
+        assert want > 0 and got == pytest.approx(want, rel=1e-12)
+
+
+def test_the_mount_by_convolution_is_the_mount_stepped():
+    """Check's pulses and a unit step, at the paper's mount and another: equal to 1e-12 of the peak."""
+    m, c = 0.245, 40.0
+    cases = [(S.kv_pulse_g(m, c, k, h), S.DT_S, S.PAPER_SCATTER.mount_hz, S.PAPER_SCATTER.mount_zeta)
+             for k, h in ((3000.0, 25.0), (7040.0, 100.0), (20000.0, 300.0))]
+    cases.append((np.ones(5001), 1e-5, 100.0, 0.2))
+    for u, dt, f, z in cases:
+        want = mount_response_stepped(u, dt, f, z)
+        got = S.mount_response(u, dt, f, z)
+        assert got.shape == want.shape and got[0] == 0.0
+        assert np.abs(got - want).max() <= 1e-12 * np.abs(want).max()
+
+
+def test_interp_on_the_equal_steps_is_np_interp_to_the_bit():
+    rng = np.random.default_rng(3)
+    for n, dt in ((2, 0.5), (4001, S.DT_S), (1000, 1e-3)):
+        v = rng.normal(size=n) * 50
+        grid = np.arange(n) * dt
+        t = np.concatenate([rng.uniform(-2 * dt, (n + 1) * dt, 5000), grid, np.nextafter(grid, -1.0), np.nextafter(grid, 1.0)])
+        want = np.interp(t, grid, v, left=0.0, right=0.0)
+        assert np.array_equal(S.interp_uniform(t, dt, v), want)
+
+
+@pytest.mark.parametrize("k,height", [(3000.0, 25.0), (7040.0, 100.0), (20000.0, 150.0), (7040.0, 400.0)])
+def test_the_peaks_skipping_samples_are_the_peaks_of_every_sample(k, height):
+    """The same mount output in both, so the skipped samples must change no drop's peak at all."""
+    pulse = S.kv_pulse_g(0.245, 40.0, k, height)
+    want = drop_peaks_every_sample(pulse, height, S.PAPER_SCATTER, (230.0, 190.0), mount=S.mount_response)
+    assert np.array_equal(S.drop_peaks(pulse, height, S.PAPER_SCATTER, (230.0, 190.0)), want)
+
+
+# -- the whole check -------------------------------------------------------------------------------
+
+def _check_json(doc: dict) -> dict:
+    import cogniframe.api as api
+
+    d = api.Design(spec_mod.from_dict(copy.deepcopy(doc), source="x.yaml"), "", "x.yaml", None)
+    return d.check().to_dict()
+
+
+def _same_check_as_the_references(doc, tmp_path, monkeypatch):
+    monkeypatch.setenv("COGNIFRAME_CACHE", str(tmp_path / "fast"))
+    fast = _check_json(doc)
+    with monkeypatch.context() as m:  # every cache empty again: the references compute everything
+        m.setenv("COGNIFRAME_CACHE", str(tmp_path / "reference"))
+        m.setattr(peg_plan, "_sleeve_in_arch", sleeve_in_arch_every_point)
+        m.setattr(S, "mount_response", mount_response_stepped)
+        m.setattr(S, "drop_peaks", drop_peaks_every_sample)
+        reference = _check_json(doc)
+    assert fast == reference
+
+
+@pytest.mark.parametrize("i", range(4))
+def test_check_figures_are_the_reference_paths(i, tmp_path, monkeypatch):
+    """Both presets (with the surrogate) and two random designs: the whole `check --json`, equal."""
+    doc = _presets()[i] if i < 2 else _random_docs(2, seed=44)[i - 2]
+    _same_check_as_the_references(doc, tmp_path, monkeypatch)
+
+
+@pytest.mark.long
+@pytest.mark.parametrize("i", range(20))
+def test_check_figures_of_twenty_random_designs_are_the_reference_paths(i, tmp_path, monkeypatch):
+    _same_check_as_the_references(_random_docs(20, seed=4400)[i], tmp_path, monkeypatch)
