@@ -54,7 +54,7 @@ def test_lines_cover_the_design(checked):
     mount = next(p for p in d.parts if p.family == "motor_mount")
     assert motor_screws.qty == 4 * len(mount.param("holes")) >= 8
     assert motor_screws.size == f"M2 x {mount.param('screw_length'):g}"
-    threaded = [ln for ln in hw.values() if "screw" in ln.item or "standoff" in ln.item]
+    threaded = [ln for ln in hw.values() if any(w in ln.item for w in ("screw", "standoff", "spacer"))]
     assert all(ln.size.startswith("M") for ln in threaded)
     assert all(ln.size.endswith(" mm") for ln in hw.values() if ln not in threaded)  # strap, zip ties
     # level arms: the plate stands on four standoffs as long as the gap the frame leaves for them,
