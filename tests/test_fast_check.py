@@ -10,6 +10,7 @@ import copy
 import functools
 import math
 import random
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,6 +19,7 @@ import design_space
 from cogniframe import frame as frame_mod
 from cogniframe.errors import UserError
 from cogniframe import spec as spec_mod
+from cogniframe.analysis import impact as I
 from cogniframe.analysis import single_drop as S
 from cogniframe.families import joint
 from cogniframe.parts import peg_plan
@@ -82,6 +84,39 @@ def drop_peaks_every_sample(pulse_g, height_cm, scatter, footprint_mm=S.PAPER_FO
 
 
 # -- the designs ---------------------------------------------------------------------------------
+
+def peak_abs_accel_searched(sys, v0, t_end):
+    """max |a| over [0, t_end]: a 2001-point grid, then a golden-section search (to 1e-13 s) round its best point."""
+    if t_end <= 0.0:
+        return abs(I._accel(sys, *I._state_at(sys, v0, 0.0)))
+    t = np.linspace(0.0, t_end, 2001)
+    a = np.abs(I._accel(sys, *I._state(sys, v0, t)))
+    i = int(np.argmax(a))
+    best = float(a[i])
+    lo, hi = t[max(i - 1, 0)], t[min(i + 1, t.size - 1)]
+    f = lambda s: abs(I._accel(sys, *I._state_at(sys, v0, s)))  # noqa: E731
+    inv = (math.sqrt(5.0) - 1.0) / 2.0
+    c, d = hi - inv * (hi - lo), lo + inv * (hi - lo)
+    fc, fd = f(c), f(d)
+    while hi - lo > 1e-13:
+        if fc > fd:
+            hi, d, fd = d, c, fc
+            c = hi - inv * (hi - lo)
+            fc = f(c)
+        else:
+            lo, c, fc = c, d, fd
+            d = lo + inv * (hi - lo)
+            fd = f(d)
+    return max(best, fc, fd)
+
+
+def parse_yaml_pure(text, path):
+    """The params file read by the pure-Python loader alone."""
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(spec_mod, "_FastUniqueKeyLoader", None)
+        return spec_mod.parse_yaml(text, path)
+
+
 
 @functools.lru_cache(maxsize=None)
 def _random_docs(n: int, seed: int) -> tuple[dict, ...]:
@@ -184,6 +219,46 @@ def test_the_peaks_skipping_samples_are_the_peaks_of_every_sample(k, height):
     assert np.array_equal(S.drop_peaks(pulse, height, S.PAPER_SCATTER, (230.0, 190.0)), want)
 
 
+@pytest.mark.parametrize("zeta", [0.0, 0.2, 0.558, 0.95, 1.0, 1.05, 2.5])
+def test_the_peak_acceleration_in_closed_form_is_the_searched_one(zeta):
+    """Every regime (undamped to over-damped, critical exactly), touch-down speeds of a sweep, to the
+    contact and beyond: the closed form is the grid-and-golden-section maximum to 1e-12 and never
+    below it (the search only approaches the maximum from below)."""
+    rnd = random.Random(int(zeta * 1000))
+    for _ in range(60):
+        m, k = rnd.uniform(0.15, 0.6), 10 ** rnd.uniform(3.0, 4.6)
+        sys = I._System.of(m, 2 * zeta * math.sqrt(k * m), k)
+        v0 = rnd.uniform(0.0, 11.0)
+        t_max = I._time_of_max(sys, v0)
+        for t_end in (t_max if math.isfinite(t_max) else I._settle_time(sys), rnd.uniform(0.0, 0.03), 0.0):
+            got, want = I._peak_abs_accel(sys, v0, t_end), peak_abs_accel_searched(sys, v0, t_end)
+            assert got == pytest.approx(want, rel=1e-12)
+            assert got >= want * (1 - 1e-14)
+
+
+def test_the_libyaml_loader_reads_what_the_pure_loader_reads():
+    """The presets and random designs as YAML: the same data, key order and types; a key written
+    twice and a syntax error still get the pure loader's words."""
+    import yaml
+
+    docs = _presets() + list(_random_docs(2, seed=44))
+    for doc in docs:
+        text = yaml.safe_dump(doc, sort_keys=False)
+        fast, pure = spec_mod.parse_yaml(text, "x.yaml"), parse_yaml_pure(text, "x.yaml")
+        assert fast == pure and repr(fast) == repr(pure)
+    for path in sorted((Path(__file__).resolve().parents[1] / "params").glob("*.yaml")):  # with their comments
+        text = path.read_text()
+        assert repr(spec_mod.parse_yaml(text, path)) == repr(parse_yaml_pure(text, path))
+    for bad in ("a: 1\nb:\n  c: 2\n  c: 3\n", "a: [1, 2\nb: 3\n", "a:\n\t- 1\n"):
+        with pytest.raises(UserError) as fast:
+            spec_mod.parse_yaml(bad, "x.yaml")
+        with pytest.raises(UserError) as pure:
+            parse_yaml_pure(bad, "x.yaml")
+        assert str(fast.value) == str(pure.value)
+    assert "written twice" in str(pytest.raises(UserError, spec_mod.parse_yaml, "a: 1\na: 2\n", "x.yaml").value)
+
+
+
 # -- the whole check -------------------------------------------------------------------------------
 
 def _check_json(doc: dict) -> dict:
@@ -201,6 +276,7 @@ def _same_check_as_the_references(doc, tmp_path, monkeypatch):
         m.setattr(peg_plan, "_sleeve_in_arch", sleeve_in_arch_every_point)
         m.setattr(S, "mount_response", mount_response_stepped)
         m.setattr(S, "drop_peaks", drop_peaks_every_sample)
+        m.setattr(I, "_peak_abs_accel", peak_abs_accel_searched)
         reference = _check_json(doc)
     assert fast == reference
 
