@@ -118,6 +118,38 @@ def parse_yaml_pure(text, path):
 
 
 
+def prop_clearances_one_by_one(frame, spec):
+    """Each propeller disc against each cage rod (sampled every 0.5 mm) and each core box (a 1 mm
+    polar grid of the disc, every box), one at a time."""
+    radius = spec.motors.prop_diameter / 2
+
+    def to_disc(pts, centre):
+        dxy = np.hypot(pts[:, 0] - centre[0], pts[:, 1] - centre[1])
+        return np.hypot(np.maximum(dxy - radius, 0.0), np.abs(pts[:, 2] - centre[2]))
+
+    def rod_to_disc(rod, centre):
+        n = max(2, int(rod.length / 0.5))
+        return float(to_disc(rod.start + np.outer(np.linspace(0, 1, n), rod.end - rod.start), centre).min() - rod.diameter / 2)
+
+    def box_to_disc(box, centre):
+        rr = np.linspace(0, radius, max(2, int(radius) + 1))
+        th = np.linspace(0, 2 * math.pi, max(16, int(2 * math.pi * radius)), endpoint=False)
+        R, T = np.meshgrid(rr, th)
+        pts = np.column_stack([centre[0] + (R * np.cos(T)).ravel(), centre[1] + (R * np.sin(T)).ravel(),
+                               np.full(R.size, centre[2])])
+        gap = np.maximum(np.abs(pts - np.asarray(box.centre)) - np.asarray(box.size) / 2, 0.0)
+        return float(np.linalg.norm(gap, axis=1).min())
+
+    out = []
+    for m in frame.motors:
+        centre = np.array([m.axis[0], m.axis[1], m.prop_z])
+        cage = min(rod_to_disc(r, centre) for r in frame.rods.values() if r.role != "arm")
+        core = min(box_to_disc(b, centre) for b in frame.core.boxes)
+        others = [np.hypot(o.axis[0] - m.axis[0], o.axis[1] - m.axis[1]) - 2 * radius for o in frame.motors if o is not m]
+        out.append(frame_mod.PropClearance(m.name, round(cage, 2), round(core, 2), round(float(min(others)), 2)))
+    return tuple(out)
+
+
 @functools.lru_cache(maxsize=None)
 def _random_docs(n: int, seed: int) -> tuple[dict, ...]:
     """n random designs ("edit" mode) that validate, their joints inside the surrogate's box."""
@@ -259,6 +291,25 @@ def test_the_libyaml_loader_reads_what_the_pure_loader_reads():
 
 
 
+def test_the_propeller_clearances_from_one_array_are_the_one_by_one_distances():
+    """Both presets and random designs: every disc's gap to the cage, the core and its neighbours,
+    equal to the bit; and a box's distance from its two gap columns is the norm of every point's gap."""
+    for doc in _presets() + list(_random_docs(6, seed=45)):
+        s = spec_mod.from_dict(copy.deepcopy(doc), source="x.yaml")
+        f = frame_mod.frame_of(s)
+        assert frame_mod.prop_clearances(f, s) == prop_clearances_one_by_one(f, s)
+    rnd = random.Random(3)
+    box = type("Box", (), {})
+    for _ in range(500):
+        b = box()
+        b.centre, b.size = tuple(rnd.uniform(-80, 80) for _ in range(3)), tuple(rnd.uniform(1, 60) for _ in range(3))
+        centre, radius = np.array([rnd.uniform(-120, 120) for _ in range(3)]), rnd.uniform(20, 60)
+        dx, dy = frame_mod._disc_grid(radius)
+        pts = np.column_stack([centre[0] + dx, centre[1] + dy, np.full(dx.size, centre[2])])
+        gap = np.maximum(np.abs(pts - np.asarray(b.centre)) - np.asarray(b.size) / 2, 0.0)
+        assert frame_mod._box_to_disc(b, centre, radius) == float(np.linalg.norm(gap, axis=1).min())
+
+
 # -- the whole check -------------------------------------------------------------------------------
 
 def _check_json(doc: dict) -> dict:
@@ -277,6 +328,7 @@ def _same_check_as_the_references(doc, tmp_path, monkeypatch):
         m.setattr(S, "mount_response", mount_response_stepped)
         m.setattr(S, "drop_peaks", drop_peaks_every_sample)
         m.setattr(I, "_peak_abs_accel", peak_abs_accel_searched)
+        m.setattr(frame_mod, "prop_clearances", prop_clearances_one_by_one)
         reference = _check_json(doc)
     assert fast == reference
 
