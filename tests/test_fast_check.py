@@ -21,6 +21,7 @@ from cogniframe.errors import UserError
 from cogniframe import spec as spec_mod
 from cogniframe.analysis import impact as I
 from cogniframe.analysis import single_drop as S
+from cogniframe.analysis.joints import mirror
 from cogniframe.families import joint
 from cogniframe.parts import peg_plan
 
@@ -310,6 +311,25 @@ def test_the_propeller_clearances_from_one_array_are_the_one_by_one_distances():
         assert frame_mod._box_to_disc(b, centre, radius) == float(np.linalg.norm(gap, axis=1).min())
 
 
+def test_a_kept_reflection_is_the_reflection_worked_out_again():
+    """The mirrored joints of both presets and random designs: the kept (P, order) equal to the
+    bit to a fresh `_reflection`, and a caller's change to P does not reach the next caller."""
+    from cogniframe.design import design
+
+    seen = 0
+    for doc in _presets() + list(_random_docs(6, seed=45)):
+        parts = design(spec_mod.from_dict(copy.deepcopy(doc), source="x.yaml")).parts
+        for p in parts:
+            if p.family == "joint" and mirror.is_mirror(p):
+                o, P, order = mirror.mirror_original(p, parts)
+                P0, order0 = mirror._reflection(o, p)
+                assert order == order0 and np.array_equal(P, P0) and P.dtype == P0.dtype
+                P[:] = 0.0
+                assert np.array_equal(mirror.reflection(o, p)[0], P0)
+                seen += 1
+    assert seen >= 8
+
+
 # -- the whole check -------------------------------------------------------------------------------
 
 def _check_json(doc: dict) -> dict:
@@ -329,6 +349,7 @@ def _same_check_as_the_references(doc, tmp_path, monkeypatch):
         m.setattr(S, "drop_peaks", drop_peaks_every_sample)
         m.setattr(I, "_peak_abs_accel", peak_abs_accel_searched)
         m.setattr(frame_mod, "prop_clearances", prop_clearances_one_by_one)
+        m.setattr(mirror, "reflection", mirror._reflection)
         reference = _check_json(doc)
     assert fast == reference
 
