@@ -330,6 +330,42 @@ def test_a_kept_reflection_is_the_reflection_worked_out_again():
     assert seen >= 8
 
 
+def test_key_lines_from_libyaml_are_the_pure_composers():
+    """Every key path (and a few that are not there, whole and partial) of the presets, the bad
+    inputs and the examples: the same line from libyaml's composer as from the pure one."""
+    import yaml
+
+    def paths(node, prefix=()):
+        if isinstance(node, yaml.MappingNode):
+            for k, v in node.value:
+                yield prefix + (str(k.value),)
+                yield from paths(v, prefix + (str(k.value),))
+        elif isinstance(node, yaml.SequenceNode):
+            for i, v in enumerate(node.value):
+                yield prefix + (str(i),)
+                yield from paths(v, prefix + (str(i),))
+
+    root = Path(__file__).resolve().parents[1]
+    files = [*sorted((root / "params").glob("*.yaml")), *sorted((root / "tests" / "bad_inputs").glob("*.yaml")),
+             *sorted((root / "examples").rglob("*.yaml"))]
+    compared = 0
+    for path in files:
+        try:
+            text = path.read_text(encoding="utf-8")
+            tree = yaml.compose(text)
+        except (UnicodeDecodeError, yaml.YAMLError):
+            continue
+        for loc in [*paths(tree), ("nope",), ("frame", "nope"), ("joints", "fit_clearance", "nope", "x")]:
+            for partial in (False, True):
+                fast = spec_mod._line_no(text, loc, partial)
+                with pytest.MonkeyPatch.context() as m:
+                    m.setattr(spec_mod, "_FastUniqueKeyLoader", None)
+                    assert fast == spec_mod._line_no(text, loc, partial), (path.name, loc)
+                compared += 1
+    assert compared > 1000
+    assert spec_mod._line_no("a: [1\n", ("a",)) is None  # not YAML for either composer
+
+
 # -- the whole check -------------------------------------------------------------------------------
 
 def _check_json(doc: dict) -> dict:
@@ -350,6 +386,7 @@ def _same_check_as_the_references(doc, tmp_path, monkeypatch):
         m.setattr(I, "_peak_abs_accel", peak_abs_accel_searched)
         m.setattr(frame_mod, "prop_clearances", prop_clearances_one_by_one)
         m.setattr(mirror, "reflection", mirror._reflection)
+        m.setattr(spec_mod, "_FastUniqueKeyLoader", None)
         reference = _check_json(doc)
     assert fast == reference
 
