@@ -536,21 +536,42 @@ def _radius_along(pa: np.ndarray, pb: np.ndarray, ra: float, rb: float, radius: 
 def prop_clearances(frame: Frame, spec: Spec) -> tuple[PropClearance, ...]:
     """Smallest gap (mm) between each propeller disc and the cage rods, the core and the other discs."""
     radius = spec.motors.prop_diameter / 2
+    cage = _RodSamples([r for r in frame.rods.values() if r.role != "arm"])
+    disc = _disc_grid(radius)
     out = []
     for m in frame.motors:
         centre = np.array([m.axis[0], m.axis[1], m.prop_z])
-        cage = min(_rod_to_disc(r, centre, radius) for r in frame.rods.values() if r.role != "arm")
-        core = _boxes_to_disc(frame.core.boxes, centre, radius)
+        to_cage = cage.min_to_disc(centre, radius)
+        core = _boxes_to_disc(frame.core.boxes, centre, radius, disc)
         others = [np.hypot(o.axis[0] - m.axis[0], o.axis[1] - m.axis[1]) - 2 * radius for o in frame.motors if o is not m]
-        out.append(PropClearance(m.name, round(cage, 2), round(core, 2), round(float(min(others)), 2)))
+        out.append(PropClearance(m.name, round(to_cage, 2), round(core, 2), round(float(min(others)), 2)))
     return tuple(out)
 
 
 def _rod_to_disc(rod: Rod, centre: np.ndarray, radius: float) -> float:
     """Distance from a rod's surface to a horizontal disc, sampled every 0.5 mm along the rod."""
+    return float(_point_to_disc(_rod_points(rod), centre, radius).min() - rod.diameter / 2)
+
+
+def _rod_points(rod: Rod) -> np.ndarray:
+    """A rod's axis sampled every 0.5 mm (at least its two ends)."""
     n = max(2, int(rod.length / 0.5))
-    pts = rod.start + np.outer(np.linspace(0, 1, n), rod.end - rod.start)
-    return float(_point_to_disc(pts, centre, radius).min() - rod.diameter / 2)
+    return rod.start + np.outer(np.linspace(0, 1, n), rod.end - rod.start)
+
+
+class _RodSamples:
+    """Rods' axis samples (`_rod_points`), made once and measured against every propeller disc:
+    min over the rods of `_rod_to_disc`, the same numbers, from one array."""
+
+    def __init__(self, rods: list[Rod]):
+        pts = [_rod_points(r) for r in rods]
+        self.points = np.concatenate(pts)
+        self.starts = np.cumsum([0] + [len(p) for p in pts[:-1]])
+        self.radii = np.array([r.diameter / 2 for r in rods])
+
+    def min_to_disc(self, centre: np.ndarray, radius: float) -> float:
+        per_rod = np.minimum.reduceat(_point_to_disc(self.points, centre, radius), self.starts)
+        return float((per_rod - self.radii).min())
 
 
 def _point_to_disc(pts: np.ndarray, centre: np.ndarray, radius: float) -> np.ndarray:
@@ -559,29 +580,41 @@ def _point_to_disc(pts: np.ndarray, centre: np.ndarray, radius: float) -> np.nda
     return np.hypot(np.maximum(dxy - radius, 0.0), dz)
 
 
-def _boxes_to_disc(boxes, centre: np.ndarray, radius: float) -> float:
+def _boxes_to_disc(boxes, centre: np.ndarray, radius: float, disc: tuple | None = None) -> float:
     """min(_box_to_disc) over `boxes`, the same number: a box whose exact distance bound (vertical
     gap and plan gap beyond the radius) already exceeds the nearest sampled one cannot be nearer
-    (a sampled distance is never below the exact one), so it is not sampled."""
+    (a sampled distance is never below the exact one), so it is not sampled. ``disc``: the
+    radius's `_disc_grid`, when the caller has it."""
     def bound(b: Box) -> float:
         lo, hi = np.asarray(b.centre) - np.asarray(b.size) / 2, np.asarray(b.centre) + np.asarray(b.size) / 2
         gap = np.maximum(np.maximum(lo - centre, centre - hi), 0.0)
         return float(math.hypot(gap[2], max(math.hypot(gap[0], gap[1]) - radius, 0.0)))
 
+    disc = _disc_grid(radius) if disc is None else disc
     best = math.inf
     for lb, i in sorted((bound(b), i) for i, b in enumerate(boxes)):
         if lb > best + 1e-9:
             break
-        best = min(best, _box_to_disc(boxes[i], centre, radius))
+        best = min(best, _box_to_disc(boxes[i], centre, radius, disc))
     return best
 
 
-def _box_to_disc(box: Box, centre: np.ndarray, radius: float) -> float:
-    """Distance from an axis-aligned box to a horizontal disc (disc sampled on a 1 mm polar grid)."""
+def _disc_grid(radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """(x, y) offsets from the centre of a disc's 1 mm polar grid (`_box_to_disc`)."""
     rr = np.linspace(0, radius, max(2, int(radius) + 1))
     th = np.linspace(0, 2 * math.pi, max(16, int(2 * math.pi * radius)), endpoint=False)
     R, T = np.meshgrid(rr, th)
-    pts = np.column_stack([centre[0] + (R * np.cos(T)).ravel(), centre[1] + (R * np.sin(T)).ravel(),
-                           np.full(R.size, centre[2])])
-    gap = np.maximum(np.abs(pts - np.asarray(box.centre)) - np.asarray(box.size) / 2, 0.0)
-    return float(np.linalg.norm(gap, axis=1).min())
+    return (R * np.cos(T)).ravel(), (R * np.sin(T)).ravel()
+
+
+def _box_to_disc(box: Box, centre: np.ndarray, radius: float, disc: tuple | None = None) -> float:
+    """Distance from an axis-aligned box to a horizontal disc (disc sampled on a 1 mm polar grid,
+    `_disc_grid`; ``disc``: that grid when the caller has it)."""
+    dx, dy = _disc_grid(radius) if disc is None else disc
+    half = np.asarray(box.size) / 2
+    gx = np.maximum(np.abs(centre[0] + dx - box.centre[0]) - half[0], 0.0)
+    gy = np.maximum(np.abs(centre[1] + dy - box.centre[1]) - half[1], 0.0)
+    gz = max(abs(centre[2] - box.centre[2]) - half[2], 0.0)  # the disc is flat: one vertical gap
+    # the points' gaps' norms (x^2 + y^2) + z^2, as np.linalg.norm sums a row; the least norm is
+    # the root of the least sum (a rounded square root never reverses an order)
+    return math.sqrt(float(((gx * gx + gy * gy) + gz * gz).min()))

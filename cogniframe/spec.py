@@ -412,8 +412,8 @@ def decode(raw: bytes, path: Path | str) -> str:
                         f"(or run `iconv -f latin1 -t utf-8`).") from None
 
 
-class _UniqueKeyLoader(yaml.SafeLoader):
-    """SafeLoader that refuses a key written twice in one mapping (PyYAML silently keeps the last)."""
+class _UniqueKeys:
+    """A SafeLoader mixin that refuses a key written twice in one mapping (PyYAML silently keeps the last)."""
 
     def construct_mapping(self, node, deep=False):
         if isinstance(node, yaml.MappingNode):
@@ -432,6 +432,20 @@ class _UniqueKeyLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep)
 
 
+class _UniqueKeyLoader(_UniqueKeys, yaml.SafeLoader):
+    """The pure-Python loader: its error messages are the ones `parse_yaml` reports (tests/bad_inputs/)."""
+
+
+# libyaml's parser (PyYAML's C extension) reads a params file about five times faster; its
+# constructor and resolver are the pure loader's, so a valid document gives the same data. Its
+# error texts differ, so a document it refuses is parsed again by the pure loader for the message.
+if getattr(yaml, "__with_libyaml__", False):
+    class _FastUniqueKeyLoader(_UniqueKeys, yaml.CSafeLoader):
+        """The libyaml loader (a valid document only: see `parse_yaml`)."""
+else:  # a PyYAML built without libyaml: the pure loader alone
+    _FastUniqueKeyLoader = None
+
+
 class _DuplicateKey(Exception):
     def __init__(self, key, first: int, second: int):
         self.key, self.first, self.second = key, first, second
@@ -439,6 +453,11 @@ class _DuplicateKey(Exception):
 
 def parse_yaml(text: str, path: Path | str):
     """YAML -> Python, with plain UserErrors for syntax errors and duplicate keys."""
+    if _FastUniqueKeyLoader is not None:
+        try:
+            return yaml.load(text, Loader=_FastUniqueKeyLoader)  # noqa: S506 (a CSafeLoader subclass)
+        except (yaml.YAMLError, _DuplicateKey):
+            pass  # the pure loader below says what is wrong, in its words
     try:
         return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
     except _DuplicateKey as e:
@@ -528,14 +547,25 @@ def _line(text: str | None, loc: tuple[str, ...]) -> str:
     return f" (line {line})" if line else ""
 
 
+def _compose(text: str):
+    """The YAML node tree of `text` (keys with their lines), None when it is not valid YAML. libyaml's
+    composer first (a check that words a problem with a key's line asks for it: ~2 ms instead of
+    ~15), the pure one for a document libyaml refuses."""
+    for loader in ((yaml.CSafeLoader,) if _FastUniqueKeyLoader is not None else ()) + (yaml.SafeLoader,):
+        try:
+            return yaml.compose(text, Loader=loader)  # noqa: S506 (safe loaders)
+        except yaml.YAMLError:
+            continue
+    return None
+
+
 def _line_no(text: str | None, loc: tuple[str, ...], partial: bool = False) -> int | None:
     """Line of the key path `loc` in the YAML source; None if it is not written there (with `partial`,
     the line of the deepest part of the path that is)."""
     if not text:
         return None
-    try:
-        node = yaml.compose(text)
-    except yaml.YAMLError:
+    node = _compose(text)
+    if node is None:
         return None
     line = None
     for part in loc:

@@ -10,6 +10,7 @@ import copy
 import functools
 import math
 import random
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,7 +19,9 @@ import design_space
 from cogniframe import frame as frame_mod
 from cogniframe.errors import UserError
 from cogniframe import spec as spec_mod
+from cogniframe.analysis import impact as I
 from cogniframe.analysis import single_drop as S
+from cogniframe.analysis.joints import mirror
 from cogniframe.families import joint
 from cogniframe.parts import peg_plan
 
@@ -82,6 +85,71 @@ def drop_peaks_every_sample(pulse_g, height_cm, scatter, footprint_mm=S.PAPER_FO
 
 
 # -- the designs ---------------------------------------------------------------------------------
+
+def peak_abs_accel_searched(sys, v0, t_end):
+    """max |a| over [0, t_end]: a 2001-point grid, then a golden-section search (to 1e-13 s) round its best point."""
+    if t_end <= 0.0:
+        return abs(I._accel(sys, *I._state_at(sys, v0, 0.0)))
+    t = np.linspace(0.0, t_end, 2001)
+    a = np.abs(I._accel(sys, *I._state(sys, v0, t)))
+    i = int(np.argmax(a))
+    best = float(a[i])
+    lo, hi = t[max(i - 1, 0)], t[min(i + 1, t.size - 1)]
+    f = lambda s: abs(I._accel(sys, *I._state_at(sys, v0, s)))  # noqa: E731
+    inv = (math.sqrt(5.0) - 1.0) / 2.0
+    c, d = hi - inv * (hi - lo), lo + inv * (hi - lo)
+    fc, fd = f(c), f(d)
+    while hi - lo > 1e-13:
+        if fc > fd:
+            hi, d, fd = d, c, fc
+            c = hi - inv * (hi - lo)
+            fc = f(c)
+        else:
+            lo, c, fc = c, d, fd
+            d = lo + inv * (hi - lo)
+            fd = f(d)
+    return max(best, fc, fd)
+
+
+def parse_yaml_pure(text, path):
+    """The params file read by the pure-Python loader alone."""
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(spec_mod, "_FastUniqueKeyLoader", None)
+        return spec_mod.parse_yaml(text, path)
+
+
+
+def prop_clearances_one_by_one(frame, spec):
+    """Each propeller disc against each cage rod (sampled every 0.5 mm) and each core box (a 1 mm
+    polar grid of the disc, every box), one at a time."""
+    radius = spec.motors.prop_diameter / 2
+
+    def to_disc(pts, centre):
+        dxy = np.hypot(pts[:, 0] - centre[0], pts[:, 1] - centre[1])
+        return np.hypot(np.maximum(dxy - radius, 0.0), np.abs(pts[:, 2] - centre[2]))
+
+    def rod_to_disc(rod, centre):
+        n = max(2, int(rod.length / 0.5))
+        return float(to_disc(rod.start + np.outer(np.linspace(0, 1, n), rod.end - rod.start), centre).min() - rod.diameter / 2)
+
+    def box_to_disc(box, centre):
+        rr = np.linspace(0, radius, max(2, int(radius) + 1))
+        th = np.linspace(0, 2 * math.pi, max(16, int(2 * math.pi * radius)), endpoint=False)
+        R, T = np.meshgrid(rr, th)
+        pts = np.column_stack([centre[0] + (R * np.cos(T)).ravel(), centre[1] + (R * np.sin(T)).ravel(),
+                               np.full(R.size, centre[2])])
+        gap = np.maximum(np.abs(pts - np.asarray(box.centre)) - np.asarray(box.size) / 2, 0.0)
+        return float(np.linalg.norm(gap, axis=1).min())
+
+    out = []
+    for m in frame.motors:
+        centre = np.array([m.axis[0], m.axis[1], m.prop_z])
+        cage = min(rod_to_disc(r, centre) for r in frame.rods.values() if r.role != "arm")
+        core = min(box_to_disc(b, centre) for b in frame.core.boxes)
+        others = [np.hypot(o.axis[0] - m.axis[0], o.axis[1] - m.axis[1]) - 2 * radius for o in frame.motors if o is not m]
+        out.append(frame_mod.PropClearance(m.name, round(cage, 2), round(core, 2), round(float(min(others)), 2)))
+    return tuple(out)
+
 
 @functools.lru_cache(maxsize=None)
 def _random_docs(n: int, seed: int) -> tuple[dict, ...]:
@@ -184,6 +252,122 @@ def test_the_peaks_skipping_samples_are_the_peaks_of_every_sample(k, height):
     assert np.array_equal(S.drop_peaks(pulse, height, S.PAPER_SCATTER, (230.0, 190.0)), want)
 
 
+@pytest.mark.parametrize("zeta", [0.0, 0.2, 0.558, 0.95, 1.0, 1.05, 2.5])
+def test_the_peak_acceleration_in_closed_form_is_the_searched_one(zeta):
+    """Every regime (undamped to over-damped, critical exactly), touch-down speeds of a sweep, to the
+    contact and beyond: the closed form is the grid-and-golden-section maximum to 1e-12 and never
+    below it (the search only approaches the maximum from below)."""
+    rnd = random.Random(int(zeta * 1000))
+    for _ in range(60):
+        m, k = rnd.uniform(0.15, 0.6), 10 ** rnd.uniform(3.0, 4.6)
+        sys = I._System.of(m, 2 * zeta * math.sqrt(k * m), k)
+        v0 = rnd.uniform(0.0, 11.0)
+        t_max = I._time_of_max(sys, v0)
+        for t_end in (t_max if math.isfinite(t_max) else I._settle_time(sys), rnd.uniform(0.0, 0.03), 0.0):
+            got, want = I._peak_abs_accel(sys, v0, t_end), peak_abs_accel_searched(sys, v0, t_end)
+            assert got == pytest.approx(want, rel=1e-12)
+            assert got >= want * (1 - 1e-14)
+
+
+def test_the_libyaml_loader_reads_what_the_pure_loader_reads():
+    """The presets and random designs as YAML: the same data, key order and types; a key written
+    twice and a syntax error still get the pure loader's words."""
+    import yaml
+
+    docs = _presets() + list(_random_docs(2, seed=44))
+    for doc in docs:
+        text = yaml.safe_dump(doc, sort_keys=False)
+        fast, pure = spec_mod.parse_yaml(text, "x.yaml"), parse_yaml_pure(text, "x.yaml")
+        assert fast == pure and repr(fast) == repr(pure)
+    for path in sorted((Path(__file__).resolve().parents[1] / "params").glob("*.yaml")):  # with their comments
+        text = path.read_text()
+        assert repr(spec_mod.parse_yaml(text, path)) == repr(parse_yaml_pure(text, path))
+    for bad in ("a: 1\nb:\n  c: 2\n  c: 3\n", "a: [1, 2\nb: 3\n", "a:\n\t- 1\n"):
+        with pytest.raises(UserError) as fast:
+            spec_mod.parse_yaml(bad, "x.yaml")
+        with pytest.raises(UserError) as pure:
+            parse_yaml_pure(bad, "x.yaml")
+        assert str(fast.value) == str(pure.value)
+    assert "written twice" in str(pytest.raises(UserError, spec_mod.parse_yaml, "a: 1\na: 2\n", "x.yaml").value)
+
+
+
+def test_the_propeller_clearances_from_one_array_are_the_one_by_one_distances():
+    """Both presets and random designs: every disc's gap to the cage, the core and its neighbours,
+    equal to the bit; and a box's distance from its two gap columns is the norm of every point's gap."""
+    for doc in _presets() + list(_random_docs(6, seed=45)):
+        s = spec_mod.from_dict(copy.deepcopy(doc), source="x.yaml")
+        f = frame_mod.frame_of(s)
+        assert frame_mod.prop_clearances(f, s) == prop_clearances_one_by_one(f, s)
+    rnd = random.Random(3)
+    box = type("Box", (), {})
+    for _ in range(500):
+        b = box()
+        b.centre, b.size = tuple(rnd.uniform(-80, 80) for _ in range(3)), tuple(rnd.uniform(1, 60) for _ in range(3))
+        centre, radius = np.array([rnd.uniform(-120, 120) for _ in range(3)]), rnd.uniform(20, 60)
+        dx, dy = frame_mod._disc_grid(radius)
+        pts = np.column_stack([centre[0] + dx, centre[1] + dy, np.full(dx.size, centre[2])])
+        gap = np.maximum(np.abs(pts - np.asarray(b.centre)) - np.asarray(b.size) / 2, 0.0)
+        assert frame_mod._box_to_disc(b, centre, radius) == float(np.linalg.norm(gap, axis=1).min())
+
+
+def test_a_kept_reflection_is_the_reflection_worked_out_again():
+    """The mirrored joints of both presets and random designs: the kept (P, order) equal to the
+    bit to a fresh `_reflection`, and a caller's change to P does not reach the next caller."""
+    from cogniframe.design import design
+
+    seen = 0
+    for doc in _presets() + list(_random_docs(6, seed=45)):
+        parts = design(spec_mod.from_dict(copy.deepcopy(doc), source="x.yaml")).parts
+        for p in parts:
+            if p.family == "joint" and mirror.is_mirror(p):
+                o, P, order = mirror.mirror_original(p, parts)
+                P0, order0 = mirror._reflection(o, p)
+                assert order == order0 and np.array_equal(P, P0) and P.dtype == P0.dtype
+                P[:] = 0.0
+                assert np.array_equal(mirror.reflection(o, p)[0], P0)
+                seen += 1
+    assert seen >= 8
+
+
+def test_key_lines_from_libyaml_are_the_pure_composers():
+    """Every key path of the presets, the bad inputs and the examples: the same line in libyaml's
+    node tree as in the pure composer's; and `_line_no` (whole and partial, paths that are there
+    and paths that are not) the same with libyaml as with the pure composer alone."""
+    import yaml
+
+    def lines(node, prefix=()):
+        if isinstance(node, yaml.MappingNode):
+            for k, v in node.value:
+                yield prefix + (str(k.value),), k.start_mark.line
+                yield from lines(v, prefix + (str(k.value),))
+        elif isinstance(node, yaml.SequenceNode):
+            for i, v in enumerate(node.value):
+                yield prefix + (str(i),), v.start_mark.line
+                yield from lines(v, prefix + (str(i),))
+
+    root = Path(__file__).resolve().parents[1]
+    files = [*sorted((root / "params").glob("*.yaml")), *sorted((root / "tests" / "bad_inputs").glob("*.yaml")),
+             *sorted((root / "examples").rglob("*.yaml"))]
+    compared = 0
+    for path in files:
+        try:
+            text = path.read_text(encoding="utf-8")
+            pure = list(lines(yaml.compose(text, Loader=yaml.SafeLoader)))
+        except (UnicodeDecodeError, yaml.YAMLError):
+            continue
+        assert list(lines(yaml.compose(text, Loader=yaml.CSafeLoader))) == pure, path.name
+        compared += len(pure)
+        sample = [loc for loc, _ in pure[::max(1, len(pure) // 8)]] + [("nope",), ("frame", "nope"), ("frame", "height", "x")]
+        for loc in sample:
+            for partial in (False, True):
+                fast = spec_mod._line_no(text, loc, partial)
+                with pytest.MonkeyPatch.context() as m:
+                    m.setattr(spec_mod, "_FastUniqueKeyLoader", None)
+                    assert fast == spec_mod._line_no(text, loc, partial), (path.name, loc)
+    assert compared > 400
+    assert spec_mod._line_no("a: [1\n", ("a",)) is None  # not YAML for either composer
+
 # -- the whole check -------------------------------------------------------------------------------
 
 def _check_json(doc: dict) -> dict:
@@ -201,6 +385,10 @@ def _same_check_as_the_references(doc, tmp_path, monkeypatch):
         m.setattr(peg_plan, "_sleeve_in_arch", sleeve_in_arch_every_point)
         m.setattr(S, "mount_response", mount_response_stepped)
         m.setattr(S, "drop_peaks", drop_peaks_every_sample)
+        m.setattr(I, "_peak_abs_accel", peak_abs_accel_searched)
+        m.setattr(frame_mod, "prop_clearances", prop_clearances_one_by_one)
+        m.setattr(mirror, "reflection", mirror._reflection)
+        m.setattr(spec_mod, "_FastUniqueKeyLoader", None)
         reference = _check_json(doc)
     assert fast == reference
 

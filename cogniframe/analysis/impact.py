@@ -271,9 +271,8 @@ def _settle_time(sys: _System) -> float:
     return 21.0 / slowest  # exp(-21) ~ 1e-9
 
 
-# Scalar solvers. Every root here is bracketed and the function monotone on the bracket, and
-# every maximum is bracketed by a dense grid: bisection and golden section are exact enough, and
-# keep scipy.optimize (~0.4 s to import) out of `cogniframe check`, whose budget is under 1 s.
+# Scalar solver. Every root here is bracketed and the function monotone on the bracket:
+# bisection is exact enough, and keeps scipy.optimize (~0.4 s to import) out of `cogniframe check`.
 def _bisect(f, lo: float, hi: float, xtol: float) -> float:
     """Root of f on [lo, hi] with f(lo) < 0 <= f(hi)."""
     for _ in range(200):
@@ -287,24 +286,6 @@ def _bisect(f, lo: float, hi: float, xtol: float) -> float:
     return 0.5 * (lo + hi)
 
 
-def _golden_max(f, lo: float, hi: float, xtol: float) -> float:
-    """max of a unimodal f on [lo, hi] (golden-section search); returns the value."""
-    inv = (math.sqrt(5.0) - 1.0) / 2.0
-    a, b = lo, hi
-    c, d = b - inv * (b - a), a + inv * (b - a)
-    fc, fd = f(c), f(d)
-    while b - a > xtol:
-        if fc > fd:
-            b, d, fd = d, c, fc
-            c = b - inv * (b - a)
-            fc = f(c)
-        else:
-            a, c, fc = c, d, fd
-            d = a + inv * (b - a)
-            fd = f(d)
-    return max(fc, fd)
-
-
 def _time_to_reach(sys: _System, v0: float, x_target: float, t_hi: float) -> float:
     """First t in (0, t_hi] where x(t) = x_target; x increases monotonically there."""
     f = lambda t: _state_at(sys, v0, t)[0] - x_target  # noqa: E731
@@ -314,24 +295,35 @@ def _time_to_reach(sys: _System, v0: float, x_target: float, t_hi: float) -> flo
 
 
 def _peak_abs_accel(sys: _System, v0: float, t_end: float) -> float:
-    """max |x''| over [0, t_end] in m/s^2: dense grid, then a bounded refinement.
+    """max |a| over [0, t_end] in m/s^2 (a = x'', the payload's acceleration), in closed form.
 
-    The acceleration is a damped sinusoid (or sum of exponentials) with at most a couple of
-    extrema before x_max, so a 2001-point grid brackets the maximum and a golden-section search
-    finishes it to ~1e-10 relative.
+    a is a combination of the two homogeneous modes, a = P Ec + Q Es (Ec, Es as in `_modes`;
+    P = a(0) = g - c v0 / m), so its extrema are where its derivative (Q - alpha P) Ec -
+    (P wd^2 + alpha Q) Es vanishes: R C(t) = W S(t), solved per regime like `_time_of_max`
+    (under-damped: every half period from one atan2; critical: one root; over-damped: at most
+    one, from atanh). |a| is largest at one of them or at an end of the interval.
     """
     if t_end <= 0.0:
         return abs(_accel(sys, *_state_at(sys, v0, 0.0)))
-    t = np.linspace(0.0, t_end, 2001)
-    x, v = _state(sys, v0, t)
-    a = np.abs(_accel(sys, x, v))
-    i = int(np.argmax(a))
-    best = float(a[i])
-    lo, hi = t[max(i - 1, 0)], t[min(i + 1, t.size - 1)]
-    if hi > lo:
-        mag = lambda s: abs(_accel(sys, *_state_at(sys, v0, s)))  # noqa: E731
-        best = max(best, _golden_max(mag, lo, hi, xtol=1e-13))
-    return best
+    al = sys.alpha
+    y0 = -sys.xs
+    p = -sys.w0sq * y0 - 2.0 * al * v0  # a(0)
+    q = -sys.w0sq * (v0 + al * y0) + 2.0 * al * (al * v0 - sys.g)
+    r, w = q - al * p, p * sys.wdsq + al * q
+    times = [0.0, t_end]
+    if sys.wdsq > 0.0:
+        wd = math.sqrt(sys.wdsq)
+        first = math.atan2(r * wd, w) % math.pi / wd  # tan(wd t) = R wd / W: the first root at or after 0
+        times += [t for t in (first + n * math.pi / wd for n in range(int(t_end * wd / math.pi) + 2)) if 0.0 < t < t_end]
+    elif sys.wdsq == 0.0:
+        if w != 0.0 and 0.0 < r / w < t_end:
+            times.append(r / w)
+    elif w != 0.0:
+        s = math.sqrt(-sys.wdsq)
+        z = r * s / w  # tanh(s t) = R s / W
+        if 0.0 < z < 1.0 and math.atanh(z) / s < t_end:
+            times.append(math.atanh(z) / s)
+    return max(abs(_accel(sys, *_state_at(sys, v0, t))) for t in times)
 
 
 # --------------------------------------------------------------------------------------------

@@ -93,25 +93,26 @@ def joint_models(spec, parts, method: str = "fe", factor: float | None = None, o
     return out
 
 
-def _rod_ends(frame) -> dict[str, tuple[list[str], np.ndarray, np.ndarray]]:
-    """Per joint node: its rods, their ports (k, 3) and socket directions (k, 3)."""
+def _rod_ends(frame) -> dict[str, tuple[list[str], tuple, tuple]]:
+    """Per joint node: its rods, their ports and socket directions (tuples of 3 floats each)."""
     out = {}
     for name, node in frame.nodes.items():
         ports, dirs = [], []
         for rn in node.rods:
             r = frame.rods[rn]
-            ports.append(r.end_at(name).port)
-            dirs.append(r.socket_direction(name))
-        out[name] = (list(node.rods), np.asarray(ports, float).reshape(-1, 3), np.asarray(dirs, float).reshape(-1, 3))
+            ports.append(tuple(map(float, r.end_at(name).port)))
+            dirs.append(tuple(map(float, r.socket_direction(name))))
+        out[name] = (list(node.rods), tuple(ports), tuple(dirs))
     return out
 
 
 def _match_rod(ends, node_name: str, port_w: np.ndarray, dir_w: np.ndarray) -> str:
-    """The rod of `node_name` whose socket port and direction match (ends: `_rod_ends`)."""
+    """The rod of `node_name` whose socket port and direction match (ends: `_rod_ends`). In plain
+    floats: a node has at most a few rods, and the model is built several times per check."""
     rods, ports, dirs = ends[node_name]
-    dp, dd = ports - port_w, dirs - dir_w
-    e = np.sqrt(np.einsum("ij,ij->i", dp, dp)) + np.sqrt(np.einsum("ij,ij->i", dd, dd))
-    i = int(np.argmin(e)) if len(rods) else -1
+    pw, dw = tuple(map(float, port_w)), tuple(map(float, dir_w))
+    e = [math.dist(p, pw) + math.dist(d, dw) for p, d in zip(ports, dirs)]
+    i = min(range(len(e)), key=e.__getitem__) if e else -1  # the first of equal errors, as argmin
     if i < 0 or e[i] > 1e-3:
         err = e[i] if i >= 0 else math.inf
         raise RuntimeError(f"stiffness model: no rod of {node_name} matches a socket of its part (error {err:.3g})")

@@ -10,6 +10,7 @@ geometry key, so the mirror's numbers are the same bits whichever was solved fir
 
 from __future__ import annotations
 
+import functools
 import time
 
 import numpy as np
@@ -33,6 +34,21 @@ def _kabsch_reflection(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def reflection(original, part) -> tuple[np.ndarray, tuple[int, ...]]:
+    """`_reflection` of the two parts, kept by their content (PartSpec is frozen and hashable): a
+    check asks for it up to three times per mirrored joint (the FE test, the box test, the
+    reflection itself), and an edit that moves no joint asks again for the same parts. P is a new
+    array each time (the caller may change it)."""
+    rows, order = _reflection_kept(original, part)
+    return np.array(rows), order
+
+
+@functools.lru_cache(maxsize=64)
+def _reflection_kept(original, part) -> tuple[tuple, tuple[int, ...]]:
+    P, order = _reflection(original, part)
+    return tuple(map(tuple, P.tolist())), order
+
+
+def _reflection(original, part) -> tuple[np.ndarray, tuple[int, ...]]:
     """(P, order): the reflection P (3x3, det -1) with part's local geometry = P x original's, and
     order[j] = the original's socket whose mirror image is the part's socket j.
 

@@ -288,18 +288,23 @@ def family_of(part) -> str:
 
 
 def _why_outside(fams: dict, spec, part) -> str | None:
+    return _box_test(fams, spec, part)[0]
+
+
+def _box_test(fams: dict, spec, part) -> tuple[str | None, np.ndarray | None]:
+    """(why the joint is outside its family's box or None, its features when they were read)."""
     from .mirror import is_mirror
 
     if is_mirror(part):  # fitted on originals: a mirror is its original's prediction, reflected
-        return "a mirrored joint (reflected from its original's prediction, not predicted itself)"
+        return "a mirrored joint (reflected from its original's prediction, not predicted itself)", None
     fam = fams.get(family_of(part))
     if fam is None:
-        return f"no surrogate for {family_of(part)} joints"
+        return f"no surrogate for {family_of(part)} joints", None
     n = len(part.sockets) + (1 if len(fam.labels) > len(part.sockets) else 0)
     if n != len(fam.labels):
-        return f"{n} bodies, trained on {len(fam.labels)}"
+        return f"{n} bodies, trained on {len(fam.labels)}", None
     names, x = features(spec, part)
-    return out_of_box(fam, names, x)
+    return out_of_box(fam, names, x), x
 
 
 def predict(spec, part, factor: float | None = None, path: Path | None = None) -> tuple[JointStiffness | None, str | None]:
@@ -311,12 +316,11 @@ def predict(spec, part, factor: float | None = None, path: Path | None = None) -
 
     t0 = time.perf_counter()
     fams = families(path)
-    why = _why_outside(fams, spec, part)
+    why, x = _box_test(fams, spec, part)
     if why is not None:
         return None, why
     fam = fams[family_of(part)]
     labels = tuple(s.rod for s in part.sockets) + (("body",) if len(fam.labels) > len(part.sockets) else ())
-    _, x = features(spec, part)
     y = fam.log_entries(x[None, :])
     e_unit = tpu_moduli(spec, 1.0)[0]
     K = matrix_from_log(y[0], part, labels, e_unit)
