@@ -272,8 +272,10 @@ def test_optimize_carbon_finds_a_lighter_design_that_passes(tcp_cluster, tmp_pat
                            out_dir=out, trials=96, scheduler=tcp_cluster, batch=4, verify=2)
     assert res.trials == 96 and res.workers == 2 and res.best is not None
     assert res.fidelity == ("surrogate", "fe") and len(res.verified) == 2
-    # the surrogate and the FE agree at the base: the screen's correction is within the model's few per cent
-    assert res.correction["max_safe_drop_cm"] == pytest.approx(1.0, abs=0.03)
+    # the surrogate and the FE agree at the base: the screen's correction is within the surrogate's documented
+    # worst error on the safe drop (docs/stiffness-model.md, held-out designs: 3.5 %; the preset's -0.30 fit sits on
+    # the training box's lower wall, where it is 3.0 % off)
+    assert res.correction["max_safe_drop_cm"] == pytest.approx(1.0, abs=0.035)
     trials = pd.read_parquet(out / "trials.parquet")
     by_trial = trials.set_index("trial")
     for r in res.verified:  # a sweep's k (surrogate) against check's (FE) for the same design
