@@ -116,6 +116,7 @@ class CoreSection(_M):
     strap_width: Annotated[float, Field(ge=5, le=30, description="hook-and-loop battery strap width, mm: sets the strap slots at the holder mouth")] = 10
     camera: CameraSection | None = Field(None, description="camera bracket at the front of the core (needs a components line with vitamin: pi_camera_v2)")
     flow_sensor: FlowSensorSection | None = Field(None, description="downward optical-flow + ToF board behind the holder (needs a components line with vitamin: matek_3901_l0x)")
+    support_holes: bool = Field(False, description="the authors' four 3.0 mm mounting holes on a 25.4 mm radius on the core's axes (CogniFly-STL v8 MainBase), where their Pi support (RPI_Support_new) and battery supports fix to the base: each in a 7 mm boss as deep as the pegs' tubes (the authors' 9.2 mm block), on a 7 mm bar from the pegged plate's centre (core.link: pegs); +3.2 cm^3 of core material on the carbon preset (+2.4 g printed)")
     link: Literal["tab", "pegs"] = Field("tab", description="how each arm's rod pair joins the core plate: pegs (the presets) = the authors' connector, one TPU peg per arm rod pressed into an ABS tube on the core plate, the strut on the link's arch (level arms only); tab = a flat TPU link bolted on the plate corner")
 
 
@@ -286,6 +287,9 @@ class Spec(_M):
             raise _KeyProblem("core.link", "the pegged core link's pegs press into ABS tubes that lie on the bed under the "
                               "upside-down core plate, level with the arms; climbing arms (frame.level_arms: false) would "
                               "tilt them off the bed", "set frame.level_arms: true, or core.link: tab")
+        if self.core.support_holes and self.core.link != "pegs":
+            raise _KeyProblem("core.support_holes", "the mounting holes' bosses hang on the pegged core plate's X (the square "
+                              "plate of core.link: tab has no bar out to a 25.4 mm radius)", "set core.link: pegs, or core.support_holes: false")
         core_half = self.core.plate_size / 2
         inner_half = min(self.frame.width, self.frame.depth) / 2 - self.frame.knee_inset - self.rods.diameter - 2 * self.joints.wall
         if core_half >= inner_half:
