@@ -50,6 +50,7 @@ class FrameSection(_M):
     level_arms: bool = Field(True, description="true: the core plate hangs at the knees' height (to the nearest mm, on M2 standoffs above the battery holder) and the arms run level, as the authors build it; false: the plate sits on the holder and the arms climb to the knees")
     arm_spacing: Annotated[float, Field(ge=6, le=40, description="centre distance between the two parallel rods of an arm, mm")] = 12
     struts: bool = Field(True, description="damping struts from the bottom corners to the core")
+    rear_net: bool = Field(False, description="the authors' thin net (CogniFly-STL v8 Flex_net_thin): a flat 0.5 mm web of the joints' TPU across the cage's rear face (the battery slides in at the front), tied with cable ties to the rear top and bottom cage rods, rings and spokes round a 68 mm window; it keeps fingers, twigs and cables out of the rear propellers' reach. 1.11 cm^3 (1.35 g) whole on the carbon preset's cage, as the authors'; on a bed under 162 mm it prints as two halves with a seam rim each (2 x 0.60 cm^3, 1.47 g)")
 
 
 class RodsSection(_M):

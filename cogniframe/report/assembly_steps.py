@@ -158,6 +158,14 @@ def assembly_steps(design: "Derived") -> tuple[Step, ...]:
     if "front_camera_mount" in parts or spec.core.flow_sensor:
         add("Camera and sensors", [n for n in ("front_camera_mount",) if n in parts], [], "none", _sensors_text(spec, parts),
             hw("front_camera_mount"), stages=("sensors",))
+    if "rear_net" in parts:
+        halves = bool(parts["rear_net"].param("halves"))
+        add("Rear net", ["rear_net"], [], "none",
+            "Lay the TPU net" + (" (two halves, printed from one file: turn one over)" if halves else "")
+            + " across the rear face of the cage (the battery slides in at the front), its long edges along the top and "
+            "bottom rear cage rods and its round window in the middle of the face, and tie it to both rods with thin cable "
+            "ties through the cells next to the rims"
+            + (", and the two halves to each other along their middle rims." if halves else "."))
     rest = [n for n in parts if n not in used_parts]
     claimed = {st for s in steps for st in s.stages}  # the stack, the computer, props and battery: the rest
     add("Electronics", rest, [], "none", _electronics_text(spec, parts), hw(*rest), stages=[st for st in STAGES if st not in claimed])
