@@ -152,20 +152,13 @@ def assembly_steps(design: "Derived") -> tuple[Step, ...]:
         hw("core_link", "core_link_mirrored", "core_plate", "battery_holder", *([spacer] if spacer else [])),
         stages=("core",), apart=True)
     add("Hang the core", [], [], "none: arm and strut ends are only pushed into the core links",
-        "Hold the core in the middle of the frame and push the free ends of both arm rods"
-        + (" and the strut" if struts else "") + " of each corner into its core link. To remove the core later, pull "
-        "the rods out of the links.", places=(len(steps),))
+        "Hold the core in the middle of the frame and push the free ends of both arm rods" + (" and the strut" if struts else "")
+        + " of each corner into its core link. To remove the core later, pull the rods out of the links.", places=(len(steps),))
     if "front_camera_mount" in parts or spec.core.flow_sensor:
         add("Camera and sensors", [n for n in ("front_camera_mount",) if n in parts], [], "none", _sensors_text(spec, parts),
             hw("front_camera_mount"), stages=("sensors",))
-    if "rear_net" in parts:
-        halves = bool(parts["rear_net"].param("halves"))
-        add("Rear net", ["rear_net"], [], "none",
-            "Lay the TPU net" + (" (two halves, printed from one file: turn one over)" if halves else "")
-            + " across the rear face of the cage (the battery slides in at the front), its long edges along the top and "
-            "bottom rear cage rods and its round window in the middle of the face, and tie it to both rods with thin cable "
-            "ties through the cells next to the rims"
-            + (", and the two halves to each other along their middle rims." if halves else "."))
+    if "rear_net" in parts:  # the frame is whole: tie the net on before the electronics
+        add("Rear net", ["rear_net"], [], "none", _net_text(parts["rear_net"]))
     rest = [n for n in parts if n not in used_parts]
     claimed = {st for s in steps for st in s.stages}  # the stack, the computer, props and battery: the rest
     add("Electronics", rest, [], "none", _electronics_text(spec, parts), hw(*rest), stages=[st for st in STAGES if st not in claimed])
@@ -196,6 +189,15 @@ def _core_text(spacer: str | None, mirrored: bool, link) -> str:
             + (f"Lay the {spacer} on the battery holder and the plate on it; " if spacer else "Put the plate on the battery holder; ")
             + "the stack's long countersunk screws hold them together: they go up from inside the holder (heads flush in its "
             "ceiling's countersinks) with the stack. The holder's open end faces the front so the battery slides in.")
+
+
+def _net_text(net) -> str:
+    """Tying the net (frame.rear_net) across the rear face: whole, or its two halves."""
+    halves = bool(net.param("halves"))
+    return ("Lay the TPU net" + (" (two halves, printed from one file: turn one over)" if halves else "")
+            + " across the rear face of the cage (the battery slides in at the front), its long edges along the top and "
+            "bottom rear cage rods and its round window in the middle of the face, and tie it to both rods with thin cable "
+            "ties through the cells next to the rims" + (", and the two halves to each other along their middle rims." if halves else "."))
 
 
 def _knee_text(spec) -> str:
