@@ -241,8 +241,11 @@ def _electronics_text(spec, parts: dict) -> str:
     return (stack + (f"; fit {comps}" if comps else "") + ". Solder the motors to the ESC, route wires along the arm rods, fit "
             "the propellers (2 CW, 2 CCW) last. Battery: "
             f"slide the pack in from the front, lead last, lay its {spec.core.battery.connector} lead up through the notch at the "
-            f"top of the holder's mouth, close the {spec.core.strap_width:g} mm hook-and-loop strap across the mouth through the two 45 deg slots "
-            "(no tools: open the strap to swap the pack).")
+            + (f"top of the holder's mouth, close the {spec.core.strap_width:g} mm hook-and-loop strap across the mouth through the two "
+               "45 deg slots (no tools: open the strap to swap the pack)." if spec.core.battery_lock == "strap" else
+               "top of the holder's mouth and put battery_lid on the mouth: its magnets meet the holder's (glue the four magnets "
+               "into their pockets beforehand, flush, each lid magnet facing its holder magnet with the opposite pole; pull the lid "
+               "off to swap the pack)."))
 
 
 def unbuilt(step: Step, design: "Derived") -> list[str]:

@@ -131,7 +131,9 @@ def build_bom(spec: "Spec", design: "Derived", budget: "MassBudget",
         b = spec.core.battery
         lines.append(BomLine("battery", "battery (LiPo)", it.qty, f"{b.length:g} x {b.width:g} x {b.height:g} mm", "",
                              it.mass_g_each, it.mass_g,
-                             notes=f"{b.cells}S {b.capacity_mah:g} mAh, {b.connector} lead; held by a {spec.core.strap_width:g} mm strap across the holder mouth"))
+                             notes=f"{b.cells}S {b.capacity_mah:g} mAh, {b.connector} lead; held by "
+                             + (f"a {spec.core.strap_width:g} mm strap across the holder mouth" if spec.core.battery_lock == "strap"
+                                else "the magnetic lid across the holder mouth")))
     for name, it in items.items():
         if name not in used:
             lines.append(BomLine("other", name, it.qty, "", it.material or "", it.mass_g_each, it.mass_g))
