@@ -50,6 +50,7 @@ class FrameSection(_M):
     level_arms: bool = Field(True, description="true: the core plate hangs at the knees' height (to the nearest mm, on M2 standoffs above the battery holder) and the arms run level, as the authors build it; false: the plate sits on the holder and the arms climb to the knees")
     arm_spacing: Annotated[float, Field(ge=6, le=40, description="centre distance between the two parallel rods of an arm, mm")] = 12
     struts: bool = Field(True, description="damping struts from the bottom corners to the core")
+    rear_net: bool = Field(False, description="the authors' thin net (CogniFly-STL v8 Flex_net_thin): a flat 0.5 mm web of the joints' TPU across the cage's rear face (the battery slides in at the front), tied with cable ties to the rear top and bottom cage rods, rings and spokes round a 68 mm window; it keeps fingers, twigs and cables out of the rear propellers' reach. 1.11 cm^3 (1.35 g) whole on the carbon preset's cage, as the authors'; on a bed under 162 mm it prints as two halves with a seam rim each (2 x 0.60 cm^3, 1.47 g)")
 
 
 class RodsSection(_M):
@@ -114,8 +115,10 @@ class CoreSection(_M):
     computer: ComputerSection | None = ComputerSection()
     spacer_thickness: Annotated[float, Field(ge=0, le=10, description="the sensor mount / spacer between the battery holder and the core plate, mm: lifts the plate and its TPU links clear of the holder")] = 2.0
     strap_width: Annotated[float, Field(ge=5, le=30, description="hook-and-loop battery strap width, mm: sets the strap slots at the holder mouth")] = 10
+    battery_lock: Literal["strap", "magnetic"] = Field("strap", description="what holds the pack in the holder: strap = a hook-and-loop strap across the mouth through two slots; magnetic = the authors' magnetic holder (CogniFly-STL v8 Battery_holder_magnetic_*): a lid (battery_lid) across the mouth held by four 6 x 2 mm N38 disc magnets glued into pockets in two bosses on the holder's mouth and in the lid, no strap and no slots; a swap is one pull, nothing to thread (+3.9 cm^3 of core material and 1.7 g of magnets on the carbon preset, less the 1.6 g strap)")
     camera: CameraSection | None = Field(None, description="camera bracket at the front of the core (needs a components line with vitamin: pi_camera_v2)")
     flow_sensor: FlowSensorSection | None = Field(None, description="downward optical-flow + ToF board behind the holder (needs a components line with vitamin: matek_3901_l0x)")
+    support_holes: bool = Field(False, description="the authors' four 3.0 mm mounting holes on a 25.4 mm radius on the core's axes (CogniFly-STL v8 MainBase), where their Pi support (RPI_Support_new) and battery supports fix to the base: each in a 7 mm boss as deep as the pegs' tubes (the authors' 9.2 mm block), on a 7 mm bar from the pegged plate's centre (core.link: pegs); +3.2 cm^3 of core material on the carbon preset (+2.4 g printed)")
     link: Literal["tab", "pegs"] = Field("tab", description="how each arm's rod pair joins the core plate: pegs (the presets) = the authors' connector, one TPU peg per arm rod pressed into an ABS tube on the core plate, the strut on the link's arch (level arms only); tab = a flat TPU link bolted on the plate corner")
 
 
@@ -286,6 +289,9 @@ class Spec(_M):
             raise _KeyProblem("core.link", "the pegged core link's pegs press into ABS tubes that lie on the bed under the "
                               "upside-down core plate, level with the arms; climbing arms (frame.level_arms: false) would "
                               "tilt them off the bed", "set frame.level_arms: true, or core.link: tab")
+        if self.core.support_holes and self.core.link != "pegs":
+            raise _KeyProblem("core.support_holes", "the mounting holes' bosses hang on the pegged core plate's X (the square "
+                              "plate of core.link: tab has no bar out to a 25.4 mm radius)", "set core.link: pegs, or core.support_holes: false")
         core_half = self.core.plate_size / 2
         inner_half = min(self.frame.width, self.frame.depth) / 2 - self.frame.knee_inset - self.rods.diameter - 2 * self.joints.wall
         if core_half >= inner_half:

@@ -26,6 +26,8 @@ from cogniframe.families import registry
 ROOT = Path(__file__).resolve().parents[1]
 PRESETS = ("carbon", "bamboo")
 FAMILIES = registry.families()
+# the families only an option plans (off in the presets), with the key that turns each on
+OPTION_FAMILIES = {"net": {"frame__rear_net": True}}
 OVERHANG_MAX = 0.01  # unsupported fraction of the downward-facing area
 
 
@@ -72,20 +74,26 @@ def test_presets_have_the_expected_parts():
 @pytest.mark.cad
 def test_family_module_keeps_the_registry_contract(family):
     """Each family's module names itself, sizes from a real params key, plans its own parts (every
-    family is planned by the carbon preset, so every family runs through the CAD cases below) and
-    gives, without CAD, the same print orientation its solid is built in."""
+    family but an option's is planned by the carbon preset, so it runs through the CAD cases below;
+    an option's family, `OPTION_FAMILIES`, is planned with its key on) and gives, without CAD, the
+    same print orientation its solid is built in."""
     mod = registry.get(family)
     assert mod.NAME == family and mod.DOC
     spec, frame, _ = planned("carbon")
+    if family in OPTION_FAMILIES:
+        from presets import preset_spec
+
+        spec = preset_spec("carbon", **OPTION_FAMILIES[family])
+        frame = frame_mod.frame_of(spec)
     value = spec
     for key in mod.SIZE_KEY.split("."):
         value = getattr(value, key)
     assert value is not None
     parts = mod.plan(spec, frame)
     assert parts and all(p.family == family for p in parts)
-    d = built_preset("carbon")
     for p in parts:
-        assert np.allclose(mod.print_from_local(p), d.built[p.name].print_from_local, atol=1e-9)
+        built = registry.solid(p) if family in OPTION_FAMILIES else built_preset("carbon").built[p.name]
+        assert np.allclose(mod.print_from_local(p), built.print_from_local, atol=1e-9)
 
 
 @pytest.mark.parametrize("preset,name", CASES)
@@ -360,7 +368,7 @@ def test_flat_contact_ratio_of_a_ball_is_tiny():
 
 def test_registry_lists_families_and_rejects_unknown_ones():
     assert registry.families() == ("battery_holder", "camera_mount", "computer_mount", "core_plate", "joint",
-                                   "motor_mount", "sensor_mount")
+                                   "motor_mount", "net", "sensor_mount")
     assert set(registry.sizes()) == set(FAMILIES)
     with pytest.raises(ValueError) as e:
         registry.get("wing")

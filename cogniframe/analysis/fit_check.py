@@ -26,7 +26,8 @@ a build FAILs with it):
   along the screw's axis away from the part, meets no solid fitted by then (fasteners.STAGES:
   what comes later in the assembly guide is not there yet);
 * `battery_path`: nothing sits in the battery's slide path: the pack at its catalogue size, swept
-  from the holder's open end (its rear face at the mouth) to its seat, meets no solid but the pack.
+  from the holder's open end (its rear face at the mouth) to its seat, meets no solid but the pack
+  (and the magnetic lock's lid, which goes on after it).
 """
 
 from __future__ import annotations
@@ -232,5 +233,7 @@ def keepouts(spec, frame, fasteners) -> tuple[Keepout, ...]:
     b, holder = frame.core.battery, frame.core.holder
     lo, hi = np.asarray(b.lo, float), np.asarray(b.hi, float)
     hi[1] = float(holder.hi[1]) + float(spec.core.battery.length)  # from its rear face at the mouth to its seat
-    out.append(Keepout("battery_path", "battery_path", "battery", (box(lo, hi),), "last", frozenset(("battery",))))
+    # the magnetic lock's lid closes the mouth once the pack is in: off while it slides
+    lid = ("battery_lid",) if spec.core.battery_lock == "magnetic" else ()
+    out.append(Keepout("battery_path", "battery_path", "battery", (box(lo, hi),), "last", frozenset(("battery", *lid))))
     return tuple(out)

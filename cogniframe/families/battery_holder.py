@@ -27,8 +27,45 @@ SIZE_KEY = "core.battery"
 DOC = "ABS/PLA open-ended battery sleeve, printed on its back stop"
 
 
+# core.battery_lock: magnetic. Four axially magnetised 6 x 2 mm N38 neodymium discs (a catalogue
+# size, e.g. Dhit MW 6x2 / N38, +-0.1 mm), each 0.42 g: its volume at sintered NdFeB's 7.5 g/cm^3
+# (the catalogue's N38 data: density >= 7.4 g/cm^3). Each pocket is the disc + 0.2 mm across (its
+# tolerance and the print's) and 0.1 mm deeper than it, glued flush; 1.2 mm of plastic (three
+# 0.4 mm lines) round it and under it in the lid (LID_FLOOR).
+MAGNET_D, MAGNET_H, MAGNET_G = 6.0, 2.0, 0.42
+POCKET_D, POCKET_DEPTH = MAGNET_D + 0.2, MAGNET_H + 0.1
+POCKET_WALL = 1.2
+LID_FLOOR = 1.2
+MAGNET_LINE = "6 x 2 mm N38 neodymium disc magnet, axially magnetised (e.g. Dhit MW 6x2 / N38), glued into its pocket"
+
+
 def plan(spec: Spec, frame: Frame) -> tuple[PartSpec, ...]:
+    if spec.core.battery_lock == "magnetic":
+        return (_battery_holder(spec, frame), _lid(spec, frame))
     return (_battery_holder(spec, frame),)
+
+
+def magnet_bosses(spec: Spec, frame: Frame) -> dict:
+    """The magnetic lock's two bosses, one on each side wall's outside at the mouth, in the
+    holder's local frame (mm): each pocket's centre x (+-), its height zc (the cavity's middle),
+    the boss's reach `out` past the wall, its length `back` from the mouth at full reach (then a
+    45 deg slope back to the wall: the boss's underside as printed, standing on the back stop)
+    and its height. The pocket keeps POCKET_WALL from the cavity and from the boss's outside and
+    floor."""
+    c, b = spec.core, spec.core.battery
+    w, length, height = frame.core.holder.size
+    ih = b.height + 1.0
+    skin = (height - ih) / 2
+    r = POCKET_D / 2
+    x = b.width / 2 + POCKET_WALL + r
+    out = round(x + r + POCKET_WALL - w / 2, 6)
+    return {"x": round(x, 6), "zc": round(-height / 2 + skin + ih / 2, 6), "out": out,
+            "back": POCKET_DEPTH + POCKET_WALL, "height": POCKET_D + 2 * POCKET_WALL, "mouth": round(length / 2, 6)}
+
+
+def _boss_area(m: dict) -> float:
+    """One boss's profile in the holder's xy (a trapezoid: full reach `back` long, then 45 deg)."""
+    return m["out"] * m["back"] + m["out"] ** 2 / 2
 
 def holder_features(spec: Spec, frame: Frame) -> dict:
     """Holder windows, strap slots and lead exit in the holder's local frame (centre of its box), mm.
@@ -55,7 +92,7 @@ def holder_features(spec: Spec, frame: Frame) -> dict:
     # Strap slot: 45 deg in the side wall, the strap's width + 1 mm long, 2 mm wide, just past the pack.
     s_len, s_w = c.strap_width + 1.0, 2.0
     ext = (s_len + s_w) / math.sqrt(2)
-    strap = (y_front_of_pack + 1.0 + ext / 2, 0.0, s_len, s_w) if ext <= ih else None
+    strap = (y_front_of_pack + 1.0 + ext / 2, 0.0, s_len, s_w) if ext <= ih and c.battery_lock == "strap" else None
     conn = CONNECTORS[b.connector]
     lead = (conn.width + 1.0, round(y_front_of_pack, 4))  # notch width, where it starts (to the mouth)
     return {"side_window": side, "floor_window": floor, "strap_slot": strap, "lead_exit": lead}
@@ -90,20 +127,30 @@ def _battery_holder(spec: Spec, frame: Frame) -> PartSpec:
     csk_vol = math.pi * csk_h / 3 * (r1 * r1 + r1 * r0 + r0 * r0) - math.pi * r0 * r0 * csk_h
     vol = (w * length * height - iw * il * ih - len(holes) * (math.pi / 4 * screw.clearance_d**2 * skin + csk_vol)
            - (cut_side + cut_strap) * t - cut_floor * skin - cut_lead * skin)
+    mag = magnet_bosses(spec, frame) if c.battery_lock == "magnetic" else None
+    if mag:  # two bosses, each less its pocket (inside the boss and the side wall)
+        vol += 2 * (_boss_area(mag) * mag["height"] - math.pi / 4 * POCKET_D**2 * POCKET_DEPTH)
     # Walls are vertical when printed on end: outside and cavity faces; horizontal: the back stop
     # and the rim of the open end.
     area_v = 2 * (w + height) * length + 2 * (iw + ih) * il - 2 * (cut_side + cut_strap + cut_floor)
     rim = w * height - iw * ih
     area_h = w * height + rim - f["lead_exit"][0] * skin
-    est = Estimate(vol, area_h, area_v, (w, height, length))
+    if mag:  # the bosses' sides stand vertical as printed; their tops and 45 deg undersides count as horizontal
+        area_v += 2 * (2 * _boss_area(mag) + mag["back"] * mag["height"])
+        area_h += 2 * (mag["out"] * (1 + math.sqrt(2)) * mag["height"])
+    est = Estimate(vol, area_h, area_v, (w + (2 * mag["out"] if mag else 0.0), height, length))
     params = (("inner", (b.width, il, b.height + 1.0)), ("wall", t), ("holes", holes), ("hole_d", screw.clearance_d),
               ("countersink_d", round(csk_d, 4)), ("outer", (w, length, height)), *sorted(f.items()))
+    if mag:
+        params += (("magnet_bosses", tuple(sorted(mag.items()))), ("pocket", (POCKET_D, POCKET_DEPTH)))
     # The strap runs across the mouth and round the holder's outside, closing on itself: the
     # holder's cross-section perimeter + 40 mm of overlap, rounded up to 10 mm; about 1 g per
     # 100 mm of 10 mm hook-and-loop.
     strap_len = math.ceil((2 * (w + height) + 40.0) / 10.0) * 10.0
     hw = (HardwareLine(f"hook-and-loop battery strap {c.strap_width:g} mm x {strap_len:g} mm", 1,
                        round(0.01 * strap_len * c.strap_width / 10.0, 2)),)
+    if mag:
+        hw = (HardwareLine(f"{MAGNET_LINE} (battery holder's mouth)", 2, MAGNET_G),)
     return PartSpec("battery_holder", "battery_holder", "core", c.material, c.infill,
                     (Placement("core", 0.0, rounded(h.centre)),), (), t, est, params, hw)
 
@@ -117,6 +164,8 @@ ROT_X_90 = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])  # local +y -> pri
 
 
 def print_from_local(part: PartSpec) -> np.ndarray:
+    if part.name == "battery_lid":
+        return transform(ROT_X_M90, (0.0, 0.0, float(part.param("size")[1]) / 2))
     w, length, h = (float(v) for v in part.param("outer"))
     return transform(ROT_X_90, (0.0, 0.0, length / 2))
 
@@ -131,6 +180,8 @@ def holder_skins(part: PartSpec) -> tuple[float, float]:
 def solid(part: PartSpec) -> Built:
     import cadquery as cq
 
+    if part.name == "battery_lid":
+        return _lid_solid(part)
     w, length, h = (float(v) for v in part.param("outer"))
     iw, il, ih = (float(v) for v in part.param("inner"))
     skin, back = holder_skins(part)
@@ -150,6 +201,11 @@ def solid(part: PartSpec) -> Built:
         holes += [cq.Solid.makeCone(r1, d / 2, r1 - d / 2, cq.Vector(float(x), float(y), h / 2 - skin - 0.5), cq.Vector(0, 0, 1))
                   for x, y in part.param("holes")]
     cutters = holder_cutters(part) if "lead_exit" in dict(part.params) else []
+    mag = dict(part.params).get("magnet_bosses")
+    if mag:
+        bosses, pockets = _boss_solids(dict(mag))
+        outer = outer.fuse(*bosses).clean()
+        cutters += pockets
     shape = outer.cut(cavity, *holes, *cutters)  # one boolean with every tool: half the time of one per tool
     m = print_from_local(part)
     placed = apply(shape.clean(), m)
@@ -186,3 +242,59 @@ def holder_cutters(part: PartSpec) -> list:
     lw, y0 = (float(v) for v in part.param("lead_exit"))  # notch in the top wall, from y0 to the mouth
     out.append(cq.Solid.makeBox(lw, length / 2 - y0 + 1.0, skin + 1.5, cq.Vector(-lw / 2, y0, h / 2 - skin - 0.5)))
     return out
+
+
+def _boss_solids(m: dict) -> tuple[list, list]:
+    """The magnetic lock's two bosses (holder's local frame) and their pockets, which open on the
+    mouth's face (local +y; up as printed)."""
+    import cadquery as cq
+
+    y1, out, back = m["mouth"], m["out"], m["back"]
+    z0, z1 = m["zc"] - m["height"] / 2, m["zc"] + m["height"] / 2
+    bosses, pockets = [], []
+    for sx in (-1.0, 1.0):
+        # from 0.5 mm inside the side wall (no face on its outside), out, back, then 45 deg back in
+        x_in, x_out = sx * (m["x"] - POCKET_D / 2 - POCKET_WALL - 0.5), sx * (m["x"] + POCKET_D / 2 + POCKET_WALL)
+        x_wall = sx * (abs(x_out) - out)
+        pts = [(x_in, y1), (x_out, y1), (x_out, y1 - back), (x_wall, y1 - back - out), (x_in, y1 - back - out)]
+        bosses.append(prism_xy(pts, z0, z1))
+        pockets.append(cq.Solid.makeCylinder(POCKET_D / 2, POCKET_DEPTH + 1.0, cq.Vector(sx * m["x"], y1 - POCKET_DEPTH, m["zc"]),
+                                             cq.Vector(0, 1, 0)))
+    return bosses, pockets
+
+
+# -- the lid (core.battery_lock: magnetic) ----------------------------------------------------
+
+def _lid(spec: Spec, frame: Frame) -> PartSpec:
+    """A plate across the holder's mouth and its bosses, POCKET_DEPTH + LID_FLOOR thick, its two
+    pockets facing the holder's; the magnets hold it on. Local frame: centred on its box, axes as
+    the frame; it prints lying on its outer face, the pockets up."""
+    c = spec.core
+    h = frame.core.holder
+    w, length, height = h.size
+    m = magnet_bosses(spec, frame)
+    a, t = w + 2 * m["out"], POCKET_DEPTH + LID_FLOOR
+    xs = (-m["x"], m["x"])
+    vol = a * height * t - 2 * math.pi / 4 * POCKET_D**2 * POCKET_DEPTH
+    est = Estimate(vol, 2 * a * height, 2 * (a + height) * t + 2 * math.pi * POCKET_D * POCKET_DEPTH, (a, height, t))
+    centre = (h.centre[0], h.centre[1] + length / 2 + t / 2, h.centre[2])
+    params = (("size", (a, t, height)), ("pockets", tuple((x, m["zc"]) for x in xs)), ("pocket", (POCKET_D, POCKET_DEPTH)))
+    hw = (HardwareLine(f"{MAGNET_LINE} (battery lid; poles opposite the holder's)", 2, MAGNET_G),)
+    return PartSpec("battery_lid", NAME, "core", c.material, c.infill, (Placement("battery_lid", 0.0, rounded(centre)),), (), LID_FLOOR,
+                    est, params, hw)
+
+
+# local -y (the face on the holder's mouth) -> print +z: the pockets open upwards
+ROT_X_M90 = np.array([[1.0, 0, 0], [0, 0, 1.0], [0, -1.0, 0]])
+
+
+def _lid_solid(part: PartSpec) -> Built:
+    import cadquery as cq
+
+    a, t, height = (float(v) for v in part.param("size"))
+    d, depth = (float(v) for v in part.param("pocket"))
+    body = cq.Solid.makeBox(a, t, height, cq.Vector(-a / 2, -t / 2, -height / 2))
+    pockets = [cq.Solid.makeCylinder(d / 2, depth + 1.0, cq.Vector(float(x), -t / 2 - 1.0, float(z)), cq.Vector(0, 1, 0))
+               for x, z in part.param("pockets")]
+    m = transform(ROT_X_M90, (0.0, 0.0, t / 2))
+    return Built(apply(body.cut(*pockets).clean(), m), m)

@@ -54,6 +54,14 @@ RIB = 3.5
 RIB_START = 2.5
 RIB_GAP = 1.0
 GUSSET = 20.0
+# core.support_holes: the authors' base carries four 3.0 mm through holes on a 25.4 mm radius on
+# its axes, 9.2 mm deep (thecognifly/CogniFly-STL, CogniFly_v8_Crash_Tests/MainBase.stl, measured
+# with tools/compare_parts.py: 2.98 mm at (+-25.41, 0) and (0, +-25.41)), the pattern of their Pi
+# support's 3.98 mm holes (RPI_Support_new.stl). Each sits in a boss as wide as a stem
+# (`PLATE_RAIL`: 2.0 mm of ABS round the hole, five 0.4 mm lines) and as deep as the pegs' tubes
+# (their 9.2 mm block), at the end of a bar as wide from the plate's centre.
+SUPPORT_HOLE_D = 3.0
+SUPPORT_HOLE_RADIUS = 25.4
 LEVEL_TOL = 1e-5  # mm: a tube's axis level and flush as planned (sockets and placements are stored to 1e-6)
 # mm: OCC's fuzzy boolean tolerance for the slab, ribs and tubes. A bar's outer edge is the plane
 # of its tubes' outer ends (the bar runs under the whole tube) and a rib's sides are its stem's;
@@ -81,6 +89,11 @@ def _core_plate(spec: Spec, frame: Frame) -> PartSpec:
         outline, ribs = pegged_layout(tubes, r_out, holes)
         params += [("tube_bore", bore), ("tube_wall", PEG_TUBE_WALL), ("tubes", tubes), ("outline", outline),
                    ("ribs", ribs), ("rib_width", PLATE_RAIL), ("rib_depth", RIB)]
+        if c.support_holes:
+            supports = support_holes(spec, tubes, bore, outline)
+            params += [("support_holes", supports), ("support_hole_d", SUPPORT_HOLE_D), ("boss_d", PLATE_RAIL),
+                       ("boss_depth", 2 * r_out)]
+            params[params.index(("outline", outline))] = ("outline", outline + support_bars(supports, PLATE_RAIL))
         est = _with_tubes(dict(params))
     hw = stack_plan(spec, frame).lines
     return PartSpec("core_plate", "core_plate", "core", c.material, c.infill,
@@ -279,6 +292,51 @@ def pegged_layout(tubes, r_out: float, stack_holes) -> tuple[tuple, tuple]:
     return tuple(pieces), tuple(ribs)
 
 
+def support_holes(spec: Spec, tubes, bore: float, outline) -> tuple[tuple[float, float], ...]:
+    """The four mounting holes (core.support_holes), the plate's local xy, on the authors' pattern;
+    or an error naming the key where a hole would open into a peg's bore (a smaller core or wider
+    arm pair brings the tubes onto the axes): the hole must keep a nozzle line (0.4 mm) of ABS
+    from every bore, as the authors' holes keep 0.54 mm from theirs. The boss's half past its
+    bar's end must lie off the X's `outline` (the closed form counts it whole, `_with_tubes`)."""
+    import manifold3d as m3
+
+    pts = ((SUPPORT_HOLE_RADIUS, 0.0), (0.0, SUPPORT_HOLE_RADIUS), (-SUPPORT_HOLE_RADIUS, 0.0), (0.0, -SUPPORT_HOLE_RADIUS))
+    x_plate = m3.CrossSection.batch_boolean([m3.CrossSection([[tuple(map(float, q)) for q in p]]) for p in outline], m3.OpType.Add)
+    for q in pts:
+        u = np.asarray(q, float) / SUPPORT_HOLE_RADIUS
+        n = np.array([-u[1], u[0]]) * PLATE_RAIL
+        b = np.asarray(q, float)
+        beyond = m3.CrossSection([[tuple(map(float, p)) for p in (b - n, b + 2 * PLATE_RAIL * u - n, b + 2 * PLATE_RAIL * u + n, b + n)]])
+        overlap = (m3.CrossSection.circle(PLATE_RAIL / 2, 64).translate(tuple(b)) ^ beyond ^ x_plate).area()
+        if overlap > 1e-3:
+            raise spec.error("core.support_holes", f"the mounting hole's boss at ({q[0]:g}, {q[1]:g}) mm runs into the bar under "
+                             f"a core link's tubes ({overlap:.2f} mm^2)",
+                             "set core.support_holes: false, or change core.plate_size or frame.arm_spacing to move the tubes off the axes")
+    for q in pts:
+        for e, s in tubes:
+            a, b, x = np.asarray(e[:2], float), np.asarray(s[:2], float), np.asarray(q, float)
+            f = min(max(float((x - a) @ (b - a) / ((b - a) @ (b - a))), 0.0), 1.0)
+            gap = float(np.linalg.norm(x - (a + f * (b - a)))) - bore / 2 - SUPPORT_HOLE_D / 2
+            if gap < 0.4:
+                raise spec.error("core.support_holes", f"the mounting hole at ({q[0]:g}, {q[1]:g}) mm keeps only {gap:.2f} mm "
+                                 f"from a peg's {bore:g} mm bore (the tube from ({e[0]:g}, {e[1]:g}))",
+                                 "set core.support_holes: false, or move the tubes off the axes (a larger core.plate_size)")
+    return pts
+
+
+def support_bars(holes, width: float) -> tuple[tuple[tuple[float, float], ...], ...]:
+    """One bar per mounting hole, `width` wide from the plate's centre to the hole's centre, where
+    its boss (a circle as wide) takes over: the bar covers exactly half the boss's circle, which
+    the closed form (`_with_tubes`) counts once."""
+    out = []
+    for x, y in holes:
+        u = np.array([x, y], float) / math.hypot(x, y)
+        n = np.array([-u[1], u[0]]) * width / 2
+        b = np.array([x, y], float)
+        out.append(tuple((round(float(p[0]), 6), round(float(p[1]), 6)) for p in (-n, b - n, b + n, n)))
+    return tuple(out)
+
+
 def outline_union(pieces):
     """The union of the outline's pieces (manifold3d's exact 2-D boolean, the library the meshes
     already use): its one outer loop, counter-clockwise, and that loop's area; or an error naming
@@ -327,6 +385,15 @@ def _with_tubes(params: dict) -> Estimate:
         vol += w_r * d_r * L_r
         a_v += 2 * (L_r + w_r) * d_r
         z_top = t + d_r
+    # core.support_holes: each boss a cylinder (diameter w_b) from the bed to `boss_depth`, its
+    # half beyond the bar's end over the slab's outline (support_bars), the hole through all of it
+    w_b, r_s = float(params.get("boss_d", 0.0)) / 2, float(params.get("support_hole_d", 0.0)) / 2
+    for _ in params.get("support_holes", ()):
+        depth = float(params["boss_depth"])
+        vol += math.pi * w_b**2 * (depth - t / 2) - math.pi * r_s**2 * depth
+        a_h += -2 * math.pi * r_s**2 + math.pi * w_b**2 / 2  # the hole's two mouths; the boss's top past the slab
+        a_v += math.pi * w_b * (depth - t) + math.pi * w_b * t / 2 + 2 * math.pi * r_s * depth
+        z_top = max(z_top, depth)
     for e, s in params["tubes"]:
         z = t / 2 - float(e[2])  # the axis's height in print: r_o for a tube flush with the plate's top
         h = min(max(z - t, -r_o), r_o)
@@ -382,6 +449,11 @@ def _with_tube_solids(params: dict, m: np.ndarray, holes):
         pieces.append(box_along(m[:2, :2] @ np.asarray(a, float), m[:2, :2] @ np.asarray(b, float), w_r, t, t + d_r))
     for x, y in holes:
         bores.append(cylinder((x, y, -1.0), (0.0, 0.0, 1.0), t + 2.0, float(params["hole_d"]) / 2))
+    for x, y in params.get("support_holes", ()):
+        q = m[:2, :2] @ np.asarray((x, y), float)
+        depth = float(params["boss_depth"])
+        pieces.append(cylinder((q[0], q[1], 0.0), (0.0, 0.0, 1.0), depth, float(params["boss_d"]) / 2))
+        bores.append(cylinder((q[0], q[1], -1.0), (0.0, 0.0, 1.0), depth + 2.0, float(params["support_hole_d"]) / 2))
     for e, s in params["tubes"]:
         pe, ps = (m[:3, :3] @ np.asarray(p, float) + m[:3, 3] for p in (e, s))
         d = ps - pe

@@ -13,11 +13,11 @@ from types import ModuleType
 
 import numpy as np
 
-from . import battery_holder, camera_mount, computer_mount, core_plate, joint, motor_mount, sensor_mount
+from . import battery_holder, camera_mount, computer_mount, core_plate, joint, motor_mount, net, sensor_mount
 from ..parts.record import PartSpec
 
 FAMILIES: tuple[ModuleType, ...] = (joint, motor_mount, core_plate, battery_holder, sensor_mount, camera_mount,
-                                    computer_mount)
+                                    computer_mount, net)
 
 
 def get(name: str) -> ModuleType:

@@ -152,12 +152,13 @@ def assembly_steps(design: "Derived") -> tuple[Step, ...]:
         hw("core_link", "core_link_mirrored", "core_plate", "battery_holder", *([spacer] if spacer else [])),
         stages=("core",), apart=True)
     add("Hang the core", [], [], "none: arm and strut ends are only pushed into the core links",
-        "Hold the core in the middle of the frame and push the free ends of both arm rods"
-        + (" and the strut" if struts else "") + " of each corner into its core link. To remove the core later, pull "
-        "the rods out of the links.", places=(len(steps),))
+        "Hold the core in the middle of the frame and push the free ends of both arm rods" + (" and the strut" if struts else "")
+        + " of each corner into its core link. To remove the core later, pull the rods out of the links.", places=(len(steps),))
     if "front_camera_mount" in parts or spec.core.flow_sensor:
         add("Camera and sensors", [n for n in ("front_camera_mount",) if n in parts], [], "none", _sensors_text(spec, parts),
             hw("front_camera_mount"), stages=("sensors",))
+    if "rear_net" in parts:  # the frame is whole: tie the net on before the electronics
+        add("Rear net", ["rear_net"], [], "none", _net_text(parts["rear_net"]))
     rest = [n for n in parts if n not in used_parts]
     claimed = {st for s in steps for st in s.stages}  # the stack, the computer, props and battery: the rest
     add("Electronics", rest, [], "none", _electronics_text(spec, parts), hw(*rest), stages=[st for st in STAGES if st not in claimed])
@@ -188,6 +189,15 @@ def _core_text(spacer: str | None, mirrored: bool, link) -> str:
             + (f"Lay the {spacer} on the battery holder and the plate on it; " if spacer else "Put the plate on the battery holder; ")
             + "the stack's long countersunk screws hold them together: they go up from inside the holder (heads flush in its "
             "ceiling's countersinks) with the stack. The holder's open end faces the front so the battery slides in.")
+
+
+def _net_text(net) -> str:
+    """Tying the net (frame.rear_net) across the rear face: whole, or its two halves."""
+    halves = bool(net.param("halves"))
+    return ("Lay the TPU net" + (" (two halves, printed from one file: turn one over)" if halves else "")
+            + " across the rear face of the cage (the battery slides in at the front), its long edges along the top and "
+            "bottom rear cage rods and its round window in the middle of the face, and tie it to both rods with thin cable "
+            "ties through the cells next to the rims" + (", and the two halves to each other along their middle rims." if halves else "."))
 
 
 def _knee_text(spec) -> str:
@@ -231,8 +241,11 @@ def _electronics_text(spec, parts: dict) -> str:
     return (stack + (f"; fit {comps}" if comps else "") + ". Solder the motors to the ESC, route wires along the arm rods, fit "
             "the propellers (2 CW, 2 CCW) last. Battery: "
             f"slide the pack in from the front, lead last, lay its {spec.core.battery.connector} lead up through the notch at the "
-            f"top of the holder's mouth, close the {spec.core.strap_width:g} mm hook-and-loop strap across the mouth through the two 45 deg slots "
-            "(no tools: open the strap to swap the pack).")
+            + (f"top of the holder's mouth, close the {spec.core.strap_width:g} mm hook-and-loop strap across the mouth through the two "
+               "45 deg slots (no tools: open the strap to swap the pack)." if spec.core.battery_lock == "strap" else
+               "top of the holder's mouth and put battery_lid on the mouth: its magnets meet the holder's (glue the four magnets "
+               "into their pockets beforehand, flush, each lid magnet facing its holder magnet with the opposite pole; pull the lid "
+               "off to swap the pack)."))
 
 
 def unbuilt(step: Step, design: "Derived") -> list[str]:

@@ -83,7 +83,7 @@ def build_bom(spec: "Spec", design: "Derived", budget: "MassBudget",
         env = tuple(sizes[p.name]) if sizes and p.name in sizes else p.estimate.envelope
         g_t = sliced.get(p.name)
         lines.append(BomLine(
-            "printed", p.name, it.qty, f"{env[0]:.0f} x {env[1]:.0f} x {env[2]:.0f} mm", p.material, it.mass_g_each, it.mass_g,
+            "printed", p.name, it.qty, " x ".join(_mm(v) for v in env) + " mm", p.material, it.mass_g_each, it.mass_g,
             None if g_t is None else g_t[0], None if g_t is None else g_t[1],
             f"{p.infill * 100:.0f} % infill; {', '.join(copy_labels(p))}"))
 
@@ -131,7 +131,9 @@ def build_bom(spec: "Spec", design: "Derived", budget: "MassBudget",
         b = spec.core.battery
         lines.append(BomLine("battery", "battery (LiPo)", it.qty, f"{b.length:g} x {b.width:g} x {b.height:g} mm", "",
                              it.mass_g_each, it.mass_g,
-                             notes=f"{b.cells}S {b.capacity_mah:g} mAh, {b.connector} lead; held by a {spec.core.strap_width:g} mm strap across the holder mouth"))
+                             notes=f"{b.cells}S {b.capacity_mah:g} mAh, {b.connector} lead; held by "
+                             + (f"a {spec.core.strap_width:g} mm strap across the holder mouth" if spec.core.battery_lock == "strap"
+                                else "the magnetic lid across the holder mouth")))
     for name, it in items.items():
         if name not in used:
             lines.append(BomLine("other", name, it.qty, "", it.material or "", it.mass_g_each, it.mass_g))
@@ -200,3 +202,8 @@ def write_bom(lines: Sequence[BomLine], out_dir: Path | str) -> tuple[Path, Path
     c.write_text(to_csv(lines), encoding="utf-8")
     m.write_text(to_markdown(lines), encoding="utf-8")
     return c, m
+
+
+def _mm(v: float) -> str:
+    """A printed part's size, whole mm; under 1 mm (the net's 0.5 mm) to 0.1 mm, not 0."""
+    return f"{v:.1f}" if v < 1 else f"{v:.0f}"
