@@ -141,6 +141,11 @@ def test_the_bom_drops_the_link_screws_and_the_plate_their_holes():
     assert len(tab["core_plate"].param("holes")) == 8
 
 
+def _signed_area(q) -> float:
+    x, y = np.asarray(q, float).T
+    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
 def _union(pieces):
     import manifold3d as m3
 
@@ -437,7 +442,10 @@ def test_random_designs_with_pegs_give_one_watertight_plate(seed, tmp_path):
         p = parts["core_plate"]
         link = parts["core_link"]
         assert len(p.param("tubes")) == 4 * len(pegged_plan(link.sockets, dict(link.params)).columns)
-        assert len(_union(p.param("outline")).to_polygons()) == 1 and len(p.param("ribs")) == 4
+        # one outer loop: slivers the bars, stems and gussets enclose where they nearly meet are filled
+        # (`core_plate.outline_union`; 700's first design leaves four)
+        outer = [q for q in _union(p.param("outline")).to_polygons() if _signed_area(q) > 0]
+        assert len(outer) == 1 and len(p.param("ribs")) == 4
         built = registry.solid(p)
         mesh = write_stl(built.shape, tmp_path / f"plate{done}.stl", name="core_plate")  # raises unless watertight
         assert mesh.body_count == 1 and mesh.bounds[0, 2] == pytest.approx(0.0, abs=1e-6)
