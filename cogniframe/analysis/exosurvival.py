@@ -118,7 +118,7 @@ def evaluate(lay, mdl, units: dict, factor: float, u_per_n: np.ndarray, drop: Dr
     per_n = influence(lay, mdl, units, factor, u_per_n)
     springs, forces, strikes = drop_loads(drop, heights_cm)
     series = []
-    worst: dict[str, tuple[float, str]] = {}
+    worst: dict[str, tuple[float, str, object]] = {}  # per joint: its largest load, where, its strength
     for n, lab, q, d in per_n["sockets"]:
         mat = units[n].material or "tpu_95a"
         st = strength(mat)
@@ -126,21 +126,18 @@ def evaluate(lay, mdl, units: dict, factor: float, u_per_n: np.ndarray, drop: Dr
             continue
         # a strain for an elastomer (the interface layer's E at this factor), a pressure otherwise
         x = q / d / (factor * MATERIALS[mat].e_mpa) if st.mode == "elongation" else q / d
-        if x > worst.get(n, (0.0, ""))[0]:
-            worst[n] = (x, lab)
-    for n, (x, lab) in sorted(worst.items()):
-        st = strength(units[n].material or "tpu_95a")
+        if x > worst.get(n, (0.0,))[0]:
+            worst[n] = (x, lab, st)
+    for n, (x, lab, st) in sorted(worst.items()):
         if st.mode == "elongation":
             series.append(margin_series(f"joint {n} ({lab})", "TPU strain", st.value, "strain", [x * f for f in springs]))
         else:
             series.append(margin_series(f"joint {n} ({lab})", "socket bearing", st.value, "MPa", [x * f for f in forces]))
     series.extend(rod_series(per_n["rods"], lambda name: strength(lay.rod_material), forces))
-    core = sorted({a.material for a in lay.exo.attached if a.name in lay.core})
+    # the weakest of the core's materials that the library knows strikes (all alike in a one-material core)
+    core = sorted((strength(m).value, m) for m in {a.material for a in lay.exo.attached if a.name in lay.core} if strength(m))
     if core:
-        # the weakest of the core's materials strikes (all alike in a one-material core)
-        mat = min(core, key=lambda m: (strength(m).value if strength(m) else math.inf, m))
-        st = strength(mat)
-        if st is not None:
-            imp = strike_impedance_mpa_per_m_s(MATERIALS[mat])
-            series.append(margin_series(f"core ({mat})", "strike on the floor", st.value, "MPa", [imp * v for v in strikes]))
+        limit, mat = core[0]
+        imp = strike_impedance_mpa_per_m_s(MATERIALS[mat])
+        series.append(margin_series(f"core ({mat})", "strike on the floor", limit, "MPa", [imp * v for v in strikes]))
     return summarise(series, heights_cm, NOTE)
