@@ -36,6 +36,7 @@ class Session:
         self.spec, self.frame, self._parts = spec, frame, parts
         self._joints = None
         self._outside = None
+        self._layout = None
         self.solution = None  # stiffness.SecantSolution once solved in this check
 
     @property
@@ -67,11 +68,20 @@ class Session:
                                         outside=self.outside if surrogate else None)
         return self._joints
 
+    @property
+    def layout(self):
+        """The frame model's `stiffness.Layout` with these joints: what every model of this check shares."""
+        if self._layout is None:
+            from .stiffness import model_layout
+
+            self._layout = model_layout(self.frame, self.parts, self.joints)
+        return self._layout
+
     def solve(self):
         if self.solution is None:
             from .stiffness import secant_solution
 
-            self.solution = secant_solution(self.spec, self.frame, self.parts, self.joints)
+            self.solution = secant_solution(self.spec, self.frame, self.parts, self.joints, self.layout)
         return self.solution
 
 
@@ -178,7 +188,8 @@ def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropR
 
             play = {n: np.asarray(p, float) for n, p in _secant(spec, frame, session)["play"].items()}
     lc = cases(spec, frame, session.parts, total_mass_g, joint_model=spec.model.stiffness_model, damping_ratio=zeta,
-               design_force_n=k_model * x / 1000.0, joints=session.joints, play=play, solved=solved, modes=modes)
+               design_force_n=k_model * x / 1000.0, joints=session.joints, play=play, solved=solved, modes=modes,
+               layout=session.layout)
     out = lc.to_dict()
     out["design_drop_height_cm"] = h_design
     out["design_force_n"] = k_model * x / 1000.0

@@ -15,9 +15,9 @@ from .. import numfmt
 from . import framefe as ff
 from .constants import G, RHO_AIR
 from .framefe import euler_loads, lowest_eigenvalues
-from .stiffness import (DEFAULT_LOAD_N, PLAY_REFERENCE_N, Model, SecantSolution, _across, _dof, _drop_unconnected,
-                        _play, _solve_payload, build_model, joint_models,
-                        joint_parts, masses_g, mouth, socket_loads)
+from .stiffness import (DEFAULT_LOAD_N, PLAY_REFERENCE_N, Layout, Model, SecantSolution, _across, _dof,
+                        _drop_unconnected, _play, _solve_payload, build_model, joint_models,
+                        joint_parts, masses_g, model_layout, socket_loads)
 
 TIE = 1e-6  # relative: results this close are equal (symmetric members; the solver's round-off)
 
@@ -85,7 +85,7 @@ class LoadCases:
 
 def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "fe", damping_ratio: float = 0.558,
                design_force_n: float | None = None, joints: dict | None = None, play: dict | None = None,
-               solved: SecantSolution | None = None, modes: bool = True) -> LoadCases:
+               solved: SecantSolution | None = None, modes: bool = True, layout: Layout | None = None) -> LoadCases:
     """All load cases of the design (see the module docstring). ``design_force_n``: the spring
     force at the design drop's maximum compression (k x_max), for buckling and strain. ``play``:
     the play springs at PLAY_REFERENCE_N if already known (`secant_k_and_play`; {} = no play),
@@ -93,7 +93,8 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
     whose payload case is this one's. ``modes=False`` lists no modes (``modes_hz`` empty) and
     decides ``mode_near_rotor`` by counting the eigenvalues below the band instead of solving for
     them (`_no_mode_near_rotor`); when the count cannot rule a mode out, the modes are solved as
-    by default, so ``mode_near_rotor`` is the default's either way.
+    by default, so ``mode_near_rotor`` is the default's either way. ``layout``: the frame's
+    `stiffness.model_layout` with ``joints`` when the caller has it (every model here shares it).
 
     The payload, wall and full-thrust cases share one model and one assembled K (they differ in
     supports and loads only); the arms-only thrust case and the modes (rods in 4 elements, with
@@ -105,6 +106,8 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
     from .joints import TPU_PRINTED_MODULUS_FACTOR
 
     masses = masses_g(spec, frame, parts, total_mass_g)
+    if layout is None:
+        layout = model_layout(frame, parts, joints)
 
     # 1. payload vertical
     f_design = design_force_n if design_force_n is not None else 95.0
@@ -112,10 +115,10 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
         play, mdl, K0, u = solved.play or None, solved.model, solved.K, solved.u
     else:
         if play is None:
-            play = _play(spec, frame, parts, joints, PLAY_REFERENCE_N)[0]
+            play = _play(spec, frame, parts, joints, PLAY_REFERENCE_N, layout=layout)[0]
         play = play or None
         # built afresh with the final springs, as `secant_solution` builds it: the same bits of k
-        mdl = build_model(spec, frame, parts, joints, play=play)
+        mdl = build_model(spec, frame, parts, joints, play=play, layout=layout)
         K0 = mdl.fe.stiffness(sparse=True)
         mdl, _, u = _solve_payload(spec, frame, parts, joints, play=play, mdl=mdl, K0=K0)
     fe = mdl.fe
@@ -126,12 +129,12 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
     wall = _wall_case(spec, frame, mdl, K0, masses, damping_ratio)
 
     # 3. thrust
-    thrust = _thrust_case(spec, frame, parts, joints, masses, play, full=(mdl, K0))
+    thrust = _thrust_case(spec, frame, parts, joints, masses, play, full=(mdl, K0), layout=layout)
 
     # 4. modes (free flight)
     n_rot = hover_rotor_hz(spec, total_mass_g)
-    if modes or not _no_mode_near_rotor(spec, frame, parts, joints, masses, n_rot, play=play):
-        hz = _modes(spec, frame, parts, joints, masses, play=play)
+    if modes or not _no_mode_near_rotor(spec, frame, parts, joints, masses, n_rot, play=play, layout=layout):
+        hz = _modes(spec, frame, parts, joints, masses, play=play, layout=layout)
     else:  # modes=False and none of them near the rotor: not listed
         hz = []
     near = None
@@ -149,7 +152,7 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
             by_rod.setdefault(b.group, []).append(axial[b.name])
     names = list(frame.rods)
     ei = [spec.material(frame.rods[rn].material).e_mpa * math.pi * frame.rods[rn].diameter**4 / 64 for rn in names]
-    lengths = [float(np.linalg.norm(mouth(frame.rods[rn], "b") - mouth(frame.rods[rn], "a"))) for rn in names]
+    lengths = [float(np.linalg.norm(layout.mouths[rn][1] - layout.mouths[rn][0])) for rn in names]
     p_crs = euler_loads(lengths, ei, [_end_rot(mdl, frame, rn, "a") for rn in names],
                         [_end_rot(mdl, frame, rn, "b") for rn in names])
     rods_out = []
@@ -252,11 +255,12 @@ def _wall_face(spec, frame, mdl: Model, K, masses, zeta: float, axis: int, sign:
             "gap_mm": gap, "damping_ratio": zeta, "face": FACE_NAMES[(axis, sign)]}
 
 
-def _thrust_case(spec, frame, parts, joints, masses, play=None, full: tuple | None = None) -> dict:
+def _thrust_case(spec, frame, parts, joints, masses, play=None, full: tuple | None = None,
+                 layout: Layout | None = None) -> dict:
     """Thrust on every motor, the battery holder clamped (the core held); the frame whole and the
     arms alone (cage, legs and struts removed: the paper's x-frame). Per newton, at hover (the
     all-up weight over four motors) and at full thrust. ``full``: (model, assembled K) of the
-    whole frame with ``play`` if already built.
+    whole frame with ``play`` if already built; ``layout``: the frame's `stiffness.model_layout`.
 
     The model is linear: the thrust turns with the motor (a follower force), so on arms that
     rotate as rigid bodies about a joint the linear rotation T L / k is also the large-rotation
@@ -272,7 +276,7 @@ def _thrust_case(spec, frame, parts, joints, masses, play=None, full: tuple | No
         if label == "full" and full is not None:
             mdl, K = full
         else:
-            mdl = build_model(spec, frame, parts, joints, only_roles=roles, play=play)
+            mdl = build_model(spec, frame, parts, joints, only_roles=roles, play=play, layout=layout)
             K = mdl.fe.stiffness(sparse=True)
         dz, tilt = _motors_under_thrust(mdl, K, 1.0)  # 1 N up on each motor: linear, scaled below
         out.update(thrust_figures(dz, tilt, per_n_hover, per_n_full, "" if label == "full" else "arms_only_"))
@@ -283,7 +287,7 @@ def _thrust_case(spec, frame, parts, joints, masses, play=None, full: tuple | No
     from .joints import TPU_PRINTED_MODULUS_FACTOR
 
     stiff = {n: replace(js, K=tuple(map(tuple, (js.matrix / TPU_PRINTED_MODULUS_FACTOR).tolist()))) for n, js in joints.items()}
-    mdl = build_model(spec, frame, parts, stiff, only_roles=("arm",))
+    mdl = build_model(spec, frame, parts, stiff, only_roles=("arm",), layout=layout)
     dz, tilt = _motors_under_thrust(mdl, mdl.fe.stiffness(sparse=True), per_n_full)
     out["arms_only_motor_deflection_mm_tpu_datasheet"] = dz
     out["arms_only_motor_tilt_deg_tpu_datasheet"] = math.degrees(tilt)
@@ -362,11 +366,11 @@ def pair_hinge(K: np.ndarray, refs: np.ndarray, arms: list[int], free: list[int]
     return float(1.0 / (lat @ C[3:, 3:] @ lat))
 
 
-def _modal_matrices(spec, frame, parts, joints, masses, rod_segments: int = 4, play=None):
+def _modal_matrices(spec, frame, parts, joints, masses, rod_segments: int = 4, play=None, layout: Layout | None = None):
     """(K, M) of the free-flight modal problem: rods in ``rod_segments`` elements, with masses."""
     from scipy.sparse import diags
 
-    mdl = build_model(spec, frame, parts, joints, rod_segments=rod_segments, masses=masses, play=play)
+    mdl = build_model(spec, frame, parts, joints, rod_segments=rod_segments, masses=masses, play=play, layout=layout)
     fe = mdl.fe
     K = fe.stiffness(sparse=True)
     M = fe.mass(sparse=True)
@@ -378,9 +382,10 @@ def _modal_matrices(spec, frame, parts, joints, masses, rod_segments: int = 4, p
     return K, M
 
 
-def _modes(spec, frame, parts, joints, masses, n: int = N_MODES, rod_segments: int = 4, play=None) -> list[float]:
+def _modes(spec, frame, parts, joints, masses, n: int = N_MODES, rod_segments: int = 4, play=None,
+           layout: Layout | None = None) -> list[float]:
     """The first n elastic natural frequencies in free flight (Hz, rounded to 0.01)."""
-    K, M = _modal_matrices(spec, frame, parts, joints, masses, rod_segments, play)
+    K, M = _modal_matrices(spec, frame, parts, joints, masses, rod_segments, play, layout)
     w2 = lowest_eigenvalues(K, M, 6 + n)
     hz = [math.sqrt(max(x, 0.0)) / (2 * math.pi) for x in w2]
     elastic = hz[6:]  # free flight: six rigid-body modes first
@@ -388,7 +393,7 @@ def _modes(spec, frame, parts, joints, masses, n: int = N_MODES, rod_segments: i
 
 
 def _no_mode_near_rotor(spec, frame, parts, joints, masses, rotor_hz: float, n: int = N_MODES, rod_segments: int = 4,
-                        play=None) -> bool:
+                        play=None, layout: Layout | None = None) -> bool:
     """True when none of the first n elastic modes (those `_modes` reports) can lie within
     MODE_WARN_BAND of ``rotor_hz``, from the count of eigenvalues of the same modal problem below
     the band's lower edge (the negative pivots of an LDL^T of K - s M, Sylvester's law of
@@ -401,7 +406,7 @@ def _no_mode_near_rotor(spec, frame, parts, joints, masses, rotor_hz: float, n: 
     edge_hz = ((1 - MODE_WARN_BAND) * rotor_hz - 0.01) * (1 - 1e-6)
     if edge_hz <= 0:
         return False
-    K, M = _modal_matrices(spec, frame, parts, joints, masses, rod_segments, play)
+    K, M = _modal_matrices(spec, frame, parts, joints, masses, rod_segments, play, layout)
     below = negative_pivots(K - (2 * math.pi * edge_hz) ** 2 * M)
     return below >= 6 + n
 

@@ -21,6 +21,7 @@ def predict(model: str, m: float, c: float, k: float, heights_cm, clearance_mm: 
     distribution, `peak_g_drop_median` and `peak_g_drop_p90` (`single_drop`), beside `peak_g`,
     the mean pulse's peak."""
     out = []
+    drops = S.draws() if scatter is not None else None  # the same simulated drops at every height
     for h in heights_cm:
         p = None
         if model == "kelvin-voigt":
@@ -34,7 +35,7 @@ def predict(model: str, m: float, c: float, k: float, heights_cm, clearance_mm: 
         row = {"height_cm": float(h), "peak_g": round(peak, 2), "x_max_mm": round(x, 3), "strikes": bool(x >= clearance_mm)}
         if scatter is not None:
             pulse = S.kv_pulse_g(m, c, k, h) if p is None else S.two_mass_pulse_g(p, h)
-            row.update(S.distribution(S.drop_peaks(pulse, h, scatter, footprint_mm or S.PAPER_FOOTPRINT_MM)))
+            row.update(S.distribution(S.drop_peaks(pulse, h, scatter, footprint_mm or S.PAPER_FOOTPRINT_MM, drops)))
         out.append(row)
     return out
 

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -139,20 +139,47 @@ def masses_g(spec, frame, parts, total_mass_g: float | None) -> dict:
     return {"rods": rods, "joints": joints, "motor_each": motor_each, "payload": max(total - fixed, 1.0), "total": total}
 
 
-def build_model(spec, frame, parts, joints: dict, *, feet: str = "sliding", rod_segments: int = 1,
-                masses: dict | None = None, only_roles: tuple[str, ...] | None = None,
-                play: dict | None = None) -> Model:
-    """The frame model. ``only_roles`` keeps only rods of those roles (and joints they touch)."""
-    if feet not in ("sliding", "pinned"):
-        raise ValueError(f"feet must be 'sliding' or 'pinned', got {feet!r}")
-    if rod_segments < 1:
-        raise ValueError(f"rod_segments must be >= 1, got {rod_segments}")
-    fe = ff.Frame3D()
-    mdl = Model(fe, "payload", joints=joints)
-    rods = {n: r for n, r in frame.rods.items() if only_roles is None or r.role in only_roles}
+@dataclass(frozen=True)
+class JointPlacement:
+    """One joint placement as the model ties it in: its part's bodies at their world reference
+    points, the rod each socket holds, and the part's super-element rotated to the placement."""
 
+    instance: str
+    part: str
+    R: np.ndarray  # the placement's rotation
+    labels: tuple[str, ...]  # the super-element's bodies: "body" (the support body) or a socket's rod label
+    refs: tuple[np.ndarray, ...]  # each body's reference point, world
+    rods: tuple[tuple[str, str] | None, ...]  # (rod, "a" or "b": its end in the socket) per body; None for "body"
+    K: np.ndarray  # the super-element in world axes (`_rotated`)
+
+
+@dataclass(frozen=True)
+class Layout:
+    """What every variant of the frame model (`build_model`: with or without play, rods in one or
+    more elements, with masses, the arms alone) shares: the rods' mouths, the motor stations on
+    the arm rods and the joint placements with their super-elements (`joints`' matrices). Made
+    once per check (`drop.Session.layout`) instead of once per model; `model_layout`."""
+
+    joints: dict  # part name -> JointStiffness the placements' K come from
+    mouths: dict  # rod -> (mouth a, mouth b)
+    stations: dict  # arm rod -> the motor station as a fraction of its span
+    placements: tuple[JointPlacement, ...]
+
+    def with_joints(self, joints: dict) -> Layout:
+        """The same layout with other joint models (the same parts: only the matrices change)."""
+        return replace(self, joints=joints, placements=tuple(
+            replace(pl, K=_rotated(pl.R, joints[pl.part].matrix)) for pl in self.placements))
+
+
+def _rotated(R: np.ndarray, K: np.ndarray) -> np.ndarray:
+    """Q^T K Q with Q = diag(R^T, ...): each 3x3 block R K_ab R^T."""
+    nb = K.shape[0] // 6
+    return np.einsum("ij,ajbk,lk->aibl", R, K.reshape(2 * nb, 3, 2 * nb, 3), R).reshape(6 * nb, 6 * nb)
+
+
+def model_layout(frame, parts, joints: dict) -> Layout:
+    """The `Layout` of the frame's model with these joint models."""
     mouths = {rn: (mouth(r, "a"), mouth(r, "b")) for rn, r in frame.rods.items()}
-
     # Motor stations on the arm rods (where the mount clips both rods).
     stations: dict[str, float] = {}
     for m in frame.motors:
@@ -161,6 +188,56 @@ def build_model(spec, frame, parts, joints: dict, *, feet: str = "sliding", rod_
             d = pb - pa
             t = float(np.dot(np.asarray(m.axis) - pa, d) / np.dot(d, d))
             stations[rn] = min(max(t, 0.05), 0.95)
+    return Layout(joints, mouths, stations, tuple(_placements(frame, parts, joints, mouths)))
+
+
+def _placements(frame, parts, joints: dict, mouths: dict) -> list[JointPlacement]:
+    """Each joint placement: its part's bodies placed at the corner, each socket matched to the rod
+    whose mouth it holds (RuntimeError when none does, or its mouth is off the socket's)."""
+    ends = _rod_ends(frame)
+    out = []
+    for part in joint_parts(parts):
+        js = joints[part.name]
+        for pl in part.placements:
+            R = _rz(pl.rotation_deg)
+            origin = np.asarray(pl.origin, float)
+            refs, rods = [], []
+            for li, lab in enumerate(js.labels):
+                ref_w = R @ np.asarray(js.refs[li]) + origin
+                refs.append(ref_w)
+                if lab == "body":
+                    rods.append(None)
+                    continue
+                sock = next(s for s in part.sockets if s.rod == lab)
+                rn = _match_rod(ends, pl.instance, R @ np.asarray(sock.port) + origin, R @ np.asarray(sock.direction))
+                tag = "a" if frame.rods[rn].a.node == pl.instance else "b"
+                off = math.dist(mouths[rn][0 if tag == "a" else 1], ref_w)
+                if off > 1e-3:
+                    raise RuntimeError(f"stiffness model: socket mouth of {rn} at {pl.instance} is off by {off:.3g} mm")
+                rods.append((rn, tag))
+            out.append(JointPlacement(pl.instance, part.name, R, tuple(js.labels), tuple(refs), tuple(rods),
+                                      _rotated(R, js.matrix)))
+    return out
+
+
+def build_model(spec, frame, parts, joints: dict, *, feet: str = "sliding", rod_segments: int = 1,
+                masses: dict | None = None, only_roles: tuple[str, ...] | None = None,
+                play: dict | None = None, layout: Layout | None = None) -> Model:
+    """The frame model. ``only_roles`` keeps only rods of those roles (and joints they touch).
+    ``layout``: the frame's `model_layout` when the caller has it (the same model, made faster;
+    with other joint models than ``joints``, their matrices are rotated again)."""
+    if feet not in ("sliding", "pinned"):
+        raise ValueError(f"feet must be 'sliding' or 'pinned', got {feet!r}")
+    if rod_segments < 1:
+        raise ValueError(f"rod_segments must be >= 1, got {rod_segments}")
+    if layout is None:
+        layout = model_layout(frame, parts, joints)
+    elif layout.joints is not joints:
+        layout = layout.with_joints(joints)
+    fe = ff.Frame3D()
+    mdl = Model(fe, "payload", joints=joints)
+    rods = {n: r for n, r in frame.rods.items() if only_roles is None or r.role in only_roles}
+    mouths, stations = layout.mouths, layout.stations
 
     for rn, r in rods.items():
         pa, pb = mouths[rn]
@@ -184,8 +261,8 @@ def build_model(spec, frame, parts, joints: dict, *, feet: str = "sliding", rod_
             fe.add_beam(f"{rn}" if len(chain) == 2 else f"{rn}#{i}", chain[i], chain[i + 1], rod_mat.e_mpa, rod_mat.g_mpa,
                         r.diameter, rho=rho_rod, group=rn)
 
-    # Joints: rotate each prototype super-element to its corner.
-    _add_joints(mdl, frame, parts, joints, rods, only_roles=only_roles, play=play)
+    # Joints: each placement's super-element, rotated to its corner.
+    _add_joints(mdl, layout.placements, rods, only_roles=only_roles, play=play)
 
     # Motors: a node at the motor axis, rigidly tied to the arm rods' stations (the clip mount).
     for m in frame.motors:
@@ -208,58 +285,37 @@ def build_model(spec, frame, parts, joints: dict, *, feet: str = "sliding", rod_
     return mdl
 
 
-def _add_joints(mdl: Model, frame, parts, joints: dict, rods: dict, *, only_roles, play) -> None:
-    """Each joint placement as its part's super-element rotated to the corner: its socket bodies
-    tied to the mouths of the rods kept (through the fit's play springs when given), a removed
-    rod's socket left free; a joint with no rod kept is left out."""
+def _add_joints(mdl: Model, placements, rods: dict, *, only_roles, play) -> None:
+    """Each joint placement (`JointPlacement`): its socket bodies tied to the mouths of the rods
+    kept (through the fit's play springs when given), a removed rod's socket left free; a joint
+    with no rod kept is left out."""
     fe = mdl.fe
-    ends = _rod_ends(frame)
-    for part in joint_parts(parts):
-        js = joints[part.name]
-        K = js.matrix
-        for pl in part.placements:
-            R = _rz(pl.rotation_deg)
-            origin = np.asarray(pl.origin, float)
-            node_names = []
-            keep = []
-            for li, lab in enumerate(js.labels):
-                ref_w = R @ np.asarray(js.refs[li]) + origin
-                if lab == "body":
-                    name = pl.instance
-                    if name not in fe.nodes:
-                        fe.add_node(name, ref_w)
-                    node_names.append(name)
-                    keep.append(li)
-                    continue
-                sock = next(s for s in part.sockets if s.rod == lab)
-                rn = _match_rod(ends, pl.instance, R @ np.asarray(sock.port) + origin, R @ np.asarray(sock.direction))
-                if rn not in rods:
-                    # rod removed (arms-only case): its socket body stays, free, on the joint
-                    name = f"{pl.instance}:{lab}:free"
+    for pl in placements:
+        node_names = []
+        for lab, ref_w, rod in zip(pl.labels, pl.refs, pl.rods):
+            if rod is None:  # the support body
+                name = pl.instance
+                if name not in fe.nodes:
                     fe.add_node(name, ref_w)
-                else:
-                    r = frame.rods[rn]
-                    tag = "a" if r.a.node == pl.instance else "b"
-                    name = mdl.rod_nodes[rn][0 if tag == "a" else 1]
-                    off = math.dist(fe.nodes[name], ref_w)
-                    if off > 1e-3:
-                        raise RuntimeError(f"stiffness model: socket mouth of {rn} at {pl.instance} is off by {off:.3g} mm")
-                    mdl.socket_refs[name] = ref_w
-                    if play and name in play:  # the fit's play: a secant spring rod end <-> socket body
-                        body = fe.add_node(f"{name}:sock", ref_w)
-                        mdl.play_slots[name] = len(fe.springs)
-                        fe.add_spring((name, body), _play_block(play[name]))
-                        name = body
-                node_names.append(name)
-                keep.append(li)
-            if only_roles is not None and not any(":free" not in n for n in node_names if n != pl.instance):
-                continue  # no rod of this joint is kept
-            nb = len(js.labels)  # Q^T K Q with Q = diag(R^T, ...): each 3x3 block R K_ab R^T
-            Kw = np.einsum("ij,ajbk,lk->aibl", R, K.reshape(2 * nb, 3, 2 * nb, 3), R).reshape(6 * nb, 6 * nb)
-            fe.add_spring(tuple(node_names), Kw)
-            mdl.joint_nodes[pl.instance] = dict(zip(js.labels, node_names))
-            mdl.instance_part[pl.instance] = part.name
-            mdl.instance_rot[pl.instance] = R
+            elif rod[0] not in rods:
+                # rod removed (arms-only case): its socket body stays, free, on the joint
+                name = fe.add_node(f"{pl.instance}:{lab}:free", ref_w)
+            else:
+                rn, tag = rod
+                name = mdl.rod_nodes[rn][0 if tag == "a" else 1]
+                mdl.socket_refs[name] = ref_w
+                if play and name in play:  # the fit's play: a secant spring rod end <-> socket body
+                    body = fe.add_node(f"{name}:sock", ref_w)
+                    mdl.play_slots[name] = len(fe.springs)
+                    fe.add_spring((name, body), _play_block(play[name]))
+                    name = body
+            node_names.append(name)
+        if only_roles is not None and not any(":free" not in n for n in node_names if n != pl.instance):
+            continue  # no rod of this joint is kept
+        fe.add_spring(tuple(node_names), pl.K)
+        mdl.joint_nodes[pl.instance] = dict(zip(pl.labels, node_names))
+        mdl.instance_part[pl.instance] = pl.part
+        mdl.instance_rot[pl.instance] = pl.R
 
 
 def _play_block(p: np.ndarray) -> np.ndarray:
@@ -415,7 +471,8 @@ def play_springs(spec, frame, parts, joints, design_force_n: float, iterations: 
     return _play(spec, frame, parts, joints, design_force_n, iterations)[0]
 
 
-def _play(spec, frame, parts, joints, design_force_n: float, iterations: int = 3) -> tuple[dict, Model | None]:
+def _play(spec, frame, parts, joints, design_force_n: float, iterations: int = 3,
+          layout: Layout | None = None) -> tuple[dict, Model | None]:
     """(`play_springs`, the frame model built with them), the model None without play.
 
     One build: the first iteration solves the model without play, which `add_play` then turns
@@ -426,7 +483,7 @@ def _play(spec, frame, parts, joints, design_force_n: float, iterations: int = 3
     if g <= 0 or design_force_n <= 0:
         return {}, None
     play: dict = {}
-    mdl = build_model(spec, frame, parts, joints)  # first without play, then with it (add_play)
+    mdl = build_model(spec, frame, parts, joints, layout=layout)  # first without play, then with it (add_play)
     T = None  # socket frames of the rod ends: fixed by the geometry
     for _ in range(iterations):
         if play and not mdl.play_slots:
@@ -567,11 +624,13 @@ class SecantSolution:
     u: np.ndarray
 
 
-def secant_solution(spec, frame, parts, joints) -> SecantSolution:
-    play, _ = _play(spec, frame, parts, joints, PLAY_REFERENCE_N)
+def secant_solution(spec, frame, parts, joints, layout: Layout | None = None) -> SecantSolution:
+    """``layout``: the frame's `model_layout` with ``joints`` when the caller has it."""
+    layout = layout if layout is not None else model_layout(frame, parts, joints)
+    play, _ = _play(spec, frame, parts, joints, PLAY_REFERENCE_N, layout=layout)
     # the model built afresh with the final play springs, as the load cases build it from the
     # cached springs: the same assembly, so k has the same bits whether or not the cache held it
-    mdl = build_model(spec, frame, parts, joints, play=play or None)
+    mdl = build_model(spec, frame, parts, joints, play=play or None, layout=layout)
     K0 = mdl.fe.stiffness(sparse=True)
     mdl, _, u = _solve_payload(spec, frame, parts, joints, play=play or None, mdl=mdl, K0=K0)
     d = -u[_dof(mdl.fe, mdl.payload, 2)]
