@@ -306,23 +306,49 @@ def solve(K, f: np.ndarray, fixed: np.ndarray) -> np.ndarray:
     if isinstance(K, np.ndarray):
         u[free] = np.linalg.solve(K[np.ix_(free, free)], f[free])
         return u
-    Kff = K.tocsc()[free][:, free]
-    u[free] = factor(Kff).solve(f[free])
+    u[free] = factor(K, free).solve(f[free])
     return u
 
 
-def factor(A):
-    """Factors of a symmetric positive definite sparse matrix (a stiffness, K - sigma M) with a
-    ``solve(b)``: qdldl's LDL^T (approximate minimum degree order, no pivoting, which a positive
-    definite matrix never needs; 2x faster to factor and 4x to solve than SuperLU here), or
-    SuperLU (`sparse_lu`) when qdldl meets a zero pivot (a matrix that is not definite)."""
+def factor(A, keep: np.ndarray | None = None):
+    """Factors of a symmetric positive definite sparse matrix (a stiffness, K - sigma M), or of
+    its rows and columns `keep` (bool mask) when given, with a ``solve(b)``: qdldl's LDL^T
+    (approximate minimum degree order, no pivoting, which a positive definite matrix never needs;
+    2x faster to factor and 4x to solve than SuperLU here), or SuperLU (`sparse_lu`) when qdldl
+    meets a zero pivot (a matrix that is not definite)."""
     import qdldl
 
     A = A.tocsc()
     try:
-        return qdldl.Solver(A)
+        return qdldl.Solver(upper_triangle(A, keep), upper=True)
     except RuntimeError:
-        return sparse_lu(A)
+        return sparse_lu(A if keep is None else A[keep][:, keep])
+
+
+def upper_triangle(A, keep: np.ndarray | None = None):
+    """The upper triangle, diagonal included, of the sparse A (of its rows and columns `keep`, a
+    bool mask, when given) in canonical CSC: what qdldl factors (it takes the triangle itself
+    from a whole matrix with `scipy.sparse.triu`). The same arrays as
+    ``triu(A[keep][:, keep], format="csc")``, in one pass over A's entries instead of three."""
+    from scipy.sparse import csc_matrix
+
+    A = A.tocsc()
+    if not A.has_canonical_format:
+        A = A.copy()
+        A.sum_duplicates()
+    n = A.shape[0]
+    rows = A.indices
+    cols = np.repeat(np.arange(n, dtype=rows.dtype), np.diff(A.indptr))
+    take = rows <= cols
+    if keep is not None:
+        take &= keep[rows] & keep[cols]
+        new = (np.cumsum(keep) - 1).astype(rows.dtype)  # old DOF -> its index among those kept
+        rows, cols, n = new[rows[take]], new[cols[take]], int(np.count_nonzero(keep))
+    else:
+        rows, cols = rows[take], cols[take]
+    indptr = np.zeros(n + 1, dtype=A.indptr.dtype)
+    np.cumsum(np.bincount(cols, minlength=n), out=indptr[1:])
+    return csc_matrix((A.data[take], rows, indptr), shape=(n, n))
 
 
 def negative_pivots(A) -> int:
@@ -332,7 +358,7 @@ def negative_pivots(A) -> int:
     import qdldl
 
     try:
-        d = qdldl.Solver(A.tocsc()).factors()[1]
+        d = qdldl.Solver(upper_triangle(A), upper=True).factors()[1]
     except RuntimeError:
         return -1
     return int(np.count_nonzero(d < 0))
@@ -420,16 +446,17 @@ def lowest_eigenvalues(K, M, count: int) -> np.ndarray:
     want = count + MODES_EXTRA
     if n <= max(200, 3 * want):
         return _dense_lowest(K, M, count)
-    from scipy.sparse.linalg import ArpackNoConvergence, LinearOperator, eigsh
+    from scipy.sparse.linalg import ArpackNoConvergence, eigsh
 
     sigma = _shift(K, M)
     lu = factor(K - sigma * M)
-    op = LinearOperator(K.shape, matvec=lambda x: lu.solve(np.ravel(x)), dtype=float)
+    M = M.tocsc()
     v0 = np.random.default_rng(0).standard_normal(n)  # deterministic, and no symmetry of the frame
     try:
         # tol: Ritz values to 1e-10 relative (the modes are reported to 0.01 Hz; 0 = machine
         # precision costs ~15 % more iterations for nothing the conditioning (~1e-8) keeps)
-        w = eigsh(K, k=want, M=M, sigma=sigma, OPinv=op, which="LM", v0=v0, tol=1e-10, return_eigenvectors=False)
+        w = eigsh(K, k=want, M=_vector_operator(M.__matmul__, n), sigma=sigma, OPinv=_vector_operator(lu.solve, n),
+                  which="LM", v0=v0, tol=1e-10, return_eigenvectors=False)
     except ArpackNoConvergence:
         return _dense_lowest(K, M, count)
     w = np.sort(w)
@@ -439,6 +466,21 @@ def lowest_eigenvalues(K, M, count: int) -> np.ndarray:
     if j is None or _count_below(K, M, 0.5 * (w[j - 1] + w[j])) != j:
         return _dense_lowest(K, M, count)
     return w[:count]
+
+
+def _vector_operator(apply, n: int):
+    """A square LinearOperator of ``apply(x)`` for ARPACK's vectors (1-D, float) whose ``matvec``
+    calls ``apply`` directly: LinearOperator's own shape handling round it costs as much as a
+    solve with the factors here, and ARPACK calls the two operators ~250 times a solve."""
+    from scipy.sparse.linalg import LinearOperator
+
+    class VectorOperator(LinearOperator):
+        def _matvec(self, x):
+            return apply(np.ravel(x))
+
+        matvec = _matvec
+
+    return VectorOperator(np.dtype(float), (n, n))
 
 
 def _shift(K, M) -> float:
