@@ -259,18 +259,26 @@ def drop_peaks(pulse_g: np.ndarray, height_cm: float, scatter: Scatter, footprin
     env = np.abs(np.asarray(logger, float))
     lo = np.searchsorted(grid, np.arange(n_samples) / rate_hz - tj.max(), side="right") - 1
     hi = np.searchsorted(grid, (np.arange(n_samples) + 1) / rate_hz, side="left") + 1
-    bound = np.array([env[max(a, 0):min(b, len(env) - 1) + 1].max(initial=0.0) for a, b in zip(lo, hi)])
+    bound = _window_max(env, np.maximum(lo, 0), np.minimum(hi, len(env) - 1))
     order = np.argsort(-bound, kind="stable")
     for first in range(0, n_samples, _SAMPLES_AT_ONCE):
         chunk = order[first:first + _SAMPLES_AT_ONCE]
         if bound[chunk[0]] < peak.min():
             break
         drop, sample = np.nonzero(peak[:, None] < bound[chunk][None, :])  # the (drop, sample) pairs to read
-        ts = (chunk[sample] + d.phase[drop]) / rate_hz
-        t = ts[:, None] - tj[drop]  # (pair, foot): time since that foot landed
+        ts = (chunk[sample] + d.phase.take(drop)) / rate_hz
+        t = ts[:, None] - tj.take(drop, axis=0)  # (pair, foot): time since that foot landed
         a = interp_uniform(t, dt, logger).mean(axis=1)  # a quarter of the frame per foot
         np.maximum.at(peak, drop, np.abs(a))
     return peak
+
+
+def _window_max(v: np.ndarray, first: np.ndarray, last: np.ndarray) -> np.ndarray:
+    """max(v[first[i]:last[i] + 1], initial=0) for each i (v >= 0): all windows at once, as rows
+    of the widest one, the points past each window's end masked."""
+    width = int(max((last - first).max(initial=-1) + 1, 1))
+    rows = np.lib.stride_tricks.sliding_window_view(np.concatenate([v, np.zeros(width)]), width)[first]
+    return np.where(np.arange(width) <= (last - first)[:, None], rows, 0.0).max(axis=1)
 
 
 def interp_uniform(t: np.ndarray, dt: float, values: np.ndarray) -> np.ndarray:
