@@ -255,15 +255,18 @@ def flow_vitamin(spec: Spec, frame: Frame) -> Vitamin | None:
                    view=(_t(apex), (0.0, 0.0, -1.0), 21.0))  # PMW3901: 42 deg field of view
 
 
-def fastener_vitamins(spec: Spec, frame: Frame, parts=None) -> list[Vitamin]:
-    """Every screw, nut and standoff of the design (fasteners.py), drawn (`fastener_vitamin`)."""
-    from .fasteners import fasteners
+def fastener_vitamins(spec: Spec, frame: Frame, parts=None, fasteners=None) -> list[Vitamin]:
+    """Every screw, nut and standoff of the design (fasteners.py), drawn (`fastener_vitamin`);
+    `fasteners`: `fasteners.fasteners` of the design when the caller has it."""
+    if fasteners is None:
+        from .fasteners import fasteners as fasteners_of
 
-    if parts is None:
-        from . import partlist
+        if parts is None:
+            from . import partlist
 
-        parts = partlist.part_list(spec, frame)
-    return [fastener_vitamin(f) for f in fasteners(spec, frame, parts)]
+            parts = partlist.part_list(spec, frame)
+        fasteners = fasteners_of(spec, frame, parts)
+    return [fastener_vitamin(f) for f in fasteners]
 
 
 def fastener_vitamin(f) -> Vitamin:
@@ -303,16 +306,17 @@ def thread_pairs(spec: Spec, frame: Frame, parts=None) -> frozenset:
     return frozenset(out)
 
 
-def vitamins(spec: Spec, frame: Frame, parts=None) -> tuple[Vitamin, ...]:
+def vitamins(spec: Spec, frame: Frame, parts=None, fasteners=None) -> tuple[Vitamin, ...]:
     """Every bought part drawn in the assembly, in a stable order; `parts`: the design's part list
-    when the caller has it (the screws sit in its holes), else made here."""
+    when the caller has it (the screws sit in its holes), else made here; `fasteners`: its
+    `fasteners.fasteners` when the caller has them."""
     out = motor_vitamins(spec, frame)
     out.append(battery_vitamin(spec, frame))
     out += stack_vitamins(spec, frame)
     for v in (computer_vitamin(spec, frame), camera_vitamin(spec, frame), flow_vitamin(spec, frame)):
         if v is not None:
             out.append(v)
-    out += fastener_vitamins(spec, frame, parts)
+    out += fastener_vitamins(spec, frame, parts, fasteners)
     return tuple(out)
 
 

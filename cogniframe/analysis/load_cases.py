@@ -172,11 +172,12 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
                                (False, numfmt.sig(x["margin"], numfmt.CHECK_FIGURES), x["rod"]))}
 
     # 6. TPU strain at the design drop
-    strain = _strain(frame, parts, mdl, u * scale, TPU_ELONGATION_AT_BREAK, interface(spec), hinged_socket, hinge_geometry)
+    knees = knee_hinges(parts, hinged_socket, hinge_geometry)
+    strain = _strain(frame, mdl, u * scale, TPU_ELONGATION_AT_BREAK, interface(spec), knees)
 
     # 7. what each part carries per newton of payload force: the survival sweep scales it
-    per_n = survival_influence(spec, frame, parts, mdl, u / DEFAULT_LOAD_N, {x["rod"]: x["euler_n"] for x in rods_out},
-                               interface(spec), hinged_socket, hinge_geometry)
+    per_n = survival_influence(spec, frame, mdl, u / DEFAULT_LOAD_N, {x["rod"]: x["euler_n"] for x in rods_out},
+                               interface(spec), knees)
 
     jinfo = {name: {"method": js.method, "dofs": js.n_dofs} for name, js in joints.items()}  # no timings: byte-stable output
     return LoadCases(k, joint_model, TPU_PRINTED_MODULUS_FACTOR, wall["k_lateral_n_per_m"], wall, thrust, tuple(hz), n_rot, near,
@@ -411,21 +412,32 @@ def _no_mode_near_rotor(spec, frame, parts, joints, masses, rotor_hz: float, n: 
     return below >= 6 + n
 
 
-def _joint_strains(frame, parts, mdl: Model, u: np.ndarray, itf, hinged_socket, hinge_geometry):
+def knee_hinges(parts, hinged_socket, hinge_geometry) -> dict[str, tuple[str, float, float]]:
+    """Per hinged joint part (the knee, knee_mirrored): (its hinged leg's socket label, the living
+    hinge's web length and thickness, mm), what `_joint_strains` reads for each of its instances."""
+    out = {}
+    for p in joint_parts(parts):
+        leg = hinged_socket(p)
+        if leg is not None:
+            l_web, _, t_web = hinge_geometry(p)
+            out[p.name] = (p.sockets[leg].rod, l_web, t_web)
+    return out
+
+
+def _joint_strains(frame, mdl: Model, u: np.ndarray, itf, knees: dict):
     """TPU strains for displacements u: ({knee instance: hinge strain}, [(joint instance, rod
     socket label, socket strain)]). The hinge: all the relative rotation of the hinged leg against
     the arms in the web (an upper bound); the sockets: the super-element's force on each rod body
     as bearing over the socket depth."""
     fe = mdl.fe
     idx = fe.index()
-    knees = {p.name: p for p in joint_parts(parts) if hinged_socket(p) is not None}  # knee (and knee_mirrored)
     hinge: dict[str, float] = {}
     for inst, labs in mdl.joint_nodes.items():
-        knee_part = knees.get(mdl.instance_part[inst])
-        if knee_part is None:
+        knee = knees.get(mdl.instance_part[inst])  # knee (and knee_mirrored): `knee_hinges`
+        if knee is None:
             continue
-        l_web, _, t_web = hinge_geometry(knee_part)
-        leg = labs[knee_part.sockets[hinged_socket(knee_part)].rod]
+        leg_label, l_web, t_web = knee
+        leg = labs[leg_label]
         arms = [n for l, n in labs.items() if "arm" in l]
         th_leg = u[6 * idx[leg] + 3:6 * idx[leg] + 6]
         th_arm = np.mean([u[6 * idx[n] + 3:6 * idx[n] + 6] for n in arms], axis=0)
@@ -439,10 +451,10 @@ def _joint_strains(frame, parts, mdl: Model, u: np.ndarray, itf, hinged_socket, 
     return hinge, [(e.node, rn, float(x)) for e, rn, x in zip(sl.ends, sl.rods, eps)]
 
 
-def _strain(frame, parts, mdl: Model, u: np.ndarray, eps_break: float, itf, hinged_socket, hinge_geometry) -> dict:
+def _strain(frame, mdl: Model, u: np.ndarray, eps_break: float, itf, knees: dict) -> dict:
     """Peak TPU strain at the design drop: the knee hinge (all the relative rotation of the hinged
     leg against the arms in the web, an upper bound) and the sockets (interface bearing)."""
-    hinge, socks = _joint_strains(frame, parts, mdl, u, itf, hinged_socket, hinge_geometry)
+    hinge, socks = _joint_strains(frame, mdl, u, itf, knees)
     eps_h = max(hinge.values(), default=0.0)
     eps_s = max((x for _, _, x in socks), default=0.0)
     # symmetric sockets tie (to round-off): the first by name
@@ -451,8 +463,7 @@ def _strain(frame, parts, mdl: Model, u: np.ndarray, eps_break: float, itf, hing
             "peak": round(max(eps_h, eps_s), 4), "ratio_to_break": round(max(eps_h, eps_s) / eps_break, 4)}
 
 
-def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: dict, itf, hinged_socket,
-                       hinge_geometry) -> dict:
+def survival_influence(spec, frame, mdl: Model, u: np.ndarray, euler_n: dict, itf, knees: dict) -> dict:
     """What each part carries per newton of payload force (u: the payload case per newton), for
     the survival sweep (analysis/survival.py), which scales it by the force of each drop:
 
@@ -489,7 +500,7 @@ def survival_influence(spec, frame, parts, mdl: Model, u: np.ndarray, euler_n: d
                                       "euler_n": euler_n.get(b.group)})
         r["stress_mpa_per_n"] = max(r["stress_mpa_per_n"], sig)
         r["axial_n_per_n"] = min(r["axial_n_per_n"], float(-f[0]))  # tension positive (end 1's force is -N)
-    hinge, socks = _joint_strains(frame, parts, mdl, u, itf, hinged_socket, hinge_geometry)
+    hinge, socks = _joint_strains(frame, mdl, u, itf, knees)
     joints: dict[str, dict] = {}
     for inst, x in sorted(hinge.items()):
         part = mdl.instance_part[inst]

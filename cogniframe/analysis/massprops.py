@@ -171,15 +171,16 @@ def combine(bodies, source: str) -> MassProps:
 
 # -- the aircraft -----------------------------------------------------------------------------
 
-def _vitamin_bodies(spec, frame, budget, parts) -> tuple[list, set[str]]:
+def _vitamin_bodies(spec, frame, budget, parts, fasteners=None) -> tuple[list, set[str]]:
     """Bodies of the bought parts drawn in the assembly (vitamins.py): each vitamin carries its
     budget line's mass (spread over the vitamins that share the line by their volume), each
     primitive its share by volume. Propellers as spinning bars (`propeller`). Returns the bodies
-    and the budget lines they used. `parts`: the design's part list (the screws sit in its holes)."""
+    and the budget lines they used. `parts`: the design's part list (the screws sit in its holes);
+    `fasteners`: its `fasteners.fasteners` when the caller has them."""
     from ..vitamins import vitamins
 
     lines = {i.name: i for i in budget.items}
-    vits = [v for v in vitamins(spec, frame, parts) if v.budget_line in lines]
+    vits = [v for v in vitamins(spec, frame, parts, fasteners) if v.budget_line in lines]
     by_line: dict[str, list] = {}
     for v in vits:
         by_line.setdefault(v.budget_line, []).append(v)
@@ -229,9 +230,9 @@ def _rest_bodies(frame, budget, used: set[str], printed: set[str]) -> list:
             if i.name not in used and i.name not in printed and not i.name.startswith("rod ")]
 
 
-def estimate(spec, design, budget) -> MassProps:
+def estimate(spec, design, budget, fasteners=None) -> MassProps:
     """From the part list's estimates (no CAD): `check --json`'s `flight.cg_mm` and
-    `flight.inertia_kg_m2`."""
+    `flight.inertia_kg_m2`. `fasteners`: the design's `fasteners.fasteners` when the caller has them."""
     frame = design.frame
 
     def copies(p, each):
@@ -240,7 +241,7 @@ def estimate(spec, design, budget) -> MassProps:
             return [box(p.name, each, core_box.centre, core_box.size) for _ in p.placements]
         return [point(p.name, each, pl.origin) for pl in p.placements]
 
-    return _combined(spec, design, budget, copies, "estimate")
+    return _combined(spec, design, budget, copies, "estimate", fasteners)
 
 
 def from_solids(spec, design, budget, solids) -> MassProps:
@@ -255,13 +256,13 @@ def from_solids(spec, design, budget, solids) -> MassProps:
     return _combined(spec, design, budget, copies, "cad")
 
 
-def _combined(spec, design, budget, copies, source: str) -> MassProps:
+def _combined(spec, design, budget, copies, source: str, fasteners=None) -> MassProps:
     """Rods, bought parts, every copy of every printed part (`copies(part, grams each)`) and the
     budget's remaining lines, combined: the two sources differ only in how a printed part's copies
     are modelled."""
     frame = design.frame
     bodies = _rod_bodies(frame, budget)
-    vit, used = _vitamin_bodies(spec, frame, budget, design.parts)
+    vit, used = _vitamin_bodies(spec, frame, budget, design.parts, fasteners)
     bodies += vit
     items = {i.name: i for i in budget.items}
     for p in design.parts:

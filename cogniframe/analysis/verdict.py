@@ -75,29 +75,33 @@ def complete(spec: Spec, d: Derived, budget: mass_mod.MassBudget, drop, session=
         stiffness, peak = _physics(spec, d, budget, drop, session, peaks or spec.requirements.max_peak_g is not None, modes)
     from . import flight as flight_mod
 
+    from ..fasteners import fasteners
+
     flight = flight_mod.evaluate(spec, budget.total_g)
     surv = _survival(spec, d.frame, budget, drop, stiffness, survival_margins)
-    fit = fit_of(spec, d)
+    screws = fasteners(spec, d.frame, d.parts)  # the fit check's and the mass properties'
+    fit = fit_of(spec, d, screws)
     # the survival sweep informs (the report warns when a part fails below the design drop); the
     # PASS/FAIL stays with the requirements' own checks
     problems = (_problems(spec, budget, drop) + _physics_problems(spec, stiffness, peak) + _aircraft_problems(spec, flight)
                 + fit.messages())
     # the mass properties and resonance flags the flight files are written from: a flagged mode
     # WARNs, never FAILs
-    model, warn = _flight_model(spec, d, budget, stiffness)
+    model, warn = _flight_model(spec, d, budget, stiffness, screws)
     return Findings(d, budget, drop, tuple(problems), stiffness, peak, flight, survival=surv, notes=tuple(_notes(spec, d, session)),
                        fit=fit, flight_model=model, warnings=warn)
 
 
-def _flight_model(spec: Spec, design: Derived, budget, stiffness: dict | None) -> tuple[dict, tuple[str, ...]]:
+def _flight_model(spec: Spec, design: Derived, budget, stiffness: dict | None, fasteners=None) -> tuple[dict, tuple[str, ...]]:
     """What `check` adds to its `flight` section: (cg_mm, inertia_kg_m2 and the resonance flags from
     the estimates and `stiffness.modes_hz`; the warnings of flagged modes: WARN, not FAIL). No flags
     when the flight tables have no entry for the motor (the flight files need one; `check` does not).
-    The flight files (`cogniframe.flight`) are written from the same figures, a floor above."""
+    The flight files (`cogniframe.flight`) are written from the same figures, a floor above.
+    `fasteners`: the design's `fasteners.fasteners` when the caller has them."""
     from ..errors import UserError
     from . import massprops, resonance, rotors
 
-    mp = massprops.estimate(spec, design, budget)
+    mp = massprops.estimate(spec, design, budget, fasteners)
     out = {"cg_mm": [round(c, 3) + 0.0 for c in mp.cg_mm],
            "inertia_kg_m2": [[float(f"{x:.6g}") + 0.0 for x in row] for row in mp.inertia_kg_m2]}
     try:
@@ -118,13 +122,17 @@ def _flight_model(spec: Spec, design: Derived, budget, stiffness: dict | None) -
     return out, tuple(notes)
 
 
-def fit_of(spec: Spec, d: Derived):
+def fit_of(spec: Spec, d: Derived, fasteners=None):
     """The fit check of the design (analysis/fit_check.py): screws through their holes into their
-    threads, holes clear of the rods, motor holes on the motor's pattern."""
-    from ..fasteners import fasteners
+    threads, holes clear of the rods, motor holes on the motor's pattern. `fasteners`: the
+    design's `fasteners.fasteners` when the caller has them."""
     from . import fit_check
 
-    return fit_check.check(spec, d.parts, fasteners(spec, d.frame, d.parts))
+    if fasteners is None:
+        from ..fasteners import fasteners as fasteners_of
+
+        fasteners = fasteners_of(spec, d.frame, d.parts)
+    return fit_check.check(spec, d.parts, fasteners)
 
 
 def _notes(spec: Spec, d: Derived, session=None) -> list[str]:
