@@ -63,7 +63,33 @@ def sig(x: float, digits: int = CHECK_FIGURES) -> float:
 def figures(obj, digits: int = CHECK_FIGURES):
     """A copy of a JSON-able tree (dicts, lists, tuples, scalars) with every float rounded to
     `digits` significant digits; ints, bools, strings and None unchanged. numpy floats count as
-    floats (and come back as Python floats)."""
+    floats (and come back as Python floats).
+
+    The plain types (float, dict, list, tuple, str, int, bool, None) go by their exact type, in
+    half the time of the isinstance tests (a check's tree has ~1500 floats); every other node
+    (subclasses, numpy scalars) by `_figures`, the same rules."""
+    spec = f".{digits}g"
+    isfinite = math.isfinite
+
+    def walk(o):
+        t = type(o)
+        if t is float:  # `sig`, inline
+            if o == 0:
+                return o + 0.0
+            return float(format(o, spec)) + 0.0 if isfinite(o) else o
+        if t is dict:
+            return {k: walk(v) for k, v in o.items()}
+        if t is list or t is tuple:
+            return [walk(v) for v in o]
+        if t is str or t is int or t is bool or o is None:
+            return o
+        return _figures(o, digits)
+
+    return walk(obj)
+
+
+def _figures(obj, digits: int):
+    """`figures` of any node, by isinstance."""
     if isinstance(obj, bool) or obj is None or isinstance(obj, (int, str)):
         return obj
     if isinstance(obj, (float, np.floating)):
