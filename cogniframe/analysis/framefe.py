@@ -337,12 +337,14 @@ def upper_triangle(A, keep: np.ndarray | None = None):
         A = A.copy()
         A.sum_duplicates()
     n = A.shape[0]
+    counts = np.diff(A.indptr)
     rows = A.indices
-    cols = np.repeat(np.arange(n, dtype=rows.dtype), np.diff(A.indptr))
+    cols = np.repeat(np.arange(n, dtype=rows.dtype), counts)
     take = rows <= cols
     if keep is not None:
-        take &= keep[rows] & keep[cols]
-        new = (np.cumsum(keep) - 1).astype(rows.dtype)  # old DOF -> its index among those kept
+        take &= np.repeat(keep, counts)
+        take &= keep[rows]
+        new = np.cumsum(keep, dtype=rows.dtype) - 1  # old DOF -> its index among those kept
         rows, cols, n = new[rows[take]], new[cols[take]], int(np.count_nonzero(keep))
     else:
         rows, cols = rows[take], cols[take]

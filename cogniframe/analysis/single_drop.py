@@ -285,16 +285,20 @@ def interp_uniform(t: np.ndarray, dt: float, values: np.ndarray) -> np.ndarray:
     """`np.interp(t, np.arange(n) * dt, values, left=0.0, right=0.0)`, the same numbers, for the
     grid's equal steps: each t's cell from t / dt (one cell either way where that quotient rounds
     across a grid point) instead of a search, then numpy's own formula on it,
-    slope[j] (t - grid[j]) + values[j]."""
+    slope[j] (t - grid[j]) + values[j]. A grid point is computed as the grid is, j dt (j as a
+    float), not looked up."""
     values = np.asarray(values, float)
     n = len(values)
     grid = np.arange(n) * dt
     slopes = (values[1:] - values[:-1]) / (grid[1:] - grid[:-1])
     with np.errstate(invalid="ignore"):
         j = np.clip(np.floor(t / dt), 0, n - 2).astype(np.intp)
-    j += (t >= grid[np.minimum(j + 1, n - 1)]) & (j < n - 2)
-    j -= (t < grid[j]) & (j > 0)
-    out = slopes[j] * (t - grid[j]) + values[j]
+    j += (t >= (j + 1) * dt) & (j < n - 2)
+    j -= (t < j * dt) & (j > 0)
+    out = j * dt  # in place from here: slopes[j] (t - j dt) + values[j]
+    np.subtract(t, out, out=out)
+    out *= slopes.take(j)
+    out += values.take(j)
     out[(t < grid[0]) | (t > grid[-1])] = 0.0
     out[t == grid[-1]] = values[-1]
     return out
