@@ -21,7 +21,13 @@ from .spec import Spec
 
 def part_list(spec: Spec, frame: Frame) -> tuple[PartSpec, ...]:
     """All distinct printed parts of the design, in a stable order (the registry's, then each plan's)."""
-    return tuple(_with_digest(p) for family in registry.FAMILIES for p in family.plan(spec, frame))
+    planned: list[PartSpec] = []
+    for family in registry.FAMILIES:
+        if getattr(family, "PLANS_FROM_EARLIER", False):  # placed from earlier families' parts (registry.py)
+            planned += family.plan(spec, frame, tuple(planned))
+        else:
+            planned += family.plan(spec, frame)
+    return tuple(_with_digest(p) for p in planned)
 
 
 def infill_by_material(parts) -> dict[str, float]:

@@ -28,7 +28,7 @@ from ..parts.joint_solid import Built
 from ..spec import Spec
 from ..parts.record import Estimate, HardwareLine, PartSpec, Placement
 from .base import plate_estimate, rounded
-from .joint_kinds.kinds import core_link, kind_of
+from .joint_kinds.kinds import core_link, kind_of, node_of
 
 NAME = "core_plate"
 SIZE_KEY = "core.plate_size"
@@ -70,11 +70,17 @@ LEVEL_TOL = 1e-5  # mm: a tube's axis level and flush as planned (sockets and pl
 FUZZ = 1e-4
 
 
-def plan(spec: Spec, frame: Frame) -> tuple[PartSpec, ...]:
-    return (_core_plate(spec, frame),)
+PLANS_FROM_EARLIER = True  # its peg tubes are placed from the joint family's core links (registry.py)
 
 
-def _core_plate(spec: Spec, frame: Frame) -> PartSpec:
+def plan(spec: Spec, frame: Frame, earlier=None) -> tuple[PartSpec, ...]:
+    """The core plate; `earlier`: the parts planned before it (`PLANS_FROM_EARLIER`), whose core
+    links place its peg tubes, else those links are planned here."""
+    links = None if earlier is None else tuple(p for p in earlier if p.family == "joint" and node_of(p) == "core_link")
+    return (_core_plate(spec, frame, links),)
+
+
+def _core_plate(spec: Spec, frame: Frame, links=None) -> PartSpec:
     c = spec.core
     pitch, _ = STACK_PATTERNS[c.stack_pattern]
     screw = SCREWS[c.stack_screw]
@@ -83,7 +89,7 @@ def _core_plate(spec: Spec, frame: Frame) -> PartSpec:
     est = plate_estimate(c.plate_size, c.plate_size, c.plate_thickness, [screw.clearance_d] * len(holes))
     params: list[tuple[str, object]] = [("size", c.plate_size), ("thickness", c.plate_thickness), ("holes", tuple(holes)),
                                         ("hole_d", screw.clearance_d)]
-    tubes, bore = peg_tubes(spec, frame)
+    tubes, bore = peg_tubes(spec, frame, links)
     if tubes:
         r_out = bore / 2 + PEG_TUBE_WALL
         outline, ribs = pegged_layout(tubes, r_out, holes)
@@ -224,18 +230,21 @@ def stack_plan(spec: Spec, frame: Frame) -> StackPlan:
 
 # -- the pegs' tubes (core.link: pegs) -----------------------------------------------------------
 
-def peg_tubes(spec: Spec, frame: Frame) -> tuple[tuple[tuple, tuple], float]:
+def peg_tubes(spec: Spec, frame: Frame, links=None) -> tuple[tuple[tuple, tuple], float]:
     """((inner end, outer end) of each tube's axis in the plate's local frame, ...), the bore (mm):
     one tube per peg of every placed core link, coaxial with it and as long (its kind's `peg_axes`:
     parts/peg_plan.py's, of the joint family's own link parts, through each copy's placement);
-    none, bore 0, for a link without pegs."""
-    from .joint import core_links
+    none, bore 0, for a link without pegs. `links`: the joint family's core link parts
+    (`joint.core_links`) when the caller has them."""
+    if links is None:
+        from .joint import core_links
 
+        links = core_links(spec, frame)
     centre = np.asarray(frame.core.plate.centre, float)
     top = spec.core.plate_thickness / 2
     tubes = []
     radii = set()
-    for link in core_links(spec, frame):
+    for link in links:
         axes = kind_of(link).peg_axes(link)
         for pl in link.placements:
             m = pl.matrix()

@@ -2,7 +2,9 @@
 
 A family module provides `NAME`, `SIZE_KEY` (the params key that drives its size, for "does not
 fit the bed" errors), `DOC`, `plan(spec, frame)` (its parts, none when the design has no such
-part), `solid(part)` (a `parts.joint_solid.Built`: the solid in print orientation, bed at z = 0, and the
+part; a family placed from an earlier family's parts says so with `PLANS_FROM_EARLIER = True`,
+and `partlist.part_list` then gives it the parts planned before it, `plan(spec, frame, earlier)`:
+the core plate's peg tubes come from the joint family's core links, not planned again), `solid(part)` (a `parts.joint_solid.Built`: the solid in print orientation, bed at z = 0, and the
 4x4 print <- local transform) and `print_from_local(part)` (the transform alone, no CAD import).
 Adding a family: its module, one line in `FAMILIES`, and its params section in spec.py.
 """
