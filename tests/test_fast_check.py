@@ -17,12 +17,16 @@ import pytest
 
 import design_space
 from cogniframe import frame as frame_mod
+from cogniframe import numfmt
 from cogniframe.errors import UserError
 from cogniframe import spec as spec_mod
+from cogniframe.analysis import drop as drop_mod
+from cogniframe.analysis import framefe as ff
 from cogniframe.analysis import impact as I
 from cogniframe.analysis import single_drop as S
+from cogniframe.analysis import stiffness as st
 from cogniframe.analysis.joints import mirror
-from cogniframe.families import joint
+from cogniframe.families import core_plate, joint
 from cogniframe.parts import peg_plan
 
 
@@ -82,6 +86,58 @@ def drop_peaks_every_sample(pulse_g, height_cm, scatter, footprint_mm=S.PAPER_FO
     t = ts[:, None, :] - tj[:, :, None]
     a = np.interp(t, np.arange(len(logger)) * dt, logger, left=0.0, right=0.0).mean(axis=1)
     return np.abs(a).max(axis=1)
+
+
+def figures_by_isinstance(obj, digits=numfmt.CHECK_FIGURES):
+    """Every node by isinstance: floats (numpy's too) to `digits` significant digits."""
+    if isinstance(obj, bool) or obj is None or isinstance(obj, (int, str)):
+        return obj
+    if isinstance(obj, (float, np.floating)):
+        return numfmt.sig(float(obj), digits)
+    if isinstance(obj, dict):
+        return {k: figures_by_isinstance(v, digits) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [figures_by_isinstance(v, digits) for v in obj]
+    return obj
+
+
+def triu_of_the_kept(A, keep=None):
+    """scipy's own: the rows, then the columns kept, then `triu`."""
+    from scipy.sparse import triu
+
+    A = A.tocsc()
+    return triu(A if keep is None else A[keep][:, keep], format="csc")
+
+
+def linear_operator(apply, n):
+    """scipy's LinearOperator round a function of vectors."""
+    from scipy.sparse.linalg import LinearOperator
+
+    return LinearOperator((n, n), matvec=lambda x: apply(np.ravel(x)), dtype=float)
+
+
+def placements_per_socket(frame, parts, joints):
+    """Each joint placement's bodies: (instance, label, world reference point, (rod, end) or None),
+    each socket's rod found by testing every rod of the node for the socket's port and direction."""
+    out = []
+    for part in (p for p in parts if p.family == "joint"):
+        js = joints[part.name]
+        for pl in part.placements:
+            R = st._rz(pl.rotation_deg)
+            for li, lab in enumerate(js.labels):
+                ref = R @ np.asarray(js.refs[li]) + np.asarray(pl.origin, float)
+                rod = None
+                if lab != "body":
+                    sock = next(x for x in part.sockets if x.rod == lab)
+                    port, d = R @ np.asarray(sock.port) + np.asarray(pl.origin, float), R @ np.asarray(sock.direction)
+                    for rn in frame.nodes[pl.instance].rods:
+                        r = frame.rods[rn]
+                        if (np.linalg.norm(np.asarray(r.end_at(pl.instance).port) - port) < 1e-6
+                                and np.linalg.norm(np.asarray(r.socket_direction(pl.instance)) - d) < 1e-6):
+                            rod = (rn, "a" if r.a.node == pl.instance else "b")
+                    assert rod is not None
+                out.append((pl.instance, lab, tuple(ref), rod))
+    return out
 
 
 # -- the designs ---------------------------------------------------------------------------------
@@ -368,6 +424,120 @@ def test_key_lines_from_libyaml_are_the_pure_composers():
     assert compared > 400
     assert spec_mod._line_no("a: [1\n", ("a",)) is None  # not YAML for either composer
 
+def _frame_session(doc):
+    import cogniframe.api as api
+
+    d = api.Design(spec_mod.from_dict(copy.deepcopy(doc), source="x.yaml"), "", "x.yaml", None)
+    return d.spec, d.derived, drop_mod.Session(d.spec, d.derived.frame, d.derived.parts)
+
+
+def test_the_check_json_by_exact_type_is_the_isinstance_rules():
+    from collections import OrderedDict
+
+    tree = {"a": [1.23456789, -0.0, 0.0, float("nan"), float("inf"), -float("inf"), 1e-300, 123456789.0],
+            "b": (np.float64(2.718281828), np.float32(0.1), np.int64(3), True, False, None, "x", 7),
+            "c": OrderedDict(d=[(0.333333333, {"e": -1.0000049})]), "f": {"g": [], "h": {}}}
+    for digits in (4, 6):
+        got, want = numfmt.figures(tree, digits), figures_by_isinstance(tree, digits)
+        assert repr(got) == repr(want)  # the same types and the same bits (repr tells -0.0, nan and np.float64 apart)
+        assert got["a"][:3] == [1.235 if digits == 4 else 1.23457, -0.0, 0.0] and str(got["a"][1]) == "0.0"
+
+
+def test_the_upper_triangle_of_the_kept_dofs_is_scipys_and_factors_to_the_same_bits():
+    """A design's payload stiffness with its supports: the same arrays as triu of the rows and columns
+    kept, and qdldl's solution from it bit for bit the one from the whole matrix."""
+    import qdldl
+
+    spec, d, session = _frame_session(_presets()[0])
+    sol = session.solve()
+    K, fixed = st._floor_bc(sol.model, sol.K, "sliding")
+    keep = ~st._drop_unconnected(K, fixed)
+    assert 0 < np.count_nonzero(~keep) < len(keep)
+    for A, mask in ((K, keep), (K, None)):
+        got, want = ff.upper_triangle(A, mask), triu_of_the_kept(A, mask)
+        for field in ("indptr", "indices", "data"):
+            assert np.array_equal(getattr(got, field), getattr(want, field))
+    b = np.random.default_rng(1).normal(size=int(keep.sum()))
+    assert np.array_equal(ff.factor(K, keep).solve(b), qdldl.Solver(K.tocsc()[keep][:, keep]).solve(b))
+
+
+def test_the_modes_without_the_operators_shape_handling_are_the_same_bits(monkeypatch):
+    from cogniframe.analysis import load_cases as lc
+
+    spec, d, session = _frame_session(_presets()[1])
+    masses = st.masses_g(spec, d.frame, d.parts, 240.0)
+    K, M = lc._modal_matrices(spec, d.frame, d.parts, session.joints, masses, layout=session.layout)
+    got = ff.lowest_eigenvalues(K, M, 14)
+    monkeypatch.setattr(ff, "_vector_operator", linear_operator)
+    want = ff.lowest_eigenvalues(K, M, 14)
+    assert len(got) == 14 and got[6] > 1.0 and np.array_equal(got, want)
+
+
+def test_the_layout_matches_each_socket_to_its_rod_and_any_joint_models_build_the_same_model():
+    """The layout's placements are the rods found by testing every rod of the node; a layout made
+    with the check's joints and turned to the datasheet's builds the model a fresh layout builds."""
+    from dataclasses import replace
+
+    spec, d, session = _frame_session(_random_docs(2, seed=44)[0])
+    layout = session.layout
+    got = [(pl.instance, lab, tuple(ref), rod) for pl in layout.placements
+           for lab, ref, rod in zip(pl.labels, pl.refs, pl.rods)]
+    assert got == placements_per_socket(d.frame, d.parts, session.joints)
+    stiff = {n: replace(js, K=tuple(map(tuple, (js.matrix * 3.0).tolist()))) for n, js in session.joints.items()}
+    for joints, kw in ((session.joints, {"rod_segments": 4}), (stiff, {"only_roles": ("arm",)})):
+        shared = st.build_model(spec, d.frame, d.parts, joints, layout=layout, **kw).fe
+        fresh = st.build_model(spec, d.frame, d.parts, joints, **kw).fe
+        assert list(shared.nodes) == list(fresh.nodes)
+        assert all(np.array_equal(shared.nodes[n], fresh.nodes[n]) for n in shared.nodes)
+        assert [(n, k.tobytes()) for n, k in shared.springs] == [(n, k.tobytes()) for n, k in fresh.springs]
+        assert (shared.stiffness(sparse=True) != fresh.stiffness(sparse=True)).nnz == 0
+
+
+def test_the_window_maxima_at_once_are_each_windows_max():
+    rng = np.random.default_rng(5)
+    v = np.abs(rng.normal(size=300))
+    first = rng.integers(0, 300, 200)
+    last = np.minimum(first + rng.integers(-3, 60, 200), 299)  # some empty windows (last < first)
+    want = np.array([v[a:b + 1].max(initial=0.0) for a, b in zip(first, last)])
+    assert np.array_equal(S._window_max(v, first, last), want)
+
+
+def test_the_core_plate_from_the_joint_familys_links_is_the_one_planned_alone():
+    from cogniframe import partlist
+
+    for doc in _presets() + list(_random_docs(2, seed=44)):
+        s = spec_mod.from_dict(copy.deepcopy(doc), source="x.yaml")
+        f = frame_mod.frame_of(s)
+        plate = next(p for p in partlist.part_list(s, f) if p.family == "core_plate")
+        alone = core_plate.plan(s, f)[0]
+        assert dict(plate.params)["tubes"] and plate == partlist._with_digest(alone)
+
+
+def test_the_mass_properties_with_the_fit_checks_fasteners_are_those_without():
+    from cogniframe.analysis import mass, massprops
+    from cogniframe.fasteners import fasteners
+
+    spec, d, _ = _frame_session(_presets()[0])
+    budget = mass.budget(spec, d.frame, d.cut, d.parts, None)
+    got = massprops.estimate(spec, d, budget, fasteners(spec, d.frame, d.parts))
+    assert got == massprops.estimate(spec, d, budget) and 0.2 < got.mass_kg < 0.3
+
+
+def test_a_cylinders_inertia_is_numpys_norms_and_identity():
+    from cogniframe.analysis import massprops
+
+    rng = np.random.default_rng(11)
+    for _ in range(50):
+        base, axis = rng.normal(size=3) * 50, rng.normal(size=3)
+        m, r, length = rng.uniform(0.1, 20), rng.uniform(0.5, 10), rng.uniform(1, 200)
+        a = axis / np.linalg.norm(axis)
+        a = a / np.linalg.norm(a)
+        want = (m * r * r / 2 - m * (3 * r * r + length * length) / 12) * np.outer(a, a) + m * (3 * r * r + length * length) / 12 * np.eye(3)
+        got = massprops.cylinder("c", m, base, axis, r, length)
+        assert np.array_equal(np.asarray(got.inertia), want)
+        assert got.centroid == tuple(map(float, np.asarray(base) + axis / np.linalg.norm(axis) * length / 2))
+
+
 # -- the whole check -------------------------------------------------------------------------------
 
 def _check_json(doc: dict) -> dict:
@@ -389,6 +559,11 @@ def _same_check_as_the_references(doc, tmp_path, monkeypatch):
         m.setattr(frame_mod, "prop_clearances", prop_clearances_one_by_one)
         m.setattr(mirror, "reflection", mirror._reflection)
         m.setattr(spec_mod, "_FastUniqueKeyLoader", None)
+        m.setattr(numfmt, "figures", figures_by_isinstance)
+        m.setattr(ff, "upper_triangle", triu_of_the_kept)
+        m.setattr(ff, "_vector_operator", linear_operator)
+        m.setattr(drop_mod.Session, "layout", property(lambda self: None))  # a layout per solve and per load cases
+        m.setattr(core_plate, "PLANS_FROM_EARLIER", False)  # the core links planned again for the peg tubes
         reference = _check_json(doc)
     assert fast == reference
 
