@@ -74,9 +74,13 @@ def _fit_error(sockets, rotation_deg: float, target) -> float:
         return math.inf
     left = list(target)
     worst = 0.0
+
+    def norm(v: np.ndarray) -> float:  # np.linalg.norm's sum (the sqrt of the dot) without its checks
+        return math.sqrt(v.dot(v))
+
     for s in sockets:
         p, d = rot_z(np.asarray(s.port, float), rotation_deg), rot_z(np.asarray(s.direction, float), rotation_deg)
-        errs = [float(np.linalg.norm(p - np.asarray(t.port)) + np.linalg.norm(d - np.asarray(t.direction)))
+        errs = [norm(p - np.asarray(t.port)) + norm(d - np.asarray(t.direction))
                 if (t.seat, t.depth, t.bore) == (s.seat, s.depth, s.bore) else math.inf for t in left]
         i = int(np.argmin(errs))
         worst = max(worst, errs[i])
