@@ -69,6 +69,7 @@ STAGES = (
     ("cogniframe.analysis.verdict", "check_dict", "JSON"),
     ("cogniframe.cache", "load_json", "cache files"),
     ("cogniframe.cache", "store_json", "cache files"),
+    ("cogniframe.cache", "store_text", "cache files"),
 )
 OTHER = "other (glue, the surrogate notes, ...)"
 

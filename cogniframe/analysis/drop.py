@@ -193,10 +193,11 @@ def load_cases(spec: Spec, frame: Frame, total_mass_g: float, drop: impact.DropR
     out = lc.to_dict()
     out["design_drop_height_cm"] = h_design
     out["design_force_n"] = k_model * x / 1000.0
-    # key order as the cache stores it (sorted), so a fresh and a cached answer print the same bytes
-    out = json.loads(json.dumps(out, default=float, sort_keys=True))
-    cache.store_json("cases", key, out)
-    return out
+    # key order as the cache stores it (sorted), so a fresh and a cached answer print the same bytes;
+    # that text is what `cache.store_json` writes (the JSON of the plain tree read back from it)
+    text = json.dumps(out, default=float, sort_keys=True)
+    cache.store_text("cases", key, text, ".json")
+    return json.loads(text)
 
 
 def peak_prediction(spec: Spec, total_mass_g: float, drop: impact.DropResult, exo_mass_g: float) -> dict:
@@ -214,6 +215,6 @@ def peak_prediction(spec: Spec, total_mass_g: float, drop: impact.DropResult, ex
 
     out = peaks.design_peaks(total_mass_g / 1000.0, drop.k_n_per_m, drop.c_n_s_per_m, exo_mass_g / 1000.0,
                              heights, drop.clearance_mm, footprint_mm=footprint)
-    out = json.loads(json.dumps(out, sort_keys=True))  # as the cache stores it: same bytes fresh or cached
-    cache.store_json("peaks", key, out)
-    return out
+    text = json.dumps(out, sort_keys=True)  # as the cache stores it (`cache.store_json`): same bytes fresh or cached
+    cache.store_text("peaks", key, text, ".json")
+    return json.loads(text)
