@@ -15,7 +15,7 @@ or left) goes to the innermost stage running, so the stages add up to the whole 
 called inside another (the part list inside the fasteners) counts once, where it runs. `calls`
 is the stage's calls per design: a figure computed twice shows as 2. Printed: the median per
 design of each stage's CPU time (this thread's, which the machine's other load moves least) and
-of the whole, and the wall medians of `check()` alone and with validation.
+of the whole, and the wall and CPU medians of `check()` alone and with validation.
 
 --sweep checks with the sweep's options (sweep.evaluate.CHECK_OPTIONS: no peak list, no mode
 list, survival margins up to the first failure) from `spec.from_dict`, as a sweep worker does.
@@ -165,15 +165,16 @@ def run(docs: list[dict], sweep: bool, ledger: Ledger | None):
         t0, c0 = time.perf_counter(), time.thread_time()
         if sweep:
             s = spec_mod.from_dict(copy.deepcopy(doc), source="x.yaml")
-            t1 = time.perf_counter()
+            t1, c1 = time.perf_counter(), time.thread_time()
             with s.blamed():
                 verdict.check_dict(verdict.check(s, **evaluate.CHECK_OPTIONS))
         else:
             d = api.from_text(text, "x.yaml")
-            t1 = time.perf_counter()
+            t1, c1 = time.perf_counter(), time.thread_time()
             d.check().to_dict()
         t2, c2 = time.perf_counter(), time.thread_time()
         rows.append({"check_ms": 1000 * (t2 - t1), "all_ms": 1000 * (t2 - t0), "cpu_ms": 1000 * (c2 - c0),
+                     "check_cpu_ms": 1000 * (c2 - c1),
                      "stages": dict(ledger.cpu) if ledger else {}, "calls": dict(ledger.calls) if ledger else {}})
     return rows
 
@@ -204,7 +205,8 @@ def main() -> None:
           f"{'the sweep' if args.sweep else 'the studio'}'s path; {os.cpu_count()} cores, load average "
           f"{load0[0]:.1f} before, {os.getloadavg()[0]:.1f} after (a shared machine: wall times move with it)")
     print(f"  check() + to_dict():          median wall {med(r['check_ms'] for r in plain):7.1f} ms "
-          f"(min {min(r['check_ms'] for r in plain):.1f}, max {max(r['check_ms'] for r in plain):.1f})")
+          f"(min {min(r['check_ms'] for r in plain):.1f}, max {max(r['check_ms'] for r in plain):.1f}), "
+          f"CPU {med(r['check_cpu_ms'] for r in plain):.1f} ms")
     print(f"  with validation (from_text):  median wall {med(r['all_ms'] for r in plain):7.1f} ms, "
           f"CPU {med(r['cpu_ms'] for r in plain):.1f} ms")
     labels = list(dict.fromkeys([s[2] for s in STAGES] + [OTHER]))
