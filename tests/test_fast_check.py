@@ -502,6 +502,13 @@ def test_the_window_maxima_at_once_are_each_windows_max():
     assert np.array_equal(S._window_max(v, first, last), want)
 
 
+def test_the_row_means_column_by_column_are_numpys_mean():
+    rng = np.random.default_rng(9)
+    for cols in (1, 2, 4, 5):
+        a = rng.normal(size=(3000, cols)) * 10 ** rng.uniform(-3, 3, size=(3000, cols))
+        assert np.array_equal(S._row_means(a), a.mean(axis=1))
+
+
 def test_the_core_plate_from_the_joint_familys_links_is_the_one_planned_alone():
     from cogniframe import partlist
 
