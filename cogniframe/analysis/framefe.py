@@ -452,7 +452,6 @@ def lowest_eigenvalues(K, M, count: int) -> np.ndarray:
 
     sigma = _shift(K, M)
     lu = factor(K - sigma * M)
-    M = M.tocsc()
     v0 = np.random.default_rng(0).standard_normal(n)  # deterministic, and no symmetry of the frame
     try:
         # tol: Ritz values to 1e-10 relative (the modes are reported to 0.01 Hz; 0 = machine

@@ -254,8 +254,8 @@ def drop_peaks(pulse_g: np.ndarray, height_cm: float, scatter: Scatter, footprin
     # round [its earliest time less the longest stagger, its latest time]. Samples are taken in
     # order of that bound, and the rest are skipped once it is below every drop's peak so far:
     # none of them can be a drop's peak (after the pulse and the mount's ringing, ~20 of 60).
-    # Likewise a sample is read only for the drops whose peak so far is below its bound (after
-    # the first few samples, a tenth of them): for the others it cannot raise the peak.
+    # Likewise a sample is read only for the drops whose peak so far is below its bound (from the
+    # third pass on, under a tenth of them): for the others it cannot raise the peak.
     env = np.abs(np.asarray(logger, float))
     lo = np.searchsorted(grid, np.arange(n_samples) / rate_hz - tj.max(), side="right") - 1
     hi = np.searchsorted(grid, (np.arange(n_samples) + 1) / rate_hz, side="left") + 1
