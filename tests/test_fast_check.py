@@ -509,6 +509,17 @@ def test_the_row_means_column_by_column_are_numpys_mean():
         assert np.array_equal(S._row_means(a), a.mean(axis=1))
 
 
+def test_the_feet_delays_from_the_lowest_foot_column_by_column_are_numpys_row_min():
+    d = S.draws()
+    for footprint, tilt_deg, v0 in (((210.0, 210.0), 2.0, 3.13), ((230.0, 190.0), 7.5, 4.43)):
+        xy = S.feet(footprint) / 1000.0
+        tilt = math.radians(tilt_deg) * d.tilt_unit
+        h = np.sin(tilt)[:, None] * (np.cos(d.azimuth)[:, None] * xy[None, :, 0] + np.sin(d.azimuth)[:, None] * xy[None, :, 1])
+        want = (h - h.min(axis=1, keepdims=True)) / v0
+        got = S.foot_delays_s(S.feet(footprint), tilt, d.azimuth, v0)
+        assert np.array_equal(got, want) and (got.min(axis=1) == 0.0).all() and got.max() > 1e-4
+
+
 def test_the_core_plate_from_the_joint_familys_links_is_the_one_planned_alone():
     from cogniframe import partlist
 
