@@ -36,6 +36,7 @@ class Session:
         self.spec, self.frame, self._parts = spec, frame, parts
         self._joints = None
         self._outside = None
+        self._tests = None
         self._layout = None
         self.solution = None  # stiffness.SecantSolution once solved in this check
 
@@ -48,14 +49,25 @@ class Session:
         return self._parts
 
     @property
+    def box_tests(self) -> dict:
+        """The joints' features and whether each is inside the surrogate's training box
+        (`surrogate.box_tests`): what `outside` and the surrogate's predictions both read."""
+        if self._tests is None:
+            from .joints.surrogate import box_tests
+            from .stiffness import joint_parts
+
+            self._tests = box_tests(self.spec, joint_parts(self.parts))
+        return self._tests
+
+    @property
     def outside(self) -> dict[str, str]:
         """The joints outside the surrogate's training box, {name: why} (`surrogate.outside_reasons`):
-        what the joint models and `check`'s notes both read."""
+        what the joint models, `check`'s notes and its question whether a joint needs its FE first read."""
         if self._outside is None:
             from .joints.surrogate import outside_reasons
             from .stiffness import joint_parts
 
-            self._outside = outside_reasons(self.spec, joint_parts(self.parts))
+            self._outside = outside_reasons(self.spec, joint_parts(self.parts), self.box_tests)
         return self._outside
 
     @property
@@ -65,7 +77,8 @@ class Session:
 
             surrogate = self.spec.model.stiffness_model == "surrogate"
             self._joints = joint_models(self.spec, self.parts, self.spec.model.stiffness_model,
-                                        outside=self.outside if surrogate else None)
+                                        outside=self.outside if surrogate else None,
+                                        tests=self.box_tests if surrogate else None)
         return self._joints
 
     @property

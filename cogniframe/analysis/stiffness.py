@@ -68,13 +68,15 @@ def joint_parts(parts) -> list:
     return [p for p in parts if p.family == "joint"]
 
 
-def joint_models(spec, parts, method: str = "fe", factor: float | None = None, outside: dict[str, str] | None = None) -> dict:
+def joint_models(spec, parts, method: str = "fe", factor: float | None = None, outside: dict[str, str] | None = None,
+                 tests: dict | None = None) -> dict:
     """The super-element of every distinct joint (cached FE, the FE's surrogate, or closed forms).
-    ``outside``: the surrogate's `outside_reasons` for these joints when the caller has it."""
+    ``outside``, ``tests``: the surrogate's `outside_reasons` and `box_tests` for these joints when
+    the caller has them."""
     from .joints import joint_stiffness, solve_missing, surrogate_models
 
     if method == "surrogate":  # the solid FE for the joints outside its training box
-        return surrogate_models(spec, joint_parts(parts), factor, outside=outside)
+        return surrogate_models(spec, joint_parts(parts), factor, outside=outside, tests=tests)
     out = {}
     # new geometries first, all at once (in parallel); then every joint comes from the cache
     failed = solve_missing(spec, joint_parts(parts)) if method == "fe" else {}

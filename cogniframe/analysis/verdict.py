@@ -38,7 +38,7 @@ class Findings:
 
 
 def check(spec: Spec, geometry: dict | None = None, clash=None, design_: Derived | None = None,
-          peaks: bool = True, modes: bool = True, survival_margins: bool = True) -> Findings:
+          peaks: bool = True, modes: bool = True, survival_margins: bool = True, session=None) -> Findings:
     """Mass budget, crash margin, flight and requirements; `geometry` = CAD volumes when known,
     `clash` = the build's clash check (analysis.clash.ClashResult) when known, `design_` = this
     spec's design when the caller has it. ``peaks=False`` leaves out the predicted peak
@@ -48,19 +48,23 @@ def check(spec: Spec, geometry: dict | None = None, clash=None, design_: Derived
     decides `stiffness.mode_near_rotor` by counting eigenvalues (load_cases.load_cases): the
     same flag and verdict, the modes' eigensolver saved. ``survival_margins=False`` ends the
     survival sweep's per-height margins at the first failure (`_survival`): the same
-    `max_undamaged_drop_cm` and `first_failure`, shorter lists."""
-    return with_clash(complete(spec, *mass_and_drop(spec, geometry, design_), peaks=peaks, modes=modes,
+    `max_undamaged_drop_cm` and `first_failure`, shorter lists. ``session``: this check's frame
+    model (`drop.Session` of this spec and design) when the caller made it (`api.Design.check`
+    asks it first which joints need their FE)."""
+    return with_clash(complete(spec, *mass_and_drop(spec, geometry, design_, session), peaks=peaks, modes=modes,
                                survival_margins=survival_margins), clash)
 
 
-def mass_and_drop(spec: Spec, geometry: dict | None = None, design_: Derived | None = None):
+def mass_and_drop(spec: Spec, geometry: dict | None = None, design_: Derived | None = None, session=None):
     """The first, cheap part of `check`: (design, mass budget, drop model, frame session): what the
-    build's mass and drop figures draw while the load cases are still being solved."""
+    build's mass and drop figures draw while the load cases are still being solved. ``session``:
+    as in `check`."""
     d = design(spec) if design_ is None else design_
     budget = mass_mod.budget(spec, d.frame, d.cut, d.parts, geometry)
     from . import drop as drop_mod
 
-    session = drop_mod.Session(spec, d.frame, d.parts)  # the frame model, solved at most once per check
+    if session is None:
+        session = drop_mod.Session(spec, d.frame, d.parts)  # the frame model, solved at most once per check
     with one_blas_thread():  # the same bits whoever calls, on any machine (and in the disk caches)
         drop = _drop(spec, d, budget, session)
     return d, budget, drop, session

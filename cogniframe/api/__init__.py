@@ -182,6 +182,8 @@ class Design:
         """Mass budget, stiffness, crash model, flight and PASS/FAIL: `cogniframe check`. The first
         check of a new joint geometry runs its solid FE (seconds; cached after)."""
         from ..analysis import verdict
+        from ..analysis.drop import Session
+        from ..analysis.joints import needs_fe
         from ..analysis.numerics import one_blas_thread
 
         from ..runtime.pools import joint_fe_workers
@@ -189,12 +191,14 @@ class Design:
         d = self.derived
         try:
             with self._spec.blamed(), one_blas_thread():  # as `build` computes it: same numbers
-                if self.needs_fe():  # new joint geometries: their FE on worker processes first
+                session = Session(self._spec, d.frame, d.parts)  # this check's frame model
+                outside = session.outside if self._spec.model.stiffness_model == "surrogate" else None
+                if needs_fe(self._spec, d.parts, outside):  # new joint geometries: their FE on worker processes first
                     from ..analysis.joints import solve_fe
 
                     with joint_fe_workers() as submit:
                         solve_fe(self._spec, d.parts, submit)
-                result = verdict.check(self._spec, design_=d)
+                result = verdict.check(self._spec, design_=d, session=session)
         except UserError as e:
             raise _params_error(e, self._source) from None
         return CheckResult(result)

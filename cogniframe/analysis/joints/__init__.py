@@ -98,17 +98,19 @@ def _fe_unit(spec, part, mesh_mm: float) -> tuple[str, dict | None, str | None]:
         return part.name, None, str(exc)
 
 
-def fe_joints(spec, parts) -> list:
+def fe_joints(spec, parts, outside: dict[str, str] | None = None) -> list:
     """The joints of ``parts`` whose super-element the solid FE gives under
     `model.stiffness_model`: all of them (fe), those outside the surrogate's training box
-    (surrogate, milliseconds: the surrogate's box test), none (analytic)."""
+    (surrogate, milliseconds: the surrogate's box test; ``outside``: `surrogate.outside_reasons`
+    of these parts when the caller has it), none (analytic)."""
     method = spec.model.stiffness_model
     if method == "fe":
         return list(parts)
     if method == "surrogate":
-        from .surrogate import outside_reasons
+        if outside is None:
+            from .surrogate import outside_reasons
 
-        outside = outside_reasons(spec, parts)
+            outside = outside_reasons(spec, parts)
         return [p for p in parts if p.name in outside]
     return []
 
@@ -180,13 +182,14 @@ def solve_missing(spec, parts, mesh_mm: float | None = None, submit=None) -> dic
     return failed
 
 
-def needs_fe(spec, parts) -> bool:
+def needs_fe(spec, parts, outside: dict[str, str] | None = None) -> bool:
     """Whether checking a design with these printed parts solves a joint's FE first: the FE model
     (or the surrogate outside its box) and a joint geometry not in the cache yet (milliseconds:
-    the cache keys are hashes of the parts' inputs). `check` and `build` both ask here."""
+    the cache keys are hashes of the parts' inputs). `check` and `build` both ask here.
+    ``outside``: `surrogate.outside_reasons` of the joints when the caller has it."""
     if spec.model.stiffness_model == "analytic":
         return False
-    return has_unsolved(spec, fe_joints(spec, _joints(parts)))
+    return has_unsolved(spec, fe_joints(spec, _joints(parts), outside))
 
 
 def solve_fe(spec, parts, submit) -> None:
@@ -251,18 +254,20 @@ def _solve(spec, todo, mesh_mm: float, submit=None) -> dict[str, str]:
     return failed
 
 
-def _surrogate_split(spec, parts, factor: float | None = None, outside: dict[str, str] | None = None):
+def _surrogate_split(spec, parts, factor: float | None = None, outside: dict[str, str] | None = None,
+                     tests: dict | None = None):
     """({part name: surrogate super-element}, {part name: why it is outside the training box}):
     originals predicted, mirrored joints reflected from their predicted original (as the FE path
     reflects them); which joints are outside is `surrogate.outside_reasons` (``outside``: its
-    answer for these parts when the caller has it)."""
-    from .surrogate import outside_reasons, predict
+    answer for these parts when the caller has it; ``tests``: their `surrogate.box_tests`)."""
+    from .surrogate import box_tests, outside_reasons, predict
 
-    outside = outside_reasons(spec, parts) if outside is None else outside
+    tests = box_tests(spec, parts) if tests is None else tests
+    outside = outside_reasons(spec, parts, tests) if outside is None else outside
     inside = {}
     for p in parts:
         if not is_mirror(p) and p.name not in outside:
-            inside[p.name], _ = predict(spec, p, factor)
+            inside[p.name], _ = predict(spec, p, factor, tested=tests[p.name])
     for p in parts:
         if is_mirror(p) and p.name not in outside:
             o, P, order = mirror_original(p, parts)
@@ -270,12 +275,13 @@ def _surrogate_split(spec, parts, factor: float | None = None, outside: dict[str
     return inside, outside
 
 
-def surrogate_models(spec, parts, factor: float | None = None, submit=None, outside: dict[str, str] | None = None) -> dict:
+def surrogate_models(spec, parts, factor: float | None = None, submit=None, outside: dict[str, str] | None = None,
+                     tests: dict | None = None) -> dict:
     """Every joint's super-element from the surrogate; the joints outside its training box from the
     solid FE (cached; `solve_missing` on `submit`'s workers), those the FE cannot mesh from the
     closed forms, as `stiffness.joint_models` does for the FE. ``outside``: `surrogate.outside_reasons`
-    for these parts when the caller has it."""
-    inside, outside = _surrogate_split(spec, parts, factor, outside)
+    for these parts when the caller has it; ``tests``: their `surrogate.box_tests`."""
+    inside, outside = _surrogate_split(spec, parts, factor, outside, tests)
     out = dict(inside)
     if outside:
         rest = [p for p in parts if p.name in outside]

@@ -253,17 +253,28 @@ def out_of_box(fam: Family, names, x: np.ndarray) -> str | None:
     return None
 
 
-def outside_reasons(spec, parts) -> dict[str, str]:
-    """{joint part name: why} for the joints the surrogate does not cover (a mirror follows its
-    original, like `joints.surrogate_models`)."""
-    from .mirror import is_mirror, mirror_original
+def box_tests(spec, parts) -> dict[str, tuple[str | None, np.ndarray | None]]:
+    """{joint part name: (why it is outside its family's training box or None, its features when
+    they were read)} for the originals among `parts` (not the mirrors): what `outside_reasons` and
+    `predict` read, so that one check reads each joint's features once."""
+    from .mirror import is_mirror
 
     fams = families()
+    return {p.name: _box_test(fams, spec, p) for p in parts if not is_mirror(p)}
+
+
+def outside_reasons(spec, parts, tests: dict | None = None) -> dict[str, str]:
+    """{joint part name: why} for the joints the surrogate does not cover (a mirror follows its
+    original, like `joints.surrogate_models`). ``tests``: `box_tests` of these parts when the
+    caller has them."""
+    from .mirror import is_mirror, mirror_original
+
+    tests = box_tests(spec, parts) if tests is None else tests
     out = {}
     for p in parts:
         if is_mirror(p):
             continue
-        why = _why_outside(fams, spec, p)
+        why = tests[p.name][0]
         if why is not None:
             out[p.name] = why
     for p in parts:
@@ -287,10 +298,6 @@ def family_of(part) -> str:
     return joint_kind(part).surrogate_family
 
 
-def _why_outside(fams: dict, spec, part) -> str | None:
-    return _box_test(fams, spec, part)[0]
-
-
 def _box_test(fams: dict, spec, part) -> tuple[str | None, np.ndarray | None]:
     """(why the joint is outside its family's box or None, its features when they were read)."""
     from .mirror import is_mirror
@@ -307,16 +314,18 @@ def _box_test(fams: dict, spec, part) -> tuple[str | None, np.ndarray | None]:
     return out_of_box(fam, names, x), x
 
 
-def predict(spec, part, factor: float | None = None, path: Path | None = None) -> tuple[JointStiffness | None, str | None]:
+def predict(spec, part, factor: float | None = None, path: Path | None = None,
+            tested: tuple | None = None) -> tuple[JointStiffness | None, str | None]:
     """(super-element, None) from the fit, scaled by the TPU factor like the FE; or (None, why) when
-    the joint is outside the training box (or its family was not trained): the caller runs the FE."""
+    the joint is outside the training box (or its family was not trained): the caller runs the FE.
+    ``tested``: the part's `box_tests` entry (the shipped fit's) when the caller has it."""
     import time
 
     from .model import TPU_PRINTED_MODULUS_FACTOR
 
     t0 = time.perf_counter()
     fams = families(path)
-    why, x = _box_test(fams, spec, part)
+    why, x = _box_test(fams, spec, part) if tested is None else tested
     if why is not None:
         return None, why
     fam = fams[family_of(part)]
