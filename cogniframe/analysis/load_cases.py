@@ -153,8 +153,9 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
     names = list(frame.rods)
     ei = [spec.material(frame.rods[rn].material).e_mpa * math.pi * frame.rods[rn].diameter**4 / 64 for rn in names]
     lengths = [float(np.linalg.norm(layout.mouths[rn][1] - layout.mouths[rn][0])) for rn in names]
-    p_crs = euler_loads(lengths, ei, [_end_rot(mdl, frame, rn, "a") for rn in names],
-                        [_end_rot(mdl, frame, rn, "b") for rn in names])
+    known: dict = {}
+    p_crs = euler_loads(lengths, ei, [_end_rot(mdl, frame, rn, "a", known) for rn in names],
+                        [_end_rot(mdl, frame, rn, "b", known) for rn in names])
     rods_out = []
     for rn, length, p_cr in zip(names, lengths, p_crs):
         n_ax = min(by_rod[rn]) * scale  # most compressive segment
@@ -184,13 +185,20 @@ def load_cases(spec, frame, parts, total_mass_g: float, *, joint_model: str = "f
                      buckling, strain, jinfo, time.perf_counter() - t0, per_n)
 
 
-def _end_rot(mdl: Model, frame, rn: str, tag: str) -> float:
+def _end_rot(mdl: Model, frame, rn: str, tag: str, known: dict | None = None) -> float:
+    """The rotational restraint of rod `rn`'s end `tag` in its joint (`socket_rotational_stiffness`).
+    ``known``: {(joint part, socket label): restraint} of the ends taken so far, filled in here (every
+    placement of a part restrains its sockets alike)."""
     r = frame.rods[rn]
     end = r.a if tag == "a" else r.b
-    js = mdl.joints[mdl.instance_part[end.node]]
+    part = mdl.instance_part[end.node]
     node = mdl.rod_nodes[rn][0 if tag == "a" else 1]
     lab = next(l for l, n in mdl.joint_nodes[end.node].items() if n in (node, node + ":sock"))
-    return js.socket_rotational_stiffness(lab)
+    if known is None:
+        return mdl.joints[part].socket_rotational_stiffness(lab)
+    if (part, lab) not in known:
+        known[part, lab] = mdl.joints[part].socket_rotational_stiffness(lab)
+    return known[part, lab]
 
 
 # The side faces a wall can meet: (axis, sign), +x first (the worst face is reported; on a tie, to
