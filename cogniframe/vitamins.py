@@ -15,6 +15,7 @@ shown in the BOM only.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -91,7 +92,9 @@ def box(lo, hi) -> Prim:
 
 def cyl(base, axis, radius: float, length: float, radius_end: float | None = None) -> Prim:
     a = np.asarray(axis, float)
-    return Prim("cyl", _t(base), axis=_t(a / np.linalg.norm(a)), radius=float(radius), length=float(length),
+    # the axis's length as np.linalg.norm sums it (the sqrt of its dot), without its checks: a
+    # check draws ~100 of these for the mass properties
+    return Prim("cyl", _t(base), axis=_t(a / math.sqrt(a.dot(a))), radius=float(radius), length=float(length),
                 radius_end=None if radius_end is None else float(radius_end))
 
 
