@@ -85,6 +85,37 @@ class Memo:
             pass
 
 
+class BytesMemo:
+    """Files of bytes under `cache_dir()/kind/`, one per key, the key salted as `Memo`'s: for
+    outputs worth keeping piece by piece, such as the assembly guide's pictures. A write is
+    atomic (a reader sees the whole file or none) and skipped when the cache cannot be written."""
+
+    def __init__(self, kind: str, salt: str, suffix: str = ".bin", root: str | Path | None = None):
+        self.kind, self.salt, self.suffix, self.root = kind, salt, suffix, Path(root) if root is not None else None
+
+    def _path(self, key: str) -> Path:
+        import hashlib
+
+        name = hashlib.sha256(f"{self.salt}/{key}".encode()).hexdigest()[:32]
+        return (self.root if self.root is not None else cache_dir()) / self.kind / f"{name}{self.suffix}"
+
+    def get(self, key: str) -> bytes | None:
+        try:
+            return self._path(key).read_bytes()
+        except OSError:
+            return None
+
+    def put(self, key: str, data: bytes) -> None:
+        path = self._path(key)
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+            tmp.write_bytes(data)
+            tmp.replace(path)
+        except OSError:
+            pass
+
+
 # -- file entries: a step's output files + its JSON value, verified on every read -------------
 
 def file_sha256(path: Path) -> str:

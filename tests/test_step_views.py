@@ -139,6 +139,46 @@ def test_same_views_same_bytes(drawn, tmp_path):
         assert [p.read_bytes() for p in paths] == [p.read_bytes() for p in written[n]]
 
 
+class _Store:
+    """A dict as `render_step_views`' store of pictures drawn before, counting what it is given."""
+
+    def __init__(self):
+        self.pngs: dict[str, bytes] = {}
+        self.puts = 0
+
+    def get(self, key):
+        return self.pngs.get(key)
+
+    def put(self, key, data):
+        self.puts += 1
+        self.pngs[key] = data
+
+
+def test_an_edit_draws_only_the_pictures_that_show_what_it_changed(drawn, tmp_path):
+    """After one part's mesh changes, the pictures that do not show it come from the store, the
+    others are drawn again, and every picture is the bytes of drawing the edited scene afresh."""
+    _, views, items, written, _ = drawn
+    store = _Store()
+    sv.render_step_views(views, items, tmp_path / "first", known=store)
+    pictures = sum(len(v.files()) for v in views)
+    assert store.puts == pictures
+    for n, paths in written.items():  # the store changes no byte of a first drawing
+        assert [(tmp_path / "first" / p.relative_to(drawn[4])).read_bytes() for p in paths] == [p.read_bytes() for p in paths]
+
+    edited_part = next(i.name for i in items if i.name.startswith("motor_mount"))
+    part = edited_part.rsplit("_", 1)[0]
+    edited = [sv.Item(i.name, i.vertices * np.array([1.0, 1.0, 1.5]) if i.name.startswith(part) else i.vertices,
+                      i.faces, i.colour, i.opacity) for i in items]
+    showing = sum(len(v.files()) for v in views if any(n.startswith(part) for n in v.shown))
+    assert 0 < showing < pictures
+    store.puts = 0
+    again = sv.render_step_views(views, edited, tmp_path / "again", known=store)
+    assert store.puts == showing  # only those are drawn
+    fresh = sv.render_step_views(views, edited, tmp_path / "fresh")
+    for n, paths in fresh.items():
+        assert [p.read_bytes() for p in again[n]] == [p.read_bytes() for p in paths]
+
+
 # -- the built report ---------------------------------------------------------------------------
 
 @pytest.fixture(scope="module")

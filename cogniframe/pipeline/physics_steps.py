@@ -96,6 +96,9 @@ ESTIMATE = Step("estimate", (), estimate, where="wait",
 BUDGET = Step("budget", ("estimate", "part:*"), budget, where="wait",
               reads="(always, thread: mass with CAD volumes, drop model; milliseconds)")
 PHYSICS = Step("physics", ("budget",), physics, where="wait",
+               # its Python holds the GIL for a few tenths of a second: after the plates, whose
+               # slicer heads the chain a one-part rebuild waits for, not beside them
+               after=("plates:*",),
                reads="(always, thread: load cases, peaks and flight for that mass, cached on disk)")
 CHECK = Step("check", ("budget", "physics", "clash"), check,
              reads="(always: the physics step's result with the clash check; check.json, cut list, mass.md)")

@@ -108,7 +108,12 @@ def make_step_views(ctx) -> Made:
     views = step_views.step_views(d, assembly_steps.assembly_steps(d))
     items = step_views.scene_items(d, {p.name: ctx.mesh(p.name) for p in d.parts},
                                    {p.name: ctx.part_value(p.name)["print_from_local"] for p in d.parts})
-    step_views.render_step_views(views, items, ctx.out)
+    known = None
+    if ctx.use_cache:  # each picture by what it shows (step_views.picture_key): an edit draws only those it changes
+        from .. import cache
+
+        known = cache.BytesMemo("step_view", f"{cache.code_hash(*STEP_VIEWS.code)}/{ctx.stack}", ".png")
+    step_views.render_step_views(views, items, ctx.out, known=known)
     return Made(tuple(f for v in views for f in v.files()), {str(v.number): list(v.files()) for v in views})
 
 def _slice_report(ctx):
