@@ -37,9 +37,10 @@ const future = [];           // redo
 let committed = {};          // what every field showed at the newest edit sent
 let wantedScene = null;      // the geometry of the figures shown: the 3D view to show
 const sceneUrls = {};        // scenes the server said are ready: key -> url
+const geometryAt = {};       // a new geometry's key -> the input event of the edit that asked for it (its view is timed)
 let lastFigures = null;
 const pendingSaves = {};  // save id -> the changes it saves
-window.cogniframeStudio = { latencies: [], events: [], changes: () => changes(), base: () => base };
+window.cogniframeStudio = { latencies: [], sceneLatencies: [], events: [], changes: () => changes(), base: () => base };
 
 const FAST_NAMES = { analytic: "analytic joints", surrogate: "the joints' FE surrogate" };
 
@@ -273,6 +274,7 @@ function handle(ev) {
     showFigures(ev);
     if (sentAt[ev.seq] !== undefined && !ev.after_fe) {
       const ms = performance.now() - sentAt[ev.seq];
+      if (ev.geometry !== sceneKey && geometryAt[ev.geometry] === undefined) geometryAt[ev.geometry] = sentAt[ev.seq];
       delete sentAt[ev.seq];
       window.cogniframeStudio.latencies.push({ seq: ev.seq, ms, server_ms: ev.ms, cpu_ms: ev.cpu_ms, pending_fe: ev.pending_fe });
       timing.textContent = `updated ${ms.toFixed(0)} ms after the edit (check: ${ev.ms.toFixed(0)} ms)`;
@@ -416,6 +418,11 @@ async function loadScene(ev) {
   slot.replaceChildren(root);
   try {
     startViewer(THREE, OrbitControls, root, data.meta, data.geometry);
+    const t0 = geometryAt[ev.key];
+    if (t0 !== undefined) {  // drawn: from the edit's input event to this view
+      window.cogniframeStudio.sceneLatencies.push({ key: ev.key, ms: performance.now() - t0, provisional: Boolean(ev.provisional) });
+      if (!ev.provisional) delete geometryAt[ev.key];
+    }
   } catch (e) {
     root.dataset.error = String(e);
     root.querySelector(".cf-info").textContent = `The 3D view could not start here (${e}).`;
