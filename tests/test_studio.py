@@ -663,6 +663,7 @@ def test_a_new_joint_geometry_shows_the_fast_model_then_the_fe_and_a_new_view(pa
     t_fe = time.monotonic() - t0
     k_new = float(_metric(page, "stiffness.k_n_per_m"))
     page.wait_for_function(f"document.querySelector('#cf-viewer[data-ready=\"1\"]')?.dataset.scene !== {json.dumps(scene)}"
+                           " && document.querySelector('#cf-viewer').dataset.provisional === '0'"
                            " || document.querySelector('#view-progress')?.dataset.error", timeout=600_000)
     assert not page.get_attribute("#view-progress", "data-error"), page.get_attribute("#view-progress", "data-error")
     t_view = time.monotonic() - t0

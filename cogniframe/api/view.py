@@ -18,7 +18,9 @@ import json
 import secrets
 import tempfile
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 
 def build_parts(spec, design, out: Path, *, fe: bool = False, server: bool | None = None,
@@ -45,21 +47,69 @@ def build_parts(spec, design, out: Path, *, fe: bool = False, server: bool | Non
     return {p.name: ctx.part_value(p.name) for p in design.parts}
 
 
-def items(spec, design, out: Path, values: dict[str, dict]) -> list:
+def items(spec, design, out: Path, values: dict[str, dict], meshes: dict | None = None) -> list:
     """The viewer's items: every copy of every printed part (grams from the mass model with the
-    CAD volumes), every rod and the bought parts."""
+    CAD volumes), every rod and the bought parts. `meshes`: the parts' meshes when the caller
+    has read them (else read from the STLs in `out`)."""
     import numpy as np
 
-    from ..analysis.mass import PartGeometry, budget
     from ..report.renders import vitamin_viewer_items
     from ..report.viewer import design_items, read_stl
 
-    geometry = {name: PartGeometry(v["volume_mm3"], v["area_h_mm2"], v["area_v_mm2"], "cad") for name, v in values.items()}
-    mass = budget(spec, design.frame, design.cut, design.parts, geometry)
-    meshes = {p.name: read_stl(out / values[p.name]["stl"]) for p in design.parts}
+    mass = _budget(spec, design, values)
+    if meshes is None:
+        meshes = {p.name: read_stl(out / values[p.name]["stl"]) for p in design.parts}
     found = design_items(design, meshes, {p.name: np.asarray(values[p.name]["print_from_local"], float) for p in design.parts},
                          mass, ())
     return found + vitamin_viewer_items(spec, design.frame, mass)
+
+
+def _budget(spec, design, values: dict[str, dict]):
+    """The mass budget with the CAD volumes of the parts in `values` (the others estimated)."""
+    from ..analysis.mass import PartGeometry, budget
+
+    geometry = {name: PartGeometry(v["volume_mm3"], v["area_h_mm2"], v["area_v_mm2"], "cad") for name, v in values.items()}
+    return budget(spec, design.frame, design.cut, design.parts, geometry)
+
+
+@dataclass(frozen=True)
+class MadePart:
+    """A part as a view made it: what its shape was made from (`geometry_digest`), its mesh in
+    print orientation, print <- local, and its part step's value (volumes)."""
+
+    digest: str
+    mesh: Any
+    print_from_local: Any
+    value: dict
+
+
+def provisional_items(spec, design, made: dict[str, MadePart]) -> tuple[list, tuple[str, ...], tuple[str, ...]]:
+    """The viewer's items of `design` at once, before its changed parts are made: (items, the
+    parts drawn provisionally, the parts left out). A part whose shape is unchanged is its mesh
+    as made; a changed part is its previous mesh at its NEW placements, drawn pale and noted as
+    updating (its grams the mass model's estimate, not the CAD's); a part never made is left
+    out. The rods (from the frame graph) and the bought parts are the new design's own."""
+    import numpy as np
+
+    from ..parts.shapes import geometry_digest
+    from ..report.renders import vitamin_viewer_items
+    from ..report.viewer import design_items
+
+    changed, missing = [], []
+    meshes, pfl, values = {}, {}, {}
+    for p in design.parts:
+        m = made.get(p.name)
+        if m is None:
+            missing.append(p.name)
+            continue
+        meshes[p.name], pfl[p.name] = m.mesh, np.asarray(m.print_from_local, float)
+        if m.digest == geometry_digest(p):
+            values[p.name] = m.value
+        else:
+            changed.append(p.name)
+    mass = _budget(spec, design, values)
+    found = design_items(design, meshes, pfl, mass, (), provisional=changed)
+    return found + vitamin_viewer_items(spec, design.frame, mass), tuple(changed), tuple(missing)
 
 
 def scene(spec, design, *, server: bool | None = None, on_step=None, log=None) -> tuple[dict, bytes]:

@@ -37,6 +37,7 @@ const future = [];           // redo
 let committed = {};          // what every field showed at the newest edit sent
 let wantedScene = null;      // the geometry of the figures shown: the 3D view to show
 const sceneUrls = {};        // scenes the server said are ready: key -> url
+const standIns = {};         // provisional scenes of geometries whose exact view is not ready yet: key -> event
 const geometryAt = {};       // a new geometry's key -> the input event of the edit that asked for it (its view is timed)
 let lastFigures = null;
 const pendingSaves = {};  // save id -> the changes it saves
@@ -281,6 +282,7 @@ function handle(ev) {
     }
     wantedScene = ev.geometry;
     if (sceneUrls[wantedScene]) loadScene({ key: wantedScene, url: sceneUrls[wantedScene] });
+    else if (standIns[wantedScene]) loadScene(standIns[wantedScene]);
     const dirty = showDirty();
     if (dirty || !statusEl.textContent.startsWith("saved")) setStatus(dirty ? "edited, not saved" : "as in the file", dirty ? "dirty" : "");
   } else if (ev.type === "invalid") {
@@ -294,7 +296,13 @@ function handle(ev) {
     showNotice(ev.message);
     setStatus("refused", "bad");
   } else if (ev.type === "scene") {
-    sceneUrls[ev.key] = ev.url;
+    if (ev.provisional) {  // the new frame at once; its exact view follows and replaces it
+      if (sceneUrls[ev.key]) return;
+      standIns[ev.key] = ev;
+    } else {
+      sceneUrls[ev.key] = ev.url;
+      delete standIns[ev.key];
+    }
     if (ev.key === wantedScene) loadScene(ev);
   } else if (ev.type === "progress") {
     if (ev.task === "view" && ev.key && ev.key !== wantedScene) return;  // another page's view
@@ -371,6 +379,25 @@ function rebase() {
 }
 rebaseBtn.addEventListener("click", rebase);
 
+// what a provisional view shows, in words (it goes when the exact view is drawn)
+function showViewNote(ev) {
+  let note = document.getElementById("view-note");
+  if (!note) {
+    note = Object.assign(document.createElement("p"), { id: "view-note", className: "view-note" });
+    note.setAttribute("role", "status");
+    document.getElementById("view-slot").before(note);
+  }
+  document.body.dataset.view = ev.provisional ? "provisional" : "exact";
+  note.hidden = !ev.provisional;
+  if (!ev.provisional) { note.textContent = ""; return; }
+  const changed = ev.changed || [], missing = ev.missing || [];
+  note.textContent = `Provisional view of the new frame: the rods, bought parts and unchanged printed parts are exact; `
+    + (changed.length ? `${changed.length} changed part${changed.length > 1 ? "s" : ""} (${changed.join(", ")}) `
+      + `${changed.length > 1 ? "are" : "is"} drawn pale: the previous shape at the new place, grams estimated. ` : "")
+    + (missing.length ? `Not shown yet: ${missing.join(", ")}. ` : "")
+    + "The exact parts replace them when made.";
+}
+
 function progress(ev) {
   const box = document.getElementById(ev.task === "build" ? "build-progress" : "view-progress");
   if (!box) return;
@@ -392,12 +419,25 @@ function progress(ev) {
 }
 
 let sceneKey = null;
+let sceneProvisional = false;  // the view drawn is a provisional one (its exact one still to come)
+const loading = new Set();     // urls being fetched
+// drawn already: the same geometry, unless a provisional view gives way to the exact one
+const drawn = (ev) => ev.key === sceneKey && (Boolean(ev.provisional) || !sceneProvisional);
 async function loadScene(ev) {
-  if (ev.key === sceneKey) return;
-  const res = await fetch(ev.url);
-  if (!res.ok) return;  // replaced by a newer one already
-  const data = await res.json();
+  if (drawn(ev) || loading.has(ev.url)) return;
+  loading.add(ev.url);
+  let data = null;
+  try {
+    const res = await fetch(ev.url);
+    if (res.ok) data = await res.json();  // else: replaced by a newer one already
+  } finally {
+    loading.delete(ev.url);
+  }
+  // meanwhile: another geometry wanted, this one drawn, or the exact view known (a provisional one is not drawn over it)
+  if (!data || ev.key !== wantedScene || drawn(ev) || (ev.provisional && sceneUrls[ev.key])) return;
   sceneKey = ev.key;
+  sceneProvisional = Boolean(ev.provisional);
+  showViewNote(ev);
   const slot = document.getElementById("view-slot");
   const old = slot.querySelector("canvas");
   if (old) {  // free the old WebGL context now, not when it is collected
@@ -409,6 +449,7 @@ async function loadScene(ev) {
   root.className = "cf-viewer";
   root.dataset.objects = String(data.meta.objects.length);
   root.dataset.scene = ev.key;
+  root.dataset.provisional = ev.provisional ? "1" : "0";
   const counts = {};
   for (const o of data.meta.objects) counts[o.kind] = (counts[o.kind] || 0) + 1;
   root.innerHTML = `<canvas id="cf-canvas" width="960" height="560" aria-label="3D view of the design"></canvas>
