@@ -24,6 +24,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import tiers
@@ -298,6 +299,114 @@ def test_a_failed_3d_view_still_brings_the_fe_figures(tmp_path, monkeypatch):
         assert solved["model"] == "fe" and not solved["pending_fe"]
         expected = cf.load("carbon.yaml").with_values({"joints.wall": 1.35}).check()
         assert solved["check"]["stiffness"]["k_n_per_m"] == pytest.approx(expected.k_n_per_m, abs=0.5)
+    finally:
+        s.close()
+
+
+def _made_parts(d, scale=2.0):
+    """A `view.MadePart` per part of design `d` as a view would keep them, without the CAD: a
+    box of its own, a print <- local of its own (a shift), and `scale` times the mass
+    model's estimated volumes (so grams from them and from the estimate differ)."""
+    from cogniframe.api.view import MadePart
+    from cogniframe.parts.shapes import geometry_digest
+    from cogniframe.report.viewer import Mesh
+
+    made = {}
+    for i, p in enumerate(d.derived.parts):
+        box = np.array([[x, y, z] for x in (0, 10) for y in (0, 6 + i) for z in (0, 4)], float)
+        faces = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                          [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+        pfl = np.eye(4)
+        pfl[:3, 3] = [i, 2 * i, 3.0]
+        e = p.estimate
+        made[p.name] = MadePart(geometry_digest(p), Mesh(box, faces), pfl.tolist(),
+                                {"volume_mm3": scale * e.volume, "area_h_mm2": scale * e.area_h, "area_v_mm2": scale * e.area_v})
+    return made
+
+
+def test_a_provisional_view_draws_the_new_frame_with_the_previous_parts_at_their_new_places():
+    """The view a geometry edit shows at once: the new frame's rods, the unchanged parts as made,
+    each changed part its previous mesh at its NEW placements, pale and noted, grams estimated."""
+    from cogniframe.api.view import provisional_items
+    from cogniframe.analysis.mass import budget
+    from cogniframe.export.plates import material_colour
+    from cogniframe.parts.shapes import geometry_digest
+    from cogniframe.report.viewer import BACKGROUND, pack
+
+    d0 = cf.load(CARBON)
+    d = d0.with_values({"frame.height": d0.spec.frame.height + 4})
+    made = _made_parts(d0)
+    items, changed, missing = provisional_items(d.spec, d.derived, made)
+    digests = {p.name: geometry_digest(p) for p in d.derived.parts}
+    assert set(changed) == {n for n, g in digests.items() if g != made[n].digest}
+    assert {"knee", "corner_top"} <= set(changed) and len(changed) < len(digests) and missing == ()
+    # the rods are the new frame's: 4 mm taller between the top and the bottom axes
+    rods = [it for it in items if it.kind == "rod"]
+    assert len(rods) == len(d.derived.frame.rods) == 28
+    ends = np.array([[it.matrix @ [0, 0, z, 1] for z in (0, 1)] for it in rods])[..., :3]
+    new_ends = np.array([[r.start, r.end] for r in d.derived.frame.rods.values()], float)
+    assert np.allclose(ends, new_ends, atol=1e-9)
+    old_z = np.array([[r.start[2], r.end[2]] for r in d0.derived.frame.rods.values()], float)
+    assert np.ptp(ends[..., 2]) - np.ptp(old_z) == pytest.approx(4.0, abs=1e-9)
+    # every copy of every part, the changed ones at their new placements, pale
+    grams_estimate = {i.name: i.mass_g_each for i in budget(d.spec, d.derived.frame, d.derived.cut, d.derived.parts).items}
+    moved = 0
+    for p in d.derived.parts:
+        copies = [it for it in items if it.kind == "part" and it.note.split(";")[0] == f"part {p.name}"]
+        assert len(copies) == len(p.placements)
+        local_from_print = np.linalg.inv(np.asarray(made[p.name].print_from_local))
+        for it, pl, pl0 in zip(copies, p.placements, next(q for q in d0.derived.parts if q.name == p.name).placements):
+            assert np.allclose(it.matrix, pl.matrix() @ local_from_print)
+            assert it.mesh is made[p.name].mesh
+            moved += not np.allclose(pl.matrix(), pl0.matrix())
+            if p.name in changed:
+                assert it.provisional and "updating" in it.note and it.mass_g == pytest.approx(grams_estimate[p.name])
+                colour, bg = material_colour(p.material), BACKGROUND
+                for k in (1, 3, 5):  # 30 % of the colour, 70 % of the background
+                    assert int(it.colour[k:k + 2], 16) == round(0.3 * int(colour[k:k + 2], 16) + 0.7 * int(bg[k:k + 2], 16))
+            else:
+                assert not it.provisional and it.colour == material_colour(p.material)
+                assert it.mass_g > 1.3 * grams_estimate[p.name]  # from the made part's (doubled) volumes
+    assert moved > 0
+    meta, _ = pack(items)
+    flagged = [o for o in meta["objects"] if "provisional" in o]
+    assert len(flagged) == sum(len(p.placements) for p in d.derived.parts if p.name in changed)
+    assert all(o["provisional"] is True for o in flagged)
+
+
+@pytest.mark.fe
+def test_a_geometry_edit_publishes_a_provisional_view_then_the_exact_one(tmp_path, monkeypatch):
+    """A frame.height edit: a provisional scene of the new geometry first (before its parts are
+    made), then the exact one under the same key, which replaces it on the server."""
+    from cogniframe.studio.session import Session
+
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(CARBON, tmp_path / "carbon.yaml")
+    events = Events()
+    s = Session("carbon.yaml", view=True)
+    try:
+        page = s.connect(events)
+        s.start()
+        first = events.wait(lambda e: e["type"] == "scene", timeout=600)
+        assert not first.get("provisional")  # nothing made before: no stand-ins to draw
+        s.edit(page, {"frame.height": "113.3"}, s.base_hash, seq=1, edited="frame.height")
+        key = events.wait(lambda e: e["type"] == "figures" and e["seq"] == 1)["geometry"]
+        exact = events.wait(lambda e: e["type"] == "scene" and e["key"] == key and not e.get("provisional"), timeout=600)
+        scenes = [e for e in events.items if e["type"] == "scene" and e["key"] == key]
+        assert [bool(e.get("provisional")) for e in scenes] == [True, False]  # the provisional one first
+        stand_in = scenes[0]
+        assert {"knee", "corner_top"} <= set(stand_in["changed"]) and stand_in["missing"] == []
+        assert stand_in["url"] != exact["url"] and s.scene(f"{key}-provisional") is None  # replaced
+        assert key not in s.provisional
+        meta, _ = s.scene(key)
+        assert not any("provisional" in o for o in meta["objects"])
+        assert exact["objects"] == stand_in["objects"] == len(meta["objects"])  # the same copies, rods, bought parts
+        # a page that asks again for this geometry gets the exact view
+        s.edit(page, {"frame.height": "113.3", "motors.kv": "6500"}, s.base_hash, seq=2, edited="motors.kv")
+        events.wait(lambda e: e["type"] == "figures" and e["seq"] == 2)
+        again = events.wait(lambda e: e["type"] == "scene" and e["key"] == key and e is not exact
+                            and not e.get("provisional") and e is not scenes[-1], timeout=60)
+        assert again["url"] == exact["url"]
     finally:
         s.close()
 
@@ -667,6 +776,10 @@ def test_a_new_joint_geometry_shows_the_fast_model_then_the_fe_and_a_new_view(pa
                            " || document.querySelector('#view-progress')?.dataset.error", timeout=600_000)
     assert not page.get_attribute("#view-progress", "data-error"), page.get_attribute("#view-progress", "data-error")
     t_view = time.monotonic() - t0
+    new_key = page.get_attribute("#cf-viewer", "data-scene")
+    drawn_views = [x["provisional"] for x in page.evaluate("window.cogniframeStudio.sceneLatencies") if x["key"] == new_key]
+    assert drawn_views == [True, False]  # the new frame drawn at once (provisional), then the exact parts
+    assert page.get_attribute("body", "data-view") == "exact" and page.is_hidden("#view-note")
     with capsys.disabled():
         print(f"\nstudio: new joint geometry: fast-model figures after {rec['ms']:.0f} ms (k {k_fast:.0f} N/m), "
               f"FE figures after {t_fe:.1f} s (k {k_new:.0f} N/m, was {k_fe:.0f}), new 3D view after {t_view:.1f} s")
