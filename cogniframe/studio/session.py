@@ -337,7 +337,9 @@ class Session:
             self.scenes[key] = packed
             self.scenes.move_to_end(key)
             while len(self.scenes) > 4:  # the pages' newest views
-                self.scenes.popitem(last=False)
+                old, _ = self.scenes.popitem(last=False)
+                if old.endswith("-provisional"):  # its event no longer points at a view
+                    self.provisional.pop(old.removesuffix("-provisional"), None)
 
     def _show_provisional(self, d: api.Design, key: str, t0: float) -> None:
         """A view of the new frame at once, while its changed parts are made (a second, more on a
@@ -462,6 +464,7 @@ class Session:
         with self.lock:
             if self.requested_key == key:
                 self.requested_key = None  # the next edit tries again
+            self.provisional.pop(key, None)  # no exact view follows it now
 
     def scene(self, key: str) -> tuple[dict, bytes] | None:
         with self.lock:

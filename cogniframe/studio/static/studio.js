@@ -410,6 +410,11 @@ function progress(ev) {
   label.textContent = ev.error ? ev.error : ev.text || "";
   box.dataset.active = active ? "1" : "0";
   box.dataset.error = ev.error || "";
+  if (ev.task === "view" && ev.error && sceneProvisional && ev.key === sceneKey) {  // no exact view follows: say so
+    const note = document.getElementById("view-note");
+    if (note) note.textContent = note.textContent.replace(/The exact parts replace them when made\.$/,
+      `The exact parts could not be made (${ev.error}); the pale parts stay provisional.`);
+  }
   if (ev.task === "fe" && ev.error && modelEl.dataset.model.endsWith("-pending")) {
     // the figures stay the fast model's: say so, instead of a wait that never ends
     const fast = modelEl.dataset.model.slice(0, -"-pending".length);
