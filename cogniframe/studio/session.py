@@ -379,7 +379,10 @@ class Session:
         t0 = time.perf_counter()
         self.publish({"type": "progress", "task": "view", "key": key, "done": 0, "total": 1, "fe": fe,
                       "text": "making the parts" + (" and solving the joints' FE" if fe else "")})
-        self._show_provisional(d, key, t0)
+        # the provisional view is made while the CAD server makes the changed parts (another
+        # process); the exact view waits for it, so a page never gets the provisional one after it
+        stand_in = threading.Thread(target=self._show_provisional, args=(d, key, t0), name="studio-provisional", daemon=True)
+        stand_in.start()
         n_parts = len(d.derived.parts)
         parts_done: list[str] = []
         shown: list[threading.Thread] = []
@@ -393,10 +396,12 @@ class Session:
                                               values[p.name]) for p in d.derived.parts}
             except Exception as e:  # noqa: BLE001
                 log.exception("packing the 3D view")
+                stand_in.join()
                 self._view_failed(key)
                 self.publish({"type": "progress", "task": "view", "key": key, "done": 1, "total": 1,
                               "text": f"the 3D view failed: {shorten(str(e))}", "error": f"{type(e).__name__}: {shorten(str(e))}"})
                 return
+            stand_in.join()
             with self.lock:
                 self.made.update(made)
                 self.provisional.pop(key, None)
@@ -425,6 +430,7 @@ class Session:
         except Exception as e:  # noqa: BLE001
             if not isinstance(e, UserError):
                 log.exception("making the parts of the 3D view")
+            stand_in.join()
             self._view_failed(key)
             text = str(e) if isinstance(e, UserError) else f"the 3D view failed: {type(e).__name__}: {e}"
             self.publish({"type": "progress", "task": "view", "key": key, "done": 1, "total": 1,
