@@ -7,12 +7,15 @@ for the next build and the other way round), optionally with the `estimate` step
 FE, on the same CAD workers as the build does it). `scene` turns the part files into the
 viewer's item list (printed parts, rods and the bought parts) and packs it; `design_html`
 inlines three.js, the viewer and the geometry into one HTML fragment with ids of its own, so
-several views can sit in one notebook and none fetches anything.
+several views can sit in one notebook and none fetches anything. For the studio:
+`geometry_key` (what a view shows, so an edit that changes none of it keeps the view) and
+`provisional_items` (a new frame's view at once, from the parts an earlier view made).
 """
 
 from __future__ import annotations
 
 import base64
+import hashlib
 import html
 import json
 import secrets
@@ -167,3 +170,23 @@ def inline_html(meta: dict, buf: bytes, title: str = "3D view") -> str:
         f'<script type="module">{module_loader(_view_id, "uid", uid=json.dumps(uid))}</script>',
         "</div>",
     ])
+
+
+def geometry_key(d) -> str:
+    """What the 3D view shows: each part's CAD inputs and placements, the rods, the bought parts'
+    shapes and the bed. A change elsewhere needs no new view (which would also reset its camera):
+    grams, a motor's KV, the battery's cells and capacity (they are only in the click panel's
+    text, which follows at the next change of shape)."""
+    from ..parts.shapes import geometry_digest
+
+    pd = d.derived
+    spec = d.spec
+    parts = [[p.name, geometry_digest(p), [[list(map(float, pl.origin)), pl.rotation_deg] for pl in p.placements]] for p in pd.parts]
+    rods = [[r.name, [float(x) for x in r.start], [float(x) for x in r.end], float(r.diameter)] for r in pd.frame.rods.values()]
+    battery = spec.core.battery
+    vitamins = [spec.motors.model_dump(mode="json", exclude={"kv", "mass", "max_thrust_g", "prop_mass"}),
+                [c.vitamin for c in spec.components],  # not their grams
+                [battery.length, battery.width, battery.height, battery.connector], spec.core.stack_pattern,
+                spec.core.model_dump(mode="json", include={"camera", "flow_sensor", "computer"})]
+    payload = [parts, rods, vitamins, [float(b) for b in spec.printer.bed]]
+    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:20]

@@ -41,7 +41,6 @@ and the workers' mailboxes (`mailbox.py`).
 from __future__ import annotations
 
 import collections
-import hashlib
 import itertools
 import json
 import logging
@@ -55,6 +54,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import api
+from ..api.view import geometry_key
 from ..errors import UserError
 from . import form
 from .compare import compare_figures
@@ -634,23 +634,3 @@ class _Lines:
 
     def isatty(self) -> bool:
         return False
-
-
-def geometry_key(d: api.Design) -> str:
-    """What the 3D view shows: each part's CAD inputs and placements, the rods, the bought parts'
-    shapes and the bed. A change elsewhere needs no new view (which would also reset its camera):
-    grams, a motor's KV, the battery's cells and capacity (they are only in the click panel's
-    text, which follows at the next change of shape)."""
-    from ..parts.shapes import geometry_digest
-
-    pd = d.derived
-    spec = d.spec
-    parts = [[p.name, geometry_digest(p), [[list(map(float, pl.origin)), pl.rotation_deg] for pl in p.placements]] for p in pd.parts]
-    rods = [[r.name, [float(x) for x in r.start], [float(x) for x in r.end], float(r.diameter)] for r in pd.frame.rods.values()]
-    battery = spec.core.battery
-    vitamins = [spec.motors.model_dump(mode="json", exclude={"kv", "mass", "max_thrust_g", "prop_mass"}),
-                [c.vitamin for c in spec.components],  # not their grams
-                [battery.length, battery.width, battery.height, battery.connector], spec.core.stack_pattern,
-                spec.core.model_dump(mode="json", include={"camera", "flow_sensor", "computer"})]
-    payload = [parts, rods, vitamins, [float(b) for b in spec.printer.bed]]
-    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:20]
