@@ -84,6 +84,79 @@ def test_field_parse():
     assert f["printer.preset"].parse("") is None and f["motors.model"].parse("1404") == "1404"
 
 
+# -- the provisional 3D view, without the CAD -----------------------------------------------------
+
+def _made_parts(d, scale=2.0):
+    """A `view.MadePart` per part of design `d` as a view would keep them, without the CAD: a
+    box of its own, a print <- local of its own (a shift), and `scale` times the mass
+    model's estimated volumes (so grams from them and from the estimate differ)."""
+    from cogniframe.api.view import MadePart
+    from cogniframe.parts.shapes import geometry_digest
+    from cogniframe.report.viewer import Mesh
+
+    made = {}
+    for i, p in enumerate(d.derived.parts):
+        box = np.array([[x, y, z] for x in (0, 10) for y in (0, 6 + i) for z in (0, 4)], float)
+        faces = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                          [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+        pfl = np.eye(4)
+        pfl[:3, 3] = [i, 2 * i, 3.0]
+        e = p.estimate
+        made[p.name] = MadePart(geometry_digest(p), Mesh(box, faces), pfl.tolist(),
+                                {"volume_mm3": scale * e.volume, "area_h_mm2": scale * e.area_h, "area_v_mm2": scale * e.area_v})
+    return made
+
+
+def test_a_provisional_view_draws_the_new_frame_with_the_previous_parts_at_their_new_places():
+    """The view a geometry edit shows at once: the new frame's rods, the unchanged parts as made,
+    each changed part its previous mesh at its NEW placements, pale and noted, grams estimated."""
+    from cogniframe.api.view import provisional_items
+    from cogniframe.analysis.mass import budget
+    from cogniframe.export.plates import material_colour
+    from cogniframe.parts.shapes import geometry_digest
+    from cogniframe.report.viewer import BACKGROUND, pack
+
+    d0 = cf.load(CARBON)
+    d = d0.with_values({"frame.height": d0.spec.frame.height + 4})
+    made = _made_parts(d0)
+    items, changed, missing = provisional_items(d.spec, d.derived, made)
+    digests = {p.name: geometry_digest(p) for p in d.derived.parts}
+    assert set(changed) == {n for n, g in digests.items() if g != made[n].digest}
+    assert {"knee", "corner_top"} <= set(changed) and len(changed) < len(digests) and missing == ()
+    # the rods are the new frame's: 4 mm taller between the top and the bottom axes
+    rods = [it for it in items if it.kind == "rod"]
+    assert len(rods) == len(d.derived.frame.rods) == 28
+    ends = np.array([[it.matrix @ [0, 0, z, 1] for z in (0, 1)] for it in rods])[..., :3]
+    new_ends = np.array([[r.start, r.end] for r in d.derived.frame.rods.values()], float)
+    assert np.allclose(ends, new_ends, atol=1e-9)
+    old_z = np.array([[r.start[2], r.end[2]] for r in d0.derived.frame.rods.values()], float)
+    assert np.ptp(ends[..., 2]) - np.ptp(old_z) == pytest.approx(4.0, abs=1e-9)
+    # every copy of every part, the changed ones at their new placements, pale
+    grams_estimate = {i.name: i.mass_g_each for i in budget(d.spec, d.derived.frame, d.derived.cut, d.derived.parts).items}
+    moved = 0
+    for p in d.derived.parts:
+        copies = [it for it in items if it.kind == "part" and it.note.split(";")[0] == f"part {p.name}"]
+        assert len(copies) == len(p.placements)
+        local_from_print = np.linalg.inv(np.asarray(made[p.name].print_from_local))
+        for it, pl, pl0 in zip(copies, p.placements, next(q for q in d0.derived.parts if q.name == p.name).placements):
+            assert np.allclose(it.matrix, pl.matrix() @ local_from_print)
+            assert it.mesh is made[p.name].mesh
+            moved += not np.allclose(pl.matrix(), pl0.matrix())
+            if p.name in changed:
+                assert it.provisional and "updating" in it.note and it.mass_g == pytest.approx(grams_estimate[p.name])
+                colour, bg = material_colour(p.material), BACKGROUND
+                for k in (1, 3, 5):  # 30 % of the colour, 70 % of the background
+                    assert int(it.colour[k:k + 2], 16) == round(0.3 * int(colour[k:k + 2], 16) + 0.7 * int(bg[k:k + 2], 16))
+            else:
+                assert not it.provisional and it.colour == material_colour(p.material)
+                assert it.mass_g > 1.3 * grams_estimate[p.name]  # from the made part's (doubled) volumes
+    assert moved > 0
+    meta, _ = pack(items)
+    flagged = [o for o in meta["objects"] if "provisional" in o]
+    assert len(flagged) == sum(len(p.placements) for p in d.derived.parts if p.name in changed)
+    assert all(o["provisional"] is True for o in flagged)
+
+
 # -- the session, without a browser ------------------------------------------------------------
 
 class Events:
@@ -303,77 +376,6 @@ def test_a_failed_3d_view_still_brings_the_fe_figures(tmp_path, monkeypatch):
         s.close()
 
 
-def _made_parts(d, scale=2.0):
-    """A `view.MadePart` per part of design `d` as a view would keep them, without the CAD: a
-    box of its own, a print <- local of its own (a shift), and `scale` times the mass
-    model's estimated volumes (so grams from them and from the estimate differ)."""
-    from cogniframe.api.view import MadePart
-    from cogniframe.parts.shapes import geometry_digest
-    from cogniframe.report.viewer import Mesh
-
-    made = {}
-    for i, p in enumerate(d.derived.parts):
-        box = np.array([[x, y, z] for x in (0, 10) for y in (0, 6 + i) for z in (0, 4)], float)
-        faces = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
-                          [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
-        pfl = np.eye(4)
-        pfl[:3, 3] = [i, 2 * i, 3.0]
-        e = p.estimate
-        made[p.name] = MadePart(geometry_digest(p), Mesh(box, faces), pfl.tolist(),
-                                {"volume_mm3": scale * e.volume, "area_h_mm2": scale * e.area_h, "area_v_mm2": scale * e.area_v})
-    return made
-
-
-def test_a_provisional_view_draws_the_new_frame_with_the_previous_parts_at_their_new_places():
-    """The view a geometry edit shows at once: the new frame's rods, the unchanged parts as made,
-    each changed part its previous mesh at its NEW placements, pale and noted, grams estimated."""
-    from cogniframe.api.view import provisional_items
-    from cogniframe.analysis.mass import budget
-    from cogniframe.export.plates import material_colour
-    from cogniframe.parts.shapes import geometry_digest
-    from cogniframe.report.viewer import BACKGROUND, pack
-
-    d0 = cf.load(CARBON)
-    d = d0.with_values({"frame.height": d0.spec.frame.height + 4})
-    made = _made_parts(d0)
-    items, changed, missing = provisional_items(d.spec, d.derived, made)
-    digests = {p.name: geometry_digest(p) for p in d.derived.parts}
-    assert set(changed) == {n for n, g in digests.items() if g != made[n].digest}
-    assert {"knee", "corner_top"} <= set(changed) and len(changed) < len(digests) and missing == ()
-    # the rods are the new frame's: 4 mm taller between the top and the bottom axes
-    rods = [it for it in items if it.kind == "rod"]
-    assert len(rods) == len(d.derived.frame.rods) == 28
-    ends = np.array([[it.matrix @ [0, 0, z, 1] for z in (0, 1)] for it in rods])[..., :3]
-    new_ends = np.array([[r.start, r.end] for r in d.derived.frame.rods.values()], float)
-    assert np.allclose(ends, new_ends, atol=1e-9)
-    old_z = np.array([[r.start[2], r.end[2]] for r in d0.derived.frame.rods.values()], float)
-    assert np.ptp(ends[..., 2]) - np.ptp(old_z) == pytest.approx(4.0, abs=1e-9)
-    # every copy of every part, the changed ones at their new placements, pale
-    grams_estimate = {i.name: i.mass_g_each for i in budget(d.spec, d.derived.frame, d.derived.cut, d.derived.parts).items}
-    moved = 0
-    for p in d.derived.parts:
-        copies = [it for it in items if it.kind == "part" and it.note.split(";")[0] == f"part {p.name}"]
-        assert len(copies) == len(p.placements)
-        local_from_print = np.linalg.inv(np.asarray(made[p.name].print_from_local))
-        for it, pl, pl0 in zip(copies, p.placements, next(q for q in d0.derived.parts if q.name == p.name).placements):
-            assert np.allclose(it.matrix, pl.matrix() @ local_from_print)
-            assert it.mesh is made[p.name].mesh
-            moved += not np.allclose(pl.matrix(), pl0.matrix())
-            if p.name in changed:
-                assert it.provisional and "updating" in it.note and it.mass_g == pytest.approx(grams_estimate[p.name])
-                colour, bg = material_colour(p.material), BACKGROUND
-                for k in (1, 3, 5):  # 30 % of the colour, 70 % of the background
-                    assert int(it.colour[k:k + 2], 16) == round(0.3 * int(colour[k:k + 2], 16) + 0.7 * int(bg[k:k + 2], 16))
-            else:
-                assert not it.provisional and it.colour == material_colour(p.material)
-                assert it.mass_g > 1.3 * grams_estimate[p.name]  # from the made part's (doubled) volumes
-    assert moved > 0
-    meta, _ = pack(items)
-    flagged = [o for o in meta["objects"] if "provisional" in o]
-    assert len(flagged) == sum(len(p.placements) for p in d.derived.parts if p.name in changed)
-    assert all(o["provisional"] is True for o in flagged)
-
-
 @pytest.mark.fe
 def test_a_geometry_edit_publishes_a_provisional_view_then_the_exact_one(tmp_path, monkeypatch):
     """A frame.height edit: a provisional scene of the new geometry first (before its parts are
@@ -407,6 +409,9 @@ def test_a_geometry_edit_publishes_a_provisional_view_then_the_exact_one(tmp_pat
         again = events.wait(lambda e: e["type"] == "scene" and e["key"] == key and e is not exact
                             and not e.get("provisional") and e is not scenes[-1], timeout=60)
         assert again["url"] == exact["url"]
+        # the view's work (and the FE after it) done before the session closes: no thread of it outlives the test
+        events.wait(lambda e: e["type"] == "progress" and e.get("task") == "view" and e.get("key") == key
+                    and e["done"] == e["total"] == 1 and e["text"] == "", timeout=600)
     finally:
         s.close()
 
