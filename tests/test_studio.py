@@ -412,6 +412,8 @@ def test_a_geometry_edit_publishes_a_provisional_view_then_the_exact_one(tmp_pat
         # the view's work (and the FE after it) done before the session closes: no thread of it outlives the test
         events.wait(lambda e: e["type"] == "progress" and e.get("task") == "view" and e.get("key") == key
                     and e["done"] == e["total"] == 1 and e["text"] == "", timeout=600)
+        if any(e["type"] == "figures" and e["pending_fe"] for e in events.items):  # and the page's check after its FE
+            events.wait(lambda e: e["type"] == "figures" and e["after_fe"], timeout=600)
     finally:
         s.close()
 
