@@ -28,12 +28,13 @@ from typing import Any
 
 def build_parts(spec, design, out: Path, *, fe: bool = False, server: bool | None = None,
                 on_step: Callable[..., None] | None = None,
-                log: Callable[[str], None] | None = None) -> dict[str, dict]:
+                log: Callable[[str], None] | None = None, stop=None) -> dict[str, dict]:
     """Make every printed part's STL and STEP in `out` through the build graph (cached steps);
     with `fe`, also solve the joints' FE (the `estimate` step). Returns each part step's value
     (its file names, volume, `print_from_local`, ...) by part name. `on_step(task, done, total,
     part_values)` after each step; `part_values()` gives the values once every part step is done
-    (the files are in `out` then, while the FE may still run)."""
+    (the files are in `out` then, while the FE may still run). `stop` (a threading.Event): once set,
+    the work ends early with `pipeline.graph.Stopped` (the caller no longer wants it)."""
     from .. import pipeline
     from ..runtime import cad_server
 
@@ -46,7 +47,8 @@ def build_parts(spec, design, out: Path, *, fe: bool = False, server: bool | Non
         if on_step is not None:
             on_step(record.task, done[0], total, lambda: {p.name: ctx.part_value(p.name) for p in design.parts})
 
-    ctx, _ = pipeline.run(spec, design, out, only=only, server=cad_server.wanted(server), log=log, on_step=finished)
+    ctx, _ = pipeline.run(spec, design, out, only=only, server=cad_server.wanted(server), log=log, on_step=finished,
+                          stop=stop)
     return {p.name: ctx.part_value(p.name) for p in design.parts}
 
 
