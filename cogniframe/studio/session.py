@@ -105,7 +105,7 @@ class Session:
         self.tmp = Path(tempfile.mkdtemp(prefix="cogniframe-studio-"))
         self._edits = PerPage()
         self._geometry = Latest()
-        self._closed = False
+        self._stop = threading.Event()  # set by close: the work under way ends early, none starts
         self._threads = [threading.Thread(target=self._evaluator, name="studio-evaluate", daemon=True),
                          threading.Thread(target=self._geometry_worker, name="studio-geometry", daemon=True)]
         for t in self._threads:
@@ -248,7 +248,10 @@ class Session:
                 self.requested_key = key
             self._geometry.put((d, key, fe))
 
-        threading.Thread(target=warm, name="studio-warm", daemon=True).start()
+        t = threading.Thread(target=warm, name="studio-warm", daemon=True)
+        with self.lock:
+            self._threads.append(t)  # close waits for it
+        t.start()
 
     def edit(self, page: Page, values: Any, base: Any, seq: int = 0, edited: str | None = None) -> None:
         """Queue a check of the page's design: `values` (what the page changed) on the file text
@@ -404,9 +407,10 @@ class Session:
             stand_in.join()
             with self.lock:
                 self.made.update(made)
-                self.provisional.pop(key, None)
-                self.scenes.pop(f"{key}-provisional", None)
+                self.provisional.pop(key, None)  # no page is sent it now
                 self._keep_scene(key, packed)
+                if f"{key}-provisional" in self.scenes:  # a page told of it may still fetch it: the next view drops it
+                    self.scenes.move_to_end(f"{key}-provisional", last=False)
             self.publish({"type": "scene", "url": f"/scene/{key}.json", "key": key,
                           "objects": len(packed[0]["objects"]), "seconds": round(time.perf_counter() - t0, 2)})
 
@@ -426,11 +430,13 @@ class Session:
                 t.start()
 
         try:
-            view.build_parts(d.spec, d.derived, out, fe=fe, server=self.server, on_step=step)
+            view.build_parts(d.spec, d.derived, out, fe=fe, server=self.server, on_step=step, stop=self._stop)
         except Exception as e:  # noqa: BLE001
+            stand_in.join()
+            if self._stop.is_set():  # the session closes: no page waits for this view or its FE now
+                return
             if not isinstance(e, UserError):
                 log.exception("making the parts of the 3D view")
-            stand_in.join()
             self._view_failed(key)
             text = str(e) if isinstance(e, UserError) else f"the 3D view failed: {type(e).__name__}: {e}"
             self.publish({"type": "progress", "task": "view", "key": key, "done": 1, "total": 1,
@@ -609,9 +615,17 @@ class Session:
         return {"type": "compared", "columns": columns}
 
     def close(self) -> None:
-        self._closed = True
+        """End the session's work, and return once it has ended: the edits and views still queued
+        are dropped, a 3D view being made drops its CAD jobs (a joint FE solved in this process
+        ends first), so no thread of it runs on into what follows or writes into the folder
+        removed here. A Build runs on (it ends with the process)."""
+        self._stop.set()
         self._edits.close()
         self._geometry.close()
+        with self.lock:
+            threads = list(self._threads)
+        for t in threads:
+            t.join()
         shutil.rmtree(self.tmp, ignore_errors=True)
 
 
