@@ -60,16 +60,22 @@ def edit(tab, key: str, value: str) -> dict:
     return tab.evaluate("window.cogniframeStudio.latencies.at(-1)")
 
 
-def geometry_edit(tab, value: str) -> tuple[float, float]:
+def geometry_edit(tab, value: str) -> tuple[float, float] | str:
     """(ms to the first view of the new frame drawn, ms to its exact view drawn) after one
-    frame.height edit; then waits for the edit's FE, so the next starts from an idle studio."""
+    frame.height edit, or the view's error when its parts could not be made; then waits for the
+    edit's FE, so the next starts from an idle studio."""
     n = tab.evaluate("window.cogniframeStudio.sceneLatencies.filter((x) => !x.provisional).length")
     seen = tab.evaluate("window.cogniframeStudio.sceneLatencies.length")
-    tab.fill("[name='frame.height']", value)
-    tab.wait_for_function(f"window.cogniframeStudio.sceneLatencies.filter((x) => !x.provisional).length > {n}",
-                          timeout=600_000)
+    tab.evaluate("(() => { const box = document.getElementById('view-progress'); if (box) box.dataset.error = ''; })()")
+    tab.fill("[name='frame.height']", value)  # (an error of an earlier edit cleared: this edit's own counts)
+    tab.wait_for_function(f"window.cogniframeStudio.sceneLatencies.filter((x) => !x.provisional).length > {n}"
+                          " || document.getElementById('view-progress')?.dataset.error", timeout=600_000)
+    error = tab.get_attribute("#view-progress", "data-error")
     recs = tab.evaluate(f"window.cogniframeStudio.sceneLatencies.slice({seen})")
-    tab.wait_for_function("document.body.dataset.model === 'fe'", timeout=600_000)
+    tab.wait_for_function("['fe', 'analytic-fe-failed', 'surrogate-fe-failed'].includes(document.body.dataset.model)",
+                          timeout=600_000)
+    if error:
+        return error
     return recs[0]["ms"], next(x["ms"] for x in recs if not x["provisional"])
 
 
@@ -103,13 +109,17 @@ def main() -> None:
                 heights = [f"{111.8 + (-1) ** i * (2 + i) + random.randint(1, 99) / 100:.2f}" for i in range(args.geometry)]
                 first, exact = [], []
                 for h in heights:
-                    a, b = geometry_edit(tab, h)
+                    got = geometry_edit(tab, h)
+                    if isinstance(got, str):
+                        print(f"frame.height {h}: no exact view ({got})")
+                        continue
+                    a, b = got
                     first.append(a)
                     exact.append(b)
                     print(f"frame.height {h}: first view of the new frame drawn after {a:.0f} ms, the exact one after {b:.0f} ms")
-                if heights:
+                if exact:
                     print(f"geometry edit -> new 3D view: first drawn median {statistics.median(first):.0f} ms, exact "
-                          f"median {statistics.median(exact):.0f} ms over {len(heights)} edits, load average "
+                          f"median {statistics.median(exact):.0f} ms over {len(exact)} edits, load average "
                           f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; target 1000 ms")
                 browser.close()
         finally:
