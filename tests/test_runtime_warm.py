@@ -34,6 +34,40 @@ def test_the_warm_up_imports_only_while_the_main_thread_holds_no_step():
 
 
 @pytest.mark.process
+def test_a_step_that_waits_goes_before_the_next_import(tmp_path):
+    """A main-thread step that becomes ready while a module is being imported takes the baton when
+    that import ends, before the warm-up's next module (a plain lock let the warm-up, which takes
+    it again at once, import them all first)."""
+    (tmp_path / "cf_slow_a.py").write_text("import builtins\nbuiltins.GATE.wait()\n")
+    (tmp_path / "cf_slow_b.py").write_text("")
+    out = _run(f"""
+        import builtins, sys, threading, time
+        sys.path.insert(0, {str(tmp_path)!r})
+        builtins.GATE = threading.Event()
+        from cogniframe.runtime.warm import Warmup
+        w = Warmup(("cf_slow_a", "cf_slow_b"))
+        w.start()
+        while "cf_slow_a" not in sys.modules:  # its import has begun (and waits at the gate)
+            time.sleep(0.001)
+        seen = []
+
+        def step():
+            with w.baton:
+                seen.append("cf_slow_b" in sys.modules)
+
+        t = threading.Thread(target=step)
+        t.start()
+        while w.baton._waiting == 0:  # the step waits for the baton
+            time.sleep(0.001)
+        builtins.GATE.set()
+        t.join()
+        w.wait()
+        print(seen[0], "cf_slow_b" in sys.modules)
+    """)
+    assert out == ["False", "True"]
+
+
+@pytest.mark.process
 def test_a_stopped_warm_up_imports_nothing_more():
     out = _run("""
         import sys

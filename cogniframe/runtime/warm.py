@@ -16,6 +16,7 @@ slicer, the physics) do not use them.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import threading
 
@@ -26,13 +27,54 @@ MAIN_THREAD_LIBRARIES = ("rectpack", "trimesh", "matplotlib.backends.backend_agg
                          "pyvista.plotting")
 
 
+class Baton:
+    """The lock the warm-up and the main-thread steps share, with the steps first: a step holds it
+    with `with baton:`; the warm-up takes it for each module with `baton.idle()`, which first
+    waits until no step is waiting for it. (A plain lock let the warm-up, which releases and
+    takes it again at once, import every module while a ready step waited: a one-part rebuild's
+    plate, the head of the path to the slicer, waited 0.6 s for matplotlib's and VTK's imports.)"""
+
+    def __init__(self):
+        self._lock = threading.Lock()
+        self._waiting = 0  # steps waiting for the lock
+        self._cv = threading.Condition()
+
+    def __enter__(self):
+        with self._cv:
+            self._waiting += 1
+        self._lock.acquire()
+        with self._cv:
+            self._waiting -= 1
+            self._cv.notify_all()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._lock.release()
+
+    @contextlib.contextmanager
+    def idle(self):
+        """Held while no step waits for it (the warm-up's side)."""
+        while True:
+            with self._cv:
+                self._cv.wait_for(lambda: self._waiting == 0)
+            self._lock.acquire()
+            with self._cv:
+                if self._waiting == 0:
+                    break
+            self._lock.release()  # a step came between the two: it goes first
+        try:
+            yield
+        finally:
+            self._lock.release()
+
+
 class Warmup:
-    """Imports `modules` in a thread of its own, one at a time, each under `baton`."""
+    """Imports `modules` in a thread of its own, one at a time, each under `baton` (`Baton.idle`)."""
 
     def __init__(self, modules=MAIN_THREAD_LIBRARIES, before=None):
         self.modules = tuple(modules)
         self.before = before  # called first in the thread (e.g. asking PrusaSlicer its version)
-        self.baton = threading.Lock()
+        self.baton = Baton()
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
         self._start_lock = threading.Lock()
@@ -54,7 +96,7 @@ class Warmup:
             except Exception:  # left to the step that needs it, which reports it like any step's error
                 pass
         for name in self.modules:
-            with self.baton:
+            with self.baton.idle():
                 if self._stop.is_set():
                     return
                 with imports_frozen():
