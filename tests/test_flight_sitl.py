@@ -78,13 +78,19 @@ class Cli:
         self.banner = self._until_prompt()
 
     def _until_prompt(self) -> str:
+        """What the CLI writes up to its next prompt. A loaded machine can keep a SITL from answering
+        for seconds (CI once saw no banner within a 5 s read): it reads on until the prompt comes,
+        the deadline only bounding a hang."""
         buf = b""
-        deadline = time.monotonic() + 10
+        deadline = time.monotonic() + 120
         while not buf.rstrip(b" ").endswith(b"\n#") and time.monotonic() < deadline:
             try:
-                buf += self.sock.recv(65536)
+                chunk = self.sock.recv(65536)
             except socket.timeout:
+                continue
+            if not chunk:  # the SITL closed the connection
                 break
+            buf += chunk
         return buf.decode(errors="replace")
 
     def send(self, line: str) -> str:
