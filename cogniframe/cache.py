@@ -53,42 +53,12 @@ def store_text(kind: str, key: str, text: str, suffix: str = ".txt") -> None:
         pass
 
 
-class Memo:
-    """A dict-like store of small JSON values under `cache_dir()/kind/`, one file per key, the
-    key salted (e.g. with the code and library versions that made the values). For results
-    worth keeping piece by piece, such as the clash check's pairs. `root`: the cache folder
-    (given explicitly to worker processes, which may not share this process's environment)."""
-
-    def __init__(self, kind: str, salt: str, root: str | Path | None = None):
-        self.kind, self.salt, self.root = kind, salt, Path(root) if root is not None else None
-
-    def _path(self, key: str) -> Path:
-        import hashlib
-
-        name = hashlib.sha256(f"{self.salt}/{key}".encode()).hexdigest()[:32]
-        return (self.root if self.root is not None else cache_dir()) / self.kind / f"{name}.json"
-
-    def get(self, key: str, default=None):
-        try:
-            return json.loads(self._path(key).read_text())["value"]
-        except (OSError, ValueError, KeyError, TypeError):
-            return default
-
-    def __setitem__(self, key: str, value) -> None:
-        path = self._path(key)
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-            tmp.write_text(json.dumps({"value": value}))
-            tmp.replace(path)
-        except OSError:
-            pass
-
-
 class BytesMemo:
-    """Files of bytes under `cache_dir()/kind/`, one per key, the key salted as `Memo`'s: for
-    outputs worth keeping piece by piece, such as the assembly guide's pictures. A write is
-    atomic (a reader sees the whole file or none) and skipped when the cache cannot be written."""
+    """Files of bytes under `cache_dir()/kind/`, one per key, the key salted (e.g. with the code
+    and library versions that made the values): for results worth keeping piece by piece, such as
+    the assembly guide's pictures. A write is atomic (a reader sees the whole file or none) and
+    skipped when the cache cannot be written. `root`: the cache folder (given explicitly to worker
+    processes, which may not share this process's environment)."""
 
     def __init__(self, kind: str, salt: str, suffix: str = ".bin", root: str | Path | None = None):
         self.kind, self.salt, self.suffix, self.root = kind, salt, suffix, Path(root) if root is not None else None
@@ -114,6 +84,24 @@ class BytesMemo:
             tmp.replace(path)
         except OSError:
             pass
+
+
+class Memo:
+    """A dict-like store of small JSON values (`BytesMemo`'s files, `.json`): for results worth
+    keeping piece by piece, such as the clash check's pairs."""
+
+    def __init__(self, kind: str, salt: str, root: str | Path | None = None):
+        self._files = BytesMemo(kind, salt, ".json", root)
+
+    def get(self, key: str, default=None):
+        data = self._files.get(key)
+        try:
+            return json.loads(data)["value"] if data is not None else default
+        except (ValueError, KeyError, TypeError):
+            return default
+
+    def __setitem__(self, key: str, value) -> None:
+        self._files.put(key, json.dumps({"value": value}).encode())
 
 
 # -- file entries: a step's output files + its JSON value, verified on every read -------------
