@@ -68,15 +68,10 @@ def figures(obj, digits: int = CHECK_FIGURES):
     The plain types (float, dict, list, tuple, str, int, bool, None) go by their exact type, in
     half the time of the isinstance tests (a check's tree has ~1500 floats); every other node
     (subclasses, numpy scalars) by `_figures`, the same rules."""
-    spec = f".{digits}g"
-    isfinite = math.isfinite
-
     def walk(o):
         t = type(o)
-        if t is float:  # `sig`, inline
-            if o == 0:
-                return o + 0.0
-            return float(format(o, spec)) + 0.0 if isfinite(o) else o
+        if t is float:
+            return sig(o, digits)
         if t is dict:
             return {k: walk(v) for k, v in o.items()}
         if t is list or t is tuple:
