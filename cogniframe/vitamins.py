@@ -15,13 +15,13 @@ shown in the BOM only.
 from __future__ import annotations
 
 import functools
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from .frame import STACK_BOTTOM, Frame
 from .materials import BOARDS, CONNECTORS, PROPS, STACK_PATTERNS, Board
+from .numfmt import norm
 from .spec import Spec
 
 # Propeller disc: the volume the blades sweep, from the top of the motor bell (materials.PROPS
@@ -92,9 +92,8 @@ def box(lo, hi) -> Prim:
 
 def cyl(base, axis, radius: float, length: float, radius_end: float | None = None) -> Prim:
     a = np.asarray(axis, float)
-    # the axis's length as np.linalg.norm sums it (the sqrt of its dot), without its checks: a
-    # check draws ~100 of these for the mass properties
-    return Prim("cyl", _t(base), axis=_t(a / math.sqrt(a.dot(a))), radius=float(radius), length=float(length),
+    # a check draws ~100 of these for the mass properties: numfmt.norm, np.linalg.norm's bits
+    return Prim("cyl", _t(base), axis=_t(a / norm(a)), radius=float(radius), length=float(length),
                 radius_end=None if radius_end is None else float(radius_end))
 
 

@@ -21,6 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..numfmt import norm
+
 # The parts whose mass sits in a frame core box, and which box (the estimate spreads the part's
 # mass over that box; a point mass would leave out most of its inertia).
 CORE_BOX = {"core_plate": "plate", "battery_holder": "holder", "sensor_mount": "spacer", "camera_mount": "camera_base"}
@@ -67,12 +69,6 @@ def _m3(a) -> tuple[tuple[float, float, float], ...]:
     return tuple(map(tuple, np.asarray(a, float).tolist()))
 
 
-def _norm(v: np.ndarray) -> float:
-    """`np.linalg.norm` of a float vector, the same bits (sqrt of its dot with itself) in a third
-    of the time: the estimate makes ~120 bodies a check."""
-    return math.sqrt(v.dot(v))
-
-
 def point(name: str, mass_g: float, at) -> Body:
     return Body(name, mass_g, _t3(at), _m3(np.zeros((3, 3))))
 
@@ -87,7 +83,7 @@ def box(name: str, mass_g: float, centre, size, rot=np.eye(3)) -> Body:
 
 def _axis_tensor(axis, i_axial: float, i_trans: float) -> np.ndarray:
     a = np.asarray(axis, float)
-    a = a / _norm(a)
+    a = a / norm(a)
     return i_trans * _EYE3 + (i_axial - i_trans) * np.outer(a, a)
 
 
@@ -98,7 +94,7 @@ _EYE3.flags.writeable = False
 def cylinder(name: str, mass_g: float, base, axis, radius: float, length: float) -> Body:
     """A solid cylinder from `base` along `axis`."""
     a = np.asarray(axis, float)
-    a = a / _norm(a)
+    a = a / norm(a)
     centre = np.asarray(base, float) + a * length / 2
     i_ax = mass_g * radius * radius / 2
     i_tr = mass_g * (3 * radius * radius + length * length) / 12
@@ -107,7 +103,7 @@ def cylinder(name: str, mass_g: float, base, axis, radius: float, length: float)
 
 def rod(name: str, mass_g: float, start, end, diameter: float) -> Body:
     d = np.asarray(end, float) - np.asarray(start, float)
-    return cylinder(name, mass_g, start, d, diameter / 2, _norm(d))
+    return cylinder(name, mass_g, start, d, diameter / 2, norm(d))
 
 
 def propeller(name: str, mass_g: float, centre, diameter: float) -> Body:

@@ -21,6 +21,7 @@ import math
 import numpy as np
 
 from ..frame import CORNERS, Frame
+from ..numfmt import norm
 from ..parts.record import PartSpec, Placement, Socket
 from ..spec import Spec
 from .base import CORNER_ROTATION, FIT_TOL, rot_z, rounded
@@ -74,9 +75,6 @@ def _fit_error(sockets, rotation_deg: float, target) -> float:
         return math.inf
     left = list(target)
     worst = 0.0
-
-    def norm(v: np.ndarray) -> float:  # np.linalg.norm's sum (the sqrt of the dot) without its checks
-        return math.sqrt(v.dot(v))
 
     for s in sockets:
         p, d = rot_z(np.asarray(s.port, float), rotation_deg), rot_z(np.asarray(s.direction, float), rotation_deg)
