@@ -203,6 +203,25 @@ def test_mesh_tolerances_agree_with_the_cache_key():
     assert (build.LINEAR_TOL, build.ANGULAR_TOL) == (mesh.LINEAR_TOL, mesh.ANGULAR_TOL)
 
 
+def test_a_sliver_at_a_t_junction_is_mended_not_left_as_a_crack():
+    """A unit tetrahedron whose face (0, 2, 1) is split at M, the midpoint of edge 0-1, and a
+    zero-area sliver (0, M, 1) closing the T-junction, as OCC's mesher leaves them: clean() drops
+    the sliver AND splits the face across 0-1 at M, so the mesh stays closed with the tetrahedron's
+    volume (1/6); dropping the sliver alone left edges 0-M, M-1 and 0-1 with one face each."""
+    import trimesh
+
+    from cogniframe.export.mesh import clean
+
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0.5, 0, 0]], float)
+    f = np.array([[0, 2, 4], [4, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3], [0, 4, 1]])
+    raw = trimesh.Trimesh(v, f, process=False)
+    assert raw.is_watertight and raw.nondegenerate_faces().sum() == 5  # one face of zero area
+    m = clean(raw)
+    assert m.is_watertight and m.is_winding_consistent and len(m.faces) == 6
+    assert m.nondegenerate_faces().all()
+    assert abs(m.volume) == pytest.approx(1 / 6, rel=1e-12)
+
+
 def test_glb_rod_cylinder_is_a_closed_prism_of_the_polygon_area():
     """The GLB's rods: a closed, outward-facing 48-gon prism from start to end; its volume is the
     polygon's area (n/2 r^2 sin(2 pi / n)) times the length, whatever the axis direction."""

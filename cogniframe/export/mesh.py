@@ -87,11 +87,46 @@ def clean(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
     """Drop degenerate and duplicate faces and unused vertices, make winding/normals consistent."""
     mesh = mesh.copy()
     mesh.merge_vertices()
+    _mend_slivers(mesh)
     mesh.update_faces(mesh.nondegenerate_faces())
     mesh.update_faces(mesh.unique_faces())
     mesh.remove_unreferenced_vertices()
     trimesh.repair.fix_normals(mesh)
     return mesh
+
+
+def _mend_slivers(mesh: trimesh.Trimesh, rounds: int = 4) -> None:
+    """Split, in place, each face across the long edge of a sliver: a zero-area face with three
+    distinct corners, one of them (m) on the line between the other two (a, c).
+
+    OCC's mesher leaves such a face now and then where a face's boundary has a node between two
+    of its neighbour's (a T-junction), and the grid rounding above makes a near-sliver exact (the
+    knee at frame.height 107.14). Dropping it alone leaves a crack: its edges a-m and m-c and the
+    neighbour's a-c each have one face, and the STL is not watertight. With the neighbour (a, c, d)
+    split into (a, m, d) and (m, c, d), same winding, the sliver is dropped as any degenerate face
+    is, and the surface stays closed. A sliver whose long edge borders another sliver is mended in
+    the next round."""
+    for _ in range(rounds):
+        faces = mesh.faces.copy()
+        distinct = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])
+        slivers = np.flatnonzero(distinct & ~mesh.nondegenerate_faces())
+        added = []
+        for s in slivers:
+            tri = faces[s]
+            ends = mesh.vertices[np.roll(tri, -1)] - mesh.vertices[np.roll(tri, -2)]  # edge opposite each corner
+            m = int(np.argmax(np.einsum("ij,ij->i", ends, ends)))  # the middle corner faces the longest edge
+            mid, a, c = int(tri[m]), int(tri[(m + 1) % 3]), int(tri[(m + 2) % 3])
+            across = np.flatnonzero((faces == a).any(axis=1) & (faces == c).any(axis=1) & ~(faces == mid).any(axis=1))
+            if not len(across):
+                continue
+            f = faces[across[0]]
+            r = next(r for r in range(3) if {int(f[r]), int(f[(r + 1) % 3])} == {a, c})
+            g0, g1, g2 = int(f[r]), int(f[(r + 1) % 3]), int(f[(r + 2) % 3])
+            faces[across[0]] = (g0, mid, g2)
+            added.append((mid, g1, g2))
+        if not added:
+            return
+        mesh.faces = np.vstack([faces, np.asarray(added, dtype=faces.dtype)])
 
 
 def stl_bytes(mesh: trimesh.Trimesh) -> bytes:
