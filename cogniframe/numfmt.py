@@ -22,6 +22,13 @@ one that wrote them. So every output writes its numbers at a stated precision, t
   merges are merged once (and a face they collapse is dropped) before the mesh is checked closed.
 - NORMAL_DIGITS = 6 decimals for the unit facet normals an STL carries (slicers recompute them).
 - PLACEMENT_DECIMALS = 9 decimals for the entries of the 4x4 placements of the GLB's nodes.
+- CAD_DECIMALS = 9 decimals (1e-9 mm; 1e-9 of a unit vector or a rotation entry) for the numbers
+  the joints' solids are built from (parts/joint_solid.py, `cad`). They come out of small numpy
+  dot and matrix-vector products, which go through the BLAS, whose kernel OpenBLAS picks by CPU:
+  with its Haswell and Sandybridge kernels a knee sleeve started at x = 1.7999999999999998 or 1.8,
+  and the knee's and core links' STEP (and the bamboo knee's STL) differed between machines of
+  one lock file. 1e-9 mm is 1/100 of OpenCascade's confusion tolerance (1e-7 mm), so the
+  rounding moves no point that OCC could tell from where it was.
 - PLOT_DECIMALS = 6 decimals for the curves a PNG plot draws (ms, mm, G: a millionth of a unit is
   ~1e-5 of a pixel), from the model's stated figures: numpy's exp and sin differ in their last
   bits between releases, and an antialiased pixel followed them.
@@ -49,6 +56,7 @@ GRID_MM = 1e-4
 GRID_DECIMALS = 4  # GRID_MM as decimals for np.round
 NORMAL_DIGITS = 6
 PLACEMENT_DECIMALS = 9
+CAD_DECIMALS = 9
 PLOT_DECIMALS = 6
 
 
@@ -112,6 +120,13 @@ def check_figures(check: dict) -> dict:
 def on_grid(vertices) -> np.ndarray:
     """Vertex coordinates (mm) snapped to the GRID_MM grid, float64; -0.0 made 0.0."""
     return np.round(np.asarray(vertices, dtype=np.float64), GRID_DECIMALS) + 0.0
+
+
+def cad(x):
+    """A number, or an array of them, that a part's CAD is built from, rounded to CAD_DECIMALS
+    decimals (a float or a float64 array); -0.0 made 0.0."""
+    a = np.round(np.asarray(x, dtype=np.float64), CAD_DECIMALS) + 0.0
+    return float(a) if a.ndim == 0 else a
 
 
 def unit_normals(normals) -> np.ndarray:

@@ -203,6 +203,63 @@ def test_mesh_tolerances_agree_with_the_cache_key():
     assert (build.LINEAR_TOL, build.ANGULAR_TOL) == (mesh.LINEAR_TOL, mesh.ANGULAR_TOL)
 
 
+# builds the joints of each (params, changes) and prints the sha256 of each one's STL and STEP
+_JOINT_HASHES = """
+import hashlib, json, sys, tempfile
+from pathlib import Path
+from cogniframe import api
+from cogniframe.export.part_files import build_part_files
+out = {}
+for params, changes in json.loads(sys.argv[1]):
+    d = api.load(params).with_values(changes)
+    bed = tuple(float(b) for b in d.spec.printer.bed)
+    for p in d.derived.parts:
+        if p.family == "joint":
+            folder = Path(tempfile.mkdtemp())
+            v = build_part_files(p, bed, str(folder))
+            out[f"{Path(params).stem} {changes} {p.name}"] = [hashlib.sha256((folder / v[k]).read_bytes()).hexdigest()
+                                                              for k in ("stl", "step")]
+print(json.dumps(out))
+"""
+
+
+def _openblas_picks_its_kernel_by_cpu() -> bool:
+    import platform
+
+    blas = np.show_config(mode="dicts")["Build Dependencies"]["blas"]
+    return platform.machine() in ("x86_64", "AMD64") and "DYNAMIC_ARCH" in str(blas.get("openblas configuration", ""))
+
+
+@pytest.mark.cad
+@pytest.mark.process
+def test_the_joints_files_do_not_follow_the_cpus_blas_kernel(tmp_path):
+    """The joints' solids are built from small numpy products, which OpenBLAS computes with a kernel
+    it picks by CPU. Before their numbers were rounded to numfmt.CAD_DECIMALS, its Haswell and
+    Sandybridge kernels (every x86-64 CPU with AVX runs both) gave the knees' and core links' STEP
+    of both presets, and most of their STLs, other bytes: the golden hashes held on one machine
+    only. Built once with each kernel, every joint of both presets and two resized carbons must
+    be the same bytes."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    if not _openblas_picks_its_kernel_by_cpu():
+        pytest.skip("numpy's BLAS is not an OpenBLAS that picks its kernel by CPU (OPENBLAS_CORETYPE)")
+    designs = [[str(ROOT / "params" / "carbon.yaml"), {}], [str(ROOT / "params" / "bamboo.yaml"), {}],
+               [str(ROOT / "params" / "carbon.yaml"), {"frame.width": 231.7, "frame.height": 117.3}],
+               [str(ROOT / "params" / "carbon.yaml"), {"frame.depth": 251.3, "rods.diameter": 2.7}]]
+    found = {}
+    for kernel in ("Haswell", "Sandybridge"):
+        env = {**os.environ, "OPENBLAS_CORETYPE": kernel}
+        run = subprocess.run([sys.executable, "-c", _JOINT_HASHES, json.dumps(designs)], env=env, cwd=tmp_path,
+                             capture_output=True, text=True, timeout=900)
+        assert run.returncode == 0, run.stderr[-2000:]
+        found[kernel] = json.loads(run.stdout.strip().splitlines()[-1])
+    assert len(found["Haswell"]) >= 20  # corners, knees, core links of four designs
+    assert found["Haswell"] == found["Sandybridge"]
+
+
 def test_a_sliver_at_a_t_junction_is_mended_not_left_as_a_crack():
     """A unit tetrahedron whose face (0, 2, 1) is split at M, the midpoint of edge 0-1, and a
     zero-area sliver (0, M, 1) closing the T-junction, as OCC's mesher leaves them: clean() drops

@@ -16,6 +16,10 @@ so TPU prints without supports:
 
 Each socket is then cut as a blind hole of diameter `socket.bore` from `socket.bottom()` to past
 `socket.mouth()`, with a 45 deg chamfer of `CHAMFER` mm at the mouth. Walls are `part.wall`.
+
+Every number a primitive here hands to CadQuery goes through `numfmt.cad` (9 decimals): the plans
+compute them with small numpy products whose last bits follow the CPU's BLAS kernel, and the
+same params must give the same solid, and bytes, on every machine.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..numfmt import cad as exact
 from .joint_plan import PSocket, horizontal
 
 CHAMFER = 0.5  # mm, 45 deg, at every socket mouth
@@ -55,7 +60,8 @@ def _cq():
 
 
 def vec(p):
-    return _cq().Vector(float(p[0]), float(p[1]), float(p[2]))
+    x, y, z = exact(np.asarray(p, float)[:3])
+    return _cq().Vector(float(x), float(y), float(z))
 
 
 def along(start, d, length: float, axis_z: float, section):
@@ -70,12 +76,13 @@ def along(start, d, length: float, axis_z: float, section):
     m = np.eye(4)
     m[:3, 0], m[:3, 1], m[:3, 2] = lat, d, (0.0, 0.0, 1.0)
     m[:3, 3] = (float(start[0]), float(start[1]), float(axis_z))
-    return apply(section(cq.Workplane("XZ")).extrude(-length).val(), m)
+    return apply(section(cq.Workplane("XZ")).extrude(-exact(length)).val(), m)
 
 
 def dsleeve(start, d, length: float, axis_z: float, r: float, bottom: float = 0.0):
     """D-section sleeve along horizontal `d` from `start`: flat bottom at `bottom`, round top."""
-    lo = bottom - axis_z
+    axis_z, r = exact(axis_z), exact(r)
+    lo = exact(bottom - axis_z)
     return along(start, d, length, axis_z,
                  lambda wp: wp.moveTo(-r, lo).lineTo(r, lo).lineTo(r, 0).threePointArc((0, r), (-r, 0)).close())
 
@@ -83,8 +90,9 @@ def dsleeve(start, d, length: float, axis_z: float, r: float, bottom: float = 0.
 def prism(points_xy, z0: float, z1: float):
     """Vertical prism over a polygon (xy points, any winding) from z0 to z1."""
     cq = _cq()
-    pts = [(float(x), float(y)) for x, y in points_xy]
-    return cq.Workplane("XY", origin=(0, 0, z0)).polyline(pts).close().extrude(z1 - z0).val()
+    pts = [(float(x), float(y)) for x, y in exact(np.asarray(points_xy, float).reshape(-1, 2))]
+    z0, z1 = exact(z0), exact(z1)
+    return cq.Workplane("XY", origin=(0, 0, z0)).polyline(pts).close().extrude(exact(z1 - z0)).val()
 
 
 def box_along(p0, p1, width: float, z0: float, z1: float):
@@ -96,7 +104,7 @@ def box_along(p0, p1, width: float, z0: float, z1: float):
 
 
 def cylinder(p0, d, length: float, r: float):
-    return _cq().Solid.makeCylinder(r, length, vec(p0), vec(d))
+    return _cq().Solid.makeCylinder(exact(r), exact(length), vec(p0), vec(d))
 
 
 def sloped_sleeve(start, d, length: float, r: float, skirt: float = SKIRT):
@@ -113,9 +121,11 @@ def sloped_sleeve(start, d, length: float, r: float, skirt: float = SKIRT):
     # lowest point of an end cap is r sin(slope) ahead of the axis end, r cos(slope) below it).
     sa, ca = float(d[2]), math.sqrt(1 - float(d[2]) ** 2)
     z0, z1 = float(p0[2]), float(p1[2])
-    outline = [(r * sa, -1.0), (run + r * sa, -1.0), (run + r * sa, z1 - r * ca), (run, z1), (0, z0), (r * sa, z0 - r * ca)]
-    plane = cq.Plane(origin=(float(p0[0]), float(p0[1]), 0.0), xDir=tuple(h), normal=tuple(-lat))
-    web = cq.Workplane(plane).polyline(outline).close().extrude(skirt * r, both=True).val()
+    outline = [tuple(map(float, xz)) for xz in exact([(r * sa, -1.0), (run + r * sa, -1.0), (run + r * sa, z1 - r * ca),
+                                                        (run, z1), (0, z0), (r * sa, z0 - r * ca)])]
+    plane = cq.Plane(origin=tuple(map(float, exact((p0[0], p0[1], 0.0)))), xDir=tuple(map(float, exact(h))),
+                     normal=tuple(map(float, exact(-lat))))
+    web = cq.Workplane(plane).polyline(outline).close().extrude(exact(skirt * r), both=True).val()
     return cylinder(p0, d, length, r).fuse(web)
 
 
@@ -134,10 +144,11 @@ def sleeve(s: PSocket, start: float, r: float, end: float | None = None):
 def socket_cutter(s: PSocket, chamfer: float = CHAMFER):
     """Blind hole from the socket bottom out past the mouth, with a 45 deg mouth chamfer."""
     cq = _cq()
-    rb = s.bore / 2
+    rb = exact(s.bore / 2)
     extra = 2.0
-    hole = cq.Solid.makeCylinder(rb, s.depth + extra, vec(s.bottom), vec(s.direction))
-    cone = cq.Solid.makeCone(rb, rb + chamfer + extra, chamfer + extra, vec(s.mouth - s.direction * chamfer), vec(s.direction))
+    hole = cq.Solid.makeCylinder(rb, exact(s.depth + extra), vec(s.bottom), vec(s.direction))
+    cone = cq.Solid.makeCone(rb, exact(rb + chamfer + extra), exact(chamfer + extra), vec(s.mouth - s.direction * chamfer),
+                             vec(s.direction))
     return hole.fuse(cone)
 
 
@@ -148,7 +159,7 @@ def apply(shape, m: np.ndarray):
     from OCP.gp import gp_Trsf
 
     t = gp_Trsf()
-    t.SetValues(*[float(v) for v in np.asarray(m, float)[:3].ravel()])
+    t.SetValues(*[float(v) for v in exact(np.asarray(m, float)[:3]).ravel()])
     return cq.Shape.cast(BRepBuilderAPI_Transform(shape.wrapped, t, True).Shape())
 
 
@@ -204,6 +215,7 @@ def teardrop(start, d, length: float, axis_z: float, r: float, web: float):
     Every face is vertical or faces down at most 45 deg, so it prints without supports however
     high its axis, at a fraction of a D-section's TPU. Where the flanks would not reach the web
     (a web as wide as the tangent points, or an axis too low for them) it is the D-section sleeve."""
+    axis_z, r = exact(axis_z), exact(r)
     k = r / math.sqrt(2.0)  # the tangent points: (+-k, -k) from the axis
     z_web = -r * math.sqrt(2.0) + web / 2  # where the flanks meet the web, from the axis
     if web / 2 >= k - 0.05 or axis_z + z_web <= 0.2:

@@ -154,6 +154,7 @@ def _core_link_flat(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarra
     cq = cad._cq()
     bolt = rot @ np.asarray(part.param("bolt_hole"), float) + o
     hole_d = float(part.param("screw_clearance"))
-    bolt_hole = cq.Solid.makeCylinder(hole_d / 2, T + 2.0, cad.vec((bolt[0], bolt[1], -1.0)), cad.vec((0.0, 0.0, 1.0)))
+    bolt_hole = cq.Solid.makeCylinder(cad.exact(hole_d / 2), cad.exact(T + 2.0), cad.vec((bolt[0], bolt[1], -1.0)),
+                                      cad.vec((0.0, 0.0, 1.0)))
     return cad.finish(cad.above_bed(body), [cad.socket_cutter(s) for s in socks] + [bolt_hole])
 

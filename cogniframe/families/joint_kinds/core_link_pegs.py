@@ -246,17 +246,18 @@ def _core_link_pegged(part: PartSpec, socks: list[PSocket]):
         else:
             pieces += [cad.cylinder((x, y, c.peg0), (0, 0, 1), c.col0 - c.peg0, pl.peg_r),
                        cad.cylinder((x, y, c.col0), (0, 0, 1), c.col_len, c.col_r)]
-    (x0, x1), (n0, n1) = pl.arch_x, pl.arch_n
-    arch = cq.Solid.makeBox(x1 - x0, n1 - n0, pl.arch_hi - pl.arch_lo, cq.Vector(x0, n0, pl.arch_lo))
+    (x0, x1), (n0, n1) = cad.exact(pl.arch_x), cad.exact(pl.arch_n)
+    lo, hi = cad.exact(pl.arch_lo), cad.exact(pl.arch_hi)
+    arch = cq.Solid.makeBox(cad.exact(x1 - x0), cad.exact(n1 - n0), cad.exact(hi - lo), cad.vec((x0, n0, lo)))
     if pl.opening is not None:
         # the opening's outline (x, z) extruded through the arch's depth, overshooting both faces
-        xz = pl.opening.outline(below=1.0)
-        hole = cq.Workplane("XZ", origin=(0, n1 + 1.0, 0)).polyline(xz).close().extrude(n1 - n0 + 2.0).val()
+        xz = [tuple(map(float, p)) for p in cad.exact(pl.opening.outline(below=1.0))]
+        hole = cq.Workplane("XZ", origin=(0, cad.exact(n1 + 1.0), 0)).polyline(xz).close().extrude(cad.exact(n1 - n0 + 2.0)).val()
         arch = arch.cut(hole)
     pieces.append(arch)
     if pl.block is not None:
-        (bx0, by0, bz0), (bx1, by1, bz1) = pl.block
-        pieces.append(cq.Solid.makeBox(bx1 - bx0, by1 - by0, bz1 - bz0, cq.Vector(bx0, by0, bz0)))
+        lo, hi = cad.exact(pl.block)
+        pieces.append(cq.Solid.makeBox(*(float(v) for v in cad.exact(hi - lo)), cad.vec(lo)))
     for st in pl.struts:
         s = socks[st.index]
         pieces.append(cad.cylinder(s.at(st.start), s.direction, st.end - st.start, pl.col_r))

@@ -251,7 +251,7 @@ def _core_link(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarray):
     pieces.append(cad.prism(convex_hull(np.array(backs)), 0.0, clear_of(max(tops + [z_top]), sleeve_levels(socks, r))))
     pieces.append(_seat(part, arms, socks, r, m, z_top))
     cq = cad._cq()
-    bolt_hole = cq.Solid.makeCylinder(hole_d / 2, t + 2.0, cad.vec(bolt + e_v * (v0 - 1.0)), cad.vec(e_v))
+    bolt_hole = cq.Solid.makeCylinder(cad.exact(hole_d / 2), cad.exact(t + 2.0), cad.vec(bolt + e_v * (v0 - 1.0)), cad.vec(e_v))
     return cad.finish(cad.above_bed(cad.fuse_all(pieces)), [cad.socket_cutter(s) for s in socks] + [bolt_hole, _esc_keepout(part, m)])
 
 
@@ -295,7 +295,7 @@ def _seat(part: PartSpec, arms: list[PSocket], socks: list[PSocket], r: float, m
     # the highest sleeve less half a millimetre (clear of the round top's tangent line and of the
     # sleeves' levels).
     top = clear_of(min(cap, max(float(s.port[2]) for s in arms) + r - 0.5), sleeve_levels(socks, r))
-    clip = cq.Solid.makeBox(2 * big, 2 * big, top, cq.Vector(-big, -big, 0.0))
+    clip = cq.Solid.makeBox(2 * big, 2 * big, cad.exact(top), cq.Vector(-big, -big, 0.0))
     return body.cut(plate).intersect(clip)
 
 
