@@ -239,3 +239,22 @@ def test_lower_triplets_are_the_lower_triangle_of_the_permuted_symmetric_matrix(
     assert n == 3 * npts and np.all(rows >= cols)
     low = sp.coo_matrix((vals, (rows, cols)), shape=(n, n)).toarray()
     assert np.array_equal(low, np.tril(full))
+
+
+@pytest.mark.process
+def test_after_gmsh_a_write_to_a_closed_pipe_raises_instead_of_ending_the_process():
+    """gmsh's initialize sets SIGPIPE to its default action (end the process); the mesher puts
+    Python's (ignore: BrokenPipeError) back, also when a thread other than the main one meshes
+    (the studio's). Without it the child below ends by SIGPIPE (-13) with no traceback, as the
+    studio did writing to a page that had closed."""
+    import subprocess
+    import sys
+
+    code = ("import os, threading\n"
+            "from cogniframe.analysis.joints import meshing\n"
+            "t = threading.Thread(target=meshing._gmsh)\n"
+            "t.start(); t.join()\n"
+            "r, w = os.pipe(); os.close(r)\n"
+            "try:\n    os.write(w, b'x')\nexcept BrokenPipeError:\n    print('raised')\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert (run.returncode, run.stdout.strip()) == (0, "raised"), run.stderr[-2000:]

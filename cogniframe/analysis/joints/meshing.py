@@ -8,6 +8,7 @@ are cached.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import tempfile
 
@@ -19,12 +20,40 @@ def _gmsh():
 
     if not gmsh.isInitialized():
         # interruptible=False: gmsh would otherwise replace the SIGINT handler (Ctrl-C must stay the CLI's)
-        gmsh.initialize(["-noenv"], readConfigFiles=False, interruptible=False)
+        with _sigpipe_kept():
+            gmsh.initialize(["-noenv"], readConfigFiles=False, interruptible=False)
     gmsh.option.setNumber("General.Terminal", 0)
     gmsh.option.setNumber("General.NumThreads", 1)
     gmsh.option.setNumber("Mesh.MaxNumThreads3D", 1)
     gmsh.option.setNumber("Mesh.RandomSeed", 1)
     return gmsh
+
+
+@contextlib.contextmanager
+def _sigpipe_kept():
+    """Put SIGPIPE's action back as it was after the block (from any thread).
+
+    gmsh's initialize sets SIGPIPE to its default action, which ends the process (the one signal it
+    changes: /proc/self/status, SigIgn). Python ignores SIGPIPE, so that a write to a pipe or
+    socket whose reader has gone raises BrokenPipeError; after gmsh, the same write ended the whole
+    process at once, with no traceback: a studio that had solved a joint, writing to a page that
+    had closed, or to the queue of a process-pool worker it had just stopped (a pytest-xdist
+    worker died so: "node down: Not properly terminated"). `signal.signal` works on the main
+    thread only, and joints are solved on others (the studio's), hence libc's `signal()`."""
+    import ctypes
+    import signal
+
+    if not hasattr(signal, "SIGPIPE"):  # Windows: no such signal
+        yield
+        return
+    libc_signal = ctypes.CDLL(None).signal
+    libc_signal.restype = ctypes.c_void_p
+    libc_signal.argtypes = (ctypes.c_int, ctypes.c_void_p)
+    before = libc_signal(signal.SIGPIPE, ctypes.c_void_p(int(signal.SIG_IGN)))  # reads the action it replaces
+    try:
+        yield
+    finally:
+        libc_signal(signal.SIGPIPE, before)
 
 
 def mesh_occ(build, h: float, name: str = "part", curvature: int = 12) -> tuple[np.ndarray, np.ndarray]:
