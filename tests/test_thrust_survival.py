@@ -328,10 +328,12 @@ def test_socket_push_pull_solid_fe_is_interface_and_sleeve_shear_in_series():
 @pytest.mark.parametrize("name", PRESETS)
 @pytest.mark.fe
 def test_arms_only_compliance_is_all_in_the_core_link(checked, name):
-    """Taken apart: rigid rods leave the bare arms' motor deflection within 5 % (carbon 0.5 %,
-    bamboo 3.8 %); the core links' super-elements made 1000x stiffer make it 20x smaller (carbon
-    170x, bamboo 26x); every other joint made 1000x stiffer changes nothing. The core link's FE
-    is nearly the whole of it."""
+    """Taken apart: rigid rods leave the bare arms' motor deflection within 5 % (carbon 0.6 %,
+    bamboo 4.9 %); the core links' super-elements made 1000x stiffer leave no more than the rods'
+    share and 1 % (carbon 0.7 %, 135x smaller; bamboo 5.0 %, 20x: its rods' 4.9 % and 0.1 %);
+    every other joint made 1000x stiffer changes nothing. The core link's FE is nearly the whole
+    of the joints' part. (The bound was 1/20 of the deflection, rods included: bamboo's rods
+    alone hold 4.9 %, and a remesh of its links, moved by < 1e-9 mm, took it to 1/19.98.)"""
     from cogniframe.analysis.joints.model import JointStiffness
     from cogniframe.analysis.stiffness import _drop_unconnected, build_model, joint_models
     from cogniframe.design import design
@@ -363,8 +365,10 @@ def test_arms_only_compliance_is_all_in_the_core_link(checked, name):
     base = deflection(fe)
     # check's figure includes the fit's play (2-3 % of it); this model has none
     assert base == pytest.approx(checked[name]["stiffness"]["thrust"]["arms_only_motor_deflection_mm_per_n"], rel=0.04)
-    assert deflection(fe, rigid_rods=True) == pytest.approx(base, rel=0.05)
-    assert deflection({**fe, **{n: stiffer(fe[n]) for n in links}}) < base / 20
+    rods_rigid = deflection(fe, rigid_rods=True)
+    assert rods_rigid == pytest.approx(base, rel=0.05)
+    stiff_links = deflection({**fe, **{n: stiffer(fe[n]) for n in links}})
+    assert stiff_links < (base - rods_rigid) + 0.01 * base
     assert deflection({**{n: stiffer(u) for n, u in fe.items()}, **{n: fe[n] for n in links}}) == pytest.approx(base, rel=1e-3)
 
 

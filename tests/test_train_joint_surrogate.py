@@ -168,5 +168,7 @@ def test_training_the_pegged_link_alone_keeps_the_other_families_and_adds_it(tmp
     others = {p.name: sg.predict(s, p, 1.0)[0] for p in parts
               if p.family == "joint" and not is_mirror(p) and p.name != "core_link"}
     k = tool.frame_k(s, frm, parts, {**others, "core_link": tool.unpacked(j["fe"])})
-    assert k == pytest.approx(fr["k_family_fe"], rel=1e-5)
+    # the stored FE is at 7 significant digits (`compact`) and the frame solve amplifies that: 2.7e-5
+    # on this design's k (8706.04 from the stored FE against 8705.80 from the tool's own)
+    assert k == pytest.approx(fr["k_family_fe"], rel=1e-4)
     assert 1000 < k < 20000  # N/m: a frame, not a mechanism
