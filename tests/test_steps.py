@@ -80,6 +80,26 @@ def test_a_need_that_no_earlier_step_makes_is_an_error():
 
 
 @pytest.mark.cad
+def test_a_stop_ends_the_run_as_an_error_would_and_starts_nothing_new(tmp_path):
+    """A caller that no longer wants the result (a studio closing) sets `stop` while a step runs:
+    the caller's cancel is called once, the running step ends, the one after it never starts."""
+    started, cancelled, stop, running = [], [], threading.Event(), threading.Event()
+
+    def slow(ctx):
+        started.append("slow")
+        running.set()
+        assert stop.wait(timeout=600)  # a bound on a hang only
+        return Made()
+
+    steps = (Step("slow", (), slow, where="wait"),
+             Step("later", ("slow",), lambda ctx: started.append("later") or Made(), where="wait"))
+    threading.Thread(target=lambda: running.wait(600) and stop.set(), daemon=True).start()
+    with pytest.raises(graph.Stopped):
+        graph.run(graph.expand(steps, [{}]), graph.Context(tmp_path, {}), on_error=lambda: cancelled.append(1), stop=stop)
+    assert started == ["slow"] and cancelled == [1]
+
+
+@pytest.mark.cad
 def test_unchanged_inputs_rerun_nothing_and_give_the_same_bytes(tmp_path, private_cache):
     ran = []
     a, status, _ = _run(tmp_path, "a", {"x": "abc", "y": "hello"}, ran)

@@ -22,6 +22,7 @@ import tiers
 from browser import CHROMIUM, FLAGS, browser_or_skip
 import trimesh
 
+import cogniframe as cf
 from cogniframe import design as design_mod
 from cogniframe.analysis import verdict
 from cogniframe import spec as spec_mod
@@ -115,6 +116,12 @@ def _pixels(page) -> np.ndarray:
     return np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
 
 
+def _rendered(page) -> None:
+    """Once the view has drawn what the page asked for before: the viewer renders in the next
+    animation frame, and a frame asked for now comes after it (events, not a wait of some ms)."""
+    page.evaluate("new Promise((done) => requestAnimationFrame(() => requestAnimationFrame(done)))")
+
+
 def _counts(img: np.ndarray) -> dict[str, int]:
     bg = np.array([int(BACKGROUND[i:i + 2], 16) for i in (1, 3, 5)])
     img = img[2:-2, 2:-2]  # the element box can take in a pixel row of the frame's border
@@ -136,7 +143,7 @@ def test_canvas_draws_the_model_and_rods_toggle(carbon_report, page_factory):
     assert full["drawn"] > 0.04 * full["all"], full
     assert full["red"] > 2000 and full["black"] > 2000, full
     page.locator("input[data-kind='rod']").uncheck()
-    page.wait_for_timeout(300)
+    _rendered(page)
     no_rods = _counts(_pixels(page))
     # the rods are most of the near-black pixels (the rest is the dark ABS core in shadow)
     assert no_rods["black"] < 0.5 * full["black"] and no_rods["drawn"] < 0.75 * full["drawn"], (full, no_rods)
@@ -180,7 +187,8 @@ def test_click_on_a_part_shows_its_data(carbon_report, page_factory, name):
 
 def test_vitamins_from_the_item_list_show_and_toggle(page_factory, tmp_path):
     """Data-driven: a `vitamin` item appears, is clickable, and hides."""
-    spec = spec_mod.load(ROOT / "params" / "carbon.yaml")
+    # the figures are not what is looked at: the fast model's (no joint FE, so no tier of its own)
+    spec = cf.load(ROOT / "params" / "carbon.yaml").with_fast_model().spec
     result = verdict.check(spec)
     battery = trimesh.creation.box((70, 35, 15))
     items = [ViewerItem("battery", "vitamin", "LiPo 2S", 58.0, 1, "", "#2060c0", battery, np.eye(4), note="vitamin"),
@@ -197,7 +205,7 @@ def test_vitamins_from_the_item_list_show_and_toggle(page_factory, tmp_path):
     assert page.locator(".cf-info dd[data-field='mass']").inner_text() == "58.00 g each"
     drawn = _counts(_pixels(page))["drawn"]
     toggle.uncheck()
-    page.wait_for_timeout(300)
+    _rendered(page)
     assert _counts(_pixels(page))["drawn"] < 0.01 * drawn
     assert page.get_attribute("#cf-viewer", "data-selected") == ""  # a hidden object is deselected
     page.close()

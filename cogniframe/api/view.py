@@ -7,28 +7,34 @@ for the next build and the other way round), optionally with the `estimate` step
 FE, on the same CAD workers as the build does it). `scene` turns the part files into the
 viewer's item list (printed parts, rods and the bought parts) and packs it; `design_html`
 inlines three.js, the viewer and the geometry into one HTML fragment with ids of its own, so
-several views can sit in one notebook and none fetches anything.
+several views can sit in one notebook and none fetches anything. For the studio:
+`geometry_key` (what a view shows, so an edit that changes none of it keeps the view) and
+`provisional_items` (a new frame's view at once, from the parts an earlier view made).
 """
 
 from __future__ import annotations
 
 import base64
+import hashlib
 import html
 import json
 import secrets
 import tempfile
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 
 def build_parts(spec, design, out: Path, *, fe: bool = False, server: bool | None = None,
                 on_step: Callable[..., None] | None = None,
-                log: Callable[[str], None] | None = None) -> dict[str, dict]:
+                log: Callable[[str], None] | None = None, stop=None) -> dict[str, dict]:
     """Make every printed part's STL and STEP in `out` through the build graph (cached steps);
     with `fe`, also solve the joints' FE (the `estimate` step). Returns each part step's value
     (its file names, volume, `print_from_local`, ...) by part name. `on_step(task, done, total,
     part_values)` after each step; `part_values()` gives the values once every part step is done
-    (the files are in `out` then, while the FE may still run)."""
+    (the files are in `out` then, while the FE may still run). `stop` (a threading.Event): once set,
+    the work ends early with `pipeline.graph.Stopped` (the caller no longer wants it)."""
     from .. import pipeline
     from ..runtime import cad_server
 
@@ -41,25 +47,74 @@ def build_parts(spec, design, out: Path, *, fe: bool = False, server: bool | Non
         if on_step is not None:
             on_step(record.task, done[0], total, lambda: {p.name: ctx.part_value(p.name) for p in design.parts})
 
-    ctx, _ = pipeline.run(spec, design, out, only=only, server=cad_server.wanted(server), log=log, on_step=finished)
+    ctx, _ = pipeline.run(spec, design, out, only=only, server=cad_server.wanted(server), log=log, on_step=finished,
+                          stop=stop)
     return {p.name: ctx.part_value(p.name) for p in design.parts}
 
 
-def items(spec, design, out: Path, values: dict[str, dict]) -> list:
+def items(spec, design, out: Path, values: dict[str, dict], meshes: dict | None = None) -> list:
     """The viewer's items: every copy of every printed part (grams from the mass model with the
-    CAD volumes), every rod and the bought parts."""
+    CAD volumes), every rod and the bought parts. `meshes`: the parts' meshes when the caller
+    has read them (else read from the STLs in `out`)."""
     import numpy as np
 
-    from ..analysis.mass import PartGeometry, budget
     from ..report.renders import vitamin_viewer_items
     from ..report.viewer import design_items, read_stl
 
-    geometry = {name: PartGeometry(v["volume_mm3"], v["area_h_mm2"], v["area_v_mm2"], "cad") for name, v in values.items()}
-    mass = budget(spec, design.frame, design.cut, design.parts, geometry)
-    meshes = {p.name: read_stl(out / values[p.name]["stl"]) for p in design.parts}
+    mass = _budget(spec, design, values)
+    if meshes is None:
+        meshes = {p.name: read_stl(out / values[p.name]["stl"]) for p in design.parts}
     found = design_items(design, meshes, {p.name: np.asarray(values[p.name]["print_from_local"], float) for p in design.parts},
                          mass, ())
     return found + vitamin_viewer_items(spec, design.frame, mass)
+
+
+def _budget(spec, design, values: dict[str, dict]):
+    """The mass budget with the CAD volumes of the parts in `values` (the others estimated)."""
+    from ..analysis.mass import PartGeometry, budget
+
+    geometry = {name: PartGeometry(v["volume_mm3"], v["area_h_mm2"], v["area_v_mm2"], "cad") for name, v in values.items()}
+    return budget(spec, design.frame, design.cut, design.parts, geometry)
+
+
+@dataclass(frozen=True)
+class MadePart:
+    """A part as a view made it: what its shape was made from (`geometry_digest`), its mesh in
+    print orientation, print <- local, and its part step's value (volumes)."""
+
+    digest: str
+    mesh: Any
+    print_from_local: Any
+    value: dict
+
+
+def provisional_items(spec, design, made: dict[str, MadePart]) -> tuple[list, tuple[str, ...], tuple[str, ...]]:
+    """The viewer's items of `design` at once, before its changed parts are made: (items, the
+    parts drawn provisionally, the parts left out). A part whose shape is unchanged is its mesh
+    as made; a changed part is its previous mesh at its NEW placements, drawn pale and noted as
+    updating (its grams the mass model's estimate, not the CAD's); a part never made is left
+    out. The rods (from the frame graph) and the bought parts are the new design's own."""
+    import numpy as np
+
+    from ..parts.shapes import geometry_digest
+    from ..report.renders import vitamin_viewer_items
+    from ..report.viewer import design_items
+
+    changed, missing = [], []
+    meshes, pfl, values = {}, {}, {}
+    for p in design.parts:
+        m = made.get(p.name)
+        if m is None:
+            missing.append(p.name)
+            continue
+        meshes[p.name], pfl[p.name] = m.mesh, np.asarray(m.print_from_local, float)
+        if m.digest == geometry_digest(p):
+            values[p.name] = m.value
+        else:
+            changed.append(p.name)
+    mass = _budget(spec, design, values)
+    found = design_items(design, meshes, pfl, mass, (), provisional=changed)
+    return found + vitamin_viewer_items(spec, design.frame, mass), tuple(changed), tuple(missing)
 
 
 def scene(spec, design, *, server: bool | None = None, on_step=None, log=None) -> tuple[dict, bytes]:
@@ -117,3 +172,23 @@ def inline_html(meta: dict, buf: bytes, title: str = "3D view") -> str:
         f'<script type="module">{module_loader(_view_id, "uid", uid=json.dumps(uid))}</script>',
         "</div>",
     ])
+
+
+def geometry_key(d) -> str:
+    """What the 3D view shows: each part's CAD inputs and placements, the rods, the bought parts'
+    shapes and the bed. A change elsewhere needs no new view (which would also reset its camera):
+    grams, a motor's KV, the battery's cells and capacity (they are only in the click panel's
+    text, which follows at the next change of shape)."""
+    from ..parts.shapes import geometry_digest
+
+    pd = d.derived
+    spec = d.spec
+    parts = [[p.name, geometry_digest(p), [[list(map(float, pl.origin)), pl.rotation_deg] for pl in p.placements]] for p in pd.parts]
+    rods = [[r.name, [float(x) for x in r.start], [float(x) for x in r.end], float(r.diameter)] for r in pd.frame.rods.values()]
+    battery = spec.core.battery
+    vitamins = [spec.motors.model_dump(mode="json", exclude={"kv", "mass", "max_thrust_g", "prop_mass"}),
+                [c.vitamin for c in spec.components],  # not their grams
+                [battery.length, battery.width, battery.height, battery.connector], spec.core.stack_pattern,
+                spec.core.model_dump(mode="json", include={"camera", "flow_sensor", "computer"})]
+    payload = [parts, rods, vitamins, [float(b) for b in spec.printer.bed]]
+    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:20]

@@ -98,12 +98,14 @@ def _build_into(spec: Spec, params_path: Path, out: Path, jobs: int | None, use_
 
 def run(spec: Spec, design: design_mod.Derived, out: Path, *, only: tuple[str, ...] | None = None,
         jobs: int | None = None, server: bool = False, early=None, use_cache: bool = True, log=None,
-        gcode: bool = False, on_start=None, on_step=None):
+        gcode: bool = False, on_start=None, on_step=None, stop=None):
     """Run the build graph's steps for `design` into the folder `out`: the one place that wires
     the steps, their inputs and the CAD runtime (the CLI's build, the API's and the studio's 3D
     view all come here). `only`: task-name patterns (e.g. `("part:*", "estimate")`) to run a
     part of the graph; None runs all of it. `on_start(task)` before and `on_step(record, ctx)` after
-    each task (`ctx.part_value` reads a finished part's files). Returns (the context, with every task's value, and the records in finishing order)."""
+    each task (`ctx.part_value` reads a finished part's files). `stop` (a threading.Event): once set,
+    the CAD jobs are dropped and `graph.Stopped` is raised when the steps under way end. Returns
+    (the context, with every task's value, and the records in finishing order)."""
     import fnmatch
 
     from . import graph, steps
@@ -132,7 +134,7 @@ def run(spec: Spec, design: design_mod.Derived, out: Path, *, only: tuple[str, .
             rt.cad.start_server()  # now, beside the set-up below, not when the first part step submits
         records = graph.run(tasks, ctx, on_start=on_start, on_error=rt.cancel,
                             on_done=None if on_step is None else (lambda record: on_step(record, ctx)),
-                            main_lock=rt.main_lock if whole else None)
+                            main_lock=rt.main_lock if whole else None, stop=stop)
     return ctx, records
 
 

@@ -174,6 +174,13 @@ def _do(task: Task, ctx: Context) -> tuple[Any, str]:
     return value, ("ran" if key is not None or (task.step.key is not None and not ctx.use_cache) else "always")
 
 
+STOP_POLL_S = 0.1  # how soon a run with a `stop` notices it while its steps run
+
+
+class Stopped(Exception):
+    """`run`'s caller set its `stop`: the steps under way ended, no other started."""
+
+
 class _Failures:
     """The errors of one run, each with when and in which task it arose. The first (by time) calls
     the caller's `on_error()` once; `raise_first` raises the one that stopped the run."""
@@ -190,6 +197,12 @@ class _Failures:
         if len(self.errors) == 1 and self.on_error is not None:
             self.on_error()
 
+    def stopped(self, stop: threading.Event | None) -> bool:  # holding the run's lock
+        """Whether the run ends: an error, or the caller's `stop` set (a `Stopped` error then)."""
+        if stop is not None and stop.is_set() and not self.errors:
+            self.add("", Stopped("the build graph's run was stopped by its caller"))
+        return bool(self.errors)
+
     def raise_first(self) -> None:
         """Raise the first error, an interruption (Ctrl-C, exit) before any other, with a note naming
         its task; nothing when there was none."""
@@ -205,7 +218,7 @@ def run(tasks: Sequence[Task], ctx: Context, threads: int = 16,
         on_start: Callable[[str], None] | None = None,
         on_done: Callable[[Record], None] | None = None,
         on_error: Callable[[], None] | None = None,
-        main_lock=None) -> list[Record]:
+        main_lock=None, stop: threading.Event | None = None) -> list[Record]:
     """Run every task once its needs are done. Main-thread tasks run in list order, one at a time;
     "wait" tasks run in threads and are started the moment their needs are done, also while a
     main-thread task is running (a finished wait task starts the ones that needed it from its own
@@ -217,7 +230,8 @@ def run(tasks: Sequence[Task], ctx: Context, threads: int = 16,
     error is raised, with a note naming its task. Errors that follow it (a job cancelled, a
     step that read what the failed one did not make) are consequences and are not reported.
     `main_lock`: held around each main-thread task (a lock that other threads take to work only
-    while the main thread has nothing to do)."""
+    while the main thread has nothing to do). `stop`: once set, the run ends as at a first error
+    (`Stopped`): the caller no longer wants its result (a studio that closes)."""
     pending = list(tasks)
     done: set[str] = set()
     records: list[Record] = []
@@ -252,7 +266,7 @@ def run(tasks: Sequence[Task], ctx: Context, threads: int = 16,
             lock.notify_all()
 
     def start_waits() -> None:  # holding the lock
-        if errors:
+        if errors.stopped(stop):
             return
         for t in [t for t in pending if t.step.where == "wait" and ready(t)]:
             pending.remove(t)
@@ -265,10 +279,10 @@ def run(tasks: Sequence[Task], ctx: Context, threads: int = 16,
         while True:
             with lock:
                 start_waits()
-                main = None if errors else next((t for t in pending if t.step.where == "main" and ready(t)), None)
+                main = None if errors.stopped(stop) else next((t for t in pending if t.step.where == "main" and ready(t)), None)
                 if main is None:
                     if running[0]:
-                        lock.wait()
+                        lock.wait(None if stop is None else STOP_POLL_S)  # a stop is not a notify: look again soon
                         continue
                     if errors or not pending:
                         return

@@ -22,10 +22,12 @@ class Latest:
             self._cond.notify_all()
 
     def take(self):
+        """The waiting item; None once closed (a job still waiting then is dropped: its session
+        has ended)."""
         with self._cond:
             while self._item is None and not self._closed:
                 self._cond.wait()
-            item, self._item = self._item, None
+            item, self._item = (None if self._closed else self._item), None
             return item
 
     def close(self) -> None:
@@ -50,10 +52,12 @@ class PerPage:
             self._cond.notify_all()
 
     def take(self):
+        """The next page's job; None once closed (the jobs still waiting are dropped)."""
         with self._cond:
             while not self._jobs and not self._closed:
                 self._cond.wait()
-            if not self._jobs:
+            if self._closed:
+                self._jobs.clear()
                 return None
             return self._jobs.popitem(last=False)[1]
 

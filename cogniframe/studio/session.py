@@ -13,7 +13,11 @@ solved) and the 3D views. Events (`Page.send(event)`, a JSON-able dict):
               (from the message to the figures) and `cpu_ms` (the check's own CPU time)
     invalid   the CLI's message for the edited file, the key it names and the field edited
     refused   a message the studio does not take (too large, too many keys, an unknown key)
-    scene     a new 3D view is ready at `url` (the viewer's items, packed); every page, by `key`
+    scene     a new 3D view is ready at `url` (the viewer's items, packed); every page, by `key`.
+              `provisional` true: a view of the new frame drawn at once, before its changed parts
+              are made (rods and unchanged parts exact; the `changed` parts their previous
+              shapes at their new places, pale; the `missing` ones never made, left out); the
+              exact view of the same `key` follows and replaces it
     progress  background work: `task` ("view", "fe", "build"), `done`/`total`, `text`
     saved     the params file now holds the page's design (read back); `base` its new text's hash
     save-error  nothing was written, and why (changed on disk, a value refused)
@@ -23,8 +27,9 @@ solved) and the 3D views. Events (`Page.send(event)`, a JSON-able dict):
 
 Work, by thread: `evaluator` validates and checks the newest edit of each page (older edits of a
 page that queued up meanwhile are skipped), in about a tenth of a second when no joint needs its
-FE; `geometry` makes the parts of the newest geometry through the build graph (and the joints'
-FE with them), then publishes the view and, after a FE, checks the waiting pages again; `build`
+FE; `geometry` publishes a provisional view of the newest geometry at once (from the parts an
+earlier view made), makes its parts through the build graph (and the joints' FE with them), then
+publishes the exact view and, after a FE, checks the waiting pages again; `build`
 runs `cogniframe build` into out/<name>. Nothing is written but the params file (Save), the build
 folder (Build) and the studio's log; the parts of the 3D view go to a temporary folder, removed
 on exit.
@@ -36,7 +41,6 @@ and the workers' mailboxes (`mailbox.py`).
 from __future__ import annotations
 
 import collections
-import hashlib
 import itertools
 import json
 import logging
@@ -50,6 +54,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import api
+from ..api.view import geometry_key
 from ..errors import UserError
 from . import form
 from .compare import compare_figures
@@ -91,6 +96,8 @@ class Session:
         self.disk_error: str | None = None  # the file on disk no longer loads: why
         self.last: dict[str, Event] = {}  # the newest shared events (scene, build), for a page that connects later
         self.scenes: collections.OrderedDict[str, tuple[dict, bytes]] = collections.OrderedDict()
+        self.provisional: dict[str, Event] = {}  # geometry key -> its provisional scene event, until the exact one
+        self.made: dict[str, Any] = {}  # part name -> view.MadePart: the newest exact view's parts, for the provisional ones
         self.requested_key: str | None = None  # the geometry the 3D view is being made for
         self.build_dir: Path | None = None
         self.building = False
@@ -98,7 +105,7 @@ class Session:
         self.tmp = Path(tempfile.mkdtemp(prefix="cogniframe-studio-"))
         self._edits = PerPage()
         self._geometry = Latest()
-        self._closed = False
+        self._stop = threading.Event()  # set by close: the work under way ends early, none starts
         self._threads = [threading.Thread(target=self._evaluator, name="studio-evaluate", daemon=True),
                          threading.Thread(target=self._geometry_worker, name="studio-geometry", daemon=True)]
         for t in self._threads:
@@ -241,7 +248,10 @@ class Session:
                 self.requested_key = key
             self._geometry.put((d, key, fe))
 
-        threading.Thread(target=warm, name="studio-warm", daemon=True).start()
+        t = threading.Thread(target=warm, name="studio-warm", daemon=True)
+        with self.lock:
+            self._threads.append(t)  # close waits for it
+        t.start()
 
     def edit(self, page: Page, values: Any, base: Any, seq: int = 0, edited: str | None = None) -> None:
         """Queue a check of the page's design: `values` (what the page changed) on the file text
@@ -299,8 +309,11 @@ class Session:
             wanted = pending_fe or (ready is None and key != self.requested_key)
             if wanted:
                 self.requested_key = key
+            stand_in = self.provisional.get(key) if ready is None else None
         if ready is not None:
             self._send(page, {"type": "scene", "url": f"/scene/{key}.json", "key": key, "objects": len(ready[0]["objects"])})
+        elif stand_in is not None:
+            self._send(page, stand_in)
         if wanted:
             self._geometry.put((d, key, pending_fe))
 
@@ -322,13 +335,57 @@ class Session:
             except Exception:  # noqa: BLE001 - logged; the next edit tries again
                 log.exception("making the 3D view")
 
-    def _make_view(self, d: api.Design, key: str, fe: bool, out: Path) -> None:
+    def _keep_scene(self, key: str, packed: tuple[dict, bytes]) -> None:
+        with self.lock:
+            self.scenes[key] = packed
+            self.scenes.move_to_end(key)
+            while len(self.scenes) > 4:  # the pages' newest views
+                old, _ = self.scenes.popitem(last=False)
+                if old.endswith("-provisional"):  # its event no longer points at a view
+                    self.provisional.pop(old.removesuffix("-provisional"), None)
+
+    def _show_provisional(self, d: api.Design, key: str, t0: float) -> None:
+        """A view of the new frame at once, while its changed parts are made (a second, more on a
+        busy machine): the rods and the bought parts of the new design, the unchanged parts as
+        made, each changed part its previous mesh at its new placements, pale. Nothing when no
+        view was made before, or when every part is as made (the exact view follows at once)."""
         from ..api import view
         from ..report.viewer import pack
+
+        with self.lock:
+            made = dict(self.made)
+            if not made or key in self.scenes:
+                return
+        try:
+            items, changed, missing = view.provisional_items(d.spec, d.derived, made)
+            if not changed and not missing:
+                return
+            packed = pack(items)
+        except Exception:  # noqa: BLE001 - the exact view still comes
+            log.exception("the provisional 3D view")
+            return
+        event = {"type": "scene", "url": f"/scene/{key}-provisional.json", "key": key, "provisional": True,
+                 "changed": list(changed), "missing": list(missing), "objects": len(packed[0]["objects"]),
+                 "seconds": round(time.perf_counter() - t0, 2)}
+        with self.lock:
+            if key in self.scenes:  # the exact view is there already
+                return
+            self._keep_scene(f"{key}-provisional", packed)
+            self.provisional[key] = event
+        self.publish(event)
+
+    def _make_view(self, d: api.Design, key: str, fe: bool, out: Path) -> None:
+        from ..api import view
+        from ..parts.shapes import geometry_digest
+        from ..report.viewer import pack, read_stl
 
         t0 = time.perf_counter()
         self.publish({"type": "progress", "task": "view", "key": key, "done": 0, "total": 1, "fe": fe,
                       "text": "making the parts" + (" and solving the joints' FE" if fe else "")})
+        # the provisional view is made while the CAD server makes the changed parts (another
+        # process); the exact view waits for it, so a page never gets the provisional one after it
+        stand_in = threading.Thread(target=self._show_provisional, args=(d, key, t0), name="studio-provisional", daemon=True)
+        stand_in.start()
         n_parts = len(d.derived.parts)
         parts_done: list[str] = []
         shown: list[threading.Thread] = []
@@ -336,18 +393,24 @@ class Session:
         def show_view(values: dict) -> None:
             """The 3D view as soon as the parts are made (the joints' FE may still run)."""
             try:
-                packed = pack(view.items(d.spec, d.derived, out, values))
+                meshes = {p.name: read_stl(out / values[p.name]["stl"]) for p in d.derived.parts}
+                packed = pack(view.items(d.spec, d.derived, out, values, meshes))
+                made = {p.name: view.MadePart(geometry_digest(p), meshes[p.name], values[p.name]["print_from_local"],
+                                              values[p.name]) for p in d.derived.parts}
             except Exception as e:  # noqa: BLE001
                 log.exception("packing the 3D view")
+                stand_in.join()
                 self._view_failed(key)
                 self.publish({"type": "progress", "task": "view", "key": key, "done": 1, "total": 1,
                               "text": f"the 3D view failed: {shorten(str(e))}", "error": f"{type(e).__name__}: {shorten(str(e))}"})
                 return
+            stand_in.join()
             with self.lock:
-                self.scenes[key] = packed
-                self.scenes.move_to_end(key)
-                while len(self.scenes) > 4:  # the pages' newest views
-                    self.scenes.popitem(last=False)
+                self.made.update(made)
+                self.provisional.pop(key, None)  # no page is sent it now
+                self._keep_scene(key, packed)
+                if f"{key}-provisional" in self.scenes:  # a page told of it may still fetch it: the next view drops it
+                    self.scenes.move_to_end(f"{key}-provisional", last=False)
             self.publish({"type": "scene", "url": f"/scene/{key}.json", "key": key,
                           "objects": len(packed[0]["objects"]), "seconds": round(time.perf_counter() - t0, 2)})
 
@@ -367,8 +430,11 @@ class Session:
                 t.start()
 
         try:
-            view.build_parts(d.spec, d.derived, out, fe=fe, server=self.server, on_step=step)
+            view.build_parts(d.spec, d.derived, out, fe=fe, server=self.server, on_step=step, stop=self._stop)
         except Exception as e:  # noqa: BLE001
+            stand_in.join()
+            if self._stop.is_set():  # the session closes: no page waits for this view or its FE now
+                return
             if not isinstance(e, UserError):
                 log.exception("making the parts of the 3D view")
             self._view_failed(key)
@@ -410,6 +476,7 @@ class Session:
         with self.lock:
             if self.requested_key == key:
                 self.requested_key = None  # the next edit tries again
+            self.provisional.pop(key, None)  # no exact view follows it now
 
     def scene(self, key: str) -> tuple[dict, bytes] | None:
         with self.lock:
@@ -548,9 +615,17 @@ class Session:
         return {"type": "compared", "columns": columns}
 
     def close(self) -> None:
-        self._closed = True
+        """End the session's work, and return once it has ended: the edits and views still queued
+        are dropped, a 3D view being made drops its CAD jobs (a joint FE solved in this process
+        ends first), so no thread of it runs on into what follows or writes into the folder
+        removed here. A Build runs on (it ends with the process)."""
+        self._stop.set()
         self._edits.close()
         self._geometry.close()
+        with self.lock:
+            threads = list(self._threads)
+        for t in threads:
+            t.join()
         shutil.rmtree(self.tmp, ignore_errors=True)
 
 
@@ -573,23 +648,3 @@ class _Lines:
 
     def isatty(self) -> bool:
         return False
-
-
-def geometry_key(d: api.Design) -> str:
-    """What the 3D view shows: each part's CAD inputs and placements, the rods, the bought parts'
-    shapes and the bed. A change elsewhere needs no new view (which would also reset its camera):
-    grams, a motor's KV, the battery's cells and capacity (they are only in the click panel's
-    text, which follows at the next change of shape)."""
-    from ..parts.shapes import geometry_digest
-
-    pd = d.derived
-    spec = d.spec
-    parts = [[p.name, geometry_digest(p), [[list(map(float, pl.origin)), pl.rotation_deg] for pl in p.placements]] for p in pd.parts]
-    rods = [[r.name, [float(x) for x in r.start], [float(x) for x in r.end], float(r.diameter)] for r in pd.frame.rods.values()]
-    battery = spec.core.battery
-    vitamins = [spec.motors.model_dump(mode="json", exclude={"kv", "mass", "max_thrust_g", "prop_mass"}),
-                [c.vitamin for c in spec.components],  # not their grams
-                [battery.length, battery.width, battery.height, battery.connector], spec.core.stack_pattern,
-                spec.core.model_dump(mode="json", include={"camera", "flow_sensor", "computer"})]
-    payload = [parts, rods, vitamins, [float(b) for b in spec.printer.bed]]
-    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:20]

@@ -243,7 +243,7 @@ def _run_optimize(sweep, objectives, constraints, out_dir: Path, trials, schedul
         size = batch or sweep.settings.batch or 4
         per_round = max(1, n_workers * size)
         done = 0
-        tb = time.perf_counter()
+        tb = written = time.perf_counter()
         while done < n_trials:
             k = min(per_round, n_trials - done)
             asked = [study.ask(dists) for _ in range(k)]
@@ -270,9 +270,13 @@ def _run_optimize(sweep, objectives, constraints, out_dir: Path, trials, schedul
                 else:
                     study.tell(t, state=TrialState.FAIL)
             done += k
-            _write_trials(out_dir, rows)
+            if time.perf_counter() - written >= TRIALS_WRITE_S:  # for a reader watching the run; the last write follows the loop
+                _write_trials(out_dir, rows)
+                written = time.perf_counter()
             if progress:
                 progress(run_mod.BatchDone(tuple(got), got[0]["worker"] if got else "", done, n_trials, time.perf_counter() - tb, "round"))
+        if rows:  # every trial: the same bytes however often the loop wrote them before
+            _write_trials(out_dir, rows)
         best_rows, pareto = ranked(rows, objectives, constraints)
         # the closed forms' finalists include designs up to SCREEN_TOLERANCE short of a bound (they
         # may pass under the FE); the surrogate's are its feasible designs, best first
@@ -308,6 +312,9 @@ def _run_optimize(sweep, objectives, constraints, out_dir: Path, trials, schedul
 FIDELITY_KEY = "model.stiffness_model"
 DEFAULT_VERIFY = 4  # finalists re-checked when screening with the closed forms
 FAIL_VIOLATION = 1e3  # a FAIL trial's constraint violation for the sampler (see _run_optimize)
+# trials.parquet is rewritten during the run at most this often (seconds), and once at its end: a
+# rewrite converts and writes every row so far, so one per round cost O(rounds x trials)
+TRIALS_WRITE_S = 5.0
 # How far a screened (closed-form joints) constraint value may miss and the design still be worth
 # re-checking with the FE: the two joint models' max_safe_drop_cm differ by up to ~20 % in either
 # direction on the carbon designs compared (docs/sweeps.md).

@@ -51,6 +51,7 @@ class ViewerItem:
     mesh: "Mesh | trimesh.Trimesh"
     matrix: np.ndarray | None = None
     note: str = ""
+    provisional: bool = False  # a stand-in until the exact shape is made (the studio's view of a new frame)
 
 
 @dataclass(frozen=True, eq=False)
@@ -119,11 +120,13 @@ def _rod_matrix(start, end, diameter: float) -> np.ndarray:
 
 
 def design_items(design, meshes: Mapping[str, "Mesh | trimesh.Trimesh"], print_from_local: Mapping[str, np.ndarray],
-                 mass=None, plates: Sequence = ()) -> list[ViewerItem]:
+                 mass=None, plates: Sequence = (), provisional: Sequence[str] = ()) -> list[ViewerItem]:
     """Items for every copy of every printed part (world placement as in the renders) and every rod.
 
     `meshes`: part name -> mesh in print orientation; `print_from_local`: part name -> 4x4;
-    `mass`: the `MassBudget` (grams each by part name); `plates`: `write_plates`' result."""
+    `mass`: the `MassBudget` (grams each by part name); `plates`: `write_plates`' result;
+    `provisional`: parts whose mesh is a stand-in (a previous shape at the new placements), drawn
+    pale (their colour mixed with the background) and noted as updating."""
     from ...export.plates import material_colour, part_of
     from ..assembly_steps import copy_labels
 
@@ -140,9 +143,13 @@ def design_items(design, meshes: Mapping[str, "Mesh | trimesh.Trimesh"], print_f
         if m is None:
             continue
         local_from_print = np.linalg.inv(np.asarray(print_from_local.get(p.name, np.eye(4)), float))
+        stand_in = p.name in provisional
+        colour = _pale(material_colour(p.material)) if stand_in else material_colour(p.material)
+        note = f"part {p.name}" + ("; updating: its previous shape at its new place, the exact part is being made"
+                                   if stand_in else "")
         for label, pl in zip(copy_labels(p), p.placements):
             items.append(ViewerItem(label, "part", p.material, grams.get(p.name), p.qty, ", ".join(on_plate.get(p.name, [])),
-                                    material_colour(p.material), m, pl.matrix() @ local_from_print, note=f"part {p.name}"))
+                                    colour, m, pl.matrix() @ local_from_print, note=note, provisional=stand_in))
     rod_mass = {r: row.mass_g for row in design.cut.rows for r in row.rods}
     cut_len = {r: row.length_mm for row in design.cut.rows for r in row.rods}
     cyl = _unit_cylinder()
@@ -151,6 +158,13 @@ def design_items(design, meshes: Mapping[str, "Mesh | trimesh.Trimesh"], print_f
         items.append(ViewerItem(rod.name, "rod", rod.material, rod_mass.get(rod.name), 1, "", ROD_COLOUR, cyl,
                                 _rod_matrix(rod.start, rod.end, rod.diameter), note=note))
     return items
+
+
+def _pale(colour: str, keep: float = 0.3) -> str:
+    """`colour` mixed with the view's background (`keep` of the colour): a ghost of it."""
+    a = [int(colour[i:i + 2], 16) for i in (1, 3, 5)]
+    b = [int(BACKGROUND[i:i + 2], 16) for i in (1, 3, 5)]
+    return "#" + "".join(f"{round(keep * x + (1 - keep) * y):02x}" for x, y in zip(a, b))
 
 
 # -- packing ---------------------------------------------------------------------------------
@@ -198,7 +212,8 @@ def pack(items: Iterable[ViewerItem]) -> tuple[dict, bytes]:
         objects.append({"name": it.name, "kind": it.kind, "material": it.material,
                         "mass_g": None if it.mass_g is None else round(float(it.mass_g), 4), "qty": int(it.qty),
                         "plate": it.plate, "colour": it.colour, "note": it.note, "geometry": index_of[key],
-                        "matrix": [round(float(x), 6) + 0.0 for x in m.T.ravel()]})  # column-major for three.js
+                        "matrix": [round(float(x), 6) + 0.0 for x in m.T.ravel()],  # column-major for three.js
+                        **({"provisional": True} if it.provisional else {})})  # absent otherwise: the report's bytes as before
     meta = {"background": BACKGROUND, "geometries": geometries, "objects": objects}
     return meta, bytes(buf)
 

@@ -37,9 +37,11 @@ const future = [];           // redo
 let committed = {};          // what every field showed at the newest edit sent
 let wantedScene = null;      // the geometry of the figures shown: the 3D view to show
 const sceneUrls = {};        // scenes the server said are ready: key -> url
+const standIns = {};         // provisional scenes of geometries whose exact view is not ready yet: key -> event
+const geometryAt = {};       // a new geometry's key -> the input event of the edit that asked for it (its view is timed)
 let lastFigures = null;
 const pendingSaves = {};  // save id -> the changes it saves
-window.cogniframeStudio = { latencies: [], events: [], changes: () => changes(), base: () => base };
+window.cogniframeStudio = { latencies: [], sceneLatencies: [], events: [], changes: () => changes(), base: () => base };
 
 const FAST_NAMES = { analytic: "analytic joints", surrogate: "the joints' FE surrogate" };
 
@@ -273,12 +275,14 @@ function handle(ev) {
     showFigures(ev);
     if (sentAt[ev.seq] !== undefined && !ev.after_fe) {
       const ms = performance.now() - sentAt[ev.seq];
+      if (ev.geometry !== sceneKey && geometryAt[ev.geometry] === undefined) geometryAt[ev.geometry] = sentAt[ev.seq];
       delete sentAt[ev.seq];
       window.cogniframeStudio.latencies.push({ seq: ev.seq, ms, server_ms: ev.ms, cpu_ms: ev.cpu_ms, pending_fe: ev.pending_fe });
       timing.textContent = `updated ${ms.toFixed(0)} ms after the edit (check: ${ev.ms.toFixed(0)} ms)`;
     }
     wantedScene = ev.geometry;
     if (sceneUrls[wantedScene]) loadScene({ key: wantedScene, url: sceneUrls[wantedScene] });
+    else if (standIns[wantedScene]) loadScene(standIns[wantedScene]);
     const dirty = showDirty();
     if (dirty || !statusEl.textContent.startsWith("saved")) setStatus(dirty ? "edited, not saved" : "as in the file", dirty ? "dirty" : "");
   } else if (ev.type === "invalid") {
@@ -292,7 +296,13 @@ function handle(ev) {
     showNotice(ev.message);
     setStatus("refused", "bad");
   } else if (ev.type === "scene") {
-    sceneUrls[ev.key] = ev.url;
+    if (ev.provisional) {  // the new frame at once; its exact view follows and replaces it
+      if (sceneUrls[ev.key]) return;
+      standIns[ev.key] = ev;
+    } else {
+      sceneUrls[ev.key] = ev.url;
+      delete standIns[ev.key];
+    }
     if (ev.key === wantedScene) loadScene(ev);
   } else if (ev.type === "progress") {
     if (ev.task === "view" && ev.key && ev.key !== wantedScene) return;  // another page's view
@@ -369,6 +379,25 @@ function rebase() {
 }
 rebaseBtn.addEventListener("click", rebase);
 
+// what a provisional view shows, in words (it goes when the exact view is drawn)
+function showViewNote(ev) {
+  let note = document.getElementById("view-note");
+  if (!note) {
+    note = Object.assign(document.createElement("p"), { id: "view-note", className: "view-note" });
+    note.setAttribute("role", "status");
+    document.getElementById("view-slot").before(note);
+  }
+  document.body.dataset.view = ev.provisional ? "provisional" : "exact";
+  note.hidden = !ev.provisional;
+  if (!ev.provisional) { note.textContent = ""; return; }
+  const changed = ev.changed || [], missing = ev.missing || [];
+  note.textContent = `Provisional view of the new frame: the rods, bought parts and unchanged printed parts are exact; `
+    + (changed.length ? `${changed.length} changed part${changed.length > 1 ? "s" : ""} (${changed.join(", ")}) `
+      + `${changed.length > 1 ? "are" : "is"} drawn pale: the previous shape at the new place, grams estimated. ` : "")
+    + (missing.length ? `Not shown yet: ${missing.join(", ")}. ` : "")
+    + "The exact parts replace them when made.";
+}
+
 function progress(ev) {
   const box = document.getElementById(ev.task === "build" ? "build-progress" : "view-progress");
   if (!box) return;
@@ -381,6 +410,11 @@ function progress(ev) {
   label.textContent = ev.error ? ev.error : ev.text || "";
   box.dataset.active = active ? "1" : "0";
   box.dataset.error = ev.error || "";
+  if (ev.task === "view" && ev.error && sceneProvisional && ev.key === sceneKey) {  // no exact view follows: say so
+    const note = document.getElementById("view-note");
+    if (note) note.textContent = note.textContent.replace(/The exact parts replace them when made\.$/,
+      `The exact parts could not be made (${ev.error}); the pale parts stay provisional.`);
+  }
   if (ev.task === "fe" && ev.error && modelEl.dataset.model.endsWith("-pending")) {
     // the figures stay the fast model's: say so, instead of a wait that never ends
     const fast = modelEl.dataset.model.slice(0, -"-pending".length);
@@ -390,12 +424,25 @@ function progress(ev) {
 }
 
 let sceneKey = null;
+let sceneProvisional = false;  // the view drawn is a provisional one (its exact one still to come)
+const loading = new Set();     // urls being fetched
+// drawn already: the same geometry, unless a provisional view gives way to the exact one
+const drawn = (ev) => ev.key === sceneKey && (Boolean(ev.provisional) || !sceneProvisional);
 async function loadScene(ev) {
-  if (ev.key === sceneKey) return;
-  const res = await fetch(ev.url);
-  if (!res.ok) return;  // replaced by a newer one already
-  const data = await res.json();
+  if (drawn(ev) || loading.has(ev.url)) return;
+  loading.add(ev.url);
+  let data = null;
+  try {
+    const res = await fetch(ev.url);
+    if (res.ok) data = await res.json();  // else: replaced by a newer one already
+  } finally {
+    loading.delete(ev.url);
+  }
+  // meanwhile: another geometry wanted, this one drawn, or the exact view known (a provisional one is not drawn over it)
+  if (!data || ev.key !== wantedScene || drawn(ev) || (ev.provisional && sceneUrls[ev.key])) return;
   sceneKey = ev.key;
+  sceneProvisional = Boolean(ev.provisional);
+  showViewNote(ev);
   const slot = document.getElementById("view-slot");
   const old = slot.querySelector("canvas");
   if (old) {  // free the old WebGL context now, not when it is collected
@@ -407,6 +454,7 @@ async function loadScene(ev) {
   root.className = "cf-viewer";
   root.dataset.objects = String(data.meta.objects.length);
   root.dataset.scene = ev.key;
+  root.dataset.provisional = ev.provisional ? "1" : "0";
   const counts = {};
   for (const o of data.meta.objects) counts[o.kind] = (counts[o.kind] || 0) + 1;
   root.innerHTML = `<canvas id="cf-canvas" width="960" height="560" aria-label="3D view of the design"></canvas>
@@ -416,6 +464,11 @@ async function loadScene(ev) {
   slot.replaceChildren(root);
   try {
     startViewer(THREE, OrbitControls, root, data.meta, data.geometry);
+    const t0 = geometryAt[ev.key];
+    if (t0 !== undefined) {  // drawn: from the edit's input event to this view
+      window.cogniframeStudio.sceneLatencies.push({ key: ev.key, ms: performance.now() - t0, provisional: Boolean(ev.provisional) });
+      if (!ev.provisional) delete geometryAt[ev.key];
+    }
   } catch (e) {
     root.dataset.error = String(e);
     root.querySelector(".cf-info").textContent = `The 3D view could not start here (${e}).`;
