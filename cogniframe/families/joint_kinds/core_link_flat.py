@@ -151,10 +151,8 @@ def _core_link_flat(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarra
     esc = cad.prism(plan([c[:2] + np.array([sx, sy]) * h for sx, sy in ((-1, -1), (1, -1), (1, 1), (-1, 1))]), -1.0, 1000.0) \
         if float(c[2]) < z_bed else None
     body = body.cut(plate) if esc is None else body.cut(plate).cut(esc)
-    cq = cad._cq()
     bolt = rot @ np.asarray(part.param("bolt_hole"), float) + o
     hole_d = float(part.param("screw_clearance"))
-    bolt_hole = cq.Solid.makeCylinder(cad.exact(hole_d / 2), cad.exact(T + 2.0), cad.vec((bolt[0], bolt[1], -1.0)),
-                                      cad.vec((0.0, 0.0, 1.0)))
+    bolt_hole = cad.cylinder((bolt[0], bolt[1], -1.0), (0.0, 0.0, 1.0), T + 2.0, hole_d / 2)
     return cad.finish(cad.above_bed(body), [cad.socket_cutter(s) for s in socks] + [bolt_hole])
 

@@ -250,8 +250,7 @@ def _core_link(part: PartSpec, socks: list[PSocket], r: float, m: np.ndarray):
     # of 1e-6 mm^2 (bamboo, joints.wall 5.48).
     pieces.append(cad.prism(convex_hull(np.array(backs)), 0.0, clear_of(max(tops + [z_top]), sleeve_levels(socks, r))))
     pieces.append(_seat(part, arms, socks, r, m, z_top))
-    cq = cad._cq()
-    bolt_hole = cq.Solid.makeCylinder(cad.exact(hole_d / 2), cad.exact(t + 2.0), cad.vec(bolt + e_v * (v0 - 1.0)), cad.vec(e_v))
+    bolt_hole = cad.cylinder(bolt + e_v * (v0 - 1.0), e_v, t + 2.0, hole_d / 2)
     return cad.finish(cad.above_bed(cad.fuse_all(pieces)), [cad.socket_cutter(s) for s in socks] + [bolt_hole, _esc_keepout(part, m)])
 
 
